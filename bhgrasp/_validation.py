@@ -1,0 +1,72 @@
+"""Boundary validation: one idiom for every public entry point (shape, dtype, finiteness, names)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+
+from bhgrasp.errors import InputError
+
+
+def as_vector(value: Any, name: str, size: int | None = None) -> np.ndarray:
+    """Return ``value`` as a finite float64 1-D array, optionally of a given length.
+
+    Args:
+        value: Array-like input.
+        name: Argument name used in error messages.
+        size: Required length, or ``None`` for any length.
+
+    Raises:
+        InputError: If the input is not numeric, not 1-D, has the wrong length, or holds NaN/inf.
+    """
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise InputError(f"`{name}` must be a numeric array, got {value!r}") from error
+    if array.ndim != 1 or (size is not None and array.shape[0] != size):
+        expected = f"({size},)" if size is not None else "a 1-D array"
+        raise InputError(f"`{name}` must have shape {expected}, got shape {array.shape}")
+    _require_finite(array, name)
+    return array
+
+
+def as_array(value: Any, name: str, shape: tuple[int | None, ...]) -> np.ndarray:
+    """Return ``value`` as a finite float64 array whose shape matches ``shape`` (``None`` = any length)."""
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise InputError(f"`{name}` must be a numeric array, got {value!r}") from error
+    if array.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, array.shape)):
+        expected = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
+        raise InputError(f"`{name}` must have shape {expected}, got shape {array.shape}")
+    _require_finite(array, name)
+    return array
+
+
+def as_positive(value: Any, name: str) -> float:
+    """Return ``value`` as a finite float > 0."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError) as error:
+        raise InputError(f"`{name}` must be a positive number, got {value!r}") from error
+    if not np.isfinite(number) or number <= 0.0:
+        raise InputError(f"`{name}` must be a positive finite number, got {number!r}")
+    return number
+
+
+def require_name(name: str, valid: Iterable[str], what: str) -> str:
+    """Return ``name`` if it is one of ``valid``, else raise an error listing the valid names."""
+    valid = list(valid)
+    if name not in valid:
+        raise InputError(f"unknown {what} {name!r}; valid {what}s: {', '.join(valid)}")
+    return name
+
+
+def _require_finite(array: np.ndarray, name: str) -> None:
+    if not np.all(np.isfinite(array)):
+        bad = np.flatnonzero(~np.isfinite(array.ravel()))
+        raise InputError(
+            f"`{name}` must be finite, got NaN/inf at flat index {bad.tolist()[:5]}: {array.ravel()[bad][:5]}"
+        )

@@ -1,0 +1,34 @@
+"""The bhgrasp exception hierarchy.
+
+Every error raised on purpose by bhgrasp derives from :class:`BhgraspError`; each subclass also derives from
+the builtin a caller would naturally catch (``ValueError`` for bad input, ...), so ``except ValueError`` keeps
+working.  Messages name the argument, the value received and what was expected.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+class BhgraspError(Exception):
+    """Root of every error bhgrasp raises on purpose."""
+
+
+class InputError(BhgraspError, ValueError):
+    """An argument has the wrong shape, type, range, or contains NaN/inf, or names an unknown joint/frame."""
+
+
+class ModelError(BhgraspError, ValueError):
+    """A robot description cannot be used: missing or malformed URDF, forbidden XML, inconsistent model."""
+
+
+class UnreachableError(BhgraspError, ValueError):
+    """A target lies outside the reachable set (joint limits or link lengths).
+
+    Attributes:
+        result: Optional diagnostic payload (e.g. the best :class:`~bhgrasp.ik.IKResult` found).
+    """
+
+    def __init__(self, message: str, result: Any = None) -> None:
+        super().__init__(message)
+        self.result = result

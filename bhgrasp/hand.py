@@ -1,0 +1,443 @@
+"""Hand: a robot hand loaded into Pinocchio, with kinematics, Jacobians and rigid-body dynamics.
+
+Conventions: SI units and radians; ``q`` (size ``nq``) and ``v`` (size ``nv``) in Pinocchio's joint order
+(:attr:`Hand.joint_names`).  "World" is the frame the hand base is placed in by :attr:`Hand.base_placement`
+(identity by default, so world = hand base frame W); gravity is given in world coordinates.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp._validation import as_array, as_vector, require_name
+from bhgrasp.errors import InputError, ModelError
+from bhgrasp.resources import barrett_urdf_path, leaf_links, read_urdf
+
+BARRETT_FINGERTIPS = {"F1": "F1_tip", "F2": "F2_tip", "F3": "F3_tip"}
+STANDARD_GRAVITY = (0.0, 0.0, -9.81)  # [m/s^2] in world coordinates
+
+
+class Hand:
+    """A fixed-base hand: Pinocchio model and data, fingertip frames, limits, kinematics and dynamics.
+
+    Every method takes the configuration explicitly and validates its inputs (shape, finiteness); results are
+    fresh arrays that the caller may keep.  One :class:`pinocchio.Data` is reused between calls, so a ``Hand``
+    is not thread-safe: give each thread or process its own (``copy.deepcopy`` works).
+    """
+
+    def __init__(
+        self,
+        model: pin.Model,
+        fingertips: Mapping[str, str],
+        *,
+        name: str | None = None,
+        base_placement: pin.SE3 | None = None,
+        gravity: Sequence[float] = STANDARD_GRAVITY,
+        urdf_path: Path | None = None,
+    ) -> None:
+        """Wrap a Pinocchio model.
+
+        Args:
+            model: Fixed-base model (no free-flyer root).
+            fingertips: Finger name -> frame name of its fingertip.
+            name: Display name; defaults to the model's name.
+            base_placement: Pose of the hand base in the world, ``transform_base_to_world``.
+            gravity: Gravity vector in world coordinates [m/s^2].
+            urdf_path: The URDF the model came from, if any (kept for later layers, e.g. collision geometry).
+        """
+        if not fingertips:
+            raise ModelError("a hand needs at least one fingertip frame")
+        self._model = model
+        self._data = model.createData()
+        self.name = name or model.name
+        self.urdf_path = urdf_path
+        frame_names = [frame.name for frame in model.frames]
+        self._tip_ids: dict[str, int] = {}
+        for finger, frame in fingertips.items():
+            require_name(frame, frame_names, "frame")
+            self._tip_ids[str(finger)] = model.getFrameId(frame)
+        self._fingertips = {finger: model.frames[i].name for finger, i in self._tip_ids.items()}
+        self._placement = pin.SE3.Identity()
+        self._gravity_world = np.zeros(3)
+        self.base_placement = base_placement if base_placement is not None else pin.SE3.Identity()
+        self.gravity = gravity
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_urdf(
+        cls,
+        path: str | Path,
+        fingertips: Sequence[str] | Mapping[str, str] | None = None,
+        **kwargs: Any,
+    ) -> Hand:
+        """Load any fixed-base hand URDF (no mimic: every joint is an independent DOF).
+
+        Args:
+            path: URDF file.  It is parsed without DTDs or entities before Pinocchio sees it.
+            fingertips: Frame names of the fingertips (finger name = frame name), or a mapping finger name ->
+                frame name; by default the URDF's leaf links.
+            **kwargs: ``name``, ``base_placement``, ``gravity`` as for :class:`Hand`.
+
+        Raises:
+            ModelError: Missing/malformed/unsafe URDF, or one Pinocchio cannot build.
+            InputError: A fingertip frame that the model does not have.
+        """
+        model, root = _build_model(path)
+        if fingertips is None:
+            fingertips = leaf_links(root)
+            if not fingertips:
+                raise ModelError(f"URDF {str(path)!r} has no leaf links to use as fingertips; pass `fingertips`")
+        if not isinstance(fingertips, Mapping):
+            fingertips = {frame: frame for frame in fingertips}
+        return Hand(model, fingertips, urdf_path=Path(path), **kwargs)
+
+    # ------------------------------------------------------------------ names, sizes, limits
+    @property
+    def model(self) -> pin.Model:
+        """The Pinocchio model (shared, do not modify while the hand is in use)."""
+        return self._model
+
+    @property
+    def data(self) -> pin.Data:
+        """The Pinocchio data that the last call filled in."""
+        return self._data
+
+    @property
+    def nq(self) -> int:
+        """Size of the configuration vector."""
+        return self._model.nq
+
+    @property
+    def nv(self) -> int:
+        """Size of the velocity/torque vector."""
+        return self._model.nv
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Joint names in Pinocchio's order (the order of ``q``, ``v`` and ``tau``)."""
+        return tuple(self._model.names[1:])
+
+    @property
+    def fingers(self) -> tuple[str, ...]:
+        """Finger names, e.g. ``("F1", "F2", "F3")`` for the Barrett hand."""
+        return tuple(self._tip_ids)
+
+    @property
+    def fingertip_frames(self) -> dict[str, str]:
+        """Finger name -> fingertip frame name."""
+        return dict(self._fingertips)
+
+    @property
+    def lower(self) -> np.ndarray:
+        """Lower joint position limits [rad], shape (nq,)."""
+        return self._model.lowerPositionLimit.copy()
+
+    @property
+    def upper(self) -> np.ndarray:
+        """Upper joint position limits [rad], shape (nq,)."""
+        return self._model.upperPositionLimit.copy()
+
+    @property
+    def velocity_limit(self) -> np.ndarray:
+        """Joint speed limits [rad/s], shape (nv,)."""
+        return self._model.velocityLimit.copy()
+
+    @property
+    def effort_limit(self) -> np.ndarray:
+        """Joint torque limits [N m], shape (nv,)."""
+        return self._model.effortLimit.copy()
+
+    @property
+    def total_mass(self) -> float:
+        """Mass of every body, base included [kg]."""
+        return float(sum(inertia.mass for inertia in self._model.inertias))
+
+    def joint_index(self, joint: str) -> int:
+        """Index of a 1-DOF joint in ``q``/``v``."""
+        require_name(joint, self.joint_names, "joint")
+        return self._model.joints[self._model.getJointId(joint)].idx_v
+
+    def finger_joints(self, finger: str) -> tuple[str, ...]:
+        """Names of the joints that move a finger's tip, from the base outward."""
+        require_name(finger, self.fingers, "finger")
+        parent = self._model.frames[self._tip_ids[finger]].parentJoint
+        return tuple(self._model.names[j] for j in self._model.supports[parent][1:])
+
+    def finger_indices(self, finger: str) -> np.ndarray:
+        """Velocity indices of a finger's joints (columns of its Jacobian that can be non-zero)."""
+        return np.array([self.joint_index(joint) for joint in self.finger_joints(finger)], dtype=int)
+
+    # ------------------------------------------------------------------ world placement and gravity
+    @property
+    def base_placement(self) -> pin.SE3:
+        """Pose of the hand base frame in the world, ``transform_base_to_world``."""
+        return self._placement.copy()
+
+    @base_placement.setter
+    def base_placement(self, placement: pin.SE3) -> None:
+        if not isinstance(placement, pin.SE3):
+            raise InputError(f"`base_placement` must be a pinocchio.SE3, got {type(placement).__name__}")
+        as_array(placement.homogeneous, "base_placement", (4, 4))
+        self._placement = placement.copy()
+        self._update_model_gravity()
+
+    @property
+    def gravity(self) -> np.ndarray:
+        """Gravity in world coordinates [m/s^2]; set it to mount the hand in any orientation."""
+        return self._gravity_world.copy()
+
+    @gravity.setter
+    def gravity(self, gravity: Sequence[float]) -> None:
+        self._gravity_world = as_vector(gravity, "gravity", 3).copy()
+        self._update_model_gravity()
+
+    def _update_model_gravity(self) -> None:
+        self._model.gravity.linear = self._placement.rotation.T @ self._gravity_world
+
+    # ------------------------------------------------------------------ configurations
+    def neutral(self) -> np.ndarray:
+        """Pinocchio's neutral configuration (all zeros for revolute joints: Barrett fingers open and flat)."""
+        return pin.neutral(self._model)
+
+    def random_configuration(self, rng: np.random.Generator | int) -> np.ndarray:
+        """Configuration drawn uniformly inside the joint limits.
+
+        Args:
+            rng: A NumPy generator or an integer seed (there is no unseeded default).
+        """
+        generator = _generator(rng)
+        return generator.uniform(self._model.lowerPositionLimit, self._model.upperPositionLimit)
+
+    def configuration(self, **joint_values: float) -> np.ndarray:
+        """Neutral configuration with the named joints set, e.g. ``hand.configuration(F3_proximal=0.8)`` [rad].
+
+        Raises:
+            InputError: Unknown joint name (the message lists the valid ones), non-finite value, or a value
+                outside the joint's limits.
+        """
+        q = self.neutral()
+        for joint, value in joint_values.items():
+            i = self.joint_index(joint)
+            angle = float(as_vector([value], joint, 1)[0])
+            low, high = self._model.lowerPositionLimit[i], self._model.upperPositionLimit[i]
+            if not low <= angle <= high:
+                raise InputError(f"joint {joint!r} = {angle!r} rad is outside its limits [{low:.6g}, {high:.6g}]")
+            q[i] = angle
+        return q
+
+    def within_limits(self, q: Any, tolerance: float = 0.0) -> bool:
+        """Whether every joint of ``q`` lies inside its limits (widened by ``tolerance`` [rad])."""
+        q = self._q(q)
+        return bool(
+            np.all(q >= self._model.lowerPositionLimit - tolerance)
+            and np.all(q <= self._model.upperPositionLimit + tolerance)
+        )
+
+    # ------------------------------------------------------------------ kinematics
+    def frame_names(self) -> tuple[str, ...]:
+        """Every frame of the model (links, joints, fixed frames)."""
+        return tuple(frame.name for frame in self._model.frames)
+
+    def frame_placement(self, q: Any, frame: str) -> pin.SE3:
+        """Pose of a frame in the world, ``transform_frame_to_world``."""
+        frame_id = self._frame_id(frame)
+        pin.framesForwardKinematics(self._model, self._data, self._q(q))
+        return self._placement * self._data.oMf[frame_id]
+
+    def fingertip_positions(self, q: Any) -> np.ndarray:
+        """Fingertip frame origins in the world [m], shape (n_fingers, 3), in :attr:`fingers` order."""
+        pin.framesForwardKinematics(self._model, self._data, self._q(q))
+        rotation, translation = self._placement.rotation, self._placement.translation
+        points = np.array([self._data.oMf[i].translation for i in self._tip_ids.values()])
+        return points @ rotation.T + translation
+
+    def frame_jacobian(self, q: Any, frame: str) -> np.ndarray:
+        """Spatial Jacobian of a frame, shape (6, nv): rows (linear, angular), world-aligned, at the frame origin."""
+        frame_id = self._frame_id(frame)
+        jacobian = pin.computeFrameJacobian(
+            self._model, self._data, self._q(q), frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        )
+        rotation = self._placement.rotation
+        return np.vstack((rotation @ jacobian[:3], rotation @ jacobian[3:]))
+
+    def fingertip_jacobian(self, q: Any, finger: str) -> np.ndarray:
+        """Translational Jacobian of a fingertip, shape (3, nv), world-aligned: ``p_dot_world = J v``."""
+        require_name(finger, self.fingers, "finger")
+        return self.frame_jacobian(q, self._fingertips[finger])[:3]
+
+    # ------------------------------------------------------------------ dynamics
+    def mass_matrix(self, q: Any) -> np.ndarray:
+        """Joint-space inertia matrix M(q) (CRBA), full symmetric, shape (nv, nv) [kg m^2]."""
+        upper = pin.crba(self._model, self._data, self._q(q))
+        return np.triu(upper) + np.triu(upper, 1).T
+
+    def nonlinear_effects(self, q: Any, v: Any) -> np.ndarray:
+        """Coriolis, centrifugal and gravity torques C(q, v) v + G(q), shape (nv,) [N m]."""
+        return pin.nonLinearEffects(self._model, self._data, self._q(q), self._v(v, "v")).copy()
+
+    def gravity_torques(self, q: Any) -> np.ndarray:
+        """Gravity torques G(q), shape (nv,) [N m] (the torques that hold the hand still)."""
+        return pin.computeGeneralizedGravity(self._model, self._data, self._q(q)).copy()
+
+    def coriolis_matrix(self, q: Any, v: Any) -> np.ndarray:
+        """Coriolis matrix C(q, v), shape (nv, nv), with M_dot - 2 C skew-symmetric (thesis (2.27))."""
+        return pin.computeCoriolisMatrix(self._model, self._data, self._q(q), self._v(v, "v")).copy()
+
+    def forward_dynamics(self, q: Any, v: Any, tau: Any, f_ext: Any = None) -> np.ndarray:
+        """Joint accelerations (ABA) under joint torques ``tau`` [N m] and optional external forces.
+
+        Args:
+            f_ext: ``None``, or one force per joint (``njoints`` entries, index 0 = universe) in each joint's
+                local frame, as ``pinocchio.Force`` objects or an array (njoints, 6) of (linear, angular);
+                :meth:`external_forces` builds it from forces on frames.
+        """
+        q, v, tau = self._q(q), self._v(v, "v"), self._v(tau, "tau")
+        if f_ext is None:
+            return pin.aba(self._model, self._data, q, v, tau).copy()
+        return pin.aba(self._model, self._data, q, v, tau, self._fext(f_ext)).copy()
+
+    def inverse_dynamics(self, q: Any, v: Any, a: Any, f_ext: Any = None) -> np.ndarray:
+        """Joint torques (RNEA) that produce accelerations ``a`` [rad/s^2]; ``f_ext`` as in :meth:`forward_dynamics`."""
+        q, v, a = self._q(q), self._v(v, "v"), self._v(a, "a")
+        if f_ext is None:
+            return pin.rnea(self._model, self._data, q, v, a).copy()
+        return pin.rnea(self._model, self._data, q, v, a, self._fext(f_ext)).copy()
+
+    def external_forces(self, q: Any, forces: Mapping[str, Any]) -> pin.StdVec_Force:
+        """Convert world-frame forces on frames into Pinocchio's per-joint ``f_ext``.
+
+        Args:
+            forces: Frame name -> force [N], shape (3,), applied at the frame origin, or wrench (6,) =
+                (force [N], torque [N m]) about the frame origin; both in world coordinates.
+        """
+        pin.framesForwardKinematics(self._model, self._data, self._q(q))
+        f_ext = pin.StdVec_Force()
+        for _ in range(self._model.njoints):
+            f_ext.append(pin.Force.Zero())
+        rotation = self._placement.rotation  # base <- world is rotation.T
+        for frame, value in forces.items():
+            frame_id = self._frame_id(frame)
+            wrench = _wrench(value, f"forces[{frame!r}]")
+            force_at_frame = pin.Force(rotation.T @ wrench[:3], rotation.T @ wrench[3:])
+            frame_origin = pin.SE3(np.eye(3), self._data.oMf[frame_id].translation)
+            joint = self._model.frames[frame_id].parentJoint
+            f_ext[joint] += self._data.oMi[joint].actInv(frame_origin.act(force_at_frame))
+        return f_ext
+
+    def regressor(self, q: Any, v: Any, a: Any) -> np.ndarray:
+        """Joint-torque regressor Y(q, v, a), shape (nv, 10 * n_bodies): ``Y @ inertial_parameters() == rnea``.
+
+        Columns come in blocks of 10 per joint body (Pinocchio's dynamic parameters: m, m c, I at the joint
+        origin).  For the Slotine-Li form Y(q, qdot, qdot_r, qddot_r) build it from this one (later issue).
+        """
+        q, v, a = self._q(q), self._v(v, "v"), self._v(a, "a")
+        return pin.computeJointTorqueRegressor(self._model, self._data, q, v, a).copy()
+
+    def inertial_parameters(self) -> np.ndarray:
+        """Dynamic parameters of every moving body, shape (10 * n_bodies,): (m, mc_x, mc_y, mc_z, I_xx, I_xy,
+        I_yy, I_xz, I_yz, I_zz) per body, inertia about the joint origin, in the joint frame."""
+        inertias = self._model.inertias
+        return np.concatenate([inertias[j].toDynamicParameters() for j in range(1, self._model.njoints)])
+
+    # ------------------------------------------------------------------ display
+    def summary(self) -> str:
+        """A human-readable table of joints, limits, fingers and mass."""
+        lines = [f"{self.name}: {self.nv} joints, {len(self.fingers)} fingers, {self.total_mass:.4f} kg"]
+        lines.append(f"  {'joint':<16}{'lower':>9}{'upper':>9}  [deg]{'vel':>8} [rad/s]{'effort':>8} [N m]")
+        for i, joint in enumerate(self.joint_names):
+            lines.append(
+                f"  {joint:<16}{np.degrees(self.lower[i]):9.1f}{np.degrees(self.upper[i]):9.1f}"
+                f"{self.velocity_limit[i]:13.3f}{self.effort_limit[i]:15.3f}"
+            )
+        for finger in self.fingers:
+            lines.append(f"  finger {finger}: tip {self._fingertips[finger]!r}, joints {', '.join(self.finger_joints(finger))}")
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"Hand({self.name!r}, nq={self.nq}, fingers={self.fingers})"
+
+    # ------------------------------------------------------------------ validation helpers
+    def _q(self, q: Any) -> np.ndarray:
+        return as_vector(q, "q", self._model.nq)
+
+    def _v(self, v: Any, name: str) -> np.ndarray:
+        return as_vector(v, name, self._model.nv)
+
+    def _frame_id(self, frame: str) -> int:
+        if not isinstance(frame, str) or not self._model.existFrame(frame):
+            require_name(frame, self.frame_names(), "frame")
+        return self._model.getFrameId(frame)
+
+    def _fext(self, f_ext: Any) -> pin.StdVec_Force:
+        njoints = self._model.njoints
+        if isinstance(f_ext, pin.StdVec_Force) or (
+            isinstance(f_ext, Sequence) and f_ext and isinstance(f_ext[0], pin.Force)
+        ):
+            if len(f_ext) != njoints:
+                raise InputError(f"`f_ext` must hold {njoints} forces (one per joint, universe first), got {len(f_ext)}")
+            for i, force in enumerate(f_ext):
+                as_vector(force.vector, f"f_ext[{i}]", 6)
+            if isinstance(f_ext, pin.StdVec_Force):
+                return f_ext
+            vector = pin.StdVec_Force()
+            for force in f_ext:
+                vector.append(force)
+            return vector
+        array = as_array(f_ext, "f_ext", (njoints, 6))
+        vector = pin.StdVec_Force()
+        for row in array:
+            vector.append(pin.Force(row[:3], row[3:]))
+        return vector
+
+
+class BarrettHand(Hand):
+    """The packaged Barrett BH8-280 (``urdf/barrett_hand.urdf``): 8 independent joints, fingers F1, F2, F3.
+
+    Joint order: F1_spread, F1_proximal, F1_distal, F2_spread, F2_proximal, F2_distal, F3_proximal, F3_distal.
+    """
+
+    def __init__(
+        self,
+        *,
+        base_placement: pin.SE3 | None = None,
+        gravity: Sequence[float] = STANDARD_GRAVITY,
+        name: str = "BarrettHand BH8-280",
+    ) -> None:
+        """Load the packaged URDF; ``base_placement`` and ``gravity`` as for :class:`Hand`."""
+        path = barrett_urdf_path()
+        model, _ = _build_model(path)
+        super().__init__(
+            model, BARRETT_FINGERTIPS, name=name, base_placement=base_placement, gravity=gravity, urdf_path=path
+        )
+
+
+def _build_model(path: str | Path) -> tuple[pin.Model, Any]:
+    """Safely read a URDF and build its Pinocchio model (mimic tags ignored: independent joints)."""
+    text, root = read_urdf(path)
+    try:
+        model = pin.buildModelFromXML(text)
+    except (ValueError, RuntimeError) as error:
+        raise ModelError(f"Pinocchio cannot build a model from {str(path)!r}: {error}") from error
+    if model.nv == 0:
+        raise ModelError(f"URDF {str(path)!r} has no moving joints")
+    return model, root
+
+
+def _wrench(value: Any, name: str) -> np.ndarray:
+    """A force (3,) or wrench (6,) as a wrench (6,) = (force, torque)."""
+    size = np.size(value)
+    wrench = as_vector(np.ravel(value) if size in (3, 6) else value, name, 6 if size == 6 else 3)
+    return wrench if size == 6 else np.concatenate((wrench, np.zeros(3)))
+
+
+def _generator(rng: np.random.Generator | int) -> np.random.Generator:
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if isinstance(rng, (int, np.integer)) and not isinstance(rng, bool):
+        return np.random.default_rng(int(rng))
+    raise InputError(f"`rng` must be a numpy.random.Generator or an integer seed, got {rng!r}")

@@ -1,0 +1,201 @@
+"""Hand kinematics and dynamics against independent truths: finite differences, conservation laws, identities."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import bhgrasp as bh
+
+SEEDS = range(5)
+
+
+def _potential(hand: bh.Hand, q: np.ndarray) -> float:
+    """Gravitational potential energy [J] of the moving bodies, -m g . c, from Pinocchio's centre of mass."""
+    data = hand.model.createData()
+    com = pin.centerOfMass(hand.model, data, q)  # moving bodies only; data.mass[0] is their total mass
+    return float(-data.mass[0] * hand.gravity @ com)
+
+
+@pytest.fixture(params=["barrett", "allegro"])
+def hand(request: pytest.FixtureRequest) -> bh.Hand:
+    return request.getfixturevalue(request.param)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_fingertip_jacobian_equals_finite_differences(hand: bh.Hand, seed: int) -> None:
+    q = hand.random_configuration(seed)
+    step = 1e-7
+    for i, finger in enumerate(hand.fingers):
+        numeric = np.empty((3, hand.nv))
+        for k in range(hand.nv):
+            dq = np.zeros(hand.nv)
+            dq[k] = step
+            numeric[:, k] = (hand.fingertip_positions(q + dq)[i] - hand.fingertip_positions(q - dq)[i]) / (2 * step)
+        np.testing.assert_allclose(hand.fingertip_jacobian(q, finger), numeric, atol=1e-8)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_mass_matrix_is_symmetric_positive_definite(hand: bh.Hand, seed: int) -> None:
+    mass = hand.mass_matrix(hand.random_configuration(seed))
+    np.testing.assert_array_equal(mass, mass.T)
+    assert np.linalg.eigvalsh(mass).min() > 0
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_mdot_minus_two_c_is_skew_symmetric(hand: bh.Hand, seed: int) -> None:
+    """Thesis (2.27), with M_dot from central differences of CRBA along v."""
+    rng = np.random.default_rng(seed)
+    q, v = hand.random_configuration(rng), rng.normal(size=hand.nv)
+    h = 1e-6
+    mass_dot = (hand.mass_matrix(q + h * v) - hand.mass_matrix(q - h * v)) / (2 * h)
+    n = mass_dot - 2 * hand.coriolis_matrix(q, v)
+    scale = np.abs(mass_dot).max()
+    np.testing.assert_allclose(n + n.T, 0.0, atol=1e-6 * scale)
+    assert np.abs(n).max() > 1e-3 * scale  # non-trivial: the property is not vacuous
+    # C v + G is the nonlinear-effects vector, and C(q, 0) = 0.
+    np.testing.assert_allclose(hand.coriolis_matrix(q, v) @ v + hand.gravity_torques(q), hand.nonlinear_effects(q, v), atol=1e-12)
+    np.testing.assert_array_equal(hand.coriolis_matrix(q, np.zeros(hand.nv)), 0.0)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_forward_dynamics_inverts_inverse_dynamics(hand: bh.Hand, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    q, v, a = hand.random_configuration(rng), rng.normal(size=hand.nv), rng.normal(size=hand.nv)
+    tau = hand.inverse_dynamics(q, v, a)
+    np.testing.assert_allclose(hand.forward_dynamics(q, v, tau), a, atol=1e-8)
+    # ... and both agree with M a + C v + G assembled from the separate terms.
+    np.testing.assert_allclose(tau, hand.mass_matrix(q) @ a + hand.nonlinear_effects(q, v), atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_regressor_times_parameters_is_inverse_dynamics(hand: bh.Hand, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    q, v, a = hand.random_configuration(rng), rng.normal(size=hand.nv), rng.normal(size=hand.nv)
+    regressor = hand.regressor(q, v, a)
+    assert regressor.shape == (hand.nv, hand.inertial_parameters().size)
+    np.testing.assert_allclose(regressor @ hand.inertial_parameters(), hand.inverse_dynamics(q, v, a), atol=1e-12)
+
+
+def test_regressor_parameters_hold_barretts_masses(barrett: bh.Hand) -> None:
+    masses = barrett.inertial_parameters()[0::10]
+    expected = [0.14109, 0.062139, 0.04166, 0.14109, 0.062139, 0.04166, 0.062139, 0.04166]
+    np.testing.assert_allclose(masses, expected)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_gravity_torques_are_the_gradient_of_potential_energy(hand: bh.Hand, seed: int) -> None:
+    """G(q) = dV/dq with V = -m g . c(q), c from Pinocchio's centre of mass (a different algorithm)."""
+    q = hand.random_configuration(seed)
+    step = 1e-6
+    gradient = [(_potential(hand, q + step * e) - _potential(hand, q - step * e)) / (2 * step) for e in np.eye(hand.nv)]
+    np.testing.assert_allclose(hand.gravity_torques(q), gradient, atol=1e-8)
+
+
+def test_energy_is_conserved_without_torques(barrett: bh.Hand) -> None:
+    """Free motion under gravity (RK4, 0.5 s): kinetic + potential energy stays constant."""
+    q, v = barrett.random_configuration(11), np.random.default_rng(11).normal(scale=0.5, size=barrett.nv)
+    zero = np.zeros(barrett.nv)
+
+    def energy(q: np.ndarray, v: np.ndarray) -> float:
+        return 0.5 * v @ barrett.mass_matrix(q) @ v + _potential(barrett, q)
+
+    def derivative(state: np.ndarray) -> np.ndarray:
+        return np.concatenate((state[8:], barrett.forward_dynamics(state[:8], state[8:], zero)))
+
+    state, dt, start = np.concatenate((q, v)), 1e-4, energy(q, v)
+    for _ in range(5000):
+        k1 = derivative(state)
+        k2 = derivative(state + dt / 2 * k1)
+        k3 = derivative(state + dt / 2 * k2)
+        k4 = derivative(state + dt * k3)
+        state = state + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    drift = abs(energy(state[:8], state[8:]) - start)
+    assert drift < 1e-8
+    assert np.linalg.norm(state[:8] - q) > 0.01  # it really moved
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_external_forces_act_through_the_jacobian_transpose(barrett: bh.Hand, seed: int) -> None:
+    """RNEA with a fingertip force F equals RNEA without it minus J^T F (thesis (4.8))."""
+    rng = np.random.default_rng(seed)
+    q, v, a = barrett.random_configuration(rng), rng.normal(size=8), rng.normal(size=8)
+    force = rng.normal(size=3)
+    f_ext = barrett.external_forces(q, {"F2_tip": force})
+    expected = barrett.inverse_dynamics(q, v, a) - barrett.fingertip_jacobian(q, "F2").T @ force
+    np.testing.assert_allclose(barrett.inverse_dynamics(q, v, a, f_ext), expected, atol=1e-12)
+    wrench = np.concatenate((force, rng.normal(size=3)))
+    f_ext = barrett.external_forces(q, {"F2_tip": wrench})
+    expected = barrett.inverse_dynamics(q, v, a) - barrett.frame_jacobian(q, "F2_tip").T @ wrench
+    np.testing.assert_allclose(barrett.inverse_dynamics(q, v, a, f_ext), expected, atol=1e-12)
+    tau = rng.normal(size=8)
+    np.testing.assert_allclose(
+        barrett.forward_dynamics(q, v, tau, f_ext),
+        np.linalg.solve(barrett.mass_matrix(q), tau + barrett.frame_jacobian(q, "F2_tip").T @ wrench - barrett.nonlinear_effects(q, v)),
+        atol=1e-8,
+    )
+
+
+def test_base_placement_and_gravity_mount_the_hand_anywhere() -> None:
+    """Turning the hand and gravity together changes world-frame outputs by that rotation and no torque."""
+    rotation = pin.rpy.rpyToMatrix(0.3, -1.1, 2.0)
+    placement = pin.SE3(rotation, np.array([0.1, -0.2, 0.5]))
+    upright = bh.BarrettHand()
+    turned = bh.BarrettHand(base_placement=placement, gravity=rotation @ np.array([0.0, 0.0, -9.81]))
+    q, v = upright.random_configuration(5), np.linspace(-1, 1, 8)
+    np.testing.assert_allclose(turned.gravity_torques(q), upright.gravity_torques(q), atol=1e-12)
+    np.testing.assert_allclose(turned.nonlinear_effects(q, v), upright.nonlinear_effects(q, v), atol=1e-12)
+    expected = upright.fingertip_positions(q) @ rotation.T + placement.translation
+    np.testing.assert_allclose(turned.fingertip_positions(q), expected, atol=1e-12)
+    np.testing.assert_allclose(turned.fingertip_jacobian(q, "F3"), rotation @ upright.fingertip_jacobian(q, "F3"), atol=1e-12)
+    assert turned.frame_placement(q, "palm_surface").isApprox(placement * upright.frame_placement(q, "palm_surface"))
+    # Hanging upside down (gravity along the palm normal) flips every gravity torque.
+    hanging = bh.BarrettHand(gravity=(0.0, 0.0, 9.81))
+    np.testing.assert_allclose(hanging.gravity_torques(q), -upright.gravity_torques(q), atol=1e-12)
+    upright.gravity = (0.0, 0.0, 0.0)
+    np.testing.assert_array_equal(upright.gravity_torques(q), 0.0)
+
+
+def test_configuration_by_joint_name(barrett: bh.Hand) -> None:
+    q = barrett.configuration(F3_proximal=0.8, F1_spread=1.0)
+    assert q[barrett.joint_index("F3_proximal")] == 0.8 and q[0] == 1.0
+    assert np.count_nonzero(q) == 2
+    np.testing.assert_array_equal(barrett.neutral(), np.zeros(8))
+
+
+def test_random_configuration_is_seeded_and_within_limits(barrett: bh.Hand) -> None:
+    np.testing.assert_array_equal(barrett.random_configuration(4), barrett.random_configuration(4))
+    samples = np.array([barrett.random_configuration(s) for s in range(200)])
+    assert np.all(samples >= barrett.lower) and np.all(samples <= barrett.upper)
+    assert barrett.within_limits(samples[0]) and not barrett.within_limits(barrett.upper + 0.1)
+
+
+def test_finger_joints(barrett: bh.Hand) -> None:
+    assert barrett.finger_joints("F1") == ("F1_spread", "F1_proximal", "F1_distal")
+    assert barrett.finger_joints("F3") == ("F3_proximal", "F3_distal")
+    np.testing.assert_array_equal(barrett.finger_indices("F2"), [3, 4, 5])
+
+
+def test_allegro_is_a_working_hand(allegro: bh.Hand) -> None:
+    assert allegro.nv == 16
+    assert len(allegro.fingers) == 4
+    assert all(frame.endswith("_tip") for frame in allegro.fingertip_frames.values())
+    assert all(len(allegro.finger_joints(f)) == 4 for f in allegro.fingers)
+    q = allegro.random_configuration(0)
+    assert allegro.fingertip_positions(q).shape == (4, 3)
+    assert allegro.forward_dynamics(q, np.zeros(16), allegro.gravity_torques(q)) == pytest.approx(np.zeros(16), abs=1e-9)
+
+
+def test_fingertips_given_by_name(allegro: bh.Hand) -> None:
+    path = bh.example_robot_data_urdf("allegro_hand_description/urdf/allegro_right_hand.urdf")
+    hand = bh.Hand.from_urdf(path, fingertips={"index": "link_3.0_tip", "thumb": "link_15.0_tip"})
+    assert hand.fingers == ("index", "thumb")
+    q = hand.random_configuration(1)
+    np.testing.assert_array_equal(hand.fingertip_positions(q)[1], allegro.fingertip_positions(q)[3])
+
+
+def test_summary_lists_every_joint(barrett: bh.Hand) -> None:
+    text = barrett.summary()
+    assert all(joint in text for joint in barrett.joint_names)
+    assert "1.2022 kg" in text
