@@ -269,7 +269,9 @@ def ik(
     """Fingertip-position IK for any hand by damped least squares, inside the joint limits.
 
     Each step solves ``dq = J^T (J J^T + damping^2 I)^-1 e`` for the stacked fingertip errors ``e`` [m], limits
-    the step to 0.2 rad, and clamps ``q`` to the joint limits.
+    the step to 0.2 rad, and clamps ``q`` to the joint limits.  It is a local method: joint limits create local
+    minima (a Barrett spread stuck at the wrong end of [0, pi]; an Allegro thumb near its limits), which the
+    seeded ``restarts`` escape (tests: 30 random reachable 4-finger Allegro targets all solved with 30 restarts).
 
     Args:
         targets: Finger name -> target fingertip position in the world [m].
