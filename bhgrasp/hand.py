@@ -63,6 +63,8 @@ class Hand:
             self._tip_ids[str(finger)] = model.getFrameId(frame)
         self._fingertips = {finger: model.frames[i].name for finger, i in self._tip_ids.items()}
         self._placement = pin.SE3.Identity()
+        self._base_at_origin = True  # skip world <- base products when the base frame is the world frame
+        self._lower_triangle = np.tril_indices(model.nv, -1)
         self._gravity_world = np.zeros(3)
         self.base_placement = base_placement if base_placement is not None else pin.SE3.Identity()
         self.gravity = gravity
@@ -184,6 +186,7 @@ class Hand:
             raise InputError(f"`base_placement` must be a pinocchio.SE3, got {type(placement).__name__}")
         as_array(placement.homogeneous, "base_placement", (4, 4))
         self._placement = placement.copy()
+        self._base_at_origin = bool(placement.isIdentity(0.0))
         self._update_model_gravity()
 
     @property
@@ -252,29 +255,36 @@ class Hand:
     def fingertip_positions(self, q: Any) -> np.ndarray:
         """Fingertip frame origins in the world [m], shape (n_fingers, 3), in :attr:`fingers` order."""
         pin.framesForwardKinematics(self._model, self._data, self._q(q))
-        rotation, translation = self._placement.rotation, self._placement.translation
         points = np.array([self._data.oMf[i].translation for i in self._tip_ids.values()])
-        return points @ rotation.T + translation
+        if self._base_at_origin:
+            return points
+        return points @ self._placement.rotation.T + self._placement.translation
 
     def frame_jacobian(self, q: Any, frame: str) -> np.ndarray:
         """Spatial Jacobian of a frame, shape (6, nv): rows (linear, angular), world-aligned, at the frame origin."""
-        frame_id = self._frame_id(frame)
-        jacobian = pin.computeFrameJacobian(
-            self._model, self._data, self._q(q), frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-        )
-        rotation = self._placement.rotation
-        return np.vstack((rotation @ jacobian[:3], rotation @ jacobian[3:]))
+        return self._jacobian(self._q(q), self._frame_id(frame), 6)
 
     def fingertip_jacobian(self, q: Any, finger: str) -> np.ndarray:
         """Translational Jacobian of a fingertip, shape (3, nv), world-aligned: ``p_dot_world = J v``."""
-        require_name(finger, self.fingers, "finger")
-        return self.frame_jacobian(q, self._fingertips[finger])[:3]
+        if finger not in self._tip_ids:
+            require_name(finger, self.fingers, "finger")
+        return self._jacobian(self._q(q), self._tip_ids[finger], 3)
+
+    def _jacobian(self, q: np.ndarray, frame_id: int, rows: int) -> np.ndarray:
+        jacobian = pin.computeFrameJacobian(
+            self._model, self._data, q, frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        )
+        if self._base_at_origin:
+            return jacobian[:rows].copy()
+        rotation = self._placement.rotation
+        return np.vstack([rotation @ jacobian[i : i + 3] for i in range(0, rows, 3)])
 
     # ------------------------------------------------------------------ dynamics
     def mass_matrix(self, q: Any) -> np.ndarray:
         """Joint-space inertia matrix M(q) (CRBA), full symmetric, shape (nv, nv) [kg m^2]."""
-        upper = pin.crba(self._model, self._data, self._q(q))
-        return np.triu(upper) + np.triu(upper, 1).T
+        mass = pin.crba(self._model, self._data, self._q(q)).copy()  # CRBA fills the upper triangle
+        mass[self._lower_triangle] = mass.T[self._lower_triangle]
+        return mass
 
     def nonlinear_effects(self, q: Any, v: Any) -> np.ndarray:
         """Coriolis, centrifugal and gravity torques C(q, v) v + G(q), shape (nv,) [N m]."""
@@ -339,8 +349,11 @@ class Hand:
         return pin.computeJointTorqueRegressor(self._model, self._data, q, v, a).copy()
 
     def inertial_parameters(self) -> np.ndarray:
-        """Dynamic parameters of every moving body, shape (10 * n_bodies,): (m, mc_x, mc_y, mc_z, I_xx, I_xy,
-        I_yy, I_xz, I_yz, I_zz) per body, inertia about the joint origin, in the joint frame."""
+        """Dynamic parameters of every moving body, shape (10 * n_bodies,).
+
+        Per body: (m, mc_x, mc_y, mc_z, I_xx, I_xy, I_yy, I_xz, I_yz, I_zz), inertia about the joint origin, in
+        the joint frame (Pinocchio's ``Inertia.toDynamicParameters``).
+        """
         inertias = self._model.inertias
         return np.concatenate([inertias[j].toDynamicParameters() for j in range(1, self._model.njoints)])
 
@@ -355,7 +368,9 @@ class Hand:
                 f"{self.velocity_limit[i]:13.3f}{self.effort_limit[i]:15.3f}"
             )
         for finger in self.fingers:
-            lines.append(f"  finger {finger}: tip {self._fingertips[finger]!r}, joints {', '.join(self.finger_joints(finger))}")
+            lines.append(
+                f"  finger {finger}: tip {self._fingertips[finger]!r}, joints {', '.join(self.finger_joints(finger))}"
+            )
         return "\n".join(lines)
 
     def __repr__(self) -> str:
@@ -379,7 +394,9 @@ class Hand:
             isinstance(f_ext, Sequence) and f_ext and isinstance(f_ext[0], pin.Force)
         ):
             if len(f_ext) != njoints:
-                raise InputError(f"`f_ext` must hold {njoints} forces (one per joint, universe first), got {len(f_ext)}")
+                raise InputError(
+                    f"`f_ext` must hold {njoints} forces (one per joint, universe first), got {len(f_ext)}"
+                )
             for i, force in enumerate(f_ext):
                 as_vector(force.vector, f"f_ext[{i}]", 6)
             if isinstance(f_ext, pin.StdVec_Force):

@@ -8,6 +8,7 @@ read from the Pinocchio model, so the solution is exact for whatever URDF the ha
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -94,7 +95,7 @@ def finger_ik(
     require_name(finger, hand.fingers, "finger")
     target_world = as_vector(position, "position", 3)
     reference = hand.neutral() if q0 is None else as_vector(q0, "q0", hand.nq)
-    chain = _FingerChain(hand, finger)
+    chain = _finger_chain(hand, finger)
     target = hand.base_placement.actInv(target_world)  # base frame coordinates
     candidates, residual = chain.solve(target)
     if not candidates:
@@ -109,6 +110,17 @@ def finger_ik(
             f"(plane_tolerance {plane_tolerance} m)"
         )
     return FingerIKResult(finger, hand.finger_joints(finger), best, indices, float(residual))
+
+
+_CHAINS: weakref.WeakKeyDictionary[Hand, dict[str, _FingerChain]] = weakref.WeakKeyDictionary()
+
+
+def _finger_chain(hand: Hand, finger: str) -> _FingerChain:
+    """The finger's geometry, read from the model once per hand (models are not modified after loading)."""
+    chains = _CHAINS.setdefault(hand, {})
+    if finger not in chains:
+        chains[finger] = _FingerChain(hand, finger)
+    return chains[finger]
 
 
 class _FingerChain:
@@ -153,7 +165,7 @@ class _FingerChain:
         self.link_t = self._in_plane(tip)  # distal axis -> fingertip at zero distal angle, 2-D
         self.height = float(self.axis_p @ (distal_placement.translation + tip))  # tip offset along the axis
         if self.spread is not None:
-            placement_s, axis_s = self.spread
+            axis_s = self.spread[1]
             axis_p_in_s = self.placement_p.rotation @ self.axis_p
             if abs(axis_p_in_s @ axis_s) > 1e-9:
                 raise ModelError(f"finger {finger!r}: the spread axis must lie in the finger's plane")
@@ -203,8 +215,8 @@ class _FingerChain:
             return []
         offset = np.arctan2(self.link_t[1], self.link_t[0]) - np.arctan2(self.link_d[1], self.link_d[0])
         solutions = []
-        delta = float(np.arccos(np.clip(cos_delta, -1.0, 1.0)))
-        for delta in (delta, -delta) if delta > 0.0 else (delta,):
+        elbow_angle = float(np.arccos(np.clip(cos_delta, -1.0, 1.0)))
+        for delta in (elbow_angle, -elbow_angle) if elbow_angle > 0.0 else (elbow_angle,):
             for q3 in _in_limits([self.sign_d * (delta - offset)], self.lower[-1], self.upper[-1]):
                 elbow = self.link_d + _rotate(self.link_t, self.sign_d * q3)
                 q2 = np.arctan2(point[1], point[0]) - np.arctan2(elbow[1], elbow[0])
@@ -213,9 +225,10 @@ class _FingerChain:
 
     def why_not(self, target: np.ndarray) -> str:
         near, far = self.reach()
+        lower, upper = np.round(self.lower, 4).tolist(), np.round(self.upper, 4).tolist()
         return (
-            f"no solution within the joint limits {np.round(self.lower, 4).tolist()}..{np.round(self.upper, 4).tolist()} "
-            f"rad (the tip can be {near:.4f}..{far:.4f} m from the proximal axis)"
+            f"no solution within the joint limits {lower}..{upper} rad "
+            f"(the tip can be {near:.4f}..{far:.4f} m from the proximal axis)"
         )
 
 
@@ -313,7 +326,9 @@ def ik(
     )
 
 
-def _dls(hand: Hand, goals: dict[str, np.ndarray], q: np.ndarray, tolerance: float, iterations: int, damping: float) -> IKResult:
+def _dls(
+    hand: Hand, goals: dict[str, np.ndarray], q: np.ndarray, tolerance: float, iterations: int, damping: float
+) -> IKResult:
     lower, upper = hand.lower, hand.upper
     q = np.clip(q, lower, upper)
     order = [hand.fingers.index(f) for f in goals]

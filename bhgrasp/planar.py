@@ -65,21 +65,23 @@ def planar_finger(
             max_config=np.array([joint_range]),
         )
         if rods:
-            inertia = pin.Inertia(mass, np.array([length / 2, 0.0, 0.0]), np.diag([0.0, 1.0, 1.0]) * mass * length**2 / 12)
+            inertia = pin.Inertia(
+                mass, np.array([length / 2, 0.0, 0.0]), np.diag([0.0, 1.0, 1.0]) * mass * length**2 / 12
+            )
         else:
             inertia = pin.Inertia(mass, np.array([length, 0.0, 0.0]), np.zeros((3, 3)))
         model.appendBodyToJoint(parent, inertia, pin.SE3.Identity())
         model.addFrame(pin.Frame(f"link{i}", parent, pin.SE3.Identity(), pin.FrameType.BODY))
         offset = float(length)
-    model.addFrame(
-        pin.Frame("tip", parent, pin.SE3(np.eye(3), np.array([offset, 0.0, 0.0])), pin.FrameType.OP_FRAME)
-    )
+    model.addFrame(pin.Frame("tip", parent, pin.SE3(np.eye(3), np.array([offset, 0.0, 0.0])), pin.FrameType.OP_FRAME))
     return Hand(model, {"tip": "tip"}, name=name, gravity=gravity)
 
 
 def thesis_two_link_finger() -> Hand:
-    """Chapter 3's planar finger: "the same mass and link dimensions of the Barrett finger" (thesis 3.5.2), i.e.
-    the two moving links of chapter 2: l = (0.05, 0.05) m, m = (0.0579, 0.0342) kg, point masses."""
+    """Chapter 3's planar finger: "the same mass and link dimensions of the Barrett finger" (thesis 3.5.2).
+
+    That is the two moving links of chapter 2: l = (0.05, 0.05) m, m = (0.0579, 0.0342) kg, point masses.
+    """
     return planar_finger((0.05, 0.05), (0.0579, 0.0342), name="thesis ch.3 planar finger")
 
 

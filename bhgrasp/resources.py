@@ -6,8 +6,8 @@ import sys
 from pathlib import Path
 from xml.etree.ElementTree import Element, ParseError
 
-import defusedxml.ElementTree as safe_xml
 from defusedxml import DefusedXmlException
+from defusedxml.ElementTree import fromstring as safe_fromstring
 
 from bhgrasp.errors import ModelError
 
@@ -47,7 +47,12 @@ def example_robot_data_dir() -> Path:
 
 
 def example_robot_data_urdf(relative_path: str) -> Path:
-    """Absolute path of a URDF of example-robot-data, e.g. ``"allegro_hand_description/urdf/allegro_right_hand.urdf"``."""
+    """Absolute path of a URDF of example-robot-data.
+
+    Args:
+        relative_path: Path below the ``robots`` folder, e.g.
+            ``"allegro_hand_description/urdf/allegro_right_hand.urdf"``.
+    """
     path = example_robot_data_dir() / relative_path
     if not path.is_file():
         raise ModelError(f"no file {relative_path!r} in example-robot-data at {example_robot_data_dir()}")
@@ -68,7 +73,7 @@ def read_urdf(path: str | Path) -> tuple[str, Element]:
         raise ModelError(f"URDF file not found: {str(path)!r}")
     text = path.read_text(encoding="utf-8", errors="strict")
     try:
-        root = safe_xml.fromstring(text, forbid_dtd=True, forbid_entities=True, forbid_external=True)
+        root = safe_fromstring(text, forbid_dtd=True, forbid_entities=True, forbid_external=True)
     except DefusedXmlException as error:
         raise ModelError(
             f"URDF {str(path)!r} declares a DTD or XML entities ({type(error).__name__}); bhgrasp refuses to "

@@ -54,7 +54,10 @@ def test_external_entities_are_neither_expanded_nor_fetched(tmp_path: Path) -> N
 
 
 def test_internal_entity_bomb_is_refused(tmp_path: Path) -> None:
-    bomb = '<?xml version="1.0"?><!DOCTYPE robot [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;">]><robot name="&b;"/>'
+    bomb = (
+        '<?xml version="1.0"?><!DOCTYPE robot [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;">]>'
+        '<robot name="&b;"/>'
+    )
     with pytest.raises(bh.ModelError, match="DTD or XML entities"):
         bh.Hand.from_urdf(write(tmp_path, bomb))
 
@@ -77,7 +80,9 @@ def test_unknown_fingertip_frame() -> None:
 
 # ---------------------------------------------------------------------- names
 def test_unknown_joint_name_lists_the_valid_ones(barrett: bh.Hand) -> None:
-    with pytest.raises(bh.InputError, match="unknown joint 'F3_spread'; valid joints: F1_spread, F1_proximal, .*F3_distal"):
+    with pytest.raises(
+        bh.InputError, match="unknown joint 'F3_spread'; valid joints: F1_spread, F1_proximal, .*F3_distal"
+    ):
         barrett.configuration(F3_spread=0.1)
 
 

@@ -55,7 +55,9 @@ def test_mdot_minus_two_c_is_skew_symmetric(hand: bh.Hand, seed: int) -> None:
     np.testing.assert_allclose(n + n.T, 0.0, atol=1e-6 * scale)
     assert np.abs(n).max() > 1e-3 * scale  # non-trivial: the property is not vacuous
     # C v + G is the nonlinear-effects vector, and C(q, 0) = 0.
-    np.testing.assert_allclose(hand.coriolis_matrix(q, v) @ v + hand.gravity_torques(q), hand.nonlinear_effects(q, v), atol=1e-12)
+    np.testing.assert_allclose(
+        hand.coriolis_matrix(q, v) @ v + hand.gravity_torques(q), hand.nonlinear_effects(q, v), atol=1e-12
+    )
     np.testing.assert_array_equal(hand.coriolis_matrix(q, np.zeros(hand.nv)), 0.0)
 
 
@@ -132,7 +134,10 @@ def test_external_forces_act_through_the_jacobian_transpose(barrett: bh.Hand, se
     tau = rng.normal(size=8)
     np.testing.assert_allclose(
         barrett.forward_dynamics(q, v, tau, f_ext),
-        np.linalg.solve(barrett.mass_matrix(q), tau + barrett.frame_jacobian(q, "F2_tip").T @ wrench - barrett.nonlinear_effects(q, v)),
+        np.linalg.solve(
+            barrett.mass_matrix(q),
+            tau + barrett.frame_jacobian(q, "F2_tip").T @ wrench - barrett.nonlinear_effects(q, v),
+        ),
         atol=1e-8,
     )
 
@@ -148,7 +153,9 @@ def test_base_placement_and_gravity_mount_the_hand_anywhere() -> None:
     np.testing.assert_allclose(turned.nonlinear_effects(q, v), upright.nonlinear_effects(q, v), atol=1e-12)
     expected = upright.fingertip_positions(q) @ rotation.T + placement.translation
     np.testing.assert_allclose(turned.fingertip_positions(q), expected, atol=1e-12)
-    np.testing.assert_allclose(turned.fingertip_jacobian(q, "F3"), rotation @ upright.fingertip_jacobian(q, "F3"), atol=1e-12)
+    np.testing.assert_allclose(
+        turned.fingertip_jacobian(q, "F3"), rotation @ upright.fingertip_jacobian(q, "F3"), atol=1e-12
+    )
     assert turned.frame_placement(q, "palm_surface").isApprox(placement * upright.frame_placement(q, "palm_surface"))
     # Hanging upside down (gravity along the palm normal) flips every gravity torque.
     hanging = bh.BarrettHand(gravity=(0.0, 0.0, 9.81))
@@ -184,7 +191,9 @@ def test_allegro_is_a_working_hand(allegro: bh.Hand) -> None:
     assert all(len(allegro.finger_joints(f)) == 4 for f in allegro.fingers)
     q = allegro.random_configuration(0)
     assert allegro.fingertip_positions(q).shape == (4, 3)
-    assert allegro.forward_dynamics(q, np.zeros(16), allegro.gravity_torques(q)) == pytest.approx(np.zeros(16), abs=1e-9)
+    assert allegro.forward_dynamics(q, np.zeros(16), allegro.gravity_torques(q)) == pytest.approx(
+        np.zeros(16), abs=1e-9
+    )
 
 
 def test_fingertips_given_by_name(allegro: bh.Hand) -> None:

@@ -23,7 +23,10 @@ def test_closed_form_reproduces_random_reachable_fingertips(barrett: bh.Hand, fi
         assert np.all(solution.angles <= barrett.upper[solution.indices])
         assert solution.plane_residual < 1e-12
         # Away from the spread singularity (tip on the spread axis) the solution is the one we started from.
-        if finger == "F3" or np.linalg.norm(target[:2] - barrett.frame_placement(q, f"{finger}_spread").translation[:2]) > 1e-3:
+        if (
+            finger == "F3"
+            or np.linalg.norm(target[:2] - barrett.frame_placement(q, f"{finger}_spread").translation[:2]) > 1e-3
+        ):
             np.testing.assert_allclose(solution.angles, q[solution.indices], atol=1e-6)
 
 

@@ -23,8 +23,10 @@ G = 9.81
 def closed_form(q: np.ndarray, v: np.ndarray, l1: float, l2: float, m1: float, m2: float) -> tuple:
     c1, c2, c12, s2 = np.cos(q[0]), np.cos(q[1]), np.cos(q[0] + q[1]), np.sin(q[1])
     mass = np.array(
-        [[(m1 + m2) * l1**2 + m2 * l2**2 + 2 * m2 * l1 * l2 * c2, m2 * l2**2 + m2 * l1 * l2 * c2],
-         [m2 * l2**2 + m2 * l1 * l2 * c2, m2 * l2**2]]
+        [
+            [(m1 + m2) * l1**2 + m2 * l2**2 + 2 * m2 * l1 * l2 * c2, m2 * l2**2 + m2 * l1 * l2 * c2],
+            [m2 * l2**2 + m2 * l1 * l2 * c2, m2 * l2**2],
+        ]
     )
     h = -m2 * l1 * l2 * s2
     coriolis = np.array([[h * v[1], h * (v[0] + v[1])], [-h * v[0], 0.0]])

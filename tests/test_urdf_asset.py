@@ -47,7 +47,11 @@ def test_limits_are_barretts(barrett: bh.Hand) -> None:
         assert barrett.lower[i] == 0.0
         assert np.degrees(barrett.upper[i]) == pytest.approx(degrees[joint.split("_")[1]], abs=1e-9)
     # Velocity limits from the puck default MV [counts/ms], 4096 counts/rev and the gear ratios.
-    motor_speed = {"spread": 50e3 / 4096 * 2 * np.pi, "proximal": 200e3 / 4096 * 2 * np.pi, "distal": 200e3 / 4096 * 2 * np.pi}
+    motor_speed = {
+        "spread": 50e3 / 4096 * 2 * np.pi,
+        "proximal": 200e3 / 4096 * 2 * np.pi,
+        "distal": 200e3 / 4096 * 2 * np.pi,
+    }
     ratio = {"spread": 17.5, "proximal": 125.0, "distal": 93.75}
     for i, joint in enumerate(barrett.joint_names):
         kind = joint.split("_")[1]
@@ -77,7 +81,9 @@ def test_inertias_are_physical(urdf_root: ET.Element) -> None:
         if inertial is None:
             continue
         t = {k: float(v) for k, v in inertial.find("inertia").attrib.items()}
-        tensor = np.array([[t["ixx"], t["ixy"], t["ixz"]], [t["ixy"], t["iyy"], t["iyz"]], [t["ixz"], t["iyz"], t["izz"]]])
+        tensor = np.array(
+            [[t["ixx"], t["ixy"], t["ixz"]], [t["ixy"], t["iyy"], t["iyz"]], [t["ixz"], t["iyz"], t["izz"]]]
+        )
         principal = np.linalg.eigvalsh(tensor)
         assert principal.min() > 0, link.get("name")
         a, b, c = principal

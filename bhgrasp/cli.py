@@ -1,0 +1,80 @@
+"""Command line: ``bhgrasp demo`` (the main job; headless by default) and ``bhgrasp info``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``bhgrasp`` command."""
+    parser = argparse.ArgumentParser(prog="bhgrasp", description="Barrett hand modelling, simulation and control.")
+    commands = parser.add_subparsers(dest="command", required=True)
+    demo = commands.add_parser("demo", help="load the Barrett hand, print its model and plot its workspace")
+    demo.add_argument("--output", type=Path, default=Path("bhgrasp_demo"), help="folder for the figure")
+    demo.add_argument("--samples", type=int, default=20_000, help="workspace samples per finger")
+    demo.add_argument("--seed", type=int, default=0, help="random seed of the workspace sampling")
+    commands.add_parser("info", help="print the hand summary only")
+    args = parser.parse_args(argv)
+    if args.command == "info":
+        from bhgrasp import BarrettHand
+
+        print(BarrettHand().summary())
+        return 0
+    return _demo(args.output, args.samples, args.seed)
+
+
+def _demo(output: Path, samples: int, seed: int) -> int:
+    import bhgrasp as bh
+    from bhgrasp.experiments.chapter2 import workspace_table
+
+    hand = bh.BarrettHand()
+    print(hand.summary())
+    q = hand.configuration(F1_spread=np.pi / 3, F1_proximal=1.0, F2_proximal=1.0, F3_proximal=1.0)
+    print("\nfingertip positions [m] in frame W at a tripod pose (spread 60 deg, proximal 57.3 deg):")
+    for finger, position in zip(hand.fingers, hand.fingertip_positions(q)):
+        print(f"  {finger}: {np.array2string(position, precision=4, floatmode='fixed', suppress_small=True)}")
+    target = hand.fingertip_positions(q)[2]
+    solution = bh.finger_ik(hand, "F3", target)
+    print(f"closed-form IK of F3 back from that point: {np.round(solution.angles, 6)} rad")
+    print("\nworkspace bounds in the thesis' axes (Table 2.2; see bhgrasp.experiments.chapter2):")
+    for row in workspace_table(hand, samples, seed):
+        print(row.format())
+    figure_path = _plot_workspace(hand, output, samples, seed)
+    print(f"\nworkspace figure: {figure_path}")
+    return 0
+
+
+def _plot_workspace(hand, output: Path, samples: int, seed: int) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")  # headless: write a file, open no window
+    import matplotlib.pyplot as plt
+
+    from bhgrasp.ik import workspace
+
+    output.mkdir(parents=True, exist_ok=True)
+    figure, axes = plt.subplots(1, 2, figsize=(11, 5), constrained_layout=True)
+    colours = {"F1": "tab:blue", "F2": "tab:orange", "F3": "tab:green"}
+    for finger in hand.fingers:
+        points = workspace(hand, finger, samples, rng=seed).points
+        axes[0].scatter(points[:, 0], points[:, 1], s=0.3, alpha=0.3, color=colours[finger], label=finger)
+        axes[1].scatter(points[:, 1], points[:, 2], s=0.3, alpha=0.3, color=colours[finger], label=finger)
+    axes[0].set(xlabel="x [m]", ylabel="y [m]", title="top view (palm plane)", aspect="equal")
+    axes[1].set(xlabel="y [m]", ylabel="z [m] (palm normal)", title="side view", aspect="equal")
+    for ax in axes:
+        ax.legend(markerscale=20)
+        ax.grid(True, alpha=0.3)
+    figure.suptitle(f"Barrett BH8-280 fingertip workspace ({samples} samples per finger, seed {seed})")
+    path = output / "workspace.png"
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+    return path
+
+
+if __name__ == "__main__":
+    sys.exit(main())
