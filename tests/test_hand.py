@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import copy
+import pickle
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -162,6 +165,17 @@ def test_base_placement_and_gravity_mount_the_hand_anywhere() -> None:
     np.testing.assert_allclose(hanging.gravity_torques(q), -upright.gravity_torques(q), atol=1e-12)
     upright.gravity = (0.0, 0.0, 0.0)
     np.testing.assert_array_equal(upright.gravity_torques(q), 0.0)
+
+
+def test_copies_are_independent(barrett: bh.Hand) -> None:
+    """Deep copies and pickles (process pools) own their model and data."""
+    q = barrett.random_configuration(8)
+    for clone in (copy.deepcopy(barrett), pickle.loads(pickle.dumps(barrett))):
+        assert clone.model is not barrett.model
+        np.testing.assert_array_equal(clone.mass_matrix(q), barrett.mass_matrix(q))
+        clone.gravity = (0.0, 0.0, 0.0)
+        assert np.abs(barrett.gravity_torques(q)).max() > 0.01
+        np.testing.assert_array_equal(clone.gravity_torques(q), 0.0)
 
 
 def test_configuration_by_joint_name(barrett: bh.Hand) -> None:
