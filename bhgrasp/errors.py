@@ -32,3 +32,20 @@ class UnreachableError(BhgraspError, ValueError):
     def __init__(self, message: str, result: Any = None) -> None:
         super().__init__(message)
         self.result = result
+
+
+class SimulationDiverged(BhgraspError, RuntimeError):
+    """A simulation produced NaN/inf, runaway speed or runaway penetration.
+
+    Attributes:
+        time: Simulated time [s] at which it was detected.
+        quantity: What diverged (e.g. ``"object speed"``, ``"contact depth"``).
+        value: The offending value.
+    """
+
+    def __init__(self, time: float, quantity: str, value: object, hint: str = "") -> None:
+        message = f"simulation diverged at t = {time:.6g} s: {quantity} = {value}"
+        super().__init__(message + (f"; {hint}" if hint else ""))
+        self.time = time
+        self.quantity = quantity
+        self.value = value

@@ -1,0 +1,336 @@
+"""Contacts: detection with coal (contact patches) and the spring-damper + Coulomb friction force law.
+
+Thesis 4.2 models contact as a spring (4.5)-(4.7) pushing the bodies apart along the contact normal.  Here every
+contact point ``i`` between body ``a`` and body ``b`` (normal ``n`` from a to b, depth ``d >= 0``) gets a force
+on ``b`` (and its opposite on ``a``, at the same point):
+
+- normal: ``f_n = max(0, k d + c d_dot)`` (linear), or ``max(0, d^e (k + c d_dot))`` (Hunt-Crossley); never pulls;
+- tangential, stick-slip (default): an elastic tangential displacement ``u`` (a spring anchored where the contact
+  began to stick) gives ``f_t = -k_t u - c_t v_t``; when ``|f_t| > mu f_n`` the contact slides, ``f_t`` is
+  projected onto the cone and the anchor follows so that ``k_t |u| = mu f_n``.  A contact that sticks has zero
+  creep at equilibrium (no velocity is needed to hold a tangential load);
+- tangential, regularised (option, for comparison): ``f_t = -mu f_n tanh(|v_t| / v_s) v_t / |v_t|``, which must
+  creep to hold a load.
+
+For the simulator's linearly-implicit step the force is written as ``f(v+) = f0 - D J v+`` (the spring evaluated
+at the end of the step): :meth:`ContactEngine.linearise` returns ``f0``, ``D`` and the relative Jacobians ``J``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp._validation import as_positive
+from bhgrasp.errors import InputError
+from bhgrasp.scene import Scene
+
+
+@dataclass(frozen=True)
+class SpringDamper:
+    """The contact force law and its parameters.
+
+    Attributes:
+        stiffness: Normal stiffness k [N/m] (Hunt-Crossley: [N/m^e]).
+        damping: Normal damping c [N s/m] (Hunt-Crossley: [N s/m^(e+1)]).
+        friction: Coulomb coefficient of the hand's finger pads (a pair uses the smaller of its two surfaces').
+        tangential_stiffness: k_t [N/m] of the stick spring; default ``stiffness``.
+        tangential_damping: c_t [N s/m]; default ``damping``.
+        normal_law: ``"linear"`` or ``"hunt-crossley"``.
+        exponent: Hunt-Crossley exponent e (1.5 for Hertzian spheres).
+        friction_law: ``"stick-slip"`` (true static friction) or ``"tanh"`` (regularised, creeps).
+        slip_velocity: v_s of the tanh law [m/s].
+    """
+
+    stiffness: float = 1e4
+    damping: float = 20.0
+    friction: float = 0.8
+    tangential_stiffness: float | None = None
+    tangential_damping: float | None = None
+    normal_law: Literal["linear", "hunt-crossley"] = "linear"
+    exponent: float = 1.5
+    friction_law: Literal["stick-slip", "tanh"] = "stick-slip"
+    slip_velocity: float = 1e-3
+
+    def __post_init__(self) -> None:
+        as_positive(self.stiffness, "stiffness")
+        _nonnegative(self.damping, "damping")
+        _nonnegative(self.friction, "friction")
+        as_positive(self.exponent, "exponent")
+        as_positive(self.slip_velocity, "slip_velocity")
+        if self.tangential_stiffness is not None:
+            as_positive(self.tangential_stiffness, "tangential_stiffness")
+        if self.tangential_damping is not None:
+            _nonnegative(self.tangential_damping, "tangential_damping")
+        if self.normal_law not in ("linear", "hunt-crossley"):
+            raise InputError(f"`normal_law` must be 'linear' or 'hunt-crossley', got {self.normal_law!r}")
+        if self.friction_law not in ("stick-slip", "tanh"):
+            raise InputError(f"`friction_law` must be 'stick-slip' or 'tanh', got {self.friction_law!r}")
+
+    @property
+    def k_t(self) -> float:
+        """Tangential stiffness [N/m]."""
+        return self.stiffness if self.tangential_stiffness is None else self.tangential_stiffness
+
+    @property
+    def c_t(self) -> float:
+        """Tangential damping [N s/m]."""
+        return self.damping if self.tangential_damping is None else self.tangential_damping
+
+
+@dataclass(frozen=True)
+class Contact:
+    """One contact point, as a user inspects it (world frame, SI units).
+
+    Attributes:
+        body_a: Name of the body the normal points away from (hand link, environment, first object).
+        body_b: Name of the body the force ``force`` acts on (an object); ``-force`` acts on ``body_a``.
+        point: Contact point [m] (midway between the two surfaces).
+        normal: Unit normal from a to b.
+        depth: Penetration [m] (>= 0).
+        normal_force: f_n [N] (>= 0).
+        tangential_force: f_t [N], perpendicular to ``normal``.
+        sticking: Whether the tangential force is inside the friction cone (no sliding).
+    """
+
+    body_a: str
+    body_b: str
+    point: np.ndarray
+    normal: np.ndarray
+    depth: float
+    normal_force: float
+    tangential_force: np.ndarray
+    sticking: bool
+
+    @property
+    def force(self) -> np.ndarray:
+        """Total force on ``body_b`` [N]."""
+        return self.normal_force * self.normal + self.tangential_force
+
+
+@dataclass
+class ContactSet:
+    """The contact points of one instant as arrays (m contacts); ``contacts`` gives :class:`Contact` records."""
+
+    pair: np.ndarray  # (m,) collision-pair index
+    point: np.ndarray  # (m, 3) [m]
+    normal: np.ndarray  # (m, 3) unit, a -> b
+    depth: np.ndarray  # (m,) [m]
+    friction: np.ndarray  # (m,) mu
+    displacement: np.ndarray  # (m, 3) tangential elastic displacement u at the start of the step [m]
+    weight: np.ndarray  # (m,) share of its patch's stiffness and damping: 1 / (points in the patch)
+    force: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (m, 3) on b [N]
+    sticking: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+
+    def __len__(self) -> int:
+        return len(self.pair)
+
+    def normal_forces(self) -> np.ndarray:
+        """f_n per contact [N]."""
+        return np.einsum("ij,ij->i", self.force, self.normal) if len(self) else np.zeros(0)
+
+    def records(self, scene: Scene) -> list[Contact]:
+        """The contacts as :class:`Contact` records with body names."""
+        records = []
+        for i, k in enumerate(self.pair):
+            pair = scene.pairs[k]
+            f_n = float(self.force[i] @ self.normal[i])
+            records.append(
+                Contact(
+                    pair.body_a,
+                    pair.body_b,
+                    self.point[i].copy(),
+                    self.normal[i].copy(),
+                    float(self.depth[i]),
+                    f_n,
+                    self.force[i] - f_n * self.normal[i],
+                    bool(self.sticking[i]),
+                )
+            )
+        return records
+
+
+def empty_contact_set() -> ContactSet:
+    """A set with no contacts."""
+    return ContactSet(
+        np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros((0, 3)), np.zeros(0)
+    )
+
+
+class ContactEngine:
+    """Detects contacts of a scene and computes their forces; remembers each contact's tangential displacement.
+
+    Contacts are matched from one step to the next by collision pair and by position on body b (within
+    ``match_radius``), so that a sticking contact keeps its tangential spring.
+    """
+
+    def __init__(self, scene: Scene, law: SpringDamper, match_radius: float = 3e-3) -> None:
+        """Prepare detection for every collision pair of ``scene``."""
+        self.scene = scene
+        self.law = law
+        self.match_radius = as_positive(match_radius, "match_radius")
+        self._pair_friction = np.array([pair.friction(law.friction) for pair in scene.pairs])
+        self._joint_a = np.array([pair.joint_a for pair in scene.pairs], dtype=int)
+        self._joint_b = np.array([pair.joint_b for pair in scene.pairs], dtype=int)
+        self._memory: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # pair -> (points in b's frame, u)
+
+    def reset(self) -> None:
+        """Forget every contact (a new run)."""
+        self._memory = {}
+
+    # ------------------------------------------------------------------ detection
+    def detect(self, q: np.ndarray) -> ContactSet:
+        """Contact points at configuration ``q`` (runs forward kinematics and coal), matched to the last step's.
+
+        Each coal contact patch (e.g. the 4 corners of a box face on a plane) shares the law's stiffness and
+        damping among its points, so a body's contact stiffness does not depend on how many points coal reports.
+        """
+        scene = self.scene
+        pin.computeCollisions(scene.model, scene.data, scene.geometry, scene.geometry_data, q, False)
+        colliding = [k for k, result in enumerate(scene.geometry_data.collisionResults) if result.isCollision()]
+        if not colliding:
+            return empty_contact_set()
+        pin.computeContactPatches(scene.geometry, scene.geometry_data)
+        pairs, on_a, on_b, normals, weights = [], [], [], [], []
+        for k in colliding:
+            patches = scene.geometry_data.contactPatchResults[k]
+            for p in range(patches.numContactPatches()):
+                patch = patches.getContactPatch(p)
+                size = patch.size()
+                normal = patch.getNormal()
+                for i in range(size):
+                    pairs.append(k)
+                    on_a.append(patch.getPointShape1(i))
+                    on_b.append(patch.getPointShape2(i))
+                    normals.append(normal)
+                    weights.append(1.0 / size)
+        on_a, on_b, normal = np.array(on_a), np.array(on_b), np.array(normals)
+        depth = np.einsum("ij,ij->i", normal, on_a - on_b)
+        keep = depth > 0.0
+        if not np.any(keep):
+            return empty_contact_set()
+        pair = np.array(pairs, dtype=int)[keep]
+        point, normal = 0.5 * (on_a[keep] + on_b[keep]), normal[keep]
+        displacement = self._recall(pair, point, normal)
+        weight = np.array(weights)[keep]
+        return ContactSet(pair, point, normal, depth[keep], self._pair_friction[pair], displacement, weight)
+
+    def _recall(self, pair: np.ndarray, point: np.ndarray, normal: np.ndarray) -> np.ndarray:
+        """Tangential displacement of each contact carried over from the last step (0 for a new contact)."""
+        displacement = np.zeros_like(point)
+        data = self.scene.data
+        for k in np.unique(pair):
+            remembered = self._memory.get(int(k))
+            if remembered is None:
+                continue
+            old_local, old_u = remembered
+            rows = np.flatnonzero(pair == k)
+            frame_b = data.oMi[int(self._joint_b[k])]
+            local = (point[rows] - frame_b.translation) @ frame_b.rotation  # world -> b's joint frame
+            distance = np.linalg.norm(local[:, None, :] - old_local[None, :, :], axis=2)
+            nearest = np.argmin(distance, axis=1)
+            matched = distance[np.arange(len(rows)), nearest] <= self.match_radius
+            u = old_u[nearest[matched]]
+            n = normal[rows[matched]]
+            projected = u - np.einsum("ij,ij->i", u, n)[:, None] * n  # onto the new tangent plane, same length
+            length, new_length = np.linalg.norm(u, axis=1), np.linalg.norm(projected, axis=1)
+            scale = np.divide(length, new_length, out=np.ones_like(length), where=new_length > 1e-15)
+            displacement[rows[matched]] = projected * scale[:, None]
+        return displacement
+
+    def remember(self, contacts: ContactSet, displacement: np.ndarray) -> None:
+        """Store the end-of-step tangential displacements (call once per step, after the forces are final)."""
+        data = self.scene.data
+        memory = {}
+        for k in np.unique(contacts.pair):
+            rows = contacts.pair == k
+            frame_b = data.oMi[int(self._joint_b[k])]
+            memory[int(k)] = ((contacts.point[rows] - frame_b.translation) @ frame_b.rotation, displacement[rows])
+        self._memory = memory
+
+    # ------------------------------------------------------------------ kinematics of the contact points
+    def jacobians(self, contacts: ContactSet) -> np.ndarray:
+        """Relative point Jacobians J_b(p) - J_a(p), shape (m, 3, nv), world-aligned.
+
+        Needs ``pin.computeJointJacobians`` at the current ``q`` (the simulator calls it once per step).
+        """
+        model, data = self.scene.model, self.scene.data
+        jacobians = np.zeros((len(contacts), 3, model.nv))
+        for joints, sign in ((self._joint_b[contacts.pair], 1.0), (self._joint_a[contacts.pair], -1.0)):
+            for joint in np.unique(joints):
+                if joint == 0:
+                    continue  # the environment and the fixed palm do not move
+                rows = np.flatnonzero(joints == joint)
+                frame = pin.getJointJacobian(model, data, int(joint), pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+                lever = contacts.point[rows] - data.oMi[int(joint)].translation
+                # v_point = v_joint + omega x lever = (J_lin - [lever]x J_ang) v
+                jacobians[rows] += sign * (frame[:3] - _skew(lever) @ frame[3:])
+        return jacobians
+
+    # ------------------------------------------------------------------ force law
+    def forces(
+        self, contacts: ContactSet, velocity: np.ndarray, dt: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Explicit forces on body b, given relative point velocities (m, 3) [m/s].
+
+        With ``dt`` > 0 the stick spring is evaluated at the end of the step (displacement + dt v_t).
+
+        Returns:
+            Forces (m, 3) [N], sticking flags (m,), end-of-step tangential displacements (m, 3) [m].
+        """
+        law = self.law
+        normal = contacts.normal
+        v_n = np.einsum("ij,ij->i", velocity, normal)
+        v_t = velocity - v_n[:, None] * normal
+        depth_rate = -v_n
+        weight = contacts.weight
+        if law.normal_law == "linear":
+            f_n = weight * (law.stiffness * contacts.depth + law.damping * depth_rate)
+        else:
+            f_n = weight * contacts.depth**law.exponent * (law.stiffness + law.damping * depth_rate)
+        f_n = np.maximum(f_n, 0.0)
+        cone = contacts.friction * f_n
+        if law.friction_law == "tanh":
+            speed = np.linalg.norm(v_t, axis=1)
+            direction = np.divide(v_t, speed[:, None], out=np.zeros_like(v_t), where=speed[:, None] > 0)
+            f_t = -(cone * np.tanh(speed / law.slip_velocity))[:, None] * direction
+            sticking = speed < law.slip_velocity
+            displacement = np.zeros_like(v_t)
+        else:
+            displacement = contacts.displacement + dt * v_t
+            f_t = -weight[:, None] * (law.k_t * displacement + law.c_t * v_t)
+            f_t, sticking, displacement = self.project_on_cone(f_t, cone, displacement, weight)
+        forces = f_n[:, None] * normal + f_t
+        return forces, sticking, displacement
+
+    def project_on_cone(
+        self, f_t: np.ndarray, cone: np.ndarray, displacement: np.ndarray, weight: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Clip tangential forces to ``|f_t| <= cone``; a sliding contact's anchor follows (w k_t |u| = cone)."""
+        magnitude = np.linalg.norm(f_t, axis=1)
+        sticking = magnitude <= cone
+        sliding = ~sticking
+        if np.any(sliding):
+            direction = f_t[sliding] / magnitude[sliding, None]
+            f_t = f_t.copy()
+            f_t[sliding] = cone[sliding, None] * direction
+            displacement = displacement.copy()
+            displacement[sliding] = -f_t[sliding] / (weight[sliding, None] * self.law.k_t)
+        return f_t, sticking, displacement
+
+
+def _skew(vectors: np.ndarray) -> np.ndarray:
+    """Cross-product matrices [v]x of a stack of 3-vectors, shape (m, 3, 3)."""
+    x, y, z = vectors.T
+    zero = np.zeros_like(x)
+    return np.stack((zero, -z, y, z, zero, -x, -y, x, zero), axis=1).reshape(-1, 3, 3)
+
+
+def _nonnegative(value: float, name: str) -> float:
+    number = float(value)
+    if not np.isfinite(number) or number < 0.0:
+        raise InputError(f"`{name}` must be a finite number >= 0, got {value!r}")
+    return number

@@ -1,0 +1,277 @@
+"""Scene: the hand, free rigid objects and a fixed environment as one Pinocchio model plus coal collision geometry.
+
+Layout of the state: ``q = (q_hand, q_object_1, ...)``, ``v = (v_hand, v_object_1, ...)``.  A free object adds a
+free-flyer joint (7 coordinates: position [m], quaternion (x, y, z, w); 6 velocities: linear [m/s] and angular
+[rad/s] of its centre of mass *in its body frame*, Pinocchio's convention).  A spring-mounted object
+(:class:`~bhgrasp.objects.SpringMounted`) adds one prismatic coordinate: its displacement [m] from rest along
+its direction.  World = the frame the hand base is placed in (``hand.base_placement``); gravity is the hand's.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp.errors import InputError, ModelError
+from bhgrasp.hand import Hand
+from bhgrasp.objects import FixedBox, Plane, RigidObject, SpringMounted
+
+Environment = Plane | FixedBox
+
+
+@dataclass(frozen=True)
+class CollisionPair:
+    """Two geometries that may touch: forces act on ``b`` along the contact normal (from ``a`` to ``b``).
+
+    Attributes:
+        index: Index in the geometry model's collision pairs.
+        geom_a: Geometry index of body a (a hand link, the environment, or the first object).
+        geom_b: Geometry index of body b (an object).
+        joint_a: Pinocchio joint carrying body a (0 = fixed: environment or palm).
+        joint_b: Joint carrying body b.
+        body_a: Display name of body a (link, environment or object name).
+        body_b: Display name of body b.
+        friction_a: Coulomb coefficient of surface a; ``None`` for a hand link (the contact law's pad value).
+        friction_b: Coulomb coefficient of surface b.
+    """
+
+    index: int
+    geom_a: int
+    geom_b: int
+    joint_a: int
+    joint_b: int
+    body_a: str
+    body_b: str
+    friction_a: float | None
+    friction_b: float
+
+    def friction(self, hand_friction: float) -> float:
+        """Coefficient of the pair: the smaller of the two surfaces' (hand pads have ``hand_friction``)."""
+        first = hand_friction if self.friction_a is None else self.friction_a
+        return min(first, self.friction_b)
+
+
+class Scene:
+    """Hand + objects + environment: one ``pin.Model`` (fixed hand base) and one ``pin.GeometryModel``."""
+
+    def __init__(
+        self,
+        hand: Hand,
+        objects: Sequence[RigidObject | SpringMounted] = (),
+        environment: Sequence[Environment] = (),
+    ) -> None:
+        """Assemble the scene.
+
+        Args:
+            hand: The hand; its base placement and gravity are the scene's.  Its collision geometry is read
+                from ``hand.urdf_path`` (a hand built without a URDF, e.g. a planar finger, has none).
+            objects: Free rigid objects and spring-mounted (compliant) objects, in state order.
+            environment: Fixed shapes (planes, fixed boxes).
+        """
+        self.hand = hand
+        self.objects = tuple(objects)
+        self.environment = tuple(environment)
+        for i, item in enumerate(self.objects):
+            if not isinstance(item, RigidObject | SpringMounted):
+                raise InputError(f"`objects[{i}]` must be a RigidObject or SpringMounted, got {type(item).__name__}")
+        for i, item in enumerate(self.environment):
+            if not isinstance(item, Plane | FixedBox):
+                raise InputError(f"`environment[{i}]` must be a Plane or FixedBox, got {type(item).__name__}")
+        self.object_names = _unique_names([o.name for o in self.objects], "object")
+        self.environment_names = _unique_names([e.name for e in self.environment], "environment")
+
+        self.model = _placed_copy(hand.model, hand.base_placement)
+        self.model.gravity.linear = hand.gravity
+        self.nq_hand, self.nv_hand = hand.nq, hand.nv
+        self.joint_stiffness = np.zeros(0)  # filled below: spring of spring-mounted objects [N/m]
+        self.object_joints: list[int] = []
+        stiffness, damping = [], []
+        for name, item in zip(self.object_names, self.objects):
+            joint = self._add_object(name, item)
+            self.object_joints.append(joint)
+            if isinstance(item, SpringMounted):
+                stiffness.append(item.stiffness)
+                damping.append(item.damping)
+            else:
+                stiffness += [0.0] * 6
+                damping += [0.0] * 6
+        self.joint_stiffness = np.concatenate((np.zeros(self.nv_hand), stiffness))
+        self.joint_damping = np.concatenate((np.zeros(self.nv_hand), damping))
+        self.data = self.model.createData()
+
+        self.geometry = self._hand_geometry()
+        self.hand_geometries = list(range(self.geometry.ngeoms))
+        self.object_geometries = [
+            self._add_geometry(name, joint, pin.SE3.Identity(), item.geometry())
+            for name, joint, item in zip(self.object_names, self.object_joints, self.objects)
+        ]
+        self.environment_geometries = [
+            self._add_geometry(name, 0, item.placement, item.geometry())
+            for name, item in zip(self.environment_names, self.environment)
+        ]
+        self.pairs = self._collision_pairs()
+        self.geometry_data = pin.GeometryData(self.geometry)
+        for request in self.geometry_data.collisionRequests:
+            request.enable_contact = True
+            request.num_max_contacts = 4
+
+    # ------------------------------------------------------------------ sizes and slices
+    @property
+    def nq(self) -> int:
+        """Size of the scene configuration."""
+        return self.model.nq
+
+    @property
+    def nv(self) -> int:
+        """Size of the scene velocity."""
+        return self.model.nv
+
+    def object_index(self, name: str) -> int:
+        """Position of an object in :attr:`objects`."""
+        if name not in self.object_names:
+            raise InputError(f"unknown object {name!r}; valid objects: {', '.join(self.object_names)}")
+        return self.object_names.index(name)
+
+    def object_q_slice(self, index: int) -> slice:
+        """Slice of an object's coordinates in the scene ``q``."""
+        joint = self.model.joints[self.object_joints[index]]
+        return slice(joint.idx_q, joint.idx_q + joint.nq)
+
+    def object_v_slice(self, index: int) -> slice:
+        """Slice of an object's velocities in the scene ``v``."""
+        joint = self.model.joints[self.object_joints[index]]
+        return slice(joint.idx_v, joint.idx_v + joint.nv)
+
+    # ------------------------------------------------------------------ states
+    def initial_state(self, q_hand: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Scene ``(q, v)`` with the hand at ``q_hand`` (default neutral) at rest and objects as described."""
+        q = np.zeros(self.nq)
+        v = np.zeros(self.nv)
+        q[: self.nq_hand] = self.hand.neutral() if q_hand is None else q_hand
+        for i, item in enumerate(self.objects):
+            if isinstance(item, SpringMounted):
+                continue  # displacement 0, at rest
+            q[self.object_q_slice(i)] = pin.SE3ToXYZQUAT(item.pose)
+            rotation = item.pose.rotation
+            v[self.object_v_slice(i)] = np.concatenate((rotation.T @ item.velocity[:3], rotation.T @ item.velocity[3:]))
+        return q, v
+
+    def object_pose(self, q: np.ndarray, index: int) -> pin.SE3:
+        """World pose of an object's centre of mass frame."""
+        item = self.objects[index]
+        if isinstance(item, SpringMounted):
+            displacement = float(q[self.object_q_slice(index)][0])
+            return pin.SE3(item.pose.rotation, item.pose.translation + displacement * item.direction)
+        return pin.XYZQUATToSE3(q[self.object_q_slice(index)])
+
+    def object_twist(self, q: np.ndarray, v: np.ndarray, index: int) -> np.ndarray:
+        """Object velocity (linear [m/s], angular [rad/s]) of its centre of mass in world-aligned coordinates."""
+        item = self.objects[index]
+        if isinstance(item, SpringMounted):
+            return np.concatenate((v[self.object_v_slice(index)][0] * item.direction, np.zeros(3)))
+        rotation = pin.XYZQUATToSE3(q[self.object_q_slice(index)]).rotation
+        local = v[self.object_v_slice(index)]
+        return np.concatenate((rotation @ local[:3], rotation @ local[3:]))
+
+    def energy(self, q: np.ndarray, v: np.ndarray) -> float:
+        """Kinetic + gravitational potential + object-spring energy [J] (contacts excluded)."""
+        kinetic = pin.computeKineticEnergy(self.model, self.data, q, v)
+        potential = pin.computePotentialEnergy(self.model, self.data, q)
+        potential -= float(self.model.inertias[0].mass * self.model.gravity.linear @ self.model.inertias[0].lever)
+        springs = 0.0
+        for i, item in enumerate(self.objects):
+            if isinstance(item, SpringMounted):
+                springs += 0.5 * item.stiffness * float(q[self.object_q_slice(i)][0]) ** 2
+        return float(kinetic + potential + springs)
+
+    # ------------------------------------------------------------------ construction helpers
+    def _add_object(self, name: str, item: RigidObject | SpringMounted) -> int:
+        if isinstance(item, SpringMounted):
+            axis_local = item.pose.rotation.T @ item.direction
+            joint = self.model.addJoint(0, pin.JointModelPrismaticUnaligned(axis_local), item.pose, name)
+            inertia = item.body.spatial_inertia()
+        else:
+            joint = self.model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), name)
+            inertia = item.spatial_inertia()
+        self.model.appendBodyToJoint(joint, inertia, pin.SE3.Identity())
+        self.model.addFrame(pin.Frame(name, joint, pin.SE3.Identity(), pin.FrameType.BODY))
+        return joint
+
+    def _hand_geometry(self) -> pin.GeometryModel:
+        path = self.hand.urdf_path
+        if path is None:
+            return pin.GeometryModel()
+        try:
+            geometry = pin.buildGeomFromUrdfString(
+                self.hand.model, path.read_text(), pin.GeometryType.COLLISION, None, [str(p) for p in path.parents]
+            )
+        except (ValueError, RuntimeError, OSError) as error:
+            raise ModelError(f"cannot load the collision geometry of {str(path)!r}: {error}") from error
+        placement = self.hand.base_placement
+        for geometry_object in geometry.geometryObjects:
+            if geometry_object.parentJoint == 0:
+                geometry_object.placement = placement * geometry_object.placement
+        return geometry
+
+    def _add_geometry(self, name: str, joint: int, placement: pin.SE3, shape: object) -> int:
+        return self.geometry.addGeometryObject(pin.GeometryObject(name, joint, placement, shape))
+
+    def _collision_pairs(self) -> list[CollisionPair]:
+        """Every hand link vs every object, objects vs environment, objects vs objects (a, b, friction of a)."""
+        candidates: list[tuple[int, int, float | None]] = []
+        for b in self.object_geometries:
+            candidates += [(a, b, None) for a in self.hand_geometries]
+            candidates += [(a, b, env.friction) for a, env in zip(self.environment_geometries, self.environment)]
+        for i, (a, first) in enumerate(zip(self.object_geometries, self.objects)):
+            candidates += [(a, b, first.friction) for b in self.object_geometries[i + 1 :]]
+        friction_of = dict(zip(self.object_geometries, (o.friction for o in self.objects)))
+        pairs = []
+        for index, (a, b, friction_a) in enumerate(candidates):
+            self.geometry.addCollisionPair(pin.CollisionPair(a, b))
+            joint_a, joint_b = (self.geometry.geometryObjects[g].parentJoint for g in (a, b))
+            body_a, body_b = self._body_name(a), self._body_name(b)
+            pairs.append(CollisionPair(index, a, b, joint_a, joint_b, body_a, body_b, friction_a, friction_of[b]))
+        return pairs
+
+    def _body_name(self, geom: int) -> str:
+        geometry_object = self.geometry.geometryObjects[geom]
+        if geom in self.hand_geometries:
+            return self.model.frames[geometry_object.parentFrame].name
+        return geometry_object.name
+
+    def __repr__(self) -> str:
+        return (
+            f"Scene({self.hand.name!r}, objects={self.object_names}, environment={self.environment_names}, "
+            f"nq={self.nq}, nv={self.nv}, pairs={len(self.pairs)})"
+        )
+
+
+def _placed_copy(model: pin.Model, placement: pin.SE3) -> pin.Model:
+    """A copy of a fixed-base model whose base sits at ``placement`` in the world."""
+    placed = copy.deepcopy(model)
+    for joint in range(1, placed.njoints):
+        if placed.parents[joint] == 0:
+            placed.jointPlacements[joint] = placement * placed.jointPlacements[joint]
+    for i, frame in enumerate(placed.frames):
+        if frame.parentJoint == 0 and i > 0:
+            frame.placement = placement * frame.placement
+            placed.frames[i] = frame
+    base = placed.inertias[0]
+    placed.inertias[0] = pin.Inertia(
+        base.mass, placement.act(base.lever), placement.rotation @ base.inertia @ placement.rotation.T
+    )
+    return placed
+
+
+def _unique_names(names: Sequence[str | None], kind: str) -> list[str]:
+    result = []
+    for i, name in enumerate(names):
+        result.append(name if name else f"{kind}{i}")
+    duplicates = {n for n in result if result.count(n) > 1}
+    if duplicates:
+        raise InputError(f"{kind} names must be unique, got duplicates {sorted(duplicates)}")
+    return result

@@ -1,0 +1,478 @@
+"""Simulator: fixed-step integration of a scene (hand + objects + contacts) under a controller.
+
+Integrators (``integrator=``):
+
+- ``"implicit"`` (default): linearly-implicit Euler.  The stiffness and damping of active contacts, joint-limit
+  stops, object springs and joint damping are folded into the velocity solve
+  ``(M + dt sum J^T D J + dt (dt K + C)) v+ = M v + dt (tau - h + sum J^T f0 - K q)``, then ``q+ = q (+) dt v+``.
+  Contacts whose force would pull are dropped and sticking contacts that leave the friction cone switch to
+  sliding (a few active-set passes), so stiff contacts (k up to 5e4 N/m) stay stable at millisecond steps.
+- ``"semi-implicit"``: symplectic Euler with explicit forces (``v+ = v + dt a(q, v)``, ``q+ = q (+) dt v+``).
+- ``"rk4"``: classical Runge-Kutta on the manifold with explicit forces, contacts re-detected at each stage.
+
+Actuation couplings (:class:`~bhgrasp.actuation.BarrettActuation`) enter as a transmission ``T``: the solve is
+done for the driven coordinates ``w`` with ``v_hand = T w``.  Contact forces enter the dynamics as generalised
+forces ``J^T f``, the same as Pinocchio's ``f_ext`` (tests/test_hand.py checks the identity).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp._validation import as_positive, as_vector
+from bhgrasp.actuation import Actuation, FullyActuated
+from bhgrasp.contact import ContactEngine, ContactSet, SpringDamper, empty_contact_set
+from bhgrasp.errors import InputError, SimulationDiverged
+from bhgrasp.scene import Scene
+from bhgrasp.state import State, Trajectory
+
+INTEGRATORS = ("implicit", "semi-implicit", "rk4")
+_FRICTION_VELOCITY = 1e-3  # [rad/s] regularisation of Coulomb joint friction
+
+
+@dataclass
+class StepInfo:
+    """What one step computed, beyond the new state: contacts with their forces and the drive torques."""
+
+    contacts: ContactSet
+    drive_torques: np.ndarray
+
+
+class Simulator:
+    """Fixed-step simulator of a :class:`~bhgrasp.scene.Scene`."""
+
+    def __init__(
+        self,
+        scene: Scene,
+        dt: float = 1e-3,
+        contact: SpringDamper | None = None,
+        actuation: Actuation | None = None,
+        integrator: str = "implicit",
+        joint_limit_stiffness: float = 1e3,
+        joint_limit_damping: float = 5.0,
+        max_penetration: float = 0.02,
+        max_speed: float = 100.0,
+    ) -> None:
+        """Set up the simulation.
+
+        Args:
+            scene: Hand, objects and environment.
+            dt: Physics step [s].
+            contact: Contact law (default ``SpringDamper()``: k = 1e4 N/m, c = 20 N s/m, mu = 0.8).
+            actuation: Input model (default ``FullyActuated(scene.hand)``: one torque per joint).
+            integrator: ``"implicit"``, ``"semi-implicit"`` or ``"rk4"``.
+            joint_limit_stiffness: Stiffness [N m/rad] of the hand's joint stops.
+            joint_limit_damping: Damping [N m s/rad] of the stops (acts only while a stop is penetrated).
+            max_penetration: Contact depth [m] beyond which the run is declared diverged.
+            max_speed: Joint or object speed [m/s or rad/s] beyond which the run is declared diverged.
+        """
+        if integrator not in INTEGRATORS:
+            raise InputError(f"`integrator` must be one of {INTEGRATORS}, got {integrator!r}")
+        self.scene = scene
+        self.dt = as_positive(dt, "dt")
+        self.law = contact if contact is not None else SpringDamper()
+        self.actuation = actuation if actuation is not None else FullyActuated(scene.hand)
+        if self.actuation.hand is not scene.hand:
+            raise InputError("`actuation` must be built for the scene's hand (`Actuation(scene.hand, ...)`)")
+        self.integrator = integrator
+        self.limit_stiffness = as_positive(joint_limit_stiffness, "joint_limit_stiffness")
+        self.limit_damping = float(joint_limit_damping)
+        self.max_penetration = as_positive(max_penetration, "max_penetration")
+        self.max_speed = as_positive(max_speed, "max_speed")
+        self.engine = ContactEngine(scene, self.law)
+        self.model, self.data = scene.model, scene.data
+        self._nvh = scene.nv_hand
+        self._lower, self._upper = scene.hand.lower, scene.hand.upper
+        self._object_identity = np.eye(scene.nv - self._nvh)
+        self._lower_triangle = np.tril_indices(scene.nv, -1)
+
+    # ------------------------------------------------------------------ states
+    def initial_state(self, q_hand: Any = None) -> State:
+        """The scene at rest with the hand at ``q_hand`` (default neutral) and objects as described."""
+        q_hand = None if q_hand is None else as_vector(q_hand, "q_hand", self.scene.nq_hand)
+        q, v = self.scene.initial_state(q_hand)
+        self.engine.reset()
+        self.actuation.reset(q[: self.scene.nq_hand])
+        return self._state(0.0, q, v, self.engine.detect(q))
+
+    def _state(self, t: float, q: np.ndarray, v: np.ndarray, contacts: ContactSet) -> State:
+        scene = self.scene
+        n = len(scene.objects)
+        poses = tuple(scene.object_pose(q, i) for i in range(n))
+        twists = np.array([scene.object_twist(q, v, i) for i in range(n)]).reshape(n, 6)
+        bodies = tuple((scene.pairs[k].body_a, scene.pairs[k].body_b) for k in contacts.pair)
+        return State(
+            t, q[: scene.nq_hand].copy(), v[: self._nvh].copy(), poses, twists, contacts.point, contacts.normal,
+            contacts.force, bodies, q, v,
+        )  # fmt: skip
+
+    # ------------------------------------------------------------------ one step
+    def step(self, state: State, u: Any, disturbance: Any = None) -> tuple[State, StepInfo]:
+        """Advance ``dt`` with inputs ``u`` held constant; ``disturbance`` adds joint torques [N m].
+
+        Raises:
+            SimulationDiverged: Non-finite input or state, runaway speed or penetration.
+        """
+        u = np.asarray(u, dtype=float)
+        if u.shape != (self.actuation.n_inputs,):
+            raise InputError(f"`u` must have shape ({self.actuation.n_inputs},), got shape {u.shape}")
+        if not np.all(np.isfinite(u)):
+            raise SimulationDiverged(state.t, "control input u", u.tolist(), "the controller returned NaN/inf")
+        q, v = state.scene_q, state.scene_v
+        tau_hand = self.actuation.joint_torques(u)
+        if disturbance is not None:
+            tau_hand = tau_hand + disturbance
+        if self.integrator == "implicit":
+            q_next, v_next, contacts, drive = self._implicit(q, v, tau_hand)
+        else:
+            q_next, v_next, contacts, drive = self._explicit(q, v, tau_hand)
+        t = state.t + self.dt
+        self._check(t, q_next, v_next, contacts)
+        self.actuation.update(q_next[: self.scene.nq_hand], v_next[: self._nvh], u, drive)
+        return self._state(t, q_next, v_next, contacts), StepInfo(contacts, drive)
+
+    def _mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        mass = pin.crba(self.model, self.data, q).copy()
+        mass[self._lower_triangle] = mass.T[self._lower_triangle]
+        return mass
+
+    def _transmission(self) -> np.ndarray:
+        hand = self.actuation.transmission()
+        rows, cols = hand.shape
+        full = np.zeros((self.scene.nv, cols + len(self._object_identity)))
+        full[:rows, :cols] = hand
+        full[rows:, cols:] = self._object_identity
+        return full
+
+    def _passive(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Joint-space springs/dampers: explicit torque, implicit stiffness K and damping C (diagonals)."""
+        nvh, nqh = self._nvh, self.scene.nq_hand
+        stiffness = self.scene.joint_stiffness.copy()
+        damping = self.scene.joint_damping.copy()
+        torque = np.zeros(self.scene.nv)
+        # Object springs act on prismatic coordinates only (q index = v index offset for those joints).
+        for i, item in enumerate(self.scene.objects):
+            if hasattr(item, "stiffness"):
+                qs, vs = self.scene.object_q_slice(i), self.scene.object_v_slice(i)
+                torque[vs] -= item.stiffness * q[qs]
+        damping[:nvh] += self.actuation.damping
+        friction = self.actuation.friction
+        if np.any(friction > 0):
+            torque[:nvh] -= friction * np.tanh(v[:nvh] / _FRICTION_VELOCITY)
+            damping[:nvh] += friction / _FRICTION_VELOCITY / np.cosh(v[:nvh] / _FRICTION_VELOCITY) ** 2
+            torque[:nvh] += (friction / _FRICTION_VELOCITY / np.cosh(v[:nvh] / _FRICTION_VELOCITY) ** 2) * v[:nvh]
+        q_hand = q[:nqh]
+        below, above = q_hand < self._lower, q_hand > self._upper
+        stop = np.where(below, self._lower, np.where(above, self._upper, q_hand))
+        active = below | above
+        torque[:nvh] -= self.limit_stiffness * (q_hand - stop)
+        stiffness[:nvh] += np.where(active, self.limit_stiffness, 0.0)
+        damping[:nvh] += np.where(active, self.limit_damping, 0.0)
+        return torque, stiffness, damping
+
+    def _implicit(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray):
+        dt, model, data = self.dt, self.model, self.data
+        contacts = self.engine.detect(q)
+        pin.computeJointJacobians(model, data, q)
+        mass = self._mass_matrix(q)
+        bias = pin.nonLinearEffects(model, data, q, v)
+        passive, stiffness, damping = self._passive(q, v)
+        tau = np.zeros(self.scene.nv)
+        tau[: self._nvh] = tau_hand
+        # Springs acting on joint coordinates (limits, object springs): the explicit torque is in `passive`;
+        # their stiffness acts on the displacement dt v+ of this step.
+        matrix = mass + dt * np.diag(dt * stiffness + damping)
+        rhs = mass @ v + dt * (tau - bias + passive)
+        transmission = self._transmission()
+        m = len(contacts)
+        jacobians = self.engine.jacobians(contacts) if m else np.zeros((0, 3, self.scene.nv))
+        status = np.ones(m, dtype=int)  # 0 off, 1 stick, 2 slide
+        slide_force = np.zeros((m, 3))
+        start_velocity = jacobians @ v
+        for _ in range(8):
+            f0, gains = self._linearise(contacts, status, slide_force)
+            stacked = jacobians.reshape(-1, self.scene.nv)  # (3m, nv)
+            matrix_c = matrix + dt * stacked.T @ (gains @ jacobians).reshape(-1, self.scene.nv)
+            rhs_c = rhs + dt * stacked.T @ f0.ravel()
+            reduced = transmission.T @ matrix_c @ transmission
+            v_next = transmission @ np.linalg.solve(reduced, transmission.T @ rhs_c)
+            relative = jacobians @ v_next
+            forces = f0 - (gains @ relative[:, :, None])[:, :, 0]
+            new_status, new_slide = self._classify(contacts, forces, status, start_velocity)
+            if np.array_equal(new_status, status) and np.abs(new_slide - slide_force).max(initial=0.0) < 1e-12:
+                break
+            status, slide_force = new_status, new_slide
+        forces[status == 0] = 0.0
+        displacement = self._displacement(contacts, relative, forces, status)
+        contacts.force, contacts.sticking = forces, status == 1
+        self.engine.remember(contacts, displacement)
+        generalized = jacobians.reshape(-1, self.scene.nv).T @ forces.ravel()
+        acceleration = (v_next - v) / dt
+        drive = (mass @ acceleration + bias - generalized - passive + (dt * stiffness + damping) * v_next)[: self._nvh]
+        return pin.integrate(model, q, v_next * dt), v_next, contacts, drive
+
+    def _linearise(self, contacts: ContactSet, status: np.ndarray, slide_force: np.ndarray):
+        """Contact force ``f(v+) = f0 - D J v+`` of each contact in its status (0 off, 1 stick, 2 slide)."""
+        law, dt = self.law, self.dt
+        normal, depth, weight = contacts.normal, contacts.depth, contacts.weight
+        outer = normal[:, :, None] * normal[:, None, :]
+        if law.normal_law == "linear":
+            f_n = weight * law.stiffness * depth
+            normal_gain = weight * (law.stiffness * dt + law.damping)
+        else:
+            power = depth**law.exponent
+            slope = law.exponent * law.stiffness * depth ** (law.exponent - 1.0)
+            f_n = weight * law.stiffness * power
+            normal_gain = weight * (slope * dt + law.damping * power)
+        f0 = f_n[:, None] * normal
+        gains = normal_gain[:, None, None] * outer
+        stick = status == 1
+        if law.friction_law == "stick-slip" and np.any(stick):
+            f0[stick] -= (weight[stick] * law.k_t)[:, None] * contacts.displacement[stick]
+            tangent_gain = weight[stick] * (law.k_t * dt + law.c_t)
+            gains[stick] += tangent_gain[:, None, None] * (np.eye(3) - outer[stick])
+        f0 += np.where((status == 2)[:, None], slide_force, 0.0)
+        off = status == 0
+        f0[off], gains[off] = 0.0, 0.0
+        return f0, gains
+
+    def _classify(self, contacts: ContactSet, forces: np.ndarray, status: np.ndarray, start_velocity: np.ndarray):
+        """Drop pulling contacts; turn sticking contacts outside the cone into sliding ones (force on the cone).
+
+        With the tanh law every contact "slides" with the regularised force of its start-of-step slip velocity.
+        """
+        normal = contacts.normal
+        normal_force = np.einsum("ij,ij->i", forces, normal)
+        tangential = forces - normal_force[:, None] * normal
+        new_status = status.copy()
+        new_status[normal_force <= 0.0] = 0
+        cone = contacts.friction * np.maximum(normal_force, 0.0)
+        slide = np.zeros_like(forces)
+        if self.law.friction_law == "tanh":
+            v_t = start_velocity - np.einsum("ij,ij->i", start_velocity, normal)[:, None] * normal
+            speed = np.linalg.norm(v_t, axis=1)
+            scale = np.divide(np.tanh(speed / self.law.slip_velocity), speed, out=np.zeros_like(speed), where=speed > 0)
+            slide = -(cone * scale)[:, None] * v_t
+            new_status[new_status == 1] = 2
+            return new_status, slide
+        magnitude = np.linalg.norm(tangential, axis=1)
+        for i in np.flatnonzero(new_status):
+            if magnitude[i] > cone[i] * (1 + 1e-9) or status[i] == 2:
+                new_status[i] = 2
+                if magnitude[i] > 0.0:
+                    slide[i] = tangential[i] * min(1.0, cone[i] / magnitude[i])
+        return new_status, slide
+
+    def _displacement(self, contacts, relative, forces, status) -> np.ndarray:
+        """End-of-step tangential spring displacement: integrated while sticking, on the cone edge when sliding."""
+        normal = contacts.normal
+        v_t = relative - np.einsum("ij,ij->i", relative, normal)[:, None] * normal
+        displacement = contacts.displacement + self.dt * v_t
+        sliding = status == 2
+        if np.any(sliding):
+            f_n = np.einsum("ij,ij->i", forces[sliding], normal[sliding])
+            tangential = forces[sliding] - f_n[:, None] * normal[sliding]
+            displacement[sliding] = -tangential / (contacts.weight[sliding, None] * self.law.k_t)
+        displacement[status == 0] = 0.0
+        return displacement
+
+    def _explicit(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray):
+        dt, model = self.dt, self.model
+        tau = np.zeros(self.scene.nv)
+        tau[: self._nvh] = tau_hand
+        transmission = self._transmission()
+        if self.integrator == "semi-implicit":
+            acceleration, contacts, forces, sticking, displacement, drive = self._acceleration(q, v, tau, transmission)
+            v_next = v + dt * acceleration
+            q_next = pin.integrate(model, q, v_next * dt)
+        else:
+            k1, contacts, forces, sticking, displacement, drive = self._acceleration(q, v, tau, transmission)
+            q2, v2 = pin.integrate(model, q, v * dt / 2), v + dt / 2 * k1
+            k2 = self._acceleration(q2, v2, tau, transmission)[0]
+            q3, v3 = pin.integrate(model, q, v2 * dt / 2), v + dt / 2 * k2
+            k3 = self._acceleration(q3, v3, tau, transmission)[0]
+            q4, v4 = pin.integrate(model, q, v3 * dt), v + dt * k3
+            k4 = self._acceleration(q4, v4, tau, transmission)[0]
+            v_next = v + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            q_next = pin.integrate(model, q, dt / 6 * (v + 2 * v2 + 2 * v3 + v4))
+        contacts.force, contacts.sticking = forces, sticking
+        self.engine.remember(contacts, displacement)
+        return q_next, v_next, contacts, drive
+
+    def _acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, transmission: np.ndarray):
+        """Explicit accelerations at (q, v) (contacts detected at q), with the step's contact bookkeeping."""
+        model, data = self.model, self.data
+        contacts = self.engine.detect(q)
+        pin.computeJointJacobians(model, data, q)
+        passive, _, damping = self._passive(q, v)
+        total = tau + passive - damping * v
+        forces, sticking, displacement = np.zeros((len(contacts), 3)), np.zeros(len(contacts), bool), None
+        generalized = np.zeros(self.scene.nv)
+        if len(contacts):
+            jacobians = self.engine.jacobians(contacts)
+            relative = np.einsum("mij,j->mi", jacobians, v)
+            forces, sticking, displacement = self.engine.forces(contacts, relative, self.dt)
+            generalized = np.einsum("mij,mi->j", jacobians, forces)
+        mass = self._mass_matrix(q)
+        bias = pin.nonLinearEffects(model, data, q, v)
+        reduced = transmission.T @ mass @ transmission
+        acceleration = transmission @ np.linalg.solve(reduced, transmission.T @ (total + generalized - bias))
+        drive = (mass @ acceleration + bias - generalized - passive + damping * v)[: self._nvh]
+        if displacement is None:
+            displacement = np.zeros((0, 3))
+        return acceleration, contacts, forces, sticking, displacement, drive
+
+    def _check(self, t: float, q: np.ndarray, v: np.ndarray, contacts: ContactSet) -> None:
+        if not np.all(np.isfinite(q)) or not np.all(np.isfinite(v)):
+            name = "joint/object position" if not np.all(np.isfinite(q)) else "joint/object velocity"
+            raise SimulationDiverged(t, name, "NaN/inf", "reduce dt or the controller gains")
+        speed = float(np.abs(v).max()) if len(v) else 0.0
+        if speed > self.max_speed:
+            index = int(np.argmax(np.abs(v)))
+            raise SimulationDiverged(t, f"speed of velocity coordinate {index}", f"{speed:.3g}", "reduce dt or gains")
+        if len(contacts) and contacts.depth.max() > self.max_penetration:
+            raise SimulationDiverged(
+                t, "contact depth", f"{contacts.depth.max():.4g} m", "stiffen the contact or reduce dt/forces"
+            )
+
+    # ------------------------------------------------------------------ runs
+    def run(
+        self,
+        controller: Callable[[float, State], Any],
+        duration: float,
+        state: State | None = None,
+        control_dt: float | None = None,
+        sensor_noise: tuple[float, float] | None = None,
+        disturbance: Callable[[float], Any] | Any = None,
+        seed: int | None = None,
+        progress: bool = True,
+        record_every: int = 1,
+    ) -> Trajectory:
+        """Simulate ``duration`` [s] under ``controller`` and record everything.
+
+        Args:
+            controller: ``(t, state) -> u`` callable or object with ``reset(state)``; an optional ``log`` dict
+                (name -> latest value) is recorded at every sample.
+            duration: Simulated time [s].
+            state: Start state (default :meth:`initial_state`).
+            control_dt: Controller period [s] (a multiple of ``dt``; inputs held in between); default ``dt``.
+            sensor_noise: (sigma_q [rad], sigma_v [rad/s]) Gaussian noise on the hand state the controller sees.
+            disturbance: Joint torques [N m] added to the actuators': an array, or a callable ``t -> array``.
+            seed: Seed of the sensor noise (required with ``sensor_noise``).
+            progress: Show a tqdm progress bar for runs of more than 20 000 steps.
+            record_every: Record one sample every this many physics steps.
+        """
+        duration = as_positive(duration, "duration")
+        steps = round(duration / self.dt)
+        hold = 1 if control_dt is None else round(as_positive(control_dt, "control_dt") / self.dt)
+        if hold < 1 or abs(hold * self.dt - (control_dt or self.dt)) > 1e-9 * max(1.0, hold):
+            raise InputError(f"`control_dt` must be a positive multiple of dt = {self.dt}, got {control_dt}")
+        if sensor_noise is not None and seed is None:
+            raise InputError("`sensor_noise` needs a `seed` (runs are deterministic)")
+        rng = np.random.default_rng(seed)
+        state = self.initial_state() if state is None else state
+        if hasattr(controller, "reset"):
+            controller.reset(state)
+        recorder = _Recorder(self, steps // record_every + 1)
+        u = np.zeros(self.actuation.n_inputs)
+        log = getattr(controller, "log", None)
+        info = StepInfo(empty_contact_set(), np.zeros(self._nvh))
+        iterator = range(steps)
+        if progress and steps > 20_000:
+            from tqdm import tqdm
+
+            iterator = tqdm(iterator, desc="simulating", unit="step", mininterval=1.0)
+        for k in iterator:
+            if k % hold == 0:
+                sensed = _noisy(state, sensor_noise, rng)
+                u = np.array(controller(state.t, sensed), dtype=float)
+            if k % record_every == 0:
+                recorder.add(state, u, info, log)
+            torque = disturbance(state.t) if callable(disturbance) else disturbance
+            state, info = self.step(state, u, torque)
+        recorder.add(state, u, info, log)
+        return recorder.trajectory()
+
+
+def _noisy(state: State, noise: tuple[float, float] | None, rng: np.random.Generator) -> State:
+    if noise is None:
+        return state
+    sigma_q, sigma_v = noise
+    from dataclasses import replace
+
+    return replace(
+        state,
+        q=state.q + rng.normal(scale=sigma_q, size=state.q.shape),
+        v=state.v + rng.normal(scale=sigma_v, size=state.v.shape),
+    )
+
+
+class _Recorder:
+    """Preallocated arrays filled sample by sample."""
+
+    def __init__(self, simulator: Simulator, capacity: int) -> None:
+        scene = simulator.scene
+        n_obj = len(scene.objects)
+        self.sim = simulator
+        self.t, self.q, self.v = [], [], []
+        self.u, self.tau, self.modes = [], [], []
+        self.position, self.quaternion, self.twist = [], [], []
+        self.offsets = [0]
+        self.contacts: dict[str, list] = {k: [] for k in ("pair", "point", "normal", "depth", "force", "sticking")}
+        self.log: dict[str, list] = {}
+        self.n_obj = n_obj
+
+    def add(self, state: State, u: np.ndarray, info: StepInfo, log: Any) -> None:
+        self.t.append(state.t)
+        self.q.append(state.q)
+        self.v.append(state.v)
+        self.u.append(u.copy())
+        self.tau.append(info.drive_torques)
+        self.modes.append(self.sim.actuation.modes())
+        self.position.append([pose.translation for pose in state.object_poses])
+        self.quaternion.append([pin.SE3ToXYZQUAT(pose)[3:] for pose in state.object_poses])
+        self.twist.append(state.object_twists)
+        contacts = info.contacts
+        self.offsets.append(self.offsets[-1] + len(contacts))
+        for name in self.contacts:
+            self.contacts[name].append(getattr(contacts, name))
+        if isinstance(log, dict):
+            for name, value in log.items():
+                self.log.setdefault(name, []).append(np.array(value, dtype=float))
+
+    def trajectory(self) -> Trajectory:
+        n_obj = self.n_obj
+        contacts = {name: np.concatenate(values) if values else np.zeros(0) for name, values in self.contacts.items()}
+        for name, width in (("point", 3), ("normal", 3), ("force", 3)):
+            contacts[name] = contacts[name].reshape(-1, width)
+        scene = self.sim.scene
+        return Trajectory(
+            t=np.array(self.t),
+            q=np.array(self.q),
+            v=np.array(self.v),
+            u=np.array(self.u),
+            tau=np.array(self.tau),
+            modes=np.array(self.modes).reshape(len(self.t), -1),
+            object_position=np.array(self.position).reshape(len(self.t), n_obj, 3),
+            object_quaternion=np.array(self.quaternion).reshape(len(self.t), n_obj, 4),
+            object_twist=np.array(self.twist).reshape(len(self.t), n_obj, 6),
+            contact_offsets=np.array(self.offsets, dtype=int),
+            contact_pair=contacts["pair"].astype(int),
+            contact_point=contacts["point"],
+            contact_normal=contacts["normal"],
+            contact_depth=contacts["depth"],
+            contact_force=contacts["force"],
+            contact_sticking=contacts["sticking"].astype(bool),
+            log={name: np.array(values) for name, values in self.log.items()},
+            joint_names=scene.hand.joint_names,
+            object_names=tuple(scene.object_names),
+            pair_bodies=np.array([(p.body_a, p.body_b) for p in scene.pairs], dtype=str).reshape(-1, 2),
+        )
+
+
+__all__ = ["INTEGRATORS", "Simulator", "StepInfo"]
