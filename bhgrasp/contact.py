@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
+import coal
 import numpy as np
 import pinocchio as pin
 
@@ -176,6 +177,8 @@ class ContactEngine:
         self._joint_a = np.array([pair.joint_a for pair in scene.pairs], dtype=int)
         self._joint_b = np.array([pair.joint_b for pair in scene.pairs], dtype=int)
         self._memory: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # pair -> (points in b's frame, u)
+        self._probe = coal.Sphere(1e-12)  # a point, for signed-distance queries
+        self._distance_request, self._distance_result = coal.DistanceRequest(), coal.DistanceResult()
 
     def reset(self) -> None:
         """Forget every contact (a new run)."""
@@ -194,29 +197,65 @@ class ContactEngine:
         if not colliding:
             return empty_contact_set()
         pin.computeContactPatches(scene.geometry, scene.geometry_data)
-        pairs, on_a, on_b, normals, weights = [], [], [], [], []
+        pairs, points, normals, depths, weights = [], [], [], [], []
         for k in colliding:
             patches = scene.geometry_data.contactPatchResults[k]
             for p in range(patches.numContactPatches()):
                 patch = patches.getContactPatch(p)
                 size = patch.size()
-                normal = patch.getNormal()
-                for i in range(size):
-                    pairs.append(k)
-                    on_a.append(patch.getPointShape1(i))
-                    on_b.append(patch.getPointShape2(i))
-                    normals.append(normal)
-                    weights.append(1.0 / size)
-        on_a, on_b, normal = np.array(on_a), np.array(on_b), np.array(normals)
-        depth = np.einsum("ij,ij->i", normal, on_a - on_b)
+                normal = np.asarray(patch.getNormal())
+                mid = np.array([patch.getPoint(i) for i in range(size)])
+                if size == 1:
+                    depth = [-patch.penetration_depth]
+                else:  # coal gives every patch point the patch's deepest depth: measure each point's own
+                    depth = self._point_depths(k, mid, normal)
+                pairs += [k] * size
+                points.append(mid)
+                normals += [normal] * size
+                depths += list(depth)
+                weights += [1.0 / size] * size
+        depth = np.array(depths)
         keep = depth > 0.0
         if not np.any(keep):
             return empty_contact_set()
+        point, normal = np.concatenate(points)[keep], np.array(normals)[keep]
         pair = np.array(pairs, dtype=int)[keep]
-        point, normal = 0.5 * (on_a[keep] + on_b[keep]), normal[keep]
         displacement = self._recall(pair, point, normal)
         weight = np.array(weights)[keep]
         return ContactSet(pair, point, normal, depth[keep], self._pair_friction[pair], displacement, weight)
+
+    def _point_depths(self, k: int, points: np.ndarray, normal: np.ndarray) -> np.ndarray:
+        """Penetration at each point of a multi-point patch, from signed distances to both shapes.
+
+        The overlap of two locally planar surfaces at ``x`` is ``-(sd_a(x) + sd_b(x))`` wherever ``x`` lies along
+        the normal.  At a polygon corner the nearest feature of a box is a side face, so the overlap is measured
+        at two points moved inward (toward the patch centroid) and extrapolated linearly back to the corner.
+        """
+        pair = self.scene.pairs[k]
+        shapes = [self._shape(pair.geom_a), self._shape(pair.geom_b)]
+        inward = points.mean(axis=0) - points
+        inward -= np.outer(inward @ normal, normal)
+        length = np.linalg.norm(inward, axis=1)
+        step = np.minimum(1e-3, 0.125 * length)
+        direction = np.divide(inward, length[:, None], out=np.zeros_like(inward), where=length[:, None] > 0)
+        depths = np.empty(len(points))
+        for i, (point, offset) in enumerate(zip(points, step[:, None] * direction)):
+            near, far = self._overlap(shapes, point + offset), self._overlap(shapes, point + 2 * offset)
+            depths[i] = 2 * near - far
+        return depths
+
+    def _shape(self, geom: int) -> tuple:
+        placement = self.scene.geometry_data.oMg[geom]
+        shape = self.scene.geometry.geometryObjects[geom].geometry
+        return shape, coal.Transform3s(placement.rotation, placement.translation)
+
+    def _overlap(self, shapes: list, point: np.ndarray) -> float:
+        probe = coal.Transform3s(np.eye(3), point)
+        total = 0.0
+        for shape, placement in shapes:
+            self._distance_result.clear()
+            total += coal.distance(self._probe, probe, shape, placement, self._distance_request, self._distance_result)
+        return -total
 
     def _recall(self, pair: np.ndarray, point: np.ndarray, normal: np.ndarray) -> np.ndarray:
         """Tangential displacement of each contact carried over from the last step (0 for a new contact)."""
@@ -233,12 +272,14 @@ class ContactEngine:
             distance = np.linalg.norm(local[:, None, :] - old_local[None, :, :], axis=2)
             nearest = np.argmin(distance, axis=1)
             matched = distance[np.arange(len(rows)), nearest] <= self.match_radius
-            u = old_u[nearest[matched]]
-            n = normal[rows[matched]]
+            # A point coal did not report last step (patches change size as a body rocks) inherits the mean
+            # displacement of its patch, so that a sticking patch keeps its anchor.
+            u = np.where(matched[:, None], old_u[nearest], old_u.mean(axis=0))
+            n = normal[rows]
             projected = u - np.einsum("ij,ij->i", u, n)[:, None] * n  # onto the new tangent plane, same length
             length, new_length = np.linalg.norm(u, axis=1), np.linalg.norm(projected, axis=1)
             scale = np.divide(length, new_length, out=np.ones_like(length), where=new_length > 1e-15)
-            displacement[rows[matched]] = projected * scale[:, None]
+            displacement[rows] = projected * scale[:, None]
         return displacement
 
     def remember(self, contacts: ContactSet, displacement: np.ndarray) -> None:

@@ -54,7 +54,7 @@ class Simulator:
         actuation: Actuation | None = None,
         integrator: str = "implicit",
         joint_limit_stiffness: float = 1e3,
-        joint_limit_damping: float = 5.0,
+        joint_limit_damping: float = 0.05,
         max_penetration: float = 0.02,
         max_speed: float = 100.0,
     ) -> None:
@@ -261,11 +261,11 @@ class Simulator:
             new_status[new_status == 1] = 2
             return new_status, slide
         magnitude = np.linalg.norm(tangential, axis=1)
-        for i in np.flatnonzero(new_status):
-            if magnitude[i] > cone[i] * (1 + 1e-9) or status[i] == 2:
-                new_status[i] = 2
-                if magnitude[i] > 0.0:
-                    slide[i] = tangential[i] * min(1.0, cone[i] / magnitude[i])
+        sliding = (new_status > 0) & ((magnitude > cone * (1 + 1e-9)) | (status == 2))
+        new_status[sliding] = 2
+        # Kinetic friction lies on the cone, along the direction the sticking spring was pulling.
+        scale = np.divide(cone, magnitude, out=np.zeros_like(cone), where=magnitude > 0)
+        slide[sliding] = tangential[sliding] * scale[sliding, None]
         return new_status, slide
 
     def _displacement(self, contacts, relative, forces, status) -> np.ndarray:
