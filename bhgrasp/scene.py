@@ -180,8 +180,7 @@ class Scene:
     def energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """Kinetic + gravitational potential + object-spring energy [J] (contacts excluded)."""
         kinetic = pin.computeKineticEnergy(self.model, self.data, q, v)
-        potential = pin.computePotentialEnergy(self.model, self.data, q)
-        potential -= float(self.model.inertias[0].mass * self.model.gravity.linear @ self.model.inertias[0].lever)
+        potential = pin.computePotentialEnergy(self.model, self.data, q)  # moving bodies only
         springs = 0.0
         for i, item in enumerate(self.objects):
             if isinstance(item, SpringMounted):

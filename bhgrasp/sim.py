@@ -136,6 +136,10 @@ class Simulator:
         self.actuation.update(q_next[: self.scene.nq_hand], v_next[: self._nvh], u, drive)
         return self._state(t, q_next, v_next, contacts), StepInfo(contacts, drive)
 
+    def _motor_damping(self) -> np.ndarray:
+        """The drive's own damping (joint damping of the actuation minus the passive joints')."""
+        return self.actuation.joint_damping() - self.actuation.damping
+
     def _mass_matrix(self, q: np.ndarray) -> np.ndarray:
         mass = pin.crba(self.model, self.data, q).copy()
         mass[self._lower_triangle] = mass.T[self._lower_triangle]
@@ -160,7 +164,7 @@ class Simulator:
             if hasattr(item, "stiffness"):
                 qs, vs = self.scene.object_q_slice(i), self.scene.object_v_slice(i)
                 torque[vs] -= item.stiffness * q[qs]
-        damping[:nvh] += self.actuation.damping
+        damping[:nvh] += self.actuation.joint_damping()
         friction = self.actuation.friction
         if np.any(friction > 0):
             torque[:nvh] -= friction * np.tanh(v[:nvh] / _FRICTION_VELOCITY)
@@ -214,6 +218,7 @@ class Simulator:
         generalized = jacobians.reshape(-1, self.scene.nv).T @ forces.ravel()
         acceleration = (v_next - v) / dt
         drive = (mass @ acceleration + bias - generalized - passive + (dt * stiffness + damping) * v_next)[: self._nvh]
+        drive -= self._motor_damping() * v_next[: self._nvh]  # the clutch passes what the motor's losses leave
         return pin.integrate(model, q, v_next * dt), v_next, contacts, drive
 
     def _linearise(self, contacts: ContactSet, status: np.ndarray, slide_force: np.ndarray):
@@ -323,6 +328,7 @@ class Simulator:
         reduced = transmission.T @ mass @ transmission
         acceleration = transmission @ np.linalg.solve(reduced, transmission.T @ (total + generalized - bias))
         drive = (mass @ acceleration + bias - generalized - passive + damping * v)[: self._nvh]
+        drive -= self._motor_damping() * v[: self._nvh]
         if displacement is None:
             displacement = np.zeros((0, 3))
         return acceleration, contacts, forces, sticking, displacement, drive

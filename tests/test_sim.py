@@ -1,0 +1,300 @@
+"""The simulator against independent truths: kinematics of free fall, statics, conservation laws, friction.
+
+Scenes keep the hand out of the way (base 5 m away, gravity-compensated) unless the hand is what is tested.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import bhgrasp as bh
+from bhgrasp.actuation import FullyActuated
+from bhgrasp.contact import SpringDamper
+from bhgrasp.errors import SimulationDiverged
+from bhgrasp.objects import Box, Sphere, table
+from bhgrasp.planar import planar_finger
+from bhgrasp.scene import Scene
+from bhgrasp.sim import Simulator
+from bhgrasp.state import Trajectory
+
+G = 9.81
+FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))
+
+
+def far_hand(gravity=(0.0, 0.0, -G)) -> bh.Hand:
+    return bh.BarrettHand(base_placement=FAR, gravity=gravity)
+
+
+def hold_hand(hand: bh.Hand):
+    return lambda t, state: hand.gravity_torques(state.q)
+
+
+def at(pose_z: float, **kwargs) -> pin.SE3:
+    return pin.SE3(np.eye(3), np.array([0.0, 0.0, pose_z]))
+
+
+# ---------------------------------------------------------------------- free fall
+@pytest.mark.parametrize("integrator", ["implicit", "semi-implicit", "rk4"])
+def test_free_fall(integrator: str) -> None:
+    """RK4 is exact for constant acceleration; the Euler schemes follow their own discrete law exactly."""
+    hand = far_hand()
+    ball = Sphere(radius=0.02, mass=0.1, pose=at(1.0))
+    dt = 1e-3
+    sim = Simulator(Scene(hand, [ball]), dt=dt, integrator=integrator)
+    trajectory = sim.run(hold_hand(hand), 0.5, progress=False)
+    k = np.arange(len(trajectory.t))
+    if integrator == "rk4":
+        expected = 1.0 - G * trajectory.t**2 / 2
+    else:  # v_k = -g k dt, z_k = z_0 - g dt^2 k (k + 1) / 2
+        expected = 1.0 - G * dt**2 * k * (k + 1) / 2
+    np.testing.assert_allclose(trajectory.object_position[:, 0, 2], expected, atol=1e-12)
+    assert len(trajectory.contact_pair) == 0
+
+
+# ---------------------------------------------------------------------- resting contact
+@pytest.mark.parametrize(
+    ("law", "expected_depth"),
+    [
+        (SpringDamper(stiffness=1e4, damping=20.0), 0.1 * G / 1e4),
+        (SpringDamper(stiffness=5e4, damping=20.0), 0.1 * G / 5e4),
+        (SpringDamper(stiffness=1e6, damping=50.0, normal_law="hunt-crossley"), (0.1 * G / 1e6) ** (1 / 1.5)),
+    ],
+)
+def test_sphere_rests_at_the_static_depth(law: SpringDamper, expected_depth: float) -> None:
+    hand = far_hand()
+    ball = Sphere(radius=0.02, mass=0.1, pose=at(0.02))
+    sim = Simulator(Scene(hand, [ball], [table()]), dt=1e-3, contact=law)
+    trajectory = sim.run(hold_hand(hand), 1.0, progress=False)
+    depth = 0.02 - trajectory.object_position[-1, 0, 2]
+    assert depth == pytest.approx(expected_depth, rel=1e-6)
+    contact = trajectory.contacts_at(len(trajectory) - 1)
+    np.testing.assert_allclose(contact["force"].sum(axis=0), [0.0, 0.0, 0.1 * G], rtol=1e-6, atol=1e-9)
+
+
+def test_box_face_contact_stiffness_is_per_patch() -> None:
+    """Coal reports 4 corner points for a box face; together they are one spring of stiffness k."""
+    hand = far_hand()
+    box = Box(size=(0.06, 0.05, 0.05), mass=0.2, pose=at(0.025))
+    sim = Simulator(Scene(hand, [box], [table()]), dt=1e-3, contact=SpringDamper(stiffness=1e4))
+    trajectory = sim.run(hold_hand(hand), 1.0, progress=False)
+    assert trajectory.contact_count()[-1] == 4
+    assert 0.025 - trajectory.object_position[-1, 0, 2] == pytest.approx(0.2 * G / 1e4, rel=1e-6)
+
+
+def test_implicit_contact_is_stable_where_explicit_is_not() -> None:
+    """k = 5e4 N/m on a 10 g sphere dropped 0.1 mm, dt = 1 ms (omega dt = 2.2 > 2): symplectic Euler pumps energy
+    into the contact and throws the ball ~15 cm up; the linearly-implicit step rests at m g / k."""
+    hand = far_hand()
+    ball = Sphere(radius=0.01, mass=0.01, pose=at(0.0101))
+    law = SpringDamper(stiffness=5e4, damping=1.0)
+    implicit = Simulator(Scene(hand, [ball], [table()]), dt=1e-3, contact=law).run(hold_hand(hand), 0.5, progress=False)
+    assert 0.01 - implicit.object_position[-1, 0, 2] == pytest.approx(0.01 * G / 5e4, rel=1e-5)
+    assert implicit.object_position[:, 0, 2].max() <= 0.0101 + 1e-12  # never above its release height
+    explicit = Simulator(Scene(hand, [ball], [table()]), dt=1e-3, contact=law, integrator="semi-implicit")
+    bounced = explicit.run(hold_hand(hand), 0.5, progress=False)
+    assert bounced.object_position[:, 0, 2].max() > 0.05  # energy from nowhere: the explicit step is unstable
+    halved = Simulator(Scene(hand, [ball], [table()]), dt=5e-4, contact=law, integrator="semi-implicit")
+    settled = halved.run(hold_hand(hand), 0.5, progress=False)
+    assert 0.01 - settled.object_position[-1, 0, 2] == pytest.approx(0.01 * G / 5e4, rel=1e-3)
+
+
+# ---------------------------------------------------------------------- conservation laws
+def _energy_run(integrator: str, dt: float) -> tuple[np.ndarray, float]:
+    finger = planar_finger((0.1, 0.08), (0.1, 0.05))  # a double pendulum: gravity along -y, in its plane
+    box = Box(
+        size=(0.06, 0.04, 0.02),
+        mass=0.2,
+        pose=pin.SE3(np.eye(3), np.array([1.0, 0.0, 0.0])),
+        velocity=np.array([0.1, 0.5, 0.0, 0.2, 8.0, 0.3]),  # tumbling about the intermediate axis
+    )
+    scene = Scene(finger, [box])
+    sim = Simulator(scene, dt=dt, integrator=integrator)
+    state = sim.initial_state(np.array([-np.pi / 2 + 0.6, 0.4]))
+    energies, kinetic = [], []
+    for _ in range(round(2.0 / dt)):
+        state, _ = sim.step(state, np.zeros(2))
+        energies.append(scene.energy(state.scene_q, state.scene_v))
+        kinetic.append(pin.computeKineticEnergy(scene.model, scene.data, state.scene_q, state.scene_v))
+    return np.array(energies), float(np.max(kinetic))
+
+
+def test_energy_is_conserved_by_rk4() -> None:
+    energies, kinetic_scale = _energy_run("rk4", 1e-3)
+    assert np.abs(energies - energies[0]).max() < 1e-4 * kinetic_scale
+
+
+def test_semi_implicit_energy_error_is_bounded_and_first_order() -> None:
+    """Symplectic Euler: energy error stays small and halves with the step (first order), it does not blow up."""
+    coarse, kinetic_scale = _energy_run("semi-implicit", 1e-3)
+    fine, _ = _energy_run("semi-implicit", 5e-4)
+    coarse_drift, fine_drift = np.abs(coarse - coarse[0]).max(), np.abs(fine - fine[0]).max()
+    assert coarse_drift < 1e-2 * kinetic_scale
+    assert 0.4 < fine_drift / coarse_drift < 0.6
+
+
+def _collision_momentum(integrator: str, friction: float, dt: float) -> tuple[np.ndarray, Trajectory]:
+    """Two spheres collide off-centre in zero gravity; returns each sample's total linear momentum."""
+    hand = far_hand(gravity=(0.0, 0.0, 0.0))
+    first = Sphere(radius=0.02, mass=0.3, friction=friction, pose=at(0.0), velocity=np.array([0.5, 0, 0, 0, 0, 0]))
+    second = Sphere(
+        radius=0.03, mass=0.1, friction=friction, pose=pin.SE3(np.eye(3), np.array([0.1, 0.02, 0.0])),
+        velocity=np.array([-0.2, 0.0, 0.1, 0.0, 0.0, 0.0]),
+    )  # fmt: skip
+    sim = Simulator(Scene(hand, [first, second]), dt=dt, integrator=integrator,
+                    contact=SpringDamper(stiffness=1e4, damping=5.0, friction=friction))  # fmt: skip
+    trajectory = sim.run(hold_hand(hand), 0.3, progress=False)
+    assert trajectory.contact_count().max() >= 1  # they did collide
+    return np.einsum("o,toi->ti", np.array([0.3, 0.1]), trajectory.object_twist[:, :, :3]), trajectory
+
+
+@pytest.mark.parametrize("integrator", ["implicit", "semi-implicit"])
+def test_frictionless_collision_conserves_momentum(integrator: str) -> None:
+    """Newton's third law: equal and opposite contact forces leave the total momentum unchanged."""
+    momentum, trajectory = _collision_momentum(integrator, 0.0, 1e-4)
+    np.testing.assert_allclose(momentum, np.repeat(momentum[:1], len(momentum), axis=0), atol=1e-12)
+    assert not np.allclose(trajectory.object_twist[-1, 0, :3], trajectory.object_twist[0, 0, :3])  # it changed
+
+
+def test_frictional_collision_momentum_error_is_integration_error() -> None:
+    """With friction the spheres spin, and the Lie-group Euler step turns body-frame velocity with O(dt) error:
+    the momentum error halves with dt (an imbalance of the contact forces would not)."""
+    coarse, trajectory = _collision_momentum("implicit", 0.8, 1e-4)
+    fine, _ = _collision_momentum("implicit", 0.8, 5e-5)
+    assert np.abs(trajectory.object_twist[-1, :, 3:]).max() > 1.0  # friction spun them up [rad/s]
+    coarse_error, fine_error = np.abs(coarse - coarse[0]).max(), np.abs(fine - fine[0]).max()
+    assert coarse_error < 1e-3 * np.abs(coarse[0]).max()
+    assert 0.4 < fine_error / coarse_error < 0.6
+
+
+# ---------------------------------------------------------------------- friction
+def _incline(theta_degrees: float, integrator: str = "implicit", dt: float = 1e-3, duration: float = 2.0) -> Trajectory:
+    theta = np.radians(theta_degrees)
+    hand = far_hand(gravity=(G * np.sin(theta), 0.0, -G * np.cos(theta)))  # tilting gravity = tilting the plane
+    box = Box(size=(0.06, 0.05, 0.05), mass=0.2, friction=0.5, pose=at(0.025 - 0.2 * G * np.cos(theta) / 1e4))
+    scene = Scene(hand, [box], [table(friction=0.5)])
+    sim = Simulator(scene, dt=dt, integrator=integrator, contact=SpringDamper(stiffness=1e4, damping=20.0))
+    return sim.run(hold_hand(hand), duration, progress=False)
+
+
+@pytest.mark.parametrize("integrator", ["implicit", "semi-implicit"])
+def test_box_sticks_on_a_plane_flatter_than_its_friction_angle(integrator: str) -> None:
+    """tan(20 deg) = 0.36 < mu = 0.5: after settling the box creeps < 1 micrometre per second."""
+    dt = 1e-3 if integrator == "implicit" else 2e-4
+    trajectory = _incline(20.0, integrator, dt, duration=1.5)
+    late = trajectory.between(0.5, 1.5)
+    creep = np.linalg.norm(late.object_position[-1, 0] - late.object_position[0, 0]) / 1.0
+    assert creep < 1e-6
+    assert late.contact_sticking.all()
+
+
+@pytest.mark.parametrize("integrator", ["implicit", "semi-implicit"])
+def test_box_slides_with_coulomb_deceleration(integrator: str) -> None:
+    """tan(35 deg) = 0.70 > mu = 0.5: a = g (sin(theta) - mu cos(theta)) = 1.609 m/s^2."""
+    dt = 1e-3 if integrator == "implicit" else 2e-4
+    trajectory = _incline(35.0, integrator, dt, duration=1.0).between(0.3, 1.0)
+    acceleration = 2 * np.polyfit(trajectory.t, trajectory.object_position[:, 0, 0], 2)[0]
+    theta = np.radians(35.0)
+    assert acceleration == pytest.approx(G * (np.sin(theta) - 0.5 * np.cos(theta)), rel=1e-3)
+    assert not trajectory.contact_sticking.any()
+
+
+def test_regularised_friction_creeps_where_stick_slip_holds() -> None:
+    """The tanh law needs slip velocity to make friction: on the 20 deg incline it creeps (the reason for stick)."""
+    theta = np.radians(20.0)
+    hand = far_hand(gravity=(G * np.sin(theta), 0.0, -G * np.cos(theta)))
+    box = Box(size=(0.06, 0.05, 0.05), mass=0.2, friction=0.5, pose=at(0.025 - 0.2 * G * np.cos(theta) / 1e4))
+    law = SpringDamper(stiffness=1e4, damping=20.0, friction_law="tanh", slip_velocity=1e-3)
+    sim = Simulator(Scene(hand, [box], [table(friction=0.5)]), dt=2e-4, contact=law, integrator="semi-implicit")
+    late = sim.run(hold_hand(hand), 1.0, progress=False).between(0.5, 1.0)
+    creep = np.linalg.norm(late.object_position[-1, 0] - late.object_position[0, 0]) / 0.5
+    assert creep > 1e-5  # tens of micrometres per second or more
+
+
+def test_three_finger_hold_does_not_creep() -> None:
+    """Barrett F1 + F2 against F3 squeeze a 0.2 kg box (friction margin > 3): creep < 1 micrometre/s over 2 s."""
+    hand = bh.BarrettHand()
+    q0 = hand.configuration(
+        F1_proximal=1.2, F1_distal=0.3, F2_proximal=1.2, F2_distal=0.3, F3_proximal=1.2, F3_distal=0.3
+    )
+    tips = hand.fingertip_positions(q0)
+    width = 2 * (tips[2, 1] - 0.010) + 0.0004  # between the 10 mm tip spheres, 0.2 mm preload each side
+    box = Box(size=(0.08, width, 0.05), mass=0.2, friction=0.8, pose=at(tips[2, 2]))
+    scene = Scene(hand, [box])
+    sim = Simulator(scene, dt=1e-3, contact=SpringDamper(stiffness=1e4, damping=20.0, friction=0.8),
+                    actuation=FullyActuated(hand, damping=0.05))  # fmt: skip
+    squeeze = {"F1": np.array([0, 2.0, 0]), "F2": np.array([0, 2.0, 0]), "F3": np.array([0, -4.0, 0])}  # [N]
+
+    def controller(t: float, state) -> np.ndarray:
+        tau = hand.gravity_torques(state.q) + 2.0 * (q0 - state.q)
+        for finger, force in squeeze.items():
+            tau += hand.fingertip_jacobian(state.q, finger).T @ force
+        return tau
+
+    trajectory = sim.run(controller, 2.5, state=sim.initial_state(q0), progress=False)
+    held = trajectory.between(0.5, 2.5)
+    creep = np.linalg.norm(held.object_position[-1, 0] - held.object_position[0, 0]) / 2.0
+    assert creep < 1e-6
+    last = held.contacts_at(len(held) - 1)
+    assert sorted(last["bodies"][:, 0]) == ["F1_distal_link", "F2_distal_link", "F3_distal_link"]
+    normal_forces = np.einsum("ij,ij->i", last["force"], last["normal"])
+    assert 0.8 * normal_forces.sum() > 3 * 0.2 * G  # the friction margin the test claims
+    np.testing.assert_allclose(last["force"].sum(axis=0), [0.0, 0.0, 0.2 * G], atol=1e-6)  # statics of the box
+    assert last["sticking"].all()
+
+
+# ---------------------------------------------------------------------- determinism and divergence
+def test_same_seed_same_trajectory_bit_for_bit() -> None:
+    hand = far_hand()
+    scene = Scene(hand, [Box(size=(0.06, 0.05, 0.05), mass=0.2, pose=at(0.03))], [table()])
+
+    def run(seed: int) -> Trajectory:
+        sim = Simulator(scene, dt=1e-3)
+        return sim.run(lambda t, s: hand.gravity_torques(s.q) - 0.01 * s.v, 0.3, sensor_noise=(1e-3, 1e-2), seed=seed,
+                       progress=False)  # fmt: skip
+
+    first, second, other = run(3), run(3), run(4)
+    for name in ("q", "v", "u", "object_position", "contact_force"):
+        np.testing.assert_array_equal(getattr(first, name), getattr(second, name))
+    assert not np.array_equal(first.u, other.u)
+
+
+def test_absurd_controller_raises_instead_of_nan() -> None:
+    hand = far_hand()
+    sim = Simulator(Scene(hand, [Sphere(radius=0.02, mass=0.1, pose=at(0.5))]), dt=1e-3)
+    with pytest.raises(SimulationDiverged, match="speed of velocity coordinate") as caught:
+        sim.run(lambda t, s: np.full(8, 1e6), 1.0, progress=False)
+    assert caught.value.time < 0.01 and caught.value.quantity.startswith("speed")
+    with pytest.raises(SimulationDiverged, match="control input u"):
+        sim.run(lambda t, s: np.full(8, np.nan), 1.0, progress=False)
+
+
+def test_bad_simulator_arguments() -> None:
+    hand = far_hand()
+    scene = Scene(hand)
+    with pytest.raises(bh.InputError, match="`integrator` must be one of"):
+        Simulator(scene, integrator="euler")
+    with pytest.raises(bh.InputError, match="`dt` must be a positive finite number"):
+        Simulator(scene, dt=0.0)
+    sim = Simulator(scene, dt=1e-3)
+    with pytest.raises(bh.InputError, match=r"`u` must have shape \(8,\), got shape \(3,\)"):
+        sim.run(lambda t, s: np.zeros(3), 0.01, progress=False)
+    with pytest.raises(bh.InputError, match="`control_dt` must be a positive multiple of dt"):
+        sim.run(lambda t, s: np.zeros(8), 0.01, control_dt=1.5e-3, progress=False)
+    with pytest.raises(bh.InputError, match="`sensor_noise` needs a `seed`"):
+        sim.run(lambda t, s: np.zeros(8), 0.01, sensor_noise=(0.01, 0.01), progress=False)
+
+
+def test_zero_order_hold_at_the_control_period() -> None:
+    hand = far_hand()
+    sim = Simulator(Scene(hand), dt=1e-3)
+    calls = []
+
+    def controller(t: float, state) -> np.ndarray:
+        calls.append(t)
+        return hand.gravity_torques(state.q)
+
+    trajectory = sim.run(controller, 0.1, control_dt=1e-2, progress=False)
+    np.testing.assert_allclose(calls, np.arange(10) * 1e-2, atol=1e-12)
+    assert len(trajectory) == 101
