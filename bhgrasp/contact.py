@@ -126,6 +126,12 @@ class ContactSet:
     force: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (m, 3) on b [N]
     sticking: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
+    def __post_init__(self) -> None:
+        m = len(self.pair)
+        if len(self.force) != m:  # detected, forces not computed yet
+            self.force = np.zeros((m, 3))
+            self.sticking = np.zeros(m, dtype=bool)
+
     def __len__(self) -> int:
         return len(self.pair)
 

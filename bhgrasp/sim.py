@@ -131,7 +131,7 @@ class Simulator:
             q_next, v_next, contacts, drive = self._implicit(q, v, tau_hand)
         else:
             q_next, v_next, contacts, drive = self._explicit(q, v, tau_hand)
-        t = state.t + self.dt
+        t = round(state.t / self.dt + 1) * self.dt  # k dt exactly: no accumulated rounding
         self._check(t, q_next, v_next, contacts)
         self.actuation.update(q_next[: self.scene.nq_hand], v_next[: self._nvh], u, drive)
         return self._state(t, q_next, v_next, contacts), StepInfo(contacts, drive)
@@ -386,7 +386,6 @@ class Simulator:
             controller.reset(state)
         recorder = _Recorder(self, steps // record_every + 1)
         u = np.zeros(self.actuation.n_inputs)
-        log = getattr(controller, "log", None)
         info = StepInfo(empty_contact_set(), np.zeros(self._nvh))
         iterator = range(steps)
         if progress and steps > 20_000:
@@ -398,10 +397,10 @@ class Simulator:
                 sensed = _noisy(state, sensor_noise, rng)
                 u = np.array(controller(state.t, sensed), dtype=float)
             if k % record_every == 0:
-                recorder.add(state, u, info, log)
+                recorder.add(state, u, info, getattr(controller, "log", None))
             torque = disturbance(state.t) if callable(disturbance) else disturbance
             state, info = self.step(state, u, torque)
-        recorder.add(state, u, info, log)
+        recorder.add(state, u, info, getattr(controller, "log", None))
         return recorder.trajectory()
 
 

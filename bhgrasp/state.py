@@ -136,6 +136,18 @@ class Trajectory:
         """(N,) number of contact points per sample."""
         return np.diff(self.contact_offsets)
 
+    def object_euler_zyz(self) -> np.ndarray:
+        """(N, n_objects, 3) object orientations as the thesis' Z-Y-Z Euler angles [rad] (for reporting only)."""
+        from bhgrasp.orientation import zyz_from_rotation
+
+        n, m = self.object_quaternion.shape[:2]
+        angles = np.empty((n, m, 3))
+        for k in range(n):
+            for i in range(m):
+                rotation = pin.Quaternion(*np.roll(self.object_quaternion[k, i], 1)).toRotationMatrix()
+                angles[k, i] = zyz_from_rotation(rotation)
+        return angles
+
     def max_penetration(self) -> float:
         """Deepest contact of the whole run [m]."""
         return float(self.contact_depth.max()) if len(self.contact_depth) else 0.0
@@ -143,7 +155,8 @@ class Trajectory:
     # ------------------------------------------------------------------ slicing
     def between(self, start: float, stop: float) -> Trajectory:
         """Samples with ``start <= t <= stop`` [s]."""
-        indices = np.flatnonzero((self.t >= start) & (self.t <= stop))
+        slack = 1e-9 * max(1.0, abs(start), abs(stop))  # times are k dt: do not lose a sample to rounding
+        indices = np.flatnonzero((self.t >= start - slack) & (self.t <= stop + slack))
         if len(indices) == 0:
             raise InputError(f"no samples between t = {start} and {stop} s (run spans {self.t[0]}..{self.t[-1]} s)")
         return self[int(indices[0]) : int(indices[-1]) + 1]

@@ -1,0 +1,117 @@
+"""Contact detection against analytic geometry, and the force law's defining properties."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import bhgrasp as bh
+from bhgrasp.contact import ContactEngine, SpringDamper
+from bhgrasp.objects import Box, Sphere, table
+from bhgrasp.scene import Scene
+
+FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))
+
+
+def engine_for(item, law: SpringDamper | None = None) -> tuple[ContactEngine, Scene]:
+    scene = Scene(bh.BarrettHand(base_placement=FAR), [item], [table()])
+    return ContactEngine(scene, law or SpringDamper()), scene
+
+
+def test_sphere_on_plane_geometry() -> None:
+    engine, scene = engine_for(Sphere(radius=0.02, mass=0.1, pose=pin.SE3(np.eye(3), np.array([0.1, 0.2, 0.0185]))))
+    q, _ = scene.initial_state()
+    contacts = engine.detect(q)
+    assert len(contacts) == 1
+    np.testing.assert_allclose(contacts.normal[0], [0, 0, 1], atol=1e-12)  # from the table (a) to the sphere (b)
+    assert contacts.depth[0] == pytest.approx(0.0015, abs=1e-12)
+    np.testing.assert_allclose(contacts.point[0], [0.1, 0.2, -0.00075], atol=1e-12)  # midway between surfaces
+    record = contacts.records(scene)[0]
+    assert (record.body_a, record.body_b) == ("table", "object0")
+
+
+def test_tilted_box_gets_each_corners_own_depth() -> None:
+    """Coal's patch gives every point the deepest depth; bhgrasp measures each corner (analytic truth here)."""
+    rotation, centre = pin.rpy.rpyToMatrix(0.0, 0.01, 0.0), np.array([0.0, 0.0, 0.0246])
+    engine, scene = engine_for(Box(size=(0.06, 0.05, 0.05), mass=0.2, pose=pin.SE3(rotation, centre)))
+    contacts = engine.detect(scene.initial_state()[0])
+    corners = np.array([[x, y, -0.025] for x in (-0.03, 0.03) for y in (-0.025, 0.025)]) @ rotation.T + centre
+    expected = sorted(-corners[:, 2])
+    assert len(contacts) == 4
+    # Signed distances are perpendicular to the tilted face, not along the plane normal: O(tilt^2) = 5e-5 relative.
+    np.testing.assert_allclose(sorted(contacts.depth), expected, rtol=2e-4)
+    np.testing.assert_allclose(contacts.weight, 0.25)
+
+
+def _one_contact(depth: float = 1e-3, displacement=(0.0, 0.0, 0.0), friction: float = 0.5):
+    engine, scene = engine_for(Sphere(radius=0.02, mass=0.1, pose=pin.SE3(np.eye(3), np.array([0, 0, 0.02 - depth]))))
+    contacts = engine.detect(scene.initial_state()[0])
+    contacts.displacement = np.array([displacement], dtype=float)
+    contacts.friction = np.array([friction])
+    return engine, contacts
+
+
+def test_normal_force_never_pulls() -> None:
+    engine, contacts = _one_contact(depth=1e-4)
+    forces, _, _ = engine.forces(contacts, np.array([[0.0, 0.0, 1.0]]))  # separating at 1 m/s: k d - c v < 0
+    np.testing.assert_array_equal(forces, 0.0)
+    forces, _, _ = engine.forces(contacts, np.array([[0.0, 0.0, -0.01]]))  # approaching: k d + c v
+    assert forces[0, 2] == pytest.approx(1e4 * 1e-4 + 20.0 * 0.01)
+
+
+def test_stick_spring_holds_without_velocity_and_slides_on_the_cone() -> None:
+    engine, contacts = _one_contact(depth=1e-3, displacement=(2e-5, 0.0, 0.0), friction=0.5)
+    forces, sticking, displacement = engine.forces(contacts, np.zeros((1, 3)))
+    np.testing.assert_allclose(forces[0], [-1e4 * 2e-5, 0.0, 10.0])  # f_t = -k_t u with zero velocity: static
+    assert sticking[0]
+    engine, contacts = _one_contact(depth=1e-3, displacement=(1e-3, 0.0, 0.0), friction=0.5)
+    forces, sticking, displacement = engine.forces(contacts, np.zeros((1, 3)))
+    np.testing.assert_allclose(forces[0], [-5.0, 0.0, 10.0])  # capped at mu f_n = 0.5 * 10 N
+    assert not sticking[0]
+    np.testing.assert_allclose(displacement[0], [5.0 / 1e4, 0.0, 0.0])  # anchor follows: k_t |u| = mu f_n
+
+
+def test_tanh_friction_needs_slip_velocity() -> None:
+    law = SpringDamper(friction_law="tanh", slip_velocity=1e-3)
+    engine, scene = engine_for(Sphere(radius=0.02, mass=0.1, pose=pin.SE3(np.eye(3), np.array([0, 0, 0.019]))), law)
+    contacts = engine.detect(scene.initial_state()[0])
+    still, _, _ = engine.forces(contacts, np.zeros((1, 3)))
+    assert still[0, 0] == 0.0  # no slip, no friction: a regularised law cannot hold a load at rest
+    sliding, _, _ = engine.forces(contacts, np.array([[0.1, 0.0, 0.0]]))
+    assert sliding[0, 0] == pytest.approx(-0.8 * 10.0 * np.tanh(100.0))
+
+
+def test_hunt_crossley_normal_force() -> None:
+    law = SpringDamper(stiffness=1e6, damping=100.0, normal_law="hunt-crossley", exponent=1.5)
+    engine, scene = engine_for(Sphere(radius=0.02, mass=0.1, pose=pin.SE3(np.eye(3), np.array([0, 0, 0.019]))), law)
+    contacts = engine.detect(scene.initial_state()[0])
+    forces, _, _ = engine.forces(contacts, np.array([[0.0, 0.0, -0.05]]))
+    assert forces[0, 2] == pytest.approx(1e-3**1.5 * (1e6 + 100.0 * 0.05))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"stiffness": 0.0}, "`stiffness` must be a positive finite number"),
+        ({"damping": -1.0}, "`damping` must be a finite number >= 0, got -1.0"),
+        ({"friction": float("nan")}, "`friction` must be a finite number >= 0"),
+        ({"normal_law": "hertz"}, "`normal_law` must be 'linear' or 'hunt-crossley', got 'hertz'"),
+        ({"friction_law": "viscous"}, "`friction_law` must be 'stick-slip' or 'tanh'"),
+    ],
+)
+def test_bad_contact_law(kwargs: dict, message: str) -> None:
+    with pytest.raises(bh.InputError, match=message):
+        SpringDamper(**kwargs)
+
+
+def test_scene_pairs_and_names() -> None:
+    hand = bh.BarrettHand()
+    scene = Scene(hand, [Sphere(radius=0.02, mass=0.1, name="ball"), Box(size=(0.02,) * 3, mass=0.1)], [table()])
+    hand_links = scene.hand_geometries
+    assert len(scene.pairs) == 2 * len(hand_links) + 2 + 1  # hand x objects, objects x table, object x object
+    assert scene.object_names == ["ball", "object1"]
+    with pytest.raises(bh.InputError, match="object names must be unique"):
+        Scene(hand, [Sphere(radius=0.02, mass=0.1, name="a"), Sphere(radius=0.02, mass=0.1, name="a")])
+    with pytest.raises(bh.InputError, match=r"`objects\[0\]` must be a RigidObject or SpringMounted, got str"):
+        Scene(hand, ["ball"])
