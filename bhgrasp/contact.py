@@ -29,6 +29,9 @@ from bhgrasp._validation import as_positive
 from bhgrasp.errors import InputError
 from bhgrasp.scene import Scene
 
+LOCAL_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+_IDENTITY3 = np.eye(3)
+
 
 @dataclass(frozen=True)
 class SpringDamper:
@@ -123,6 +126,7 @@ class ContactSet:
     friction: np.ndarray  # (m,) mu
     displacement: np.ndarray  # (m, 3) tangential elastic displacement u at the start of the step [m]
     weight: np.ndarray  # (m,) share of its patch's stiffness and damping: 1 / (points in the patch)
+    local_b: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (m, 3) points in b's joint frame [m]
     force: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (m, 3) on b [N]
     sticking: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
@@ -182,13 +186,14 @@ class ContactEngine:
         self._pair_friction = np.array([pair.friction(law.friction) for pair in scene.pairs])
         self._joint_a = np.array([pair.joint_a for pair in scene.pairs], dtype=int)
         self._joint_b = np.array([pair.joint_b for pair in scene.pairs], dtype=int)
-        self._memory: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # pair -> (points in b's frame, u)
+        self._memory = (np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)))  # pair, point in b's frame, u
         self._probe = coal.Sphere(1e-12)  # a point, for signed-distance queries
+        self._probe_placement = coal.Transform3s()
         self._distance_request, self._distance_result = coal.DistanceRequest(), coal.DistanceResult()
 
     def reset(self) -> None:
         """Forget every contact (a new run)."""
-        self._memory = {}
+        self._memory = (np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)))
 
     # ------------------------------------------------------------------ detection
     def detect(self, q: np.ndarray) -> ContactSet:
@@ -198,10 +203,9 @@ class ContactEngine:
         damping among its points, so a body's contact stiffness does not depend on how many points coal reports.
         """
         scene = self.scene
-        pin.computeCollisions(scene.model, scene.data, scene.geometry, scene.geometry_data, q, False)
-        colliding = [k for k, result in enumerate(scene.geometry_data.collisionResults) if result.isCollision()]
-        if not colliding:
+        if not pin.computeCollisions(scene.model, scene.data, scene.geometry, scene.geometry_data, q, False):
             return empty_contact_set()
+        colliding = [k for k, result in enumerate(scene.geometry_data.collisionResults) if result.isCollision()]
         pin.computeContactPatches(scene.geometry, scene.geometry_data)
         pairs, points, normals, depths, weights = [], [], [], [], []
         for k in colliding:
@@ -226,9 +230,10 @@ class ContactEngine:
             return empty_contact_set()
         point, normal = np.concatenate(points)[keep], np.array(normals)[keep]
         pair = np.array(pairs, dtype=int)[keep]
-        displacement = self._recall(pair, point, normal)
+        local = self._in_frame_b(pair, point)
+        displacement = self._recall(pair, local, normal)
         weight = np.array(weights)[keep]
-        return ContactSet(pair, point, normal, depth[keep], self._pair_friction[pair], displacement, weight)
+        return ContactSet(pair, point, normal, depth[keep], self._pair_friction[pair], displacement, weight, local)
 
     def _point_depths(self, k: int, points: np.ndarray, normal: np.ndarray) -> np.ndarray:
         """Penetration at each point of a multi-point patch, from signed distances to both shapes.
@@ -238,65 +243,65 @@ class ContactEngine:
         at two points moved inward (toward the patch centroid) and extrapolated linearly back to the corner.
         """
         pair = self.scene.pairs[k]
-        shapes = [self._shape(pair.geom_a), self._shape(pair.geom_b)]
-        inward = points.mean(axis=0) - points
+        placements, geometries = self.scene.geometry_data.oMg, self.scene.geometry.geometryObjects
+        shapes = []
+        for geom in (pair.geom_a, pair.geom_b):
+            placement = placements[geom]
+            shapes.append((geometries[geom].geometry, coal.Transform3s(placement.rotation, placement.translation)))
+        inward = points.sum(axis=0) / len(points) - points
         inward -= np.outer(inward @ normal, normal)
-        length = np.linalg.norm(inward, axis=1)
-        step = np.minimum(1e-3, 0.125 * length)
-        direction = np.divide(inward, length[:, None], out=np.zeros_like(inward), where=length[:, None] > 0)
-        depths = np.empty(len(points))
-        for i, (point, offset) in enumerate(zip(points, step[:, None] * direction)):
-            near, far = self._overlap(shapes, point + offset), self._overlap(shapes, point + 2 * offset)
-            depths[i] = 2 * near - far
-        return depths
-
-    def _shape(self, geom: int) -> tuple:
-        placement = self.scene.geometry_data.oMg[geom]
-        shape = self.scene.geometry.geometryObjects[geom].geometry
-        return shape, coal.Transform3s(placement.rotation, placement.translation)
+        length = np.sqrt((inward * inward).sum(axis=1))
+        offsets = inward * (np.minimum(1e-3, 0.125 * length) / np.maximum(length, 1e-300))[:, None]
+        near = [self._overlap(shapes, point) for point in points + offsets]
+        far = [self._overlap(shapes, point) for point in points + 2 * offsets]
+        return 2 * np.array(near) - np.array(far)
 
     def _overlap(self, shapes: list, point: np.ndarray) -> float:
-        probe = coal.Transform3s(np.eye(3), point)
+        probe, placement, request, result = (
+            self._probe,
+            self._probe_placement,
+            self._distance_request,
+            self._distance_result,
+        )
+        placement.setTranslation(point)
         total = 0.0
-        for shape, placement in shapes:
-            self._distance_result.clear()
-            total += coal.distance(self._probe, probe, shape, placement, self._distance_request, self._distance_result)
+        for shape, shape_placement in shapes:
+            result.clear()
+            total += coal.distance(probe, placement, shape, shape_placement, request, result)
         return -total
 
-    def _recall(self, pair: np.ndarray, point: np.ndarray, normal: np.ndarray) -> np.ndarray:
-        """Tangential displacement of each contact carried over from the last step (0 for a new contact)."""
-        displacement = np.zeros_like(point)
-        data = self.scene.data
-        for k in np.unique(pair):
-            remembered = self._memory.get(int(k))
-            if remembered is None:
-                continue
-            old_local, old_u = remembered
-            rows = np.flatnonzero(pair == k)
-            frame_b = data.oMi[int(self._joint_b[k])]
-            local = (point[rows] - frame_b.translation) @ frame_b.rotation  # world -> b's joint frame
-            distance = np.linalg.norm(local[:, None, :] - old_local[None, :, :], axis=2)
-            nearest = np.argmin(distance, axis=1)
-            matched = distance[np.arange(len(rows)), nearest] <= self.match_radius
-            # A point coal did not report last step (patches change size as a body rocks) inherits the mean
-            # displacement of its patch, so that a sticking patch keeps its anchor.
-            u = np.where(matched[:, None], old_u[nearest], old_u.mean(axis=0))
-            n = normal[rows]
-            projected = u - np.einsum("ij,ij->i", u, n)[:, None] * n  # onto the new tangent plane, same length
-            length, new_length = np.linalg.norm(u, axis=1), np.linalg.norm(projected, axis=1)
-            scale = np.divide(length, new_length, out=np.ones_like(length), where=new_length > 1e-15)
-            displacement[rows] = projected * scale[:, None]
-        return displacement
+    def _in_frame_b(self, pair: np.ndarray, point: np.ndarray) -> np.ndarray:
+        """Contact points expressed in the joint frame of their body b."""
+        placements = self.scene.data.oMi
+        return np.array([placements[int(j)].actInv(p) for j, p in zip(self._joint_b[pair], point)])
+
+    def _recall(self, pair: np.ndarray, local: np.ndarray, normal: np.ndarray) -> np.ndarray:
+        """Tangential displacement of each contact carried over from the last step (0 for a new contact).
+
+        A contact matches the nearest remembered point of the same pair within ``match_radius`` (on body b); a point
+        coal did not report last step (patches change size as a body rocks) inherits the mean displacement of its
+        pair, so that a sticking patch keeps its anchor.
+        """
+        old_pair, old_local, old_u = self._memory
+        if len(old_pair) == 0:
+            return np.zeros_like(local)
+        same_pair = pair[:, None] == old_pair[None, :]
+        gap = local[:, None, :] - old_local[None, :, :]
+        distance = np.where(same_pair, (gap * gap).sum(axis=2), np.inf)
+        nearest = distance.argmin(axis=1)
+        matched = distance[np.arange(len(pair)), nearest] <= self.match_radius**2
+        u = old_u[nearest]
+        if not matched.all():
+            u[~matched] = 0.0
+            for i in np.flatnonzero(~matched & same_pair.any(axis=1)):
+                u[i] = old_u[same_pair[i]].mean(axis=0)
+        projected = u - (u * normal).sum(axis=1)[:, None] * normal  # onto the new tangent plane ...
+        length, new_length = np.sqrt((u * u).sum(axis=1)), np.sqrt((projected * projected).sum(axis=1))
+        return projected * (length / np.maximum(new_length, 1e-300))[:, None]  # ... keeping its length
 
     def remember(self, contacts: ContactSet, displacement: np.ndarray) -> None:
         """Store the end-of-step tangential displacements (call once per step, after the forces are final)."""
-        data = self.scene.data
-        memory = {}
-        for k in np.unique(contacts.pair):
-            rows = contacts.pair == k
-            frame_b = data.oMi[int(self._joint_b[k])]
-            memory[int(k)] = ((contacts.point[rows] - frame_b.translation) @ frame_b.rotation, displacement[rows])
-        self._memory = memory
+        self._memory = (contacts.pair.copy(), contacts.local_b.copy(), displacement.copy())
 
     # ------------------------------------------------------------------ kinematics of the contact points
     def jacobians(self, contacts: ContactSet) -> np.ndarray:
@@ -306,15 +311,15 @@ class ContactEngine:
         """
         model, data = self.scene.model, self.scene.data
         jacobians = np.zeros((len(contacts), 3, model.nv))
-        for joints, sign in ((self._joint_b[contacts.pair], 1.0), (self._joint_a[contacts.pair], -1.0)):
-            for joint in np.unique(joints):
-                if joint == 0:
-                    continue  # the environment and the fixed palm do not move
-                rows = np.flatnonzero(joints == joint)
-                frame = pin.getJointJacobian(model, data, int(joint), pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-                lever = contacts.point[rows] - data.oMi[int(joint)].translation
-                # v_point = v_joint + omega x lever = (J_lin - [lever]x J_ang) v
-                jacobians[rows] += sign * (frame[:3] - _skew(lever) @ frame[3:])
+        identity = _IDENTITY3
+        for i, k in enumerate(contacts.pair):
+            joint_b, joint_a = int(self._joint_b[k]), int(self._joint_a[k])
+            if joint_b:  # a point fixed on body b: Pinocchio's frame Jacobian of that placement
+                placement = pin.SE3(identity, contacts.local_b[i])
+                jacobians[i] = pin.getFrameJacobian(model, data, joint_b, placement, LOCAL_WORLD_ALIGNED)[:3]
+            if joint_a:  # 0 = the environment or the fixed palm
+                placement = pin.SE3(identity, data.oMi[joint_a].actInv(contacts.point[i]))
+                jacobians[i] -= pin.getFrameJacobian(model, data, joint_a, placement, LOCAL_WORLD_ALIGNED)[:3]
         return jacobians
 
     # ------------------------------------------------------------------ force law
@@ -367,13 +372,6 @@ class ContactEngine:
             displacement = displacement.copy()
             displacement[sliding] = -f_t[sliding] / (weight[sliding, None] * self.law.k_t)
         return f_t, sticking, displacement
-
-
-def _skew(vectors: np.ndarray) -> np.ndarray:
-    """Cross-product matrices [v]x of a stack of 3-vectors, shape (m, 3, 3)."""
-    x, y, z = vectors.T
-    zero = np.zeros_like(x)
-    return np.stack((zero, -z, y, z, zero, -x, -y, x, zero), axis=1).reshape(-1, 3, 3)
 
 
 def _nonnegative(value: float, name: str) -> float:

@@ -33,6 +33,7 @@ from bhgrasp.state import State, Trajectory
 
 INTEGRATORS = ("implicit", "semi-implicit", "rk4")
 _FRICTION_VELOCITY = 1e-3  # [rad/s] regularisation of Coulomb joint friction
+_IDENTITY3 = np.eye(3)
 
 
 @dataclass
@@ -90,6 +91,11 @@ class Simulator:
         self._lower, self._upper = scene.hand.lower, scene.hand.upper
         self._object_identity = np.eye(scene.nv - self._nvh)
         self._lower_triangle = np.tril_indices(scene.nv, -1)
+        self._object_v = [scene.object_v_slice(i) for i in range(len(scene.objects))]
+        self._pair_bodies = [(pair.body_a, pair.body_b) for pair in scene.pairs]
+        springs = [i for i, item in enumerate(scene.objects) if hasattr(item, "stiffness")]
+        self._spring_q = np.array([scene.object_q_slice(i).start for i in springs], dtype=int)
+        self._spring_v = np.array([scene.object_v_slice(i).start for i in springs], dtype=int)
 
     # ------------------------------------------------------------------ states
     def initial_state(self, q_hand: Any = None) -> State:
@@ -104,8 +110,15 @@ class Simulator:
         scene = self.scene
         n = len(scene.objects)
         poses = tuple(scene.object_pose(q, i) for i in range(n))
-        twists = np.array([scene.object_twist(q, v, i) for i in range(n)]).reshape(n, 6)
-        bodies = tuple((scene.pairs[k].body_a, scene.pairs[k].body_b) for k in contacts.pair)
+        twists = np.zeros((n, 6))
+        for i, pose in enumerate(poses):
+            local = v[self._object_v[i]]
+            if len(local) == 6:
+                rotation = pose.rotation
+                twists[i, :3], twists[i, 3:] = rotation @ local[:3], rotation @ local[3:]
+            else:  # spring-mounted: slides along its direction
+                twists[i, :3] = local[0] * scene.objects[i].direction
+        bodies = tuple(self._pair_bodies[k] for k in contacts.pair)
         return State(
             t, q[: scene.nq_hand].copy(), v[: self._nvh].copy(), poses, twists, contacts.point, contacts.normal,
             contacts.force, bodies, q, v,
@@ -154,29 +167,31 @@ class Simulator:
         return full
 
     def _passive(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Joint-space springs/dampers: explicit torque, implicit stiffness K and damping C (diagonals)."""
+        """Joint-space springs/dampers: explicit torque, implicit stiffness K and damping C (diagonals).
+
+        Object springs (spring-mounted objects, rest at 0), joint stops (only while penetrated), joint damping and
+        regularised joint friction (linearised about ``v``).
+        """
         nvh, nqh = self._nvh, self.scene.nq_hand
         stiffness = self.scene.joint_stiffness.copy()
         damping = self.scene.joint_damping.copy()
         torque = np.zeros(self.scene.nv)
-        # Object springs act on prismatic coordinates only (q index = v index offset for those joints).
-        for i, item in enumerate(self.scene.objects):
-            if hasattr(item, "stiffness"):
-                qs, vs = self.scene.object_q_slice(i), self.scene.object_v_slice(i)
-                torque[vs] -= item.stiffness * q[qs]
+        if len(self._spring_v):
+            torque[self._spring_v] = -self.scene.joint_stiffness[self._spring_v] * q[self._spring_q]
         damping[:nvh] += self.actuation.joint_damping()
         friction = self.actuation.friction
-        if np.any(friction > 0):
-            torque[:nvh] -= friction * np.tanh(v[:nvh] / _FRICTION_VELOCITY)
-            damping[:nvh] += friction / _FRICTION_VELOCITY / np.cosh(v[:nvh] / _FRICTION_VELOCITY) ** 2
-            torque[:nvh] += (friction / _FRICTION_VELOCITY / np.cosh(v[:nvh] / _FRICTION_VELOCITY) ** 2) * v[:nvh]
+        if friction.any():
+            ratio = v[:nvh] / _FRICTION_VELOCITY
+            slope = friction / _FRICTION_VELOCITY / np.cosh(ratio) ** 2
+            torque[:nvh] += slope * v[:nvh] - friction * np.tanh(ratio)
+            damping[:nvh] += slope
         q_hand = q[:nqh]
-        below, above = q_hand < self._lower, q_hand > self._upper
-        stop = np.where(below, self._lower, np.where(above, self._upper, q_hand))
-        active = below | above
-        torque[:nvh] -= self.limit_stiffness * (q_hand - stop)
-        stiffness[:nvh] += np.where(active, self.limit_stiffness, 0.0)
-        damping[:nvh] += np.where(active, self.limit_damping, 0.0)
+        stop = np.clip(q_hand, self._lower, self._upper)
+        active = stop != q_hand
+        if active.any():
+            torque[:nvh] -= self.limit_stiffness * (q_hand - stop)
+            stiffness[:nvh] += active * self.limit_stiffness
+            damping[:nvh] += active * self.limit_damping
         return torque, stiffness, damping
 
     def _implicit(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray):
@@ -198,8 +213,9 @@ class Simulator:
         status = np.ones(m, dtype=int)  # 0 off, 1 stick, 2 slide
         slide_force = np.zeros((m, 3))
         start_velocity = jacobians @ v
+        parts = self._normal_part(contacts)
         for _ in range(8):
-            f0, gains = self._linearise(contacts, status, slide_force)
+            f0, gains = self._linearise(parts, status, slide_force)
             stacked = jacobians.reshape(-1, self.scene.nv)  # (3m, nv)
             matrix_c = matrix + dt * stacked.T @ (gains @ jacobians).reshape(-1, self.scene.nv)
             rhs_c = rhs + dt * stacked.T @ f0.ravel()
@@ -221,30 +237,37 @@ class Simulator:
         drive -= self._motor_damping() * v_next[: self._nvh]  # the clutch passes what the motor's losses leave
         return pin.integrate(model, q, v_next * dt), v_next, contacts, drive
 
-    def _linearise(self, contacts: ContactSet, status: np.ndarray, slide_force: np.ndarray):
-        """Contact force ``f(v+) = f0 - D J v+`` of each contact in its status (0 off, 1 stick, 2 slide)."""
+    def _normal_part(self, contacts: ContactSet):
+        """Per step: the normal force at the end of the step ``f_n0 n - g_n n n^T J v+`` and the tangent projectors."""
         law, dt = self.law, self.dt
         normal, depth, weight = contacts.normal, contacts.depth, contacts.weight
         outer = normal[:, :, None] * normal[:, None, :]
         if law.normal_law == "linear":
-            f_n = weight * law.stiffness * depth
-            normal_gain = weight * (law.stiffness * dt + law.damping)
+            force = weight * law.stiffness * depth
+            gain = weight * (law.stiffness * dt + law.damping)
         else:
             power = depth**law.exponent
-            slope = law.exponent * law.stiffness * depth ** (law.exponent - 1.0)
-            f_n = weight * law.stiffness * power
-            normal_gain = weight * (slope * dt + law.damping * power)
-        f0 = f_n[:, None] * normal
-        gains = normal_gain[:, None, None] * outer
-        stick = status == 1
-        if law.friction_law == "stick-slip" and np.any(stick):
-            f0[stick] -= (weight[stick] * law.k_t)[:, None] * contacts.displacement[stick]
-            tangent_gain = weight[stick] * (law.k_t * dt + law.c_t)
-            gains[stick] += tangent_gain[:, None, None] * (np.eye(3) - outer[stick])
-        f0 += np.where((status == 2)[:, None], slide_force, 0.0)
+            force = weight * law.stiffness * power
+            gain = weight * (law.exponent * law.stiffness * depth ** (law.exponent - 1.0) * dt + law.damping * power)
+        f0 = force[:, None] * normal
+        gains = gain[:, None, None] * outer
+        if law.friction_law == "stick-slip":
+            f0_stick = f0 - (weight * law.k_t)[:, None] * contacts.displacement
+            gains_stick = gains + (weight * (law.k_t * dt + law.c_t))[:, None, None] * (_IDENTITY3 - outer)
+        else:
+            f0_stick, gains_stick = f0, gains
+        return f0, gains, f0_stick, gains_stick
+
+    def _linearise(self, parts, status: np.ndarray, slide_force: np.ndarray):
+        """Contact force ``f(v+) = f0 - D J v+`` of each contact in its status (0 off, 1 stick, 2 slide)."""
+        f0, gains, f0_stick, gains_stick = parts
+        stick = (status == 1)[:, None]
+        f_0 = np.where(stick, f0_stick, f0 + slide_force)
+        d = np.where(stick[:, :, None], gains_stick, gains)
         off = status == 0
-        f0[off], gains[off] = 0.0, 0.0
-        return f0, gains
+        if off.any():
+            f_0[off], d[off] = 0.0, 0.0
+        return f_0, d
 
     def _classify(self, contacts: ContactSet, forces: np.ndarray, status: np.ndarray, start_velocity: np.ndarray):
         """Drop pulling contacts; turn sticking contacts outside the cone into sliding ones (force on the cone).
