@@ -19,52 +19,25 @@ import numpy as np
 import pinocchio as pin
 
 import bhgrasp as bh
-from bhgrasp.actuation import FullyActuated
-from bhgrasp.contact import SpringDamper
 from bhgrasp.errors import SimulationDiverged
-from bhgrasp.objects import Box
-from bhgrasp.scene import Scene
-from bhgrasp.sim import Simulator
-
-SQUEEZE = {"F1": np.array([0.0, 2.0, 0.0]), "F2": np.array([0.0, 2.0, 0.0]), "F3": np.array([0.0, -4.0, 0.0])}
-KP, DAMPING = 2.0, 0.05
-
-
-def reference_pose(hand: bh.Hand) -> tuple[np.ndarray, np.ndarray, float]:
-    """Hand posture, box size and box height of the reference hold."""
-    q0 = hand.configuration(
-        F1_proximal=1.2, F1_distal=0.3, F2_proximal=1.2, F2_distal=0.3, F3_proximal=1.2, F3_distal=0.3
-    )
-    tips = hand.fingertip_positions(q0)
-    size = np.array([0.08, 2 * (tips[2, 1] - 0.010) + 0.0004, 0.05])
-    return q0, size, float(tips[2, 2])
+from bhgrasp.experiments.hold import JOINT_DAMPING, POSTURE_GAIN, SQUEEZE, reference_hold
 
 
 def run_bhgrasp(duration: float, dt: float, stiffness: float = 1e4) -> dict:
-    hand = bh.BarrettHand()
-    q0, size, height = reference_pose(hand)
-    box = Box(size=size, mass=0.2, friction=0.8, pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, height])))
-    law = SpringDamper(stiffness=stiffness, damping=2e-3 * stiffness, friction=0.8)
-    sim = Simulator(Scene(hand, [box]), dt=dt, contact=law, actuation=FullyActuated(hand, damping=DAMPING))
-
-    def controller(t: float, state) -> np.ndarray:
-        tau = hand.gravity_torques(state.q) + KP * (q0 - state.q)
-        for finger, force in SQUEEZE.items():
-            tau += hand.fingertip_jacobian(state.q, finger).T @ force
-        return tau
-
+    hold = reference_hold(dt=dt, stiffness=stiffness)
     start = time.perf_counter()
-    trajectory = sim.run(controller, duration, state=sim.initial_state(q0), progress=False)
+    trajectory = hold.simulator.run(hold.controller, duration, state=hold.state, progress=False)
     wall = time.perf_counter() - start
     position = trajectory.object_position[:, 0]
-    return {"wall": wall, "steps": len(trajectory) - 1, "drop": height - position[-1, 2], "position": position}
+    return {"wall": wall, "steps": len(trajectory) - 1, "drop": hold.box_height - position[-1, 2], "position": position}
 
 
 def run_mujoco(duration: float, dt: float) -> dict:
     import mujoco
 
-    hand = bh.BarrettHand()
-    q0, size, height = reference_pose(hand)
+    hold = reference_hold(dt=dt)
+    q0, height = hold.state.q, hold.box_height
+    size = np.array(hold.simulator.scene.objects[0].size)
     spec = mujoco.MjSpec.from_file(str(bh.barrett_urdf_path()))
     spec.option.timestep = dt
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
@@ -72,7 +45,7 @@ def run_mujoco(duration: float, dt: float) -> dict:
     body.add_freejoint()
     body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=size / 2, mass=0.2, friction=[0.8, 0.005, 0.0001])
     for joint in spec.joints:
-        joint.damping = [DAMPING, 0.0, 0.0]  # MuJoCo 4: (damping, polynomial coefficients)
+        joint.damping = [JOINT_DAMPING, 0.0, 0.0]  # MuJoCo 4: (damping, polynomial coefficients)
     model = spec.compile()
     data = mujoco.MjData(model)
     data.qpos[:8] = q0
@@ -83,7 +56,7 @@ def run_mujoco(duration: float, dt: float) -> dict:
     start = time.perf_counter()
     for _ in range(steps):
         q = data.qpos[:8]
-        tau = data.qfrc_bias[:8] + KP * (q0 - q)  # gravity + Coriolis compensation, posture spring
+        tau = data.qfrc_bias[:8] + POSTURE_GAIN * (q0 - q)  # gravity + Coriolis compensation, posture spring
         for body_id, force in zip(tips, SQUEEZE.values()):
             tip = data.xpos[body_id] + data.xmat[body_id].reshape(3, 3) @ np.array([0.05, 0.0, 0.0])
             mujoco.mj_jac(model, data, jacobian, None, tip, body_id)
@@ -97,11 +70,11 @@ def run_mujoco(duration: float, dt: float) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--duration", type=float, default=2.0, help="simulated time [s]")
-    parser.add_argument("--stiffness-sweep", action="store_true", help="largest stable step per contact stiffness")
+    parser.add_argument("--stiffness-sweep", action="store_true", help="hold quality per contact stiffness and step")
     args = parser.parse_args()
     print(f"machine: {platform.machine()} python {platform.python_version()}, pinocchio {pin.__version__}")
     rows = []
-    for dt in (1e-3, 2e-3):
+    for dt in (1e-3, 2e-3, 5e-3):
         ours = run_bhgrasp(args.duration, dt)
         rows.append((f"bhgrasp implicit, dt {dt * 1e3:g} ms", ours))
     try:
@@ -110,6 +83,8 @@ def main() -> None:
         print(f"mujoco {mujoco.__version__}")
         theirs = run_mujoco(args.duration, 1e-3)
         rows.append(("mujoco implicitfast, dt 1 ms", theirs))
+        for dt in (2e-3, 5e-3):
+            rows.append((f"mujoco implicitfast, dt {dt * 1e3:g} ms", run_mujoco(args.duration, dt)))
     except ImportError:
         theirs = None
         print("mujoco not installed: no comparison")
@@ -119,21 +94,25 @@ def main() -> None:
         rtf = args.duration / result["wall"]
         print(f"{name:<30}{per_step:10.1f}{rtf:8.2f}{result['wall'] / args.duration:16.3f}{result['drop'] * 1e3:15.3f}")
     if theirs is not None:
-        for name, result in rows[:-1]:
+        for name, result in rows[:3]:
             print(f"ratio {name} / mujoco (wall per simulated second): {result['wall'] / theirs['wall']:.1f}")
     if args.stiffness_sweep:
-        print("\nlargest stable step (hold completes, box drop < 1 mm) per contact stiffness:")
+        print("\nhold over 1 s per contact stiffness and step: box drop [mm] / creep over the last 0.5 s [um/s]")
+        steps = (5e-3, 2e-3, 1e-3, 5e-4)
+        print(f"{'k [N/m]':>10}" + "".join(f"{f'dt {dt * 1e3:g} ms':>22}" for dt in steps))
         for stiffness in (1e3, 1e4, 5e4):
-            stable = None
-            for dt in (5e-3, 2e-3, 1e-3, 5e-4):
+            cells = []
+            for dt in steps:
                 try:
-                    result = run_bhgrasp(min(args.duration, 0.5), dt, stiffness)
+                    result = run_bhgrasp(1.0, dt, stiffness)
                 except SimulationDiverged:
+                    cells.append("diverged")
                     continue
-                if abs(result["drop"]) < 1e-3:
-                    stable = dt
-                    break
-            print(f"  k = {stiffness:8.0f} N/m: dt = {stable * 1e3 if stable else float('nan'):g} ms")
+                position = result["position"]
+                late = position[len(position) // 2 :]
+                creep = np.linalg.norm(late[-1] - late[0]) / 0.5 * 1e6
+                cells.append(f"{result['drop'] * 1e3:.3f} / {creep:.2g}")
+            print(f"{stiffness:10.0f}" + "".join(f"{cell:>22}" for cell in cells))
 
 
 if __name__ == "__main__":

@@ -3,20 +3,43 @@
 The public API is re-exported here; ``import bhgrasp`` never imports matplotlib or meshcat.
 """
 
-from bhgrasp.errors import BhgraspError, InputError, ModelError, UnreachableError
+from bhgrasp.actuation import BarrettActuation, FullyActuated
+from bhgrasp.contact import Contact, SpringDamper
+from bhgrasp.errors import BhgraspError, InputError, ModelError, SimulationDiverged, UnreachableError
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.ik import FingerIKResult, IKResult, Workspace, finger_ik, ik, workspace
+from bhgrasp.objects import Box, Capsule, Cylinder, FixedBox, Plane, Sphere, SpringMounted, table, wall
+from bhgrasp.orientation import rotation_from_zyz, zyz_from_rotation
 from bhgrasp.planar import planar_finger, thesis_impedance_finger, thesis_one_link_finger, thesis_two_link_finger
 from bhgrasp.resources import barrett_urdf_path, example_robot_data_dir, example_robot_data_urdf
+from bhgrasp.scene import Scene
+from bhgrasp.sim import Simulator
+from bhgrasp.state import State, Trajectory
 
 __all__ = [
+    "BarrettActuation",
     "BarrettHand",
     "BhgraspError",
+    "Box",
+    "Capsule",
+    "Contact",
+    "Cylinder",
     "FingerIKResult",
+    "FixedBox",
+    "FullyActuated",
     "Hand",
     "IKResult",
     "InputError",
     "ModelError",
+    "Plane",
+    "Scene",
+    "SimulationDiverged",
+    "Simulator",
+    "Sphere",
+    "SpringDamper",
+    "SpringMounted",
+    "State",
+    "Trajectory",
     "UnreachableError",
     "Workspace",
     "barrett_urdf_path",
@@ -25,10 +48,14 @@ __all__ = [
     "finger_ik",
     "ik",
     "planar_finger",
+    "rotation_from_zyz",
+    "table",
     "thesis_impedance_finger",
     "thesis_one_link_finger",
     "thesis_two_link_finger",
+    "wall",
     "workspace",
+    "zyz_from_rotation",
 ]
 
 __version__ = "0.1.0"

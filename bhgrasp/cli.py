@@ -14,10 +14,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``bhgrasp`` command."""
     parser = argparse.ArgumentParser(prog="bhgrasp", description="Barrett hand modelling, simulation and control.")
     commands = parser.add_subparsers(dest="command", required=True)
-    demo = commands.add_parser("demo", help="load the Barrett hand, print its model and plot its workspace")
+    demo = commands.add_parser(
+        "demo", help="load the Barrett hand, print its model, plot its workspace, simulate a three-finger hold"
+    )
     demo.add_argument("--output", type=Path, default=Path("bhgrasp_demo"), help="folder for the figure")
     demo.add_argument("--samples", type=int, default=20_000, help="workspace samples per finger")
     demo.add_argument("--seed", type=int, default=0, help="random seed of the workspace sampling")
+    demo.add_argument("--hold", type=float, default=1.0, help="simulated duration of the grasp hold [s]")
     commands.add_parser("info", help="print the hand summary only")
     args = parser.parse_args(argv)
     if args.command == "info":
@@ -25,10 +28,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         print(BarrettHand().summary())
         return 0
-    return _demo(args.output, args.samples, args.seed)
+    return _demo(args.output, args.samples, args.seed, args.hold)
 
 
-def _demo(output: Path, samples: int, seed: int) -> int:
+def _demo(output: Path, samples: int, seed: int, duration: float) -> int:
     import bhgrasp as bh
     from bhgrasp.experiments.chapter2 import workspace_table
 
@@ -46,7 +49,25 @@ def _demo(output: Path, samples: int, seed: int) -> int:
         print(row.format())
     figure_path = _plot_workspace(hand, output, samples, seed)
     print(f"\nworkspace figure: {figure_path}")
+    _hold(duration)
     return 0
+
+
+def _hold(duration: float) -> None:
+    """Simulate the reference three-finger hold and report contacts and creep."""
+    from bhgrasp.experiments.hold import BOX_MASS, reference_hold
+
+    hold = reference_hold(dt=2e-3)
+    print(f"\nsimulating a {duration:g} s three-finger hold of a {BOX_MASS} kg box (implicit contacts, dt 2 ms) ...")
+    trajectory = hold.simulator.run(hold.controller, duration, state=hold.state, progress=False)
+    last = trajectory.contacts_at(len(trajectory) - 1)
+    for (link, _), force, sticking in zip(last["bodies"], last["force"], last["sticking"]):
+        state = "sticks" if sticking else "slides"
+        print(f"  {link:<16} force on box {np.array2string(force, precision=3, suppress_small=True)} N, {state}")
+    position = trajectory.object_position[:, 0]
+    half = len(position) // 2
+    creep = np.linalg.norm(position[-1] - position[half]) / (trajectory.t[-1] - trajectory.t[half])
+    print(f"  box sag {1e3 * (hold.box_height - position[-1, 2]):.3f} mm, creep {creep * 1e6:.3g} um/s")
 
 
 def _plot_workspace(hand, output: Path, samples: int, seed: int) -> Path:

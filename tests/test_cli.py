@@ -12,7 +12,7 @@ from bhgrasp.cli import main
 
 
 def test_demo_prints_the_hand_and_writes_the_workspace_figure(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    assert main(["demo", "--output", str(tmp_path), "--samples", "500", "--seed", "3"]) == 0
+    assert main(["demo", "--output", str(tmp_path), "--samples", "500", "--seed", "3", "--hold", "0.5"]) == 0
     out = capsys.readouterr().out
     assert "BarrettHand BH8-280: 8 joints, 3 fingers, 1.2022 kg" in out
     assert "closed-form IK of F3 back from that point: [1. 0.] rad" in out
@@ -20,6 +20,7 @@ def test_demo_prints_the_hand_and_writes_the_workspace_figure(tmp_path: Path, ca
     figure = tmp_path / "workspace.png"
     assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert figure.stat().st_size > 20_000  # a real scatter plot, not an empty canvas
+    assert out.count("sticks") == 3 and "box sag 0.45" in out  # the simulated hold: three sticking pads
 
 
 def test_module_entry_point_runs_headless() -> None:

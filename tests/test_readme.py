@@ -5,17 +5,24 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
+import pytest
+
 README = Path(__file__).resolve().parents[1] / "README.md"
 
 
-def test_readme_python_blocks_run(capsys) -> None:
+def test_readme_python_blocks_run(capsys, tmp_path, monkeypatch) -> None:
+    monkeypatch.chdir(tmp_path)  # the examples write files
     blocks = re.findall(r"```python\n(.*?)```", README.read_text(), flags=re.DOTALL)
-    assert len(blocks) >= 3
+    assert len(blocks) >= 4
     namespace: dict = {}
     for block in blocks:
         exec(compile(block, str(README), "exec"), namespace)  # our own README
     assert "unknown joint 'F3_spread'; valid joints: F1_spread, F1_proximal" in capsys.readouterr().out
     assert namespace["result"].converged
+    assert namespace["traj"].object_position[-1, 0, 2] == pytest.approx(0.025 - 0.2 * 9.81 / 1e4, rel=1e-6)
+    closing = namespace["closing"].q
+    np.testing.assert_allclose(closing[:, 2] - closing[:, 1] / 3, 0.0, atol=1e-12)  # distal = proximal / 3
 
 
 def test_readme_gives_exactly_two_setup_commands() -> None:

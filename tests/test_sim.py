@@ -10,9 +10,9 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.actuation import FullyActuated
 from bhgrasp.contact import SpringDamper
 from bhgrasp.errors import SimulationDiverged
+from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Box, Sphere, table
 from bhgrasp.planar import planar_finger
 from bhgrasp.scene import Scene
@@ -214,25 +214,8 @@ def test_regularised_friction_creeps_where_stick_slip_holds() -> None:
 
 def test_three_finger_hold_does_not_creep() -> None:
     """Barrett F1 + F2 against F3 squeeze a 0.2 kg box (friction margin > 3): creep < 1 micrometre/s over 2 s."""
-    hand = bh.BarrettHand()
-    q0 = hand.configuration(
-        F1_proximal=1.2, F1_distal=0.3, F2_proximal=1.2, F2_distal=0.3, F3_proximal=1.2, F3_distal=0.3
-    )
-    tips = hand.fingertip_positions(q0)
-    width = 2 * (tips[2, 1] - 0.010) + 0.0004  # between the 10 mm tip spheres, 0.2 mm preload each side
-    box = Box(size=(0.08, width, 0.05), mass=0.2, friction=0.8, pose=at(tips[2, 2]))
-    scene = Scene(hand, [box])
-    sim = Simulator(scene, dt=1e-3, contact=SpringDamper(stiffness=1e4, damping=20.0, friction=0.8),
-                    actuation=FullyActuated(hand, damping=0.05))  # fmt: skip
-    squeeze = {"F1": np.array([0, 2.0, 0]), "F2": np.array([0, 2.0, 0]), "F3": np.array([0, -4.0, 0])}  # [N]
-
-    def controller(t: float, state) -> np.ndarray:
-        tau = hand.gravity_torques(state.q) + 2.0 * (q0 - state.q)
-        for finger, force in squeeze.items():
-            tau += hand.fingertip_jacobian(state.q, finger).T @ force
-        return tau
-
-    trajectory = sim.run(controller, 2.5, state=sim.initial_state(q0), progress=False)
+    hold = reference_hold(dt=1e-3)
+    trajectory = hold.simulator.run(hold.controller, 2.5, state=hold.state, progress=False)
     held = trajectory.between(0.5, 2.5)
     creep = np.linalg.norm(held.object_position[-1, 0] - held.object_position[0, 0]) / 2.0
     assert creep < 1e-6
