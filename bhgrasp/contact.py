@@ -114,6 +114,16 @@ class Contact:
         """Total force on ``body_b`` [N]."""
         return self.normal_force * self.normal + self.tangential_force
 
+    @property
+    def point_a(self) -> np.ndarray:
+        """Deepest point of body a's surface inside body b [m]."""
+        return self.point + 0.5 * self.depth * self.normal
+
+    @property
+    def point_b(self) -> np.ndarray:
+        """Deepest point of body b's surface inside body a [m]."""
+        return self.point - 0.5 * self.depth * self.normal
+
 
 @dataclass
 class ContactSet:
@@ -243,18 +253,33 @@ class ContactEngine:
         at two points moved inward (toward the patch centroid) and extrapolated linearly back to the corner.
         """
         pair = self.scene.pairs[k]
-        placements, geometries = self.scene.geometry_data.oMg, self.scene.geometry.geometryObjects
-        shapes = []
-        for geom in (pair.geom_a, pair.geom_b):
-            placement = placements[geom]
-            shapes.append((geometries[geom].geometry, coal.Transform3s(placement.rotation, placement.translation)))
         inward = points.sum(axis=0) / len(points) - points
         inward -= np.outer(inward @ normal, normal)
         length = np.sqrt((inward * inward).sum(axis=1))
         offsets = inward * (np.minimum(1e-3, 0.125 * length) / np.maximum(length, 1e-300))[:, None]
-        near = [self._overlap(shapes, point) for point in points + offsets]
-        far = [self._overlap(shapes, point) for point in points + 2 * offsets]
-        return 2 * np.array(near) - np.array(far)
+        probes = np.concatenate((points + offsets, points + 2 * offsets))
+        overlap = -(self._signed_distance(pair.geom_a, probes) + self._signed_distance(pair.geom_b, probes))
+        near, far = overlap[: len(points)], overlap[len(points) :]
+        return 2 * near - far
+
+    def _signed_distance(self, geom: int, points: np.ndarray) -> np.ndarray:
+        """Signed distance [m] of world points to a geometry (negative inside).
+
+        Closed form for boxes, half-spaces and spheres; coal's GJK/EPA for other shapes.
+        """
+        placement = self.scene.geometry_data.oMg[geom]
+        shape = self.scene.geometry.geometryObjects[geom].geometry
+        local = (points - placement.translation) @ placement.rotation
+        if isinstance(shape, coal.Box):
+            excess = np.abs(local) - shape.halfSide
+            outside = np.sqrt((np.maximum(excess, 0.0) ** 2).sum(axis=1))
+            return outside + np.minimum(excess.max(axis=1), 0.0)
+        if isinstance(shape, coal.Halfspace):
+            return local @ shape.n - shape.d
+        if isinstance(shape, coal.Sphere):
+            return np.sqrt((local * local).sum(axis=1)) - shape.radius
+        transform = coal.Transform3s(placement.rotation, placement.translation)
+        return np.array([-self._overlap([(shape, transform)], point) for point in points])
 
     def _overlap(self, shapes: list, point: np.ndarray) -> float:
         probe, placement, request, result = (

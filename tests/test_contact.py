@@ -29,6 +29,8 @@ def test_sphere_on_plane_geometry() -> None:
     np.testing.assert_allclose(contacts.point[0], [0.1, 0.2, -0.00075], atol=1e-12)  # midway between surfaces
     record = contacts.records(scene)[0]
     assert (record.body_a, record.body_b) == ("table", "object0")
+    np.testing.assert_allclose(record.point_a, [0.1, 0.2, 0.0], atol=1e-12)  # the table's surface
+    np.testing.assert_allclose(record.point_b, [0.1, 0.2, -0.0015], atol=1e-12)  # the sphere's lowest point
 
 
 def test_tilted_box_gets_each_corners_own_depth() -> None:
@@ -42,6 +44,38 @@ def test_tilted_box_gets_each_corners_own_depth() -> None:
     # Signed distances are perpendicular to the tilted face, not along the plane normal: O(tilt^2) = 5e-5 relative.
     np.testing.assert_allclose(sorted(contacts.depth), expected, rtol=2e-4)
     np.testing.assert_allclose(contacts.weight, 0.25)
+
+
+@pytest.mark.parametrize("shape", ["box", "sphere", "halfspace", "capsule"])
+def test_signed_distances_agree_with_coal(shape: str) -> None:
+    """The closed-form signed distances used for patch depths equal coal's GJK/EPA (inside and outside)."""
+    import coal
+
+    from bhgrasp.objects import Capsule
+
+    items = {
+        "box": Box(
+            size=(0.06, 0.05, 0.04), mass=0.2, pose=pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.2, 1.0), np.ones(3) * 0.1)
+        ),
+        "sphere": Sphere(radius=0.03, mass=0.1, pose=pin.SE3(np.eye(3), np.array([0.1, 0.0, 0.05]))),
+        "capsule": Capsule(
+            radius=0.02, length=0.05, mass=0.1, pose=pin.SE3(pin.rpy.rpyToMatrix(0.5, 0.1, 0), np.zeros(3))
+        ),
+    }
+    engine, scene = engine_for(items.get(shape, items["sphere"]))
+    pin.updateGeometryPlacements(scene.model, scene.data, scene.geometry, scene.geometry_data, scene.initial_state()[0])
+    geom = scene.environment_geometries[0] if shape == "halfspace" else scene.object_geometries[0]
+    points = np.random.default_rng(1).uniform(-0.08, 0.2, size=(200, 3))
+    placement = scene.geometry_data.oMg[geom]
+    transform = coal.Transform3s(placement.rotation, placement.translation)
+    probe, result = coal.Sphere(1e-12), coal.DistanceResult()
+    expected = []
+    for point in points:
+        result.clear()
+        expected.append(coal.distance(probe, coal.Transform3s(np.eye(3), point),
+                                      scene.geometry.geometryObjects[geom].geometry, transform,
+                                      coal.DistanceRequest(), result))  # fmt: skip
+    np.testing.assert_allclose(engine._signed_distance(geom, points), expected, atol=1e-9)
 
 
 def _one_contact(depth: float = 1e-3, displacement=(0.0, 0.0, 0.0), friction: float = 0.5):
