@@ -28,6 +28,7 @@ from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.actuation import Actuation, FullyActuated
 from bhgrasp.contact import ContactEngine, ContactSet, SpringDamper, empty_contact_set
 from bhgrasp.errors import InputError, SimulationDiverged
+from bhgrasp.recorder import Recorder
 from bhgrasp.scene import Scene
 from bhgrasp.state import State, Trajectory
 
@@ -408,7 +409,7 @@ class Simulator:
         state = self.initial_state() if state is None else state
         if hasattr(controller, "reset"):
             controller.reset(state)
-        recorder = _Recorder(self, steps // record_every + 1)
+        recorder = Recorder(self.scene, self.actuation)
         u = np.zeros(self.actuation.n_inputs)
         info = StepInfo(empty_contact_set(), np.zeros(self._nvh))
         iterator = range(steps)
@@ -439,69 +440,6 @@ def _noisy(state: State, noise: tuple[float, float] | None, rng: np.random.Gener
         q=state.q + rng.normal(scale=sigma_q, size=state.q.shape),
         v=state.v + rng.normal(scale=sigma_v, size=state.v.shape),
     )
-
-
-class _Recorder:
-    """Preallocated arrays filled sample by sample."""
-
-    def __init__(self, simulator: Simulator, capacity: int) -> None:
-        scene = simulator.scene
-        n_obj = len(scene.objects)
-        self.sim = simulator
-        self.t, self.q, self.v = [], [], []
-        self.u, self.tau, self.modes = [], [], []
-        self.position, self.quaternion, self.twist = [], [], []
-        self.offsets = [0]
-        self.contacts: dict[str, list] = {k: [] for k in ("pair", "point", "normal", "depth", "force", "sticking")}
-        self.log: dict[str, list] = {}
-        self.n_obj = n_obj
-
-    def add(self, state: State, u: np.ndarray, info: StepInfo, log: Any) -> None:
-        self.t.append(state.t)
-        self.q.append(state.q)
-        self.v.append(state.v)
-        self.u.append(u.copy())
-        self.tau.append(info.drive_torques)
-        self.modes.append(self.sim.actuation.modes())
-        self.position.append([pose.translation for pose in state.object_poses])
-        self.quaternion.append([pin.SE3ToXYZQUAT(pose)[3:] for pose in state.object_poses])
-        self.twist.append(state.object_twists)
-        contacts = info.contacts
-        self.offsets.append(self.offsets[-1] + len(contacts))
-        for name in self.contacts:
-            self.contacts[name].append(getattr(contacts, name))
-        if isinstance(log, dict):
-            for name, value in log.items():
-                self.log.setdefault(name, []).append(np.array(value, dtype=float))
-
-    def trajectory(self) -> Trajectory:
-        n_obj = self.n_obj
-        contacts = {name: np.concatenate(values) if values else np.zeros(0) for name, values in self.contacts.items()}
-        for name, width in (("point", 3), ("normal", 3), ("force", 3)):
-            contacts[name] = contacts[name].reshape(-1, width)
-        scene = self.sim.scene
-        return Trajectory(
-            t=np.array(self.t),
-            q=np.array(self.q),
-            v=np.array(self.v),
-            u=np.array(self.u),
-            tau=np.array(self.tau),
-            modes=np.array(self.modes).reshape(len(self.t), -1),
-            object_position=np.array(self.position).reshape(len(self.t), n_obj, 3),
-            object_quaternion=np.array(self.quaternion).reshape(len(self.t), n_obj, 4),
-            object_twist=np.array(self.twist).reshape(len(self.t), n_obj, 6),
-            contact_offsets=np.array(self.offsets, dtype=int),
-            contact_pair=contacts["pair"].astype(int),
-            contact_point=contacts["point"],
-            contact_normal=contacts["normal"],
-            contact_depth=contacts["depth"],
-            contact_force=contacts["force"],
-            contact_sticking=contacts["sticking"].astype(bool),
-            log={name: np.array(values) for name, values in self.log.items()},
-            joint_names=scene.hand.joint_names,
-            object_names=tuple(scene.object_names),
-            pair_bodies=np.array([(p.body_a, p.body_b) for p in scene.pairs], dtype=str).reshape(-1, 2),
-        )
 
 
 __all__ = ["INTEGRATORS", "Simulator", "StepInfo"]
