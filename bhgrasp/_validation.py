@@ -60,6 +60,18 @@ def as_positive(value: Any, name: str) -> float:
     return number
 
 
+def as_real(value: Any, name: str, nonnegative: bool = True) -> float:
+    """Return ``value`` as a finite float (>= 0 unless ``nonnegative`` is false)."""
+    expected = "a finite number >= 0" if nonnegative else "a finite number"
+    try:
+        number = float(value)
+    except (TypeError, ValueError) as error:
+        raise InputError(f"`{name}` must be {expected}, got {value!r}") from error
+    if not math.isfinite(number) or (nonnegative and number < 0.0):
+        raise InputError(f"`{name}` must be {expected}, got {number!r}")
+    return number
+
+
 def require_name(name: str, valid: Iterable[str], what: str) -> str:
     """Return ``name`` if it is one of ``valid``, else raise an error listing the valid names."""
     valid = list(valid)

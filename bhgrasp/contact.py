@@ -25,7 +25,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_positive
+from bhgrasp._validation import as_positive, as_real
 from bhgrasp.errors import InputError
 from bhgrasp.scene import Scene
 
@@ -61,14 +61,14 @@ class SpringDamper:
 
     def __post_init__(self) -> None:
         as_positive(self.stiffness, "stiffness")
-        _nonnegative(self.damping, "damping")
-        _nonnegative(self.friction, "friction")
+        as_real(self.damping, "damping")
+        as_real(self.friction, "friction")
         as_positive(self.exponent, "exponent")
         as_positive(self.slip_velocity, "slip_velocity")
         if self.tangential_stiffness is not None:
             as_positive(self.tangential_stiffness, "tangential_stiffness")
         if self.tangential_damping is not None:
-            _nonnegative(self.tangential_damping, "tangential_damping")
+            as_real(self.tangential_damping, "tangential_damping")
         if self.normal_law not in ("linear", "hunt-crossley"):
             raise InputError(f"`normal_law` must be 'linear' or 'hunt-crossley', got {self.normal_law!r}")
         if self.friction_law not in ("stick-slip", "tanh"):
@@ -397,10 +397,3 @@ class ContactEngine:
             displacement = displacement.copy()
             displacement[sliding] = -f_t[sliding] / (weight[sliding, None] * self.law.k_t)
         return f_t, sticking, displacement
-
-
-def _nonnegative(value: float, name: str) -> float:
-    number = float(value)
-    if not np.isfinite(number) or number < 0.0:
-        raise InputError(f"`{name}` must be a finite number >= 0, got {value!r}")
-    return number

@@ -19,23 +19,12 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_positive, as_vector
+from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.errors import InputError
 
 __all__ = ["Box", "Capsule", "Cylinder", "FixedBox", "Plane", "RigidObject", "Sphere", "SpringMounted", "table", "wall"]
 
 _COMMON = ("mass", "density", "pose", "velocity", "friction", "name")
-
-
-def _as_real(value: Any, name: str, nonnegative: bool = True) -> float:
-    expected = "a finite number >= 0" if nonnegative else "a finite number"
-    try:
-        number = float(value)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"`{name}` must be {expected}, got {value!r}") from error
-    if not math.isfinite(number) or (nonnegative and number < 0.0):
-        raise InputError(f"`{name}` must be {expected}, got {number!r}")
-    return number
 
 
 def _as_pose(value: Any, name: str = "pose") -> pin.SE3:
@@ -102,7 +91,7 @@ class RigidObject(ABC):
             object.__setattr__(self, "mass", as_positive(self.mass, "mass"))
         object.__setattr__(self, "pose", _as_pose(self.pose))
         object.__setattr__(self, "velocity", _frozen_array(as_vector(self.velocity, "velocity", 6)))
-        object.__setattr__(self, "friction", _as_real(self.friction, "friction"))
+        object.__setattr__(self, "friction", as_real(self.friction, "friction"))
 
     @property
     def volume(self) -> float:
@@ -239,8 +228,8 @@ class Plane:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "normal", _as_unit(self.normal, "normal"))
-        object.__setattr__(self, "offset", _as_real(self.offset, "offset", nonnegative=False))
-        object.__setattr__(self, "friction", _as_real(self.friction, "friction"))
+        object.__setattr__(self, "offset", as_real(self.offset, "offset", nonnegative=False))
+        object.__setattr__(self, "friction", as_real(self.friction, "friction"))
 
     @property
     def placement(self) -> pin.SE3:
@@ -264,7 +253,7 @@ class FixedBox:
     def __post_init__(self) -> None:
         object.__setattr__(self, "size", _as_size(self.size))
         object.__setattr__(self, "pose", _as_pose(self.pose))
-        object.__setattr__(self, "friction", _as_real(self.friction, "friction"))
+        object.__setattr__(self, "friction", as_real(self.friction, "friction"))
 
     @property
     def placement(self) -> pin.SE3:
@@ -278,7 +267,7 @@ class FixedBox:
 
 def table(height: float = 0.0, friction: float = 0.8) -> Plane:
     """A horizontal table top: the plane z = ``height`` [m] with normal +z, solid below."""
-    return Plane(normal=(0.0, 0.0, 1.0), offset=_as_real(height, "height", False), friction=friction, name="table")
+    return Plane(normal=(0.0, 0.0, 1.0), offset=as_real(height, "height", False), friction=friction, name="table")
 
 
 def wall(point: Any, normal: Any, friction: float = 0.8) -> Plane:
@@ -314,7 +303,7 @@ class SpringMounted:
             raise InputError(f"`body` must be a RigidObject (Sphere, Box, ...), got {type(self.body).__name__}")
         object.__setattr__(self, "direction", _as_unit(self.direction, "direction"))
         object.__setattr__(self, "stiffness", as_positive(self.stiffness, "stiffness"))
-        object.__setattr__(self, "damping", _as_real(self.damping, "damping"))
+        object.__setattr__(self, "damping", as_real(self.damping, "damping"))
         if self.name is None:
             object.__setattr__(self, "name", self.body.name)
 
