@@ -13,7 +13,8 @@ on ``b`` (and its opposite on ``a``, at the same point):
   creep to hold a load.
 
 For the simulator's linearly-implicit step the force is written as ``f(v+) = f0 - D J v+`` (the spring evaluated
-at the end of the step): :meth:`ContactEngine.linearise` returns ``f0``, ``D`` and the relative Jacobians ``J``.
+at the end of the step): :meth:`ContactEngine.linear_parts` and :meth:`ContactEngine.linearise` give ``f0`` and ``D``,
+:meth:`ContactEngine.jacobians` the relative Jacobians ``J``; :meth:`ContactEngine.classify` is the active-set rule.
 """
 
 from __future__ import annotations
@@ -382,6 +383,85 @@ class ContactEngine:
             f_t, sticking, displacement = self.project_on_cone(f_t, cone, displacement, weight)
         forces = f_n[:, None] * normal + f_t
         return forces, sticking, displacement
+
+    # ------------------------------------------------------------------ linearly-implicit form (the simulator)
+    def linear_parts(self, contacts: ContactSet, dt: float) -> tuple:
+        """Per step, for the implicit solve: ``f0`` and gains ``D`` of the normal law alone and with the stick spring.
+
+        The spring is evaluated at the end of a step of ``dt`` [s]: ``f(v+) = f0 - D J v+``.
+        """
+        law = self.law
+        normal, depth, weight = contacts.normal, contacts.depth, contacts.weight
+        outer = normal[:, :, None] * normal[:, None, :]
+        if law.normal_law == "linear":
+            force = weight * law.stiffness * depth
+            gain = weight * (law.stiffness * dt + law.damping)
+        else:
+            power = depth**law.exponent
+            force = weight * law.stiffness * power
+            gain = weight * (law.exponent * law.stiffness * depth ** (law.exponent - 1.0) * dt + law.damping * power)
+        f0 = force[:, None] * normal
+        gains = gain[:, None, None] * outer
+        if law.friction_law == "stick-slip":
+            f0_stick = f0 - (weight * law.k_t)[:, None] * contacts.displacement
+            gains_stick = gains + (weight * (law.k_t * dt + law.c_t))[:, None, None] * (_IDENTITY3 - outer)
+        else:
+            f0_stick, gains_stick = f0, gains
+        return f0, gains, f0_stick, gains_stick
+
+    def linearise(self, parts: tuple, status: np.ndarray, slide_force: np.ndarray):
+        """Contact force ``f(v+) = f0 - D J v+`` of each contact in its status (0 off, 1 stick, 2 slide)."""
+        f0, gains, f0_stick, gains_stick = parts
+        stick = (status == 1)[:, None]
+        f_0 = np.where(stick, f0_stick, f0 + slide_force)
+        d = np.where(stick[:, :, None], gains_stick, gains)
+        off = status == 0
+        if off.any():
+            f_0[off], d[off] = 0.0, 0.0
+        return f_0, d
+
+    def classify(
+        self, contacts: ContactSet, forces: np.ndarray, status: np.ndarray, start_velocity: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Drop pulling contacts; turn sticking contacts outside the cone into sliding ones (force on the cone).
+
+        With the tanh law every contact "slides" with the regularised force of its start-of-step slip velocity.
+        """
+        normal = contacts.normal
+        normal_force = (forces * normal).sum(axis=1)
+        tangential = forces - normal_force[:, None] * normal
+        new_status = np.where(normal_force > 0.0, status, 0)
+        cone = contacts.friction * np.maximum(normal_force, 0.0)
+        slide = np.zeros_like(forces)
+        if self.law.friction_law == "tanh":
+            v_t = start_velocity - np.einsum("ij,ij->i", start_velocity, normal)[:, None] * normal
+            speed = np.linalg.norm(v_t, axis=1)
+            scale = np.divide(np.tanh(speed / self.law.slip_velocity), speed, out=np.zeros_like(speed), where=speed > 0)
+            slide = -(cone * scale)[:, None] * v_t
+            new_status[new_status == 1] = 2
+            return new_status, slide
+        magnitude = np.sqrt((tangential * tangential).sum(axis=1))
+        sliding = (new_status > 0) & ((magnitude > cone * (1 + 1e-9)) | (status == 2))
+        if sliding.any():
+            new_status[sliding] = 2
+            # Kinetic friction lies on the cone, along the direction the sticking spring was pulling.
+            slide[sliding] = tangential[sliding] * (cone[sliding] / np.maximum(magnitude[sliding], 1e-300))[:, None]
+        return new_status, slide
+
+    def end_displacement(
+        self, contacts: ContactSet, relative: np.ndarray, forces: np.ndarray, status: np.ndarray, dt: float
+    ) -> np.ndarray:
+        """End-of-step tangential spring displacement: integrated while sticking, on the cone edge when sliding."""
+        normal = contacts.normal
+        v_t = relative - (relative * normal).sum(axis=1)[:, None] * normal
+        displacement = contacts.displacement + dt * v_t
+        sliding = status == 2
+        if sliding.any():
+            f_n = (forces[sliding] * normal[sliding]).sum(axis=1)
+            tangential = forces[sliding] - f_n[:, None] * normal[sliding]
+            displacement[sliding] = -tangential / (contacts.weight[sliding, None] * self.law.k_t)
+        displacement[status == 0] = 0.0
+        return displacement
 
     def project_on_cone(
         self, f_t: np.ndarray, cone: np.ndarray, displacement: np.ndarray, weight: np.ndarray

@@ -34,7 +34,6 @@ from bhgrasp.state import State, Trajectory
 
 INTEGRATORS = ("implicit", "semi-implicit", "rk4")
 _FRICTION_VELOCITY = 1e-3  # [rad/s] regularisation of Coulomb joint friction
-_IDENTITY3 = np.eye(3)
 
 
 @dataclass
@@ -214,9 +213,9 @@ class Simulator:
         status = np.ones(m, dtype=int)  # 0 off, 1 stick, 2 slide
         slide_force = np.zeros((m, 3))
         start_velocity = jacobians @ v
-        parts = self._normal_part(contacts)
+        parts = self.engine.linear_parts(contacts, dt)
         for _ in range(8):
-            f0, gains = self._linearise(parts, status, slide_force)
+            f0, gains = self.engine.linearise(parts, status, slide_force)
             stacked = jacobians.reshape(-1, self.scene.nv)  # (3m, nv)
             matrix_c = matrix + dt * stacked.T @ (gains @ jacobians).reshape(-1, self.scene.nv)
             rhs_c = rhs + dt * stacked.T @ f0.ravel()
@@ -224,14 +223,14 @@ class Simulator:
             v_next = transmission @ np.linalg.solve(reduced, transmission.T @ rhs_c)
             relative = jacobians @ v_next
             forces = f0 - (gains @ relative[:, :, None])[:, :, 0]
-            new_status, new_slide = self._classify(contacts, forces, status, start_velocity)
+            new_status, new_slide = self.engine.classify(contacts, forces, status, start_velocity)
             if (new_status == status).all() and (
                 not (status == 2).any() or np.abs(new_slide - slide_force).max() < 1e-12
             ):
                 break
             status, slide_force = new_status, new_slide
         forces[status == 0] = 0.0
-        displacement = self._displacement(contacts, relative, forces, status)
+        displacement = self.engine.end_displacement(contacts, relative, forces, status, dt)
         contacts.force, contacts.sticking = forces, status == 1
         self.engine.remember(contacts, displacement)
         generalized = jacobians.reshape(-1, self.scene.nv).T @ forces.ravel()
@@ -239,77 +238,6 @@ class Simulator:
         drive = (mass @ acceleration + bias - generalized - passive + (dt * stiffness + damping) * v_next)[: self._nvh]
         drive -= self._motor_damping() * v_next[: self._nvh]  # the clutch passes what the motor's losses leave
         return pin.integrate(model, q, v_next * dt), v_next, contacts, drive
-
-    def _normal_part(self, contacts: ContactSet):
-        """Per step: the normal force at the end of the step ``f_n0 n - g_n n n^T J v+`` and the tangent projectors."""
-        law, dt = self.law, self.dt
-        normal, depth, weight = contacts.normal, contacts.depth, contacts.weight
-        outer = normal[:, :, None] * normal[:, None, :]
-        if law.normal_law == "linear":
-            force = weight * law.stiffness * depth
-            gain = weight * (law.stiffness * dt + law.damping)
-        else:
-            power = depth**law.exponent
-            force = weight * law.stiffness * power
-            gain = weight * (law.exponent * law.stiffness * depth ** (law.exponent - 1.0) * dt + law.damping * power)
-        f0 = force[:, None] * normal
-        gains = gain[:, None, None] * outer
-        if law.friction_law == "stick-slip":
-            f0_stick = f0 - (weight * law.k_t)[:, None] * contacts.displacement
-            gains_stick = gains + (weight * (law.k_t * dt + law.c_t))[:, None, None] * (_IDENTITY3 - outer)
-        else:
-            f0_stick, gains_stick = f0, gains
-        return f0, gains, f0_stick, gains_stick
-
-    def _linearise(self, parts, status: np.ndarray, slide_force: np.ndarray):
-        """Contact force ``f(v+) = f0 - D J v+`` of each contact in its status (0 off, 1 stick, 2 slide)."""
-        f0, gains, f0_stick, gains_stick = parts
-        stick = (status == 1)[:, None]
-        f_0 = np.where(stick, f0_stick, f0 + slide_force)
-        d = np.where(stick[:, :, None], gains_stick, gains)
-        off = status == 0
-        if off.any():
-            f_0[off], d[off] = 0.0, 0.0
-        return f_0, d
-
-    def _classify(self, contacts: ContactSet, forces: np.ndarray, status: np.ndarray, start_velocity: np.ndarray):
-        """Drop pulling contacts; turn sticking contacts outside the cone into sliding ones (force on the cone).
-
-        With the tanh law every contact "slides" with the regularised force of its start-of-step slip velocity.
-        """
-        normal = contacts.normal
-        normal_force = (forces * normal).sum(axis=1)
-        tangential = forces - normal_force[:, None] * normal
-        new_status = np.where(normal_force > 0.0, status, 0)
-        cone = contacts.friction * np.maximum(normal_force, 0.0)
-        slide = np.zeros_like(forces)
-        if self.law.friction_law == "tanh":
-            v_t = start_velocity - np.einsum("ij,ij->i", start_velocity, normal)[:, None] * normal
-            speed = np.linalg.norm(v_t, axis=1)
-            scale = np.divide(np.tanh(speed / self.law.slip_velocity), speed, out=np.zeros_like(speed), where=speed > 0)
-            slide = -(cone * scale)[:, None] * v_t
-            new_status[new_status == 1] = 2
-            return new_status, slide
-        magnitude = np.sqrt((tangential * tangential).sum(axis=1))
-        sliding = (new_status > 0) & ((magnitude > cone * (1 + 1e-9)) | (status == 2))
-        if sliding.any():
-            new_status[sliding] = 2
-            # Kinetic friction lies on the cone, along the direction the sticking spring was pulling.
-            slide[sliding] = tangential[sliding] * (cone[sliding] / np.maximum(magnitude[sliding], 1e-300))[:, None]
-        return new_status, slide
-
-    def _displacement(self, contacts, relative, forces, status) -> np.ndarray:
-        """End-of-step tangential spring displacement: integrated while sticking, on the cone edge when sliding."""
-        normal = contacts.normal
-        v_t = relative - (relative * normal).sum(axis=1)[:, None] * normal
-        displacement = contacts.displacement + self.dt * v_t
-        sliding = status == 2
-        if sliding.any():
-            f_n = (forces[sliding] * normal[sliding]).sum(axis=1)
-            tangential = forces[sliding] - f_n[:, None] * normal[sliding]
-            displacement[sliding] = -tangential / (contacts.weight[sliding, None] * self.law.k_t)
-        displacement[status == 0] = 0.0
-        return displacement
 
     def _explicit(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray):
         dt, model = self.dt, self.model
