@@ -213,10 +213,10 @@ class Simulator:
         status = np.ones(m, dtype=int)  # 0 off, 1 stick, 2 slide
         slide_force = np.zeros((m, 3))
         start_velocity = jacobians @ v
+        stacked = jacobians.reshape(-1, self.scene.nv)  # (3m, nv)
         parts = self.engine.linear_parts(contacts, dt)
         for _ in range(8):
             f0, gains = self.engine.linearise(parts, status, slide_force)
-            stacked = jacobians.reshape(-1, self.scene.nv)  # (3m, nv)
             matrix_c = matrix + dt * stacked.T @ (gains @ jacobians).reshape(-1, self.scene.nv)
             rhs_c = rhs + dt * stacked.T @ f0.ravel()
             reduced = transmission.T @ matrix_c @ transmission
@@ -233,7 +233,7 @@ class Simulator:
         displacement = self.engine.end_displacement(contacts, relative, forces, status, dt)
         contacts.force, contacts.sticking = forces, status == 1
         self.engine.remember(contacts, displacement)
-        generalized = jacobians.reshape(-1, self.scene.nv).T @ forces.ravel()
+        generalized = stacked.T @ forces.ravel()
         acceleration = (v_next - v) / dt
         drive = (mass @ acceleration + bias - generalized - passive + (dt * stiffness + damping) * v_next)[: self._nvh]
         drive -= self._motor_damping() * v_next[: self._nvh]  # the clutch passes what the motor's losses leave
