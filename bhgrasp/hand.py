@@ -270,6 +270,20 @@ class Hand:
             require_name(finger, self.fingers, "finger")
         return self._jacobian(self._q(q), self._tip_ids[finger], 3)
 
+    def fingertip_bias_acceleration(self, q: Any, v: Any, finger: str) -> np.ndarray:
+        """J_dot(q, v) v: the fingertip's classical acceleration at zero joint acceleration, world frame [m/s^2].
+
+        With it, fingertip acceleration = ``fingertip_jacobian(q, finger) @ a + fingertip_bias_acceleration(q, v)``.
+        """
+        require_name(finger, self.fingers, "finger")
+        q, v = self._q(q), self._v(v, "v")
+        pin.forwardKinematics(self._model, self._data, q, v, np.zeros(self._model.nv))
+        frame_id = self._tip_ids[finger]
+        acceleration = pin.getFrameClassicalAcceleration(
+            self._model, self._data, frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        ).linear
+        return acceleration.copy() if self._base_at_origin else self._placement.rotation @ acceleration
+
     def _jacobian(self, q: np.ndarray, frame_id: int, rows: int) -> np.ndarray:
         jacobian = pin.computeFrameJacobian(
             self._model, self._data, q, frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -343,10 +357,36 @@ class Hand:
         """Joint-torque regressor Y(q, v, a), shape (nv, 10 * n_bodies): ``Y @ inertial_parameters() == rnea``.
 
         Columns come in blocks of 10 per joint body (Pinocchio's dynamic parameters: m, m c, I at the joint
-        origin).  For the Slotine-Li form Y(q, qdot, qdot_r, qddot_r) build it from this one (later issue).
+        origin).  For the Slotine-Li form Y(q, qdot, qdot_r, qddot_r) see :meth:`slotine_li_regressor`.
         """
         q, v, a = self._q(q), self._v(v, "v"), self._v(a, "a")
         return pin.computeJointTorqueRegressor(self._model, self._data, q, v, a).copy()
+
+    def slotine_li_torque(self, q: Any, v: Any, v_r: Any, a_r: Any) -> np.ndarray:
+        """M(q) a_r + C(q, v) v_r + G(q) [N m], the model term of sliding and adaptive laws (thesis (3.39)-(3.40)).
+
+        C is the Christoffel-symbol Coriolis matrix (bilinear and symmetric in its velocity arguments, with
+        M_dot - 2 C skew-symmetric), obtained by polarisation of RNEA's velocity-product torques h(w) = C(q, w) w:
+        C(q, v) v_r = (h(v + v_r) - h(v - v_r)) / 4.  Three RNEA passes, no matrix is formed.
+        """
+        q, v, v_r, a_r = self._q(q), self._v(v, "v"), self._v(v_r, "v_r"), self._v(a_r, "a_r")
+        model, data, zero = self._model, self._data, np.zeros(self._model.nv)
+        plus = pin.rnea(model, data, q, v + v_r, zero).copy()
+        minus = pin.rnea(model, data, q, v - v_r, zero)  # gravity cancels in the difference
+        return pin.rnea(model, data, q, zero, a_r) + 0.25 * (plus - minus)
+
+    def slotine_li_regressor(self, q: Any, v: Any, v_r: Any, a_r: Any) -> np.ndarray:
+        """Y(q, v, v_r, a_r), shape (nv, 10 n_bodies): ``Y @ inertial_parameters() == slotine_li_torque(...)``.
+
+        Pinocchio's regressor takes (q, v, a) and gives M a + C(q, v) v + G; the adaptive laws need the
+        reference velocity in the Coriolis term, so this builds it from three regressors by the same polarisation
+        as :meth:`slotine_li_torque`.
+        """
+        q, v, v_r, a_r = self._q(q), self._v(v, "v"), self._v(v_r, "v_r"), self._v(a_r, "a_r")
+        model, data, zero = self._model, self._data, np.zeros(self._model.nv)
+        plus = pin.computeJointTorqueRegressor(model, data, q, v + v_r, zero).copy()
+        minus = pin.computeJointTorqueRegressor(model, data, q, v - v_r, zero).copy()
+        return pin.computeJointTorqueRegressor(model, data, q, zero, a_r) + 0.25 * (plus - minus)
 
     def inertial_parameters(self) -> np.ndarray:
         """Dynamic parameters of every moving body, shape (10 * n_bodies,).
@@ -356,6 +396,58 @@ class Hand:
         """
         inertias = self._model.inertias
         return np.concatenate([inertias[j].toDynamicParameters() for j in range(1, self._model.njoints)])
+
+    # ------------------------------------------------------------------ model errors
+    def perturbed(
+        self,
+        mass_scale: float | Sequence[float] = 1.0,
+        payload: tuple[str, float] | None = None,
+        name: str | None = None,
+    ) -> Hand:
+        """A copy of this hand with different inertial parameters: a controller's nominal model, or a plant.
+
+        Kinematics, limits and fingertips are unchanged; the copy has its own Pinocchio model and data.
+
+        Args:
+            mass_scale: Factor on each moving body's mass and rotational inertia (centre of mass unchanged): one
+                number, or one per body in joint order (``nv`` values for a hand of 1-DOF joints).  0.7 is a
+                nominal model that underestimates every body by 30 %.
+            payload: ``(frame, mass [kg])``: a point mass rigidly attached at that frame's origin, e.g. an unknown
+                load at a fingertip.
+            name: Display name (default: this hand's name with the perturbation).
+
+        Raises:
+            InputError: Non-positive or non-finite scales, a negative payload, or an unknown frame.
+        """
+        n_bodies = self._model.njoints - 1
+        uniform = np.ndim(mass_scale) == 0
+        scales = as_vector(np.full(n_bodies, mass_scale) if uniform else mass_scale, "mass_scale", n_bodies)
+        if np.any(scales <= 0.0):
+            raise InputError(f"`mass_scale` must be positive and finite, got {mass_scale!r}")
+        model = pin.Model(self._model)
+        for joint, scale in enumerate(scales, start=1):
+            inertia = model.inertias[joint]
+            model.inertias[joint] = pin.Inertia(scale * inertia.mass, inertia.lever.copy(), scale * inertia.inertia)
+        label = f"mass x{float(mass_scale):g}" if uniform else "masses scaled"
+        if payload is not None:
+            frame, mass = payload
+            frame_id = self._frame_id(frame)
+            mass = float(mass)
+            if not np.isfinite(mass) or mass < 0.0:
+                raise InputError(f"payload mass must be a finite number >= 0 [kg], got {payload[1]!r}")
+            placement = model.frames[frame_id].placement  # frame in its parent joint's frame
+            joint = model.frames[frame_id].parentJoint
+            point = pin.Inertia(mass, placement.translation.copy(), np.zeros((3, 3)))
+            model.inertias[joint] = model.inertias[joint] + point
+            label += f", {mass:g} kg at {frame}"
+        return Hand(
+            model,
+            self._fingertips,
+            name=name or f"{self.name} ({label})",
+            base_placement=self.base_placement,
+            gravity=self.gravity,
+            urdf_path=self.urdf_path,
+        )
 
     # ------------------------------------------------------------------ display
     def summary(self) -> str:
