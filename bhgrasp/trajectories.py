@@ -24,7 +24,6 @@ from abc import ABC, abstractmethod
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_real, as_vector, require_name
 from bhgrasp.errors import InputError, ModelError
@@ -249,7 +248,6 @@ class CartesianReference(Reference):
         self.q_rest = as_vector(q_rest, "q_rest", hand.nq).copy()
         self.plane_tolerance = as_positive(plane_tolerance, "plane_tolerance")
         self._indices = hand.finger_indices(finger)
-        self._frame_id = hand.model.getFrameId(hand.fingertip_frames[finger])
         self._seed = self.q_rest.copy()
 
     @property
@@ -277,15 +275,9 @@ class CartesianReference(Reference):
         v = np.zeros(hand.nv)
         v[indices] = np.linalg.lstsq(jacobian, xdot, rcond=None)[0]
         a = np.zeros(hand.nv)
-        a[indices] = np.linalg.lstsq(jacobian, xddot - self._bias_acceleration(q, v), rcond=None)[0]
+        bias = hand.fingertip_bias_acceleration(q, v, self.finger)
+        a[indices] = np.linalg.lstsq(jacobian, xddot - bias, rcond=None)[0]
         return q, v, a
-
-    def _bias_acceleration(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """``Jdot v``: classical fingertip acceleration [m/s^2] at zero joint acceleration, world coordinates."""
-        model, data = self.hand.model, self.hand.data
-        pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
-        linear = pin.getFrameClassicalAcceleration(model, data, self._frame_id, pin.LOCAL_WORLD_ALIGNED).linear
-        return self.hand.base_placement.rotation @ linear  # base-aligned -> world (the base does not move)
 
 
 def _time(t: Any) -> float:

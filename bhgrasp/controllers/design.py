@@ -4,7 +4,8 @@ If the true inertial parameters differ from the nominal ones by at most a fracti
 scale error), the torque the nominal model misses along a reference is bounded by
 Delta = model_error / (1 - model_error) max_t |tau_hat(q_d, qd_d, qdd_d)| per joint, and its rate by
 Phi = model_error / (1 - model_error) max_t |d tau_hat / dt|.  SMC's K and HOSM's alpha are ``margin`` x Delta;
-the super-twisting gains follow Levant's rule (W > Phi, lambda_s = 1.5 sqrt(M W)).
+the super-twisting gains follow Levant's rule (W > Phi, lambda_s = 1.5 sqrt(M W)), with W also large enough for
+the integral term to build up Delta quickly.
 """
 
 from __future__ import annotations
@@ -49,6 +50,7 @@ def sliding_gains(
     model_error: float = 0.3,
     margin: float = 2.0,
     samples: int = 501,
+    build_up: float = 0.2,
 ) -> SlidingGains:
     """Robust gains that dominate a ``model_error`` scale error of ``nominal`` along ``reference`` over [0, duration].
 
@@ -59,6 +61,7 @@ def sliding_gains(
         model_error: Relative inertial-parameter error, in [0, 1).
         margin: Factor > 1 on Delta for K, alpha and u_M.
         samples: Time samples of the reference.
+        build_up: Time [s] in which the super-twisting integral can build up Delta (W >= Delta / build_up).
     """
     duration = as_positive(duration, "duration")
     if not 0.0 <= float(model_error) < 1.0:
@@ -71,7 +74,7 @@ def sliding_gains(
     ratio = float(model_error) / (1.0 - float(model_error))
     delta = ratio * np.abs(torques).max(axis=0)
     phi = ratio * np.abs(np.gradient(torques, times, axis=0)).max(axis=0)
-    w = 1.1 * phi + delta / duration  # W > Phi, and u1 can build up Delta within the run
+    w = 1.1 * phi + delta / as_positive(build_up, "build_up")  # W > Phi, and u1 reaches Delta in build_up
     inertia = np.diag(nominal.mass_matrix(reference(duration)[0]))
     floor = 1e-9 * max(float(np.max(delta)), 1e-12)  # a joint with no load still needs positive gains
     k = np.maximum(margin * delta, floor)
