@@ -1,4 +1,4 @@
-"""Command line: ``bhgrasp demo`` (the main job; headless by default) and ``bhgrasp info``."""
+"""Command line: ``bhgrasp demo`` (the main job; headless by default), ``bhgrasp experiments`` and ``bhgrasp info``."""
 
 from __future__ import annotations
 
@@ -22,7 +22,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     demo.add_argument("--seed", type=int, default=0, help="random seed of the workspace sampling")
     demo.add_argument("--hold", type=float, default=1.0, help="simulated duration of the grasp hold [s]")
     commands.add_parser("info", help="print the hand summary only")
+    experiments = commands.add_parser("experiments", help="reproduce a thesis chapter: report (markdown) and figures")
+    experiments.add_argument("chapter", choices=["ch3"], help="ch3: joint-space control (CTC, SMC, ASMC, HOSM)")
+    experiments.add_argument("--output", type=Path, default=Path("docs/results"), help="folder for report and figures")
+    experiments.add_argument(
+        "--scale", type=float, default=1.0, help="multiply every case's duration (e.g. 0.5 for a quick look)"
+    )
+    experiments.add_argument("--no-figures", action="store_true", help="write the report only")
     args = parser.parse_args(argv)
+    if args.command == "experiments":
+        return _experiments(args.chapter, args.output, args.scale, not args.no_figures)
     if args.command == "info":
         from bhgrasp import BarrettHand
 
@@ -50,6 +59,22 @@ def _demo(output: Path, samples: int, seed: int, duration: float) -> int:
     figure_path = _plot_workspace(hand, output, samples, seed)
     print(f"\nworkspace figure: {figure_path}")
     _hold(duration)
+    return 0
+
+
+def _experiments(chapter: str, output: Path, scale: float, figures: bool) -> int:
+    import time
+
+    from bhgrasp.experiments.chapter3 import run_chapter3
+
+    if not (np.isfinite(scale) and scale > 0.0):
+        print(f"bhgrasp: error: --scale must be a positive number, got {scale}", file=sys.stderr)
+        return 2
+    start = time.perf_counter()
+    cases = run_chapter3(output, scale=scale, figures=figures)
+    runs = sum(len(case.runs) for case in cases)
+    print(f"{chapter}: {len(cases)} cases, {runs} runs in {time.perf_counter() - start:.1f} s")
+    print(f"report: {output / 'chapter3.md'}")
     return 0
 
 
