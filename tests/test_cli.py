@@ -32,3 +32,19 @@ def test_bad_command_exits_with_usage() -> None:
     with pytest.raises(SystemExit) as caught:
         main(["fly"])
     assert caught.value.code == 2
+
+
+def test_experiments_ch3_writes_the_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """A shortened run (durations x 0.3) of `bhgrasp experiments ch3`: every case's table and PNG figures."""
+    assert main(["experiments", "ch3", "--output", str(tmp_path), "--scale", "0.3"]) == 0
+    assert "4 cases, 31 runs" in capsys.readouterr().out
+    report = (tmp_path / "chapter3.md").read_text()
+    for heading in ("Computed torque", "planar finger", "SMC vs ASMC", "finger F3", "Findings"):
+        assert heading in report
+    figures = sorted(tmp_path.glob("*.png"))
+    assert len(figures) == 7 and all(f.read_bytes()[:4] == b"\x89PNG" for f in figures)
+    assert all(f"]({f.name})" in report for f in figures)
+
+
+def test_experiments_rejects_a_bad_scale(tmp_path: Path) -> None:
+    assert main(["experiments", "ch3", "--output", str(tmp_path), "--scale", "-1"]) == 2

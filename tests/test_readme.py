@@ -18,7 +18,10 @@ def test_readme_python_blocks_run(capsys, tmp_path, monkeypatch) -> None:
     namespace: dict = {}
     for block in blocks:
         exec(compile(block, str(README), "exec"), namespace)  # our own README
-    assert "unknown joint 'F3_spread'; valid joints: F1_spread, F1_proximal" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "unknown joint 'F3_spread'; valid joints: F1_spread, F1_proximal" in out
+    assert "CTC: RMS error" in out and "ASMC: RMS error" in out and "super-twisting: RMS error" in out
+    assert namespace["name"] == "super-twisting" and np.all(namespace["tracking"].rms_percent < 10.0)  # tracks
     assert namespace["result"].converged
     assert namespace["traj"].object_position[-1, 0, 2] == pytest.approx(0.025 - 0.2 * 9.81 / 1e4, rel=1e-6)
     closing = namespace["closing"].q
