@@ -3,6 +3,7 @@
 The public API is re-exported here; ``import bhgrasp`` never imports matplotlib or meshcat.
 """
 
+from bhgrasp import controllers, metrics, trajectories
 from bhgrasp.actuation import BarrettActuation, FullyActuated
 from bhgrasp.contact import Contact, SpringDamper
 from bhgrasp.errors import BhgraspError, InputError, ModelError, SimulationDiverged, UnreachableError
@@ -43,16 +44,19 @@ __all__ = [
     "UnreachableError",
     "Workspace",
     "barrett_urdf_path",
+    "controllers",
     "example_robot_data_dir",
     "example_robot_data_urdf",
     "finger_ik",
     "ik",
+    "metrics",
     "planar_finger",
     "rotation_from_zyz",
     "table",
     "thesis_impedance_finger",
     "thesis_one_link_finger",
     "thesis_two_link_finger",
+    "trajectories",
     "wall",
     "workspace",
     "zyz_from_rotation",
