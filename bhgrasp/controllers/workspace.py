@@ -64,8 +64,9 @@ def workspace_dynamics(hand: Hand, q: Any, v: Any, finger: str) -> WorkspaceDyna
     inverse = np.linalg.inv(task_jacobian)
     mass_f = hand.mass_matrix(q)[np.ix_(index, index)]
     mass_x = inverse.T @ mass_f @ inverse
-    gravity_f = hand.gravity_torques(q)[index]
-    velocity_f = (hand.nonlinear_effects(q, v) - hand.gravity_torques(q))[index]
+    gravity = hand.gravity_torques(q)
+    gravity_f = gravity[index]
+    velocity_f = (hand.nonlinear_effects(q, v) - gravity)[index]
     bias = basis.T @ hand.fingertip_bias_acceleration(q, v, finger)
     coriolis_x = inverse.T @ velocity_f - mass_x @ bias
     return WorkspaceDynamics(basis, task_jacobian, 0.5 * (mass_x + mass_x.T), coriolis_x, inverse.T @ gravity_f)
