@@ -39,6 +39,7 @@ class Hand:
         base_placement: pin.SE3 | None = None,
         gravity: Sequence[float] = STANDARD_GRAVITY,
         urdf_path: Path | None = None,
+        collision_geometry: pin.GeometryModel | None = None,
     ) -> None:
         """Wrap a Pinocchio model.
 
@@ -49,6 +50,8 @@ class Hand:
             base_placement: Pose of the hand base in the world, ``transform_base_to_world``.
             gravity: Gravity vector in world coordinates [m/s^2].
             urdf_path: The URDF the model came from, if any (kept for later layers, e.g. collision geometry).
+            collision_geometry: Collision shapes attached to the model's joints and frames, for a hand built
+                without a URDF (e.g. a planar finger's tip sphere); scenes use it instead of ``urdf_path``'s.
         """
         if not fingertips:
             raise ModelError("a hand needs at least one fingertip frame")
@@ -56,6 +59,7 @@ class Hand:
         self._data = model.createData()
         self.name = name or model.name
         self.urdf_path = urdf_path
+        self.collision_geometry = collision_geometry
         frame_names = [frame.name for frame in model.frames]
         self._tip_ids: dict[str, int] = {}
         for finger, frame in fingertips.items():
@@ -447,6 +451,7 @@ class Hand:
             base_placement=self.base_placement,
             gravity=self.gravity,
             urdf_path=self.urdf_path,
+            collision_geometry=self.collision_geometry,
         )
 
     # ------------------------------------------------------------------ display

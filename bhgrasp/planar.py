@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import coal
 import numpy as np
 import pinocchio as pin
 
@@ -27,6 +28,7 @@ def planar_finger(
     rods: bool = False,
     gravity: Sequence[float] = PLANAR_GRAVITY,
     joint_range: float = np.pi,
+    tip_radius: float | None = None,
     name: str = "planar finger",
 ) -> Hand:
     """An n-link planar finger as a :class:`Hand` with one finger, ``"tip"``.
@@ -38,6 +40,8 @@ def planar_finger(
         gravity: Gravity in the base frame [m/s^2].
         joint_range: Joint limits are [-joint_range, joint_range] [rad]; speed and torque limits are infinite
             (the thesis' planar fingers are idealised).
+        tip_radius: Radius [m] of a collision sphere centred on the fingertip (on the last link's frame), so that
+            the finger can touch objects in a :class:`~bhgrasp.scene.Scene`; ``None``: no collision geometry.
         name: Display name.
     """
     lengths = as_vector(lengths, "lengths")
@@ -73,8 +77,15 @@ def planar_finger(
         model.appendBodyToJoint(parent, inertia, pin.SE3.Identity())
         model.addFrame(pin.Frame(f"link{i}", parent, pin.SE3.Identity(), pin.FrameType.BODY))
         offset = float(length)
-    model.addFrame(pin.Frame("tip", parent, pin.SE3(np.eye(3), np.array([offset, 0.0, 0.0])), pin.FrameType.OP_FRAME))
-    return Hand(model, {"tip": "tip"}, name=name, gravity=gravity)
+    tip = pin.SE3(np.eye(3), np.array([offset, 0.0, 0.0]))
+    model.addFrame(pin.Frame("tip", parent, tip, pin.FrameType.OP_FRAME))
+    geometry = None
+    if tip_radius is not None:
+        geometry = pin.GeometryModel()
+        link = model.getFrameId(f"link{lengths.size}")
+        sphere = coal.Sphere(as_positive(tip_radius, "tip_radius"))
+        geometry.addGeometryObject(pin.GeometryObject("tip_sphere", parent, link, tip, sphere))
+    return Hand(model, {"tip": "tip"}, name=name, gravity=gravity, collision_geometry=geometry)
 
 
 def thesis_two_link_finger() -> Hand:
@@ -85,11 +96,17 @@ def thesis_two_link_finger() -> Hand:
     return planar_finger((0.05, 0.05), (0.0579, 0.0342), name="thesis ch.3 planar finger")
 
 
-def thesis_impedance_finger() -> Hand:
-    """Chapter 4's planar two-link finger for impedance control (4.5.4): m = (1, 1) kg, l = (0.5, 0.5) m."""
-    return planar_finger((0.5, 0.5), (1.0, 1.0), name="thesis ch.4 planar finger")
+def thesis_impedance_finger(tip_radius: float = 0.02) -> Hand:
+    """Chapter 4's planar two-link finger for impedance control (4.5.4): m = (1, 1) kg, l = (0.5, 0.5) m.
+
+    Its fingertip carries a collision sphere of ``tip_radius`` [m] (our choice; the thesis' contact is a point).
+    """
+    return planar_finger((0.5, 0.5), (1.0, 1.0), tip_radius=tip_radius, name="thesis ch.4 planar finger")
 
 
-def thesis_one_link_finger(mass: float = 1.0) -> Hand:
-    """Chapter 4's one-link finger (4.4): l = 0.2 m.  The thesis gives no link mass: 1 kg by default (our choice)."""
-    return planar_finger((0.2,), (mass,), name="thesis ch.4 one-link finger")
+def thesis_one_link_finger(mass: float = 1.0, tip_radius: float = 0.01) -> Hand:
+    """Chapter 4's one-link finger (4.4): l = 0.2 m.  The thesis gives no link mass: 1 kg by default (our choice).
+
+    Its fingertip carries a collision sphere of ``tip_radius`` [m] (our choice).
+    """
+    return planar_finger((0.2,), (mass,), tip_radius=tip_radius, name="thesis ch.4 one-link finger")

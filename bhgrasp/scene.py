@@ -67,8 +67,8 @@ class Scene:
         """Assemble the scene.
 
         Args:
-            hand: The hand; its base placement and gravity are the scene's.  Its collision geometry is read
-                from ``hand.urdf_path`` (a hand built without a URDF, e.g. a planar finger, has none).
+            hand: The hand; its base placement and gravity are the scene's.  Its collision geometry is
+                ``hand.collision_geometry`` if set, else read from ``hand.urdf_path`` (else none).
             objects: Free rigid objects and spring-mounted (compliant) objects, in state order.
             environment: Fixed shapes (planes, fixed boxes).
         """
@@ -202,18 +202,25 @@ class Scene:
 
     def _hand_geometry(self) -> pin.GeometryModel:
         path = self.hand.urdf_path
-        if path is None:
+        if self.hand.collision_geometry is not None:
+            geometry = self.hand.collision_geometry.copy()
+        elif path is None:
             return pin.GeometryModel()
+        else:
+            geometry = self._urdf_geometry(path)
+        placement = self.hand.base_placement
+        for geometry_object in geometry.geometryObjects:
+            if geometry_object.parentJoint == 0:
+                geometry_object.placement = placement * geometry_object.placement
+        return geometry
+
+    def _urdf_geometry(self, path) -> pin.GeometryModel:
         try:
             geometry = pin.buildGeomFromUrdfString(
                 self.hand.model, path.read_text(), pin.GeometryType.COLLISION, None, [str(p) for p in path.parents]
             )
         except (ValueError, RuntimeError, OSError) as error:
             raise ModelError(f"cannot load the collision geometry of {str(path)!r}: {error}") from error
-        placement = self.hand.base_placement
-        for geometry_object in geometry.geometryObjects:
-            if geometry_object.parentJoint == 0:
-                geometry_object.placement = placement * geometry_object.placement
         return geometry
 
     def _add_geometry(self, name: str, joint: int, placement: pin.SE3, shape: object) -> int:

@@ -1,0 +1,105 @@
+"""What a controller reads from sensed contacts: per-finger contact forces and their joint reaction torques.
+
+A :class:`~bhgrasp.state.State` lists contacts as (body a, body b) with body a a hand link frame, the normal from a
+to b and the force on b (the object).  Here contacts are grouped by finger (the finger whose joints move the link)
+and turned into the force the finger exerts on the object, its normal component, and the joint torques J^T F the
+contact forces produce (thesis (4.8), tau_d = J_f^T F_c).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bhgrasp.hand import Hand
+from bhgrasp.state import State
+
+
+@dataclass(frozen=True)
+class FingerContact:
+    """The contacts of one finger at one instant (world frame).
+
+    Attributes:
+        force: Total force the finger exerts on the object(s) [N], (3,).
+        normal_force: Sum of the normal components n . F [N] (>= 0 while pressing).
+        normal: Force-weighted mean unit normal from finger to object, or zeros without contact.
+        count: Number of contact points.
+    """
+
+    force: np.ndarray
+    normal_force: float
+    normal: np.ndarray
+    count: int
+
+    @property
+    def touching(self) -> bool:
+        """Whether the finger has at least one contact that presses."""
+        return self.count > 0 and self.normal_force > 0.0
+
+
+class ContactSensing:
+    """Groups a state's contacts by finger; built once per hand (maps link frames to fingers)."""
+
+    def __init__(self, hand: Hand) -> None:
+        """Map every frame attached to a finger's joints to that finger."""
+        self.hand = hand
+        model = hand.model
+        self._finger_of: dict[str, str] = {}
+        for finger in hand.fingers:
+            joints = {model.getJointId(name) for name in hand.finger_joints(finger)}
+            for frame in model.frames:
+                if frame.parentJoint in joints:
+                    self._finger_of.setdefault(frame.name, finger)
+        self._empty = FingerContact(np.zeros(3), 0.0, np.zeros(3), 0)
+
+    def finger_of(self, link: str) -> str | None:
+        """The finger a link frame belongs to (``None`` for the palm or a frame of no finger)."""
+        return self._finger_of.get(link)
+
+    def fingers(self, state: State) -> dict[str, FingerContact]:
+        """Per finger (every finger of the hand), its contacts in ``state``."""
+        grouped: dict[str, list[int]] = {finger: [] for finger in self.hand.fingers}
+        for k, (link, _) in enumerate(state.contact_bodies):
+            finger = self._finger_of.get(link)
+            if finger is not None:
+                grouped[finger].append(k)
+        result = {}
+        for finger, rows in grouped.items():
+            if not rows:
+                result[finger] = self._empty
+                continue
+            forces, normals = state.contact_forces[rows], state.contact_normals[rows]
+            components = np.einsum("ij,ij->i", forces, normals)
+            weights = np.maximum(components, 0.0)
+            mean = (weights @ normals) if weights.sum() > 0.0 else normals.sum(axis=0)
+            norm = np.linalg.norm(mean)
+            normal = mean / norm if norm > 0.0 else np.zeros(3)
+            result[finger] = FingerContact(forces.sum(axis=0), float(components.sum()), normal, len(rows))
+        return result
+
+    def reaction_torques(self, state: State) -> np.ndarray:
+        """Joint torques the contact forces exert on the hand, sum of J_p^T F_on_hand over contacts [N m], (nv,).
+
+        J_p is the translational Jacobian of the contact point on its link; F_on_hand = -(force on the object).
+        The hand's dynamics read M q_dd + C q_d + G = tau + this.
+        """
+        hand = self.hand
+        torque = np.zeros(hand.nv)
+        for k, (link, _) in enumerate(state.contact_bodies):
+            if link not in self._finger_of and not hand.model.existFrame(link):
+                continue
+            jacobian = hand.frame_jacobian(state.q, link)
+            origin = hand.frame_placement(state.q, link).translation
+            lever = state.contact_points[k] - origin
+            point_jacobian = jacobian[:3] - _skew(lever) @ jacobian[3:]
+            torque -= point_jacobian.T @ state.contact_forces[k]
+        return torque
+
+
+def _skew(vector: np.ndarray) -> np.ndarray:
+    x, y, z = vector
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+__all__ = ["ContactSensing", "FingerContact"]

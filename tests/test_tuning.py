@@ -1,0 +1,332 @@
+"""CMA-ES tuning against known minimisers (shifted sphere, Rosenbrock), and its determinism and failure handling.
+
+The objectives are top-level functions of this module, so process-pool and Dask workers can unpickle them by
+reference: pytest's default "prepend" import mode puts ``tests/`` on ``sys.path`` and imports this file as
+``test_tuning``, and spawned workers inherit the parent's ``sys.path``.  The default process pool uses the
+platform's start method (``fork`` on Linux before Python 3.14); a ``spawn`` pool is tested explicitly too.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import multiprocessing
+import os
+import subprocess
+import sys
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor
+from typing import Any
+
+import numpy as np
+import pytest
+
+from bhgrasp.errors import InputError
+from bhgrasp.tuning import TuningError, TuningResult, cma_es
+
+CENTRE = np.array([3.0, -2.0, 1.0])
+ARRAY_FIELDS = ("best", "history_parameters", "history_fitness", "generation_best", "sigma")
+
+
+def shifted_sphere(x: np.ndarray, centre: np.ndarray = CENTRE) -> float:
+    return float(np.sum((x - centre) ** 2))
+
+
+def rosenbrock(x: np.ndarray) -> float:
+    return float(100.0 * (x[1] - x[0] ** 2) ** 2 + (1.0 - x[0]) ** 2)
+
+
+def sphere_touching_global_rng(x: np.ndarray) -> float:
+    np.random.random(3)  # noqa: NPY002  (deliberately) consumes numpy's global generator: must not change what CMA-ES samples
+    return shifted_sphere(x)
+
+
+def sphere_failing_right(x: np.ndarray) -> float:
+    if x[0] > 4.0:
+        raise ValueError(f"x[0] = {x[0]:.3f} is too far right")
+    return shifted_sphere(x)
+
+
+def sphere_returning_junk(x: np.ndarray) -> Any:
+    if x[1] > 1.0:
+        return math.nan
+    if x[2] > 2.0:
+        return "not a number"
+    return shifted_sphere(x)
+
+
+def always_failing(x: np.ndarray) -> float:
+    raise RuntimeError("simulation diverged")
+
+
+def sphere_killing_worker(x: np.ndarray) -> float:
+    if x[0] > 1.0:
+        os._exit(1)  # the worker process dies: the pool breaks
+    return shifted_sphere(x)
+
+
+def assert_same_result(a: TuningResult, b: TuningResult) -> None:
+    for name in ARRAY_FIELDS:
+        assert np.array_equal(getattr(a, name), getattr(b, name), equal_nan=True), name
+    assert (a.best_fitness, a.generations, a.evaluations, a.failures, a.stop) == (
+        b.best_fitness,
+        b.generations,
+        b.evaluations,
+        b.failures,
+        b.stop,
+    )
+
+
+@pytest.fixture(scope="module")
+def serial_sphere() -> TuningResult:
+    """The serial reference run that the parallel executors must reproduce exactly."""
+    return cma_es(shifted_sphere, np.zeros(3), 1.0, seed=7, max_generations=25, population=6, executor="serial")
+
+
+class SubmitFailsAfter(Executor):
+    """Evaluates synchronously in ``submit``; the call after the first ``limit`` raises, as a lost cluster would."""
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        self.submitted = 0
+
+    def submit(self, fn: Any, /, *args: Any, **kwargs: Any) -> Future:
+        if self.submitted == self.limit:
+            raise RuntimeError("connection to the cluster lost")
+        self.submitted += 1
+        future: Future = Future()
+        try:
+            future.set_result(fn(*args, **kwargs))
+        except Exception as error:
+            future.set_exception(error)
+        return future
+
+
+# --- convergence -----------------------------------------------------------------------------------------------
+
+
+def test_shifted_sphere_converges_from_a_far_start_to_its_centre() -> None:
+    result = cma_es(shifted_sphere, [10.0, 10.0, 10.0], 2.0, seed=1, max_generations=300, executor="serial")
+    population = 4 + math.floor(3 * math.log(3))  # cma's default
+    assert np.max(np.abs(result.best - CENTRE)) < 1e-4
+    assert result.best_fitness == shifted_sphere(result.best)
+    assert "tolfun" in result.stop and result.generations < 300  # stopped by tol_fun, not the generation cap
+    assert result.evaluations == result.generations * population
+    assert result.history_parameters.shape == (result.evaluations, 3)
+    assert result.history_fitness.shape == (result.evaluations,)
+    assert result.generation_best.shape == result.sigma.shape == (result.generations,)
+    per_generation = result.history_fitness.reshape(result.generations, population)
+    assert np.array_equal(result.generation_best, per_generation.min(axis=1))
+    assert np.array_equal(result.history_fitness, [shifted_sphere(x) for x in result.history_parameters])
+    running = np.minimum.accumulate(result.generation_best)
+    assert np.all(np.diff(running) <= 0.0) and running[-1] == result.best_fitness
+    assert result.generation_best[0] > 1e2 and result.sigma[-1] < 1e-3  # it really travelled and contracted
+    assert result.failures == ()
+
+
+def test_one_parameter_is_supported() -> None:
+    result = cma_es(functools.partial(shifted_sphere, centre=np.array([-4.0])), [5.0], 1.0, seed=3, executor="serial")
+    assert abs(result.best[0] + 4.0) < 1e-4
+
+
+def test_rosenbrock_reaches_its_minimum_at_one_one() -> None:
+    result = cma_es(rosenbrock, [-1.2, 1.0], 0.5, seed=2, max_generations=600, executor="serial", tol_fun=1e-14)
+    assert np.max(np.abs(result.best - 1.0)) < 1e-3
+    assert result.best_fitness == rosenbrock(result.best)
+
+
+# --- determinism and executors ---------------------------------------------------------------------------------
+
+
+def test_same_seed_gives_a_bitwise_identical_result_and_another_seed_does_not() -> None:
+    def run(seed: int, global_seed: int) -> TuningResult:
+        np.random.seed(global_seed)  # noqa: NPY002  numpy's global generator is not what CMA-ES samples from
+        return cma_es(sphere_touching_global_rng, np.zeros(3), 1.0, seed=seed, max_generations=15, executor="serial")
+
+    first, again, other = run(11, 0), run(11, 12345), run(12, 0)
+    assert_same_result(first, again)
+    assert first.history_parameters.shape == other.history_parameters.shape
+    assert not np.array_equal(first.history_parameters, other.history_parameters)
+    assert not np.array_equal(first.history_parameters[0], other.history_parameters[0])
+
+
+def test_default_process_pool_reproduces_the_serial_run(serial_sphere: TuningResult) -> None:
+    # The pool uses multiprocessing's default start method: "fork" here (Linux, Python < 3.14), "spawn" on
+    # macOS/Windows, "forkserver" on Linux from Python 3.14; the spawn test below covers the non-fork methods.
+    objective = functools.partial(shifted_sphere, centre=CENTRE)  # a partial of a top-level function pickles
+    assert_same_result(cma_es(objective, np.zeros(3), 1.0, seed=7, max_generations=25, population=6), serial_sphere)
+
+
+def test_spawn_process_pool_reproduces_the_serial_run(serial_sphere: TuningResult) -> None:
+    with ProcessPoolExecutor(max_workers=2, mp_context=multiprocessing.get_context("spawn")) as pool:
+        result = cma_es(shifted_sphere, np.zeros(3), 1.0, seed=7, max_generations=25, population=6, executor=pool)
+    assert_same_result(result, serial_sphere)
+
+
+@pytest.mark.parametrize("processes", [False, True], ids=["threads", "processes"])
+def test_dask_client_executor_reproduces_the_serial_run(serial_sphere: TuningResult, processes: bool) -> None:
+    distributed = pytest.importorskip("distributed")
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=processes, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        executor = client.get_executor()
+        result = cma_es(shifted_sphere, np.zeros(3), 1.0, seed=7, max_generations=25, population=6, executor=executor)
+    assert_same_result(result, serial_sphere)
+
+
+def test_progress_bar_shows_generations(capsys: pytest.CaptureFixture[str]) -> None:
+    cma_es(shifted_sphere, np.zeros(3), 1.0, seed=7, max_generations=5, executor="serial", progress=True)
+    err = capsys.readouterr().err
+    assert "CMA-ES" in err and "5/5" in err and "best=" in err
+
+
+# --- failures --------------------------------------------------------------------------------------------------
+
+
+def test_failing_candidates_are_recorded_and_penalised(monkeypatch: pytest.MonkeyPatch) -> None:
+    import cma
+
+    told: list[list[float]] = []
+    tell = cma.CMAEvolutionStrategy.tell
+
+    def spy(self: Any, solutions: Any, function_values: Any, *args: Any, **kwargs: Any) -> Any:
+        told.append(list(function_values))
+        return tell(self, solutions, function_values, *args, **kwargs)
+
+    monkeypatch.setattr(cma.CMAEvolutionStrategy, "tell", spy)
+    result = cma_es(sphere_failing_right, np.zeros(3), 3.0, seed=5, max_generations=120, executor="serial")
+    failed = ~np.isfinite(result.history_fitness)
+    assert 0 < failed.sum() == len(result.failures)
+    assert np.all(np.isinf(result.history_fitness[failed]))
+    assert np.all(result.history_parameters[failed, 0] > 4.0) and np.all(result.history_parameters[~failed, 0] <= 4.0)
+    assert all(": ValueError: x[0] = " in f and "is too far right" in f for f in result.failures)
+    population = len(told[0])
+    first = int(np.flatnonzero(failed)[0])
+    generation, candidate = divmod(first, population)
+    assert result.failures[0].startswith(f"generation {generation}, candidate {candidate}: ")
+    assert np.max(np.abs(result.best - CENTRE)) < 1e-4 and result.best_fitness == shifted_sphere(result.best)
+    assert len(told) == result.generations and np.all(np.isfinite(told))  # CMA-ES never sees inf/NaN
+    seen = result.history_fitness[: (generation + 1) * population]
+    assert told[generation][candidate] == 10.0 * seen[np.isfinite(seen)].max()  # 10 x the worst finite so far
+
+
+def test_nan_and_non_numbers_count_as_failures() -> None:
+    result = cma_es(
+        sphere_returning_junk, np.zeros(3), 1.5, seed=4, max_generations=10, executor="serial", failure_fitness=1e3
+    )
+    assert any("ValueError: objective returned nan, not a finite number" in f for f in result.failures)
+    assert any("TypeError: objective returned 'not a number', not a number" in f for f in result.failures)
+    assert np.isinf(result.history_fitness).sum() == len(result.failures)
+    assert np.isfinite(result.best_fitness)
+
+
+def test_a_generation_that_fails_entirely_raises_with_the_partial_result() -> None:
+    with pytest.raises(
+        TuningError,
+        match=r"all 5 candidates of generation 0 failed: generation 0, candidate 0: "
+        r"RuntimeError: simulation diverged",
+    ) as caught:
+        cma_es(always_failing, np.zeros(2), 1.0, seed=1, population=5, executor="serial")
+    partial = caught.value.partial
+    assert (partial.generations, partial.evaluations, len(partial.failures)) == (0, 5, 5)
+    assert partial.history_parameters.shape == (5, 2) and np.all(np.isinf(partial.history_fitness))
+    assert np.all(np.isnan(partial.best)) and partial.best_fitness == math.inf
+    assert partial.failures[4] == "generation 0, candidate 4: RuntimeError: simulation diverged"
+    assert isinstance(caught.value, RuntimeError)
+
+
+def test_executor_whose_submit_fails_keeps_every_finished_evaluation() -> None:
+    reference = cma_es(shifted_sphere, np.zeros(3), 1.0, seed=9, max_generations=5, population=4, executor="serial")
+    failing = SubmitFailsAfter(10)
+    with pytest.raises(
+        TuningError, match=r"executor failed in generation 2: RuntimeError: connection to the"
+    ) as caught:
+        cma_es(shifted_sphere, np.zeros(3), 1.0, seed=9, max_generations=5, population=4, executor=failing)
+    partial = caught.value.partial
+    assert (partial.generations, partial.evaluations) == (2, 10)  # 2 full generations + 2 candidates of the third
+    assert np.array_equal(partial.history_parameters, reference.history_parameters[:10])
+    assert np.array_equal(partial.history_fitness, reference.history_fitness[:10])
+    assert np.array_equal(partial.sigma, reference.sigma[:2])
+    assert partial.best_fitness == reference.history_fitness[:10].min()
+
+
+def test_shut_down_executor_raises_tuning_error() -> None:
+    pool = ThreadPoolExecutor(max_workers=1)
+    pool.shutdown()
+    with pytest.raises(TuningError, match=r"generation 0: RuntimeError: cannot schedule new futures") as caught:
+        cma_es(shifted_sphere, np.zeros(3), 1.0, seed=1, executor=pool)
+    assert caught.value.partial.evaluations == 0
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="os._exit in a worker")
+def test_a_dying_worker_breaks_the_pool_and_raises_tuning_error() -> None:
+    with pytest.raises(TuningError, match=r"executor failed in generation \d+: BrokenProcessPool") as caught:
+        cma_es(sphere_killing_worker, np.zeros(3), 1.0, seed=3, max_generations=30, population=4)
+    partial = caught.value.partial
+    finite = np.isfinite(partial.history_fitness)
+    assert partial.evaluations >= 4 * partial.generations
+    assert np.all(finite)  # a candidate lost with the worker is not recorded, not even as a failure
+    assert np.array_equal(partial.history_fitness, [shifted_sphere(x) for x in partial.history_parameters])
+
+
+# --- bounds and validation -------------------------------------------------------------------------------------
+
+
+def test_every_candidate_respects_the_bounds() -> None:
+    lower, upper = np.array([0.0, 0.0, -np.inf]), np.array([1.0, 1.0, 0.5])
+    result = cma_es(
+        shifted_sphere, [0.5, 0.5, 0.0], 0.3, seed=6, max_generations=80, bounds=(lower, upper), executor="serial"
+    )
+    assert np.all(result.history_parameters >= lower) and np.all(result.history_parameters <= upper)
+    assert np.max(np.abs(result.best - [1.0, 0.0, 0.5])) < 1e-2  # the optimum clipped to the box
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"x0": [0.0, math.nan]}, r"`x0` must be finite"),
+        ({"x0": []}, r"`x0` must hold at least 1 parameter"),
+        ({"x0": np.zeros((2, 2))}, r"`x0` must have shape"),
+        ({"sigma0": 0.0}, r"`sigma0` must be a positive"),
+        ({"sigma0": -1.0}, r"`sigma0` must be a positive"),
+        ({"seed": None}, r"`seed` must be an int >= 0"),
+        ({"seed": 1.5}, r"`seed` must be an int >= 0"),
+        ({"seed": "3"}, r"`seed` must be an int >= 0"),
+        ({"seed": True}, r"`seed` must be an int >= 0"),
+        ({"seed": -1}, r"`seed` must be an int >= 0"),
+        ({"population": 1}, r"`population` must be an int >= 2"),
+        ({"population": 4.0}, r"`population` must be an int >= 2"),
+        ({"max_generations": 0}, r"`max_generations` must be an int >= 1"),
+        ({"bounds": ([0.0, 1.0], [1.0, 1.0])}, r"lower < upper"),
+        ({"bounds": ([1.0, 1.0], [0.0, 2.0])}, r"lower < upper"),
+        ({"bounds": ([0.5, -1.0], [1.0, 1.0])}, r"`x0` = .* must lie within `bounds`"),
+        ({"bounds": ([0.0, 0.0, 0.0], [1.0, 1.0, 1.0])}, r"`bounds` must be \(lower, upper\)"),
+        ({"bounds": ([math.nan, 0.0], [1.0, 1.0])}, r"`bounds` must not hold NaN"),
+        ({"executor": "threads"}, r"`executor` must be None, 'serial'"),
+        ({"executor": object()}, r"`executor` must have a submit\(\) method"),
+        ({"failure_fitness": math.inf}, r"`failure_fitness` must be a finite number"),
+        ({"tol_fun": -1.0}, r"`tol_fun` must be a finite number >= 0"),
+        ({"objective": 3.0}, r"`objective` must be callable"),
+        ({"objective": lambda x: 0.0, "executor": None}, r"`objective` must be picklable"),
+    ],
+)
+def test_bad_inputs_raise_input_error(kwargs: dict[str, Any], message: str) -> None:
+    arguments: dict[str, Any] = {"objective": shifted_sphere, "x0": [0.0, 0.0], "seed": 1, "executor": "serial"}
+    with pytest.raises(InputError, match=message):
+        cma_es(**(arguments | kwargs))
+
+
+def test_the_seed_is_a_required_argument() -> None:
+    with pytest.raises(TypeError, match="seed"):
+        cma_es(shifted_sphere, [0.0, 0.0], executor="serial")  # type: ignore[call-arg]
+
+
+def test_importing_tuning_does_not_import_cma_tqdm_or_dask() -> None:
+    code = (
+        "import sys, bhgrasp.tuning; "
+        "loaded = [m for m in sys.modules if m.split('.')[0] in ('cma', 'tqdm', 'dask', 'distributed')]; "
+        "assert not loaded, loaded"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
