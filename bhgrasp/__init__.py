@@ -3,7 +3,7 @@
 The public API is re-exported here; ``import bhgrasp`` never imports matplotlib or meshcat.
 """
 
-from bhgrasp import controllers, metrics, trajectories
+from bhgrasp import controllers, metrics, trajectories, tuning
 from bhgrasp.actuation import BarrettActuation, FullyActuated
 from bhgrasp.contact import Contact, SpringDamper
 from bhgrasp.errors import BhgraspError, InputError, ModelError, SimulationDiverged, UnreachableError
@@ -57,6 +57,7 @@ __all__ = [
     "thesis_one_link_finger",
     "thesis_two_link_finger",
     "trajectories",
+    "tuning",
     "wall",
     "workspace",
     "zyz_from_rotation",

@@ -23,7 +23,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     demo.add_argument("--hold", type=float, default=1.0, help="simulated duration of the grasp hold [s]")
     commands.add_parser("info", help="print the hand summary only")
     experiments = commands.add_parser("experiments", help="reproduce a thesis chapter: report (markdown) and figures")
-    experiments.add_argument("chapter", choices=["ch3"], help="ch3: joint-space control (CTC, SMC, ASMC, HOSM)")
+    experiments.add_argument(
+        "chapter", choices=["ch3", "ch4"], help="ch3: joint-space control (CTC, SMC, ASMC, HOSM); ch4: force control"
+    )
     experiments.add_argument("--output", type=Path, default=Path("docs/results"), help="folder for report and figures")
     experiments.add_argument(
         "--scale", type=float, default=1.0, help="multiply every case's duration (e.g. 0.5 for a quick look)"
@@ -65,16 +67,23 @@ def _demo(output: Path, samples: int, seed: int, duration: float) -> int:
 def _experiments(chapter: str, output: Path, scale: float, figures: bool) -> int:
     import time
 
-    from bhgrasp.experiments.chapter3 import run_chapter3
-
     if not (np.isfinite(scale) and scale > 0.0):
         print(f"bhgrasp: error: --scale must be a positive number, got {scale}", file=sys.stderr)
         return 2
     start = time.perf_counter()
-    cases = run_chapter3(output, scale=scale, figures=figures)
-    runs = sum(len(case.runs) for case in cases)
-    print(f"{chapter}: {len(cases)} cases, {runs} runs in {time.perf_counter() - start:.1f} s")
-    print(f"report: {output / 'chapter3.md'}")
+    if chapter == "ch3":
+        from bhgrasp.experiments.chapter3 import run_chapter3
+
+        cases = run_chapter3(output, scale=scale, figures=figures)
+        runs = sum(len(case.runs) for case in cases)
+        print(f"{chapter}: {len(cases)} cases, {runs} runs in {time.perf_counter() - start:.1f} s")
+        print(f"report: {output / 'chapter3.md'}")
+        return 0
+    from bhgrasp.experiments.chapter4 import run_chapter4
+
+    cases = run_chapter4(output, scale=scale, figures=figures)
+    print(f"{chapter}: {len(cases)} cases in {time.perf_counter() - start:.1f} s")
+    print(f"report: {output / 'chapter4.md'}")
     return 0
 
 

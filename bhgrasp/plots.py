@@ -78,4 +78,30 @@ def save_case_figures(case: Any, output: Path) -> list[str]:
     return names
 
 
-__all__ = ["save_case_figures", "tracking_figure"]
+def force_figure(traces: dict[str, tuple[np.ndarray, np.ndarray, float | None]], title: str = "") -> Figure:
+    """Contact force [N] against time [s] of several runs; a dashed line marks each run's desired force."""
+    if not traces:
+        raise InputError("`traces` must hold at least one (t, force, desired) entry")
+    figure = Figure(figsize=(9, 4.5), layout="tight")
+    ax = figure.subplots()
+    for name, (t, force, desired) in traces.items():
+        (line,) = ax.plot(t, force, lw=1.0, label=name)
+        if desired is not None:
+            ax.axhline(desired, ls="--", lw=0.7, color=line.get_color())
+    ax.set(xlabel="t [s]", ylabel="normal contact force [N]", title=title)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    return figure
+
+
+def save_force_figure(case: Any, path: Path) -> Path:
+    """PNG of a force-control case's traces (``case.traces``, ``case.title``)."""
+    path = Path(path)
+    figure = force_figure(case.traces, case.title)
+    if case.key == "tuning":
+        figure.axes[0].set(xlabel="generation", ylabel="best fitness: mean |f_d - f| [N]", yscale="log")
+    figure.savefig(path, dpi=90)
+    return path
+
+
+__all__ = ["force_figure", "save_case_figures", "save_force_figure", "tracking_figure"]

@@ -43,7 +43,9 @@ from bhgrasp.trajectories import Reference
 
 Sample = tuple[np.ndarray, np.ndarray, np.ndarray]
 _SEARCH_BAND = 5e-3  # [m] a fingertip this close to its target without contact makes the surface estimate advance
-_SURFACE_UNCERTAINTY = 0.05  # [m] prior standard deviation of x_e for the least-squares estimator
+MIN_CONTACT_DAMPING_RATIO = 0.5  # force-based impedance refuses a less damped contact loop (thesis (4.19)'s intent)
+_SURFACE_UNCERTAINTY = 0.05  # [m] prior scale of x_e for the least-squares estimator ...
+_PRIOR_SCALE = 10.0  # ... and the prior's weakness: standard deviations of 10 k_e(0) and 10 k_e(0) x 5 cm
 
 
 def _unit(vector: Any, name: str) -> np.ndarray:
@@ -94,9 +96,14 @@ class ImpedanceLaw(ABC):
         """X_c, its velocity and acceleration, for fingertip position ``x`` [m] and the finger's contacts."""
 
     def _filtered(self, desired: Sample, force: np.ndarray, dt: float) -> Sample:
-        dx, dx_dot, dx_ddot = self.filter.step(force, dt)
+        """X_c = X_d - dx and its velocity, with X_d's acceleration.
+
+        The filter's acceleration is *not* passed on: it is an algebraic function of the sensed force, and feeding
+        it to the inner loop closes a force loop through a one-sample delay that rings on stiff contacts.
+        """
+        dx, dx_dot, _ = self.filter.step(force, dt)
         self.log["delta_x"] = dx
-        return desired[0] - dx, desired[1] - dx_dot, desired[2] - dx_ddot
+        return desired[0] - dx, desired[1] - dx_dot, desired[2]
 
 
 class PositionImpedance(ImpedanceLaw):
@@ -146,12 +153,19 @@ class ForceImpedance(ImpedanceLaw):
             surface: A point x_e [m] of the environment's unloaded surface (only its normal component matters).
             environment_stiffness: k_e [N/m] > 0 as the fingertip sees it.
             mass, damping, stiffness, period: As :class:`ImpedanceLaw`; ``damping=None`` is critical damping of
-                the contact loop (K_I + k_e).
+                the contact loop (K_I + k_e); a given damping must keep that loop's damping ratio >= 0.5.
         """
         k_e = as_positive(environment_stiffness, "environment_stiffness")
         mass, stiffness = as_positive(mass, "mass"), as_positive(stiffness, "stiffness")
         if damping is None:
             damping = critical_damping(mass, stiffness, k_e)
+        minimum = critical_damping(mass, stiffness, k_e, ratio=MIN_CONTACT_DAMPING_RATIO)
+        if as_real(damping, "damping") < minimum:
+            raise InputError(
+                f"`damping` B_I = {damping:g} N s/m violates the damping condition: the contact loop M_I e'' + B_I e' +"
+                f" (K_I + k_e) e needs B_I >= {minimum:.4g} (damping ratio {MIN_CONTACT_DAMPING_RATIO}) for M_I ="
+                f" {mass:g}, K_I = {stiffness:g}, k_e = {k_e:g}"
+            )
         super().__init__(reference, mass, damping, stiffness, period)
         self.normal = _unit(normal, "normal")
         if isinstance(force, Reference):
@@ -249,7 +263,7 @@ class AdaptiveForceImpedance(ForceImpedance):
         k0 = self.environment_stiffness
         self.theta = np.array([k0, k0 * (self.surface - self._centre)])  # theta = (k_e, k_e (x_e - centre))
         self._rate = np.zeros(2)
-        self._covariance = np.diag([k0**2, (k0 * _SURFACE_UNCERTAINTY) ** 2])
+        self._covariance = np.diag([(_PRIOR_SCALE * k0) ** 2, (_PRIOR_SCALE * k0 * _SURFACE_UNCERTAINTY) ** 2])
         self._last_x: np.ndarray | None = None
 
     def command(self, t, x, contact, dt) -> Sample:  # noqa: D102
@@ -370,4 +384,11 @@ class _Commanded(Reference):
         return self.sample
 
 
-__all__ = ["AdaptiveForceImpedance", "ForceImpedance", "ImpedanceController", "ImpedanceLaw", "PositionImpedance"]
+__all__ = [
+    "MIN_CONTACT_DAMPING_RATIO",
+    "AdaptiveForceImpedance",
+    "ForceImpedance",
+    "ImpedanceController",
+    "ImpedanceLaw",
+    "PositionImpedance",
+]
