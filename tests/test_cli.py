@@ -48,3 +48,15 @@ def test_experiments_ch3_writes_the_report_and_figures(tmp_path: Path, capsys: p
 
 def test_experiments_rejects_a_bad_scale(tmp_path: Path) -> None:
     assert main(["experiments", "ch3", "--output", str(tmp_path), "--scale", "-1"]) == 2
+
+
+def test_experiments_ch4_writes_the_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """A shortened run (durations x 0.2, 2 CMA-ES generations) of `bhgrasp experiments ch4`."""
+    assert main(["experiments", "ch4", "--output", str(tmp_path), "--scale", "0.2"]) == 0
+    assert "ch4: 6 cases" in capsys.readouterr().out
+    report = (tmp_path / "chapter4.md").read_text()
+    for heading in ("One-link finger", "uncontrolled vs position-based", "Planar finger", "adaptive FIM",
+                    "all three fingers", "CMA-ES"):  # fmt: skip
+        assert heading in report
+    figures = sorted(tmp_path.glob("*.png"))
+    assert len(figures) == 6 and all(f"]({f.name})" in report for f in figures)

@@ -22,6 +22,11 @@ def test_readme_python_blocks_run(capsys, tmp_path, monkeypatch) -> None:
     assert "unknown joint 'F3_spread'; valid joints: F1_spread, F1_proximal" in out
     assert "CTC: RMS error" in out and "ASMC: RMS error" in out and "super-twisting: RMS error" in out
     assert namespace["name"] == "super-twisting" and np.all(namespace["tracking"].rms_percent < 10.0)  # tracks
+    force_example = namespace["normal_force"](namespace["setup"], namespace["traj_force"])
+    assert (
+        abs(force_example[-1] - 30.0) < 0.6
+        and abs(namespace["law"].environment_stiffness / namespace["setup"].k_e - 1) < 0.05
+    )
     assert namespace["result"].converged
     assert namespace["traj"].object_position[-1, 0, 2] == pytest.approx(0.025 - 0.2 * 9.81 / 1e4, rel=1e-6)
     closing = namespace["closing"].q
