@@ -29,7 +29,7 @@ from bhgrasp.contact import SpringDamper
 from bhgrasp.controllers import PDGravity, WorkspaceComputedTorque
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.impedance import AdaptiveForceImpedance, ForceImpedance, ImpedanceController, PositionImpedance
-from bhgrasp.errors import SimulationDiverged
+from bhgrasp.errors import InputError, SimulationDiverged
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.objects import Box, SpringMounted
 from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
@@ -130,7 +130,7 @@ def probe_surface(setup: Setup, speed: float = 0.01, limit: float = 3.0) -> floa
         state, info = sim.step(state, controller(state.t, state))
         if len(info.contacts):
             return float(setup.normal @ hand.fingertip_positions(state.q)[index])
-    raise SimulationDiverged(limit, "probe", "no contact", "place the object within reach")
+    raise InputError(f"probing along {setup.normal} for {limit} s found no contact: place the object within reach")
 
 
 class _Ramp(Reference):
