@@ -7,6 +7,8 @@ from bhgrasp import controllers, metrics, trajectories, tuning
 from bhgrasp.actuation import BarrettActuation, FullyActuated
 from bhgrasp.contact import Contact, SpringDamper
 from bhgrasp.errors import BhgraspError, InputError, ModelError, SimulationDiverged, UnreachableError
+from bhgrasp.grasp import GraspQuality, ferrari_canny, grasp_map, grasp_quality, hand_jacobian, is_force_closure
+from bhgrasp.grasp_forces import ContactForceQP, ContactForceResult, internal_forces, pseudo_inverse_forces
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.ik import FingerIKResult, IKResult, Workspace, finger_ik, ik, workspace
 from bhgrasp.objects import Box, Capsule, Cylinder, FixedBox, Plane, Sphere, SpringMounted, table, wall
@@ -24,10 +26,13 @@ __all__ = [
     "Box",
     "Capsule",
     "Contact",
+    "ContactForceQP",
+    "ContactForceResult",
     "Cylinder",
     "FingerIKResult",
     "FixedBox",
     "FullyActuated",
+    "GraspQuality",
     "Hand",
     "IKResult",
     "InputError",
@@ -47,10 +52,17 @@ __all__ = [
     "controllers",
     "example_robot_data_dir",
     "example_robot_data_urdf",
+    "ferrari_canny",
     "finger_ik",
+    "grasp_map",
+    "grasp_quality",
+    "hand_jacobian",
     "ik",
+    "internal_forces",
+    "is_force_closure",
     "metrics",
     "planar_finger",
+    "pseudo_inverse_forces",
     "rotation_from_zyz",
     "table",
     "thesis_impedance_finger",
