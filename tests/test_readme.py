@@ -27,6 +27,7 @@ def test_readme_python_blocks_run(capsys, tmp_path, monkeypatch) -> None:
         abs(force_example[-1] - 30.0) < 0.6
         and abs(namespace["law"].environment_stiffness / namespace["setup"].k_e - 1) < 0.05
     )
+    assert namespace["quality"].force_closure and namespace["forces"].feasible
     assert namespace["result"].converged
     assert namespace["traj"].object_position[-1, 0, 2] == pytest.approx(0.025 - 0.2 * 9.81 / 1e4, rel=1e-6)
     closing = namespace["closing"].q

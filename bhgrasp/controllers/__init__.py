@@ -2,6 +2,7 @@
 
 from bhgrasp.controllers.base import Controller, JointTracking, inertia_gain
 from bhgrasp.controllers.design import SlidingGains, sliding_gains
+from bhgrasp.controllers.grasping import GraspForceController
 from bhgrasp.controllers.hosm import QuasiContinuousA, SuperTwisting, TwistingB, hosm
 from bhgrasp.controllers.joint import ComputedTorque, PDGravity
 from bhgrasp.controllers.sliding import AdaptiveSlidingMode, SlidingMode, SlidingSurface, lyapunov, parameter_scales
@@ -11,6 +12,7 @@ __all__ = [
     "AdaptiveSlidingMode",
     "ComputedTorque",
     "Controller",
+    "GraspForceController",
     "JointTracking",
     "PDGravity",
     "QuasiContinuousA",

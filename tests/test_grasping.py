@@ -1,0 +1,77 @@
+"""Object-space grasp control through the friction-cone QP, on the simulator's contacts (the reference hold)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import bhgrasp as bh
+from bhgrasp.controllers.grasping import GraspForceController
+from bhgrasp.experiments.hold import BOX_MASS, reference_hold
+from bhgrasp.trajectories import Quintic
+
+
+def measured_cone_margins(traj, mu):
+    """mu f_n - |f_t| of every recorded contact force (force on the box along and across the contact normal)."""
+    normal = np.einsum("ij,ij->i", traj.contact_force, traj.contact_normal)
+    tangential = np.linalg.norm(traj.contact_force - normal[:, None] * traj.contact_normal, axis=1)
+    return mu * normal - tangential
+
+
+@pytest.fixture(scope="module")
+def lifted():
+    hold = reference_hold()
+    pose = hold.state.object_poses[0]
+    start = np.concatenate((pose.translation, np.zeros(3)))
+    reference = Quintic(start, start + np.array([0.0, 0.0, 0.005, 0.0, 0.0, 0.0]), 1.0)
+    controller = GraspForceController(hold.hand, BOX_MASS, reference=reference, mu=0.6, squeeze=3.0)
+    traj = hold.simulator.run(controller, 2.0, state=hold.state, progress=False)
+    return hold, traj
+
+
+def test_hold_keeps_the_box_still_with_forces_inside_the_cones():
+    hold = reference_hold()
+    controller = GraspForceController(hold.hand, BOX_MASS, mu=0.6, squeeze=3.0)
+    traj = hold.simulator.run(controller, 1.0, state=hold.state, progress=False)
+    drift = np.linalg.norm(traj.object_position[-1, 0] - traj.object_position[0, 0])
+    assert drift < 2e-5  # [m]
+    assert np.all(traj.contact_sticking) and np.all(traj.log["feasible"] == 1.0)
+    assert np.min(measured_cone_margins(traj, 0.8)) > 0.0  # no measured force leaves the true cone (mu 0.8)
+    weight = -np.sum(traj.contacts_at(len(traj) - 1)["force"], axis=0)  # forces on the box balance its weight
+    assert weight[2] == pytest.approx(-BOX_MASS * 9.81, rel=0.01)
+
+
+def test_lift_tracks_the_object_reference_without_slip(lifted):
+    hold, traj = lifted
+    target = hold.state.object_poses[0].translation[2] + 0.005
+    assert abs(traj.object_position[-1, 0, 2] - target) < 5e-4  # [m], PD steady state
+    assert np.all(traj.contact_sticking)  # slip events = 0
+    assert np.min(traj.log["cone_margin"]) > 0.0 and np.min(measured_cone_margins(traj, 0.8)) > 0.0
+
+
+def test_fingers_close_onto_the_box_and_grasp_it():
+    """From 0.03 rad open, the approach torque closes the fingers; the grasp holds once they touch."""
+    hold = reference_hold()
+    q = hold.state.q.copy()
+    for finger in hold.hand.fingers:
+        q[hold.hand.joint_index(f"{finger}_proximal")] -= 0.03
+    controller = GraspForceController(hold.hand, BOX_MASS, mu=0.6, squeeze=3.0, approach_torque=0.1)
+    traj = hold.simulator.run(controller, 1.0, state=hold.simulator.initial_state(q), progress=False)
+    grasped = np.argmax(traj.log["contacts"] >= 2)
+    assert 0 < traj.t[grasped] < 0.1 and traj.log["contacts"][-1] == 3
+    late = traj.object_position[traj.t > 0.5, 0, 2]
+    assert np.max(np.abs(late - traj.object_position[grasped, 0, 2])) < 1e-4  # held where it was caught [m]
+    assert np.all(traj.contact_sticking[traj.contact_offsets[grasped + 50] :])  # no slip once grasped
+
+
+def test_grasp_controller_validates_its_inputs():
+    hand = bh.BarrettHand()
+    with pytest.raises(bh.InputError, match="object_mass"):
+        GraspForceController(hand, -1.0)
+    with pytest.raises(bh.InputError, match="kp"):
+        GraspForceController(hand, 0.2, kp=(0.0, 1.0))
+    with pytest.raises(bh.InputError, match="reference"):
+        GraspForceController(hand, 0.2, reference=Quintic(np.zeros(3), np.ones(3), 1.0))
+    controller = GraspForceController(hand, 0.2)
+    with pytest.raises(bh.InputError, match="object"):
+        controller(0.0, bh.State(0.0, hand.neutral(), np.zeros(8)))
