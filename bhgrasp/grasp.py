@@ -122,13 +122,8 @@ def hand_jacobian(hand: Hand, q: Any, points: Any, links: Sequence[str] | str, n
         raise InputError(f"`links` must be {count} frame name(s), one per contact, got {links!r}")
     frames = contact_frames(normals)
     result = np.empty((3 * count, hand.nv))
-    cache: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     for i, link in enumerate(links):
-        if link not in cache:
-            cache[link] = (hand.frame_jacobian(q, link), np.array(hand.frame_placement(q, link).translation))
-        jacobian, origin = cache[link]
-        point_jacobian = jacobian[:3] - _skew(points[i] - origin) @ jacobian[3:]
-        result[3 * i : 3 * i + 3] = frames[i].T @ point_jacobian
+        result[3 * i : 3 * i + 3] = frames[i].T @ hand.point_jacobian(q, link, points[i])
     return result
 
 
@@ -430,11 +425,6 @@ def _facets(value: Any) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 3:
         raise InputError(f"`facets` must be an integer >= 3, got {value!r}")
     return int(value)
-
-
-def _skew(vector: np.ndarray) -> np.ndarray:
-    x, y, z = vector
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
 def _skew_rows(vectors: np.ndarray) -> np.ndarray:

@@ -274,6 +274,17 @@ class Hand:
             require_name(finger, self.fingers, "finger")
         return self._jacobian(self._q(q), self._tip_ids[finger], 3)
 
+    def point_jacobian(self, q: Any, frame: str, point: Any) -> np.ndarray:
+        """Translational Jacobian (3, nv), world-aligned, of a point [m, world] fixed on ``frame``'s body at ``q``.
+
+        J_p = J_lin - skew(p - o) J_ang with the frame's spatial Jacobian at its origin o (the point moves with the
+        body: v_p = v_o + omega x (p - o)).
+        """
+        point = as_vector(point, "point", 3)
+        jacobian = self.frame_jacobian(q, frame)
+        origin = self.frame_placement(q, frame).translation  # world, base placement included
+        return jacobian[:3] - pin.skew(point - origin) @ jacobian[3:]
+
     def fingertip_bias_acceleration(self, q: Any, v: Any, finger: str) -> np.ndarray:
         """J_dot(q, v) v: the fingertip's classical acceleration at zero joint acceleration, world frame [m/s^2].
 

@@ -87,19 +87,9 @@ class ContactSensing:
         hand = self.hand
         torque = np.zeros(hand.nv)
         for k, (link, _) in enumerate(state.contact_bodies):
-            if link not in self._finger_of and not hand.model.existFrame(link):
-                continue
-            jacobian = hand.frame_jacobian(state.q, link)
-            origin = hand.frame_placement(state.q, link).translation
-            lever = state.contact_points[k] - origin
-            point_jacobian = jacobian[:3] - _skew(lever) @ jacobian[3:]
-            torque -= point_jacobian.T @ state.contact_forces[k]
+            if link in self._finger_of or hand.model.existFrame(link):
+                torque -= hand.point_jacobian(state.q, link, state.contact_points[k]).T @ state.contact_forces[k]
         return torque
-
-
-def _skew(vector: np.ndarray) -> np.ndarray:
-    x, y, z = vector
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
 __all__ = ["ContactSensing", "FingerContact"]

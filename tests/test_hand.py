@@ -222,3 +222,19 @@ def test_summary_lists_every_joint(barrett: bh.Hand) -> None:
     text = barrett.summary()
     assert all(joint in text for joint in barrett.joint_names)
     assert "1.2022 kg" in text
+
+
+def test_point_jacobian_matches_finite_differences_of_a_carried_point(barrett):
+    """A point fixed on a link, moved with the link: d/dt of its world position equals point_jacobian @ v."""
+    rng = np.random.default_rng(11)
+    hand = bh.BarrettHand(base_placement=pin.SE3(pin.exp3(np.array([0.3, -0.2, 0.5])), np.array([0.1, 0.0, 0.2])))
+    q, v = hand.random_configuration(rng), rng.normal(size=hand.nv)
+    link = "F1_distal_link"
+    offset = np.array([0.02, 0.005, -0.003])  # in the link frame
+
+    def carried(configuration):
+        return hand.frame_placement(configuration, link).act(offset)
+
+    h = 1e-7
+    expected = (carried(q + h * v) - carried(q - h * v)) / (2 * h)
+    np.testing.assert_allclose(hand.point_jacobian(q, link, carried(q)) @ v, expected, atol=1e-7)
