@@ -75,3 +75,28 @@ def test_grasp_controller_validates_its_inputs():
     controller = GraspForceController(hand, 0.2)
     with pytest.raises(bh.InputError, match="object"):
         controller(0.0, bh.State(0.0, hand.neutral(), np.zeros(8)))
+
+
+def finger_normal_forces(hand, traj, k):
+    """Measured normal force of each finger on the box at sample k [N] (sum over its contacts)."""
+    contacts = traj.contacts_at(k)
+    forces = np.zeros(len(hand.fingers))
+    for (link, _), force, normal in zip(contacts["bodies"], contacts["force"], contacts["normal"]):
+        finger = next(f for f in hand.fingers if link.startswith(f))
+        forces[hand.fingers.index(finger)] += force @ normal
+    return forces
+
+
+@pytest.mark.parametrize(("mass", "first_slip_free"), [(0.5, 0.0), (1.0, 1.0)])
+def test_unknown_object_mass_is_learnt_and_contact_forces_follow_the_qp(mass, first_slip_free):
+    """Nominal 0.2 kg, true 0.5 or 1.0 kg: the mass estimate converges, the box stays, forces match the QP's."""
+    hold = reference_hold(box_mass=mass)
+    controller = GraspForceController(hold.hand, BOX_MASS, mu=0.6, squeeze=3.0, mass_adaptation=5.0)
+    traj = hold.simulator.run(controller, 3.0, state=hold.state, progress=False)
+    assert traj.log["mass_estimate"][-1] == pytest.approx(mass, rel=0.02)
+    assert abs(traj.object_position[-1, 0, 2] - traj.object_position[0, 0, 2]) < 1e-4
+    after = traj.contact_offsets[np.searchsorted(traj.t, first_slip_free)]
+    assert np.all(traj.contact_sticking[after:])  # a 1 kg box slips only until the estimate catches up
+    measured = finger_normal_forces(hold.hand, traj, len(traj) - 1)
+    commanded = traj.log["commanded_normal"][-1]
+    np.testing.assert_allclose(measured, commanded, rtol=0.05)  # contact force error within 5 % after settling

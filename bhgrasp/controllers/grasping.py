@@ -34,9 +34,9 @@ from bhgrasp.trajectories import Reference
 class GraspForceController(Controller):
     """Hold or move a grasped object through contact forces computed by the friction-cone QP.
 
-    Logged: ``object_error`` (position [m], rotation vector [rad]), ``wrench`` (commanded), ``forces`` (QP,
-    contact frames, per touching finger stacked), ``feasible``, ``cone_margin`` (smallest mu f_n - |f_t| of the
-    commanded forces [N]), ``contacts`` (number of touching fingers).
+    Logged: ``object_error`` (position [m], rotation vector [rad]), ``wrench`` (commanded), ``commanded_normal``
+    (QP normal force per finger of the hand [N], 0 if not touching), ``feasible``, ``cone_margin`` (smallest
+    mu f_n - |f_t| of the commanded forces [N]), ``contacts`` (number of touching fingers), ``mass_estimate``.
     """
 
     def __init__(
@@ -51,6 +51,7 @@ class GraspForceController(Controller):
         kd: tuple[float, float] = (8.0, 0.01),
         approach_torque: float = 0.05,
         gravity: Any = (0.0, 0.0, -9.81),
+        mass_adaptation: float | None = None,
     ) -> None:
         """Set up the controller.
 
@@ -65,6 +66,11 @@ class GraspForceController(Controller):
             kp, kd: Object PD gains (translation [N/m], [N s/m]; rotation [N m/rad], [N m s/rad]).
             approach_torque: Closing torque [N m] on each finger's proximal-most non-spread joint before contact.
             gravity: World gravity [m/s^2].
+            mass_adaptation: ``None``, or the rate gamma [kg s / m^2 ...] of a Slotine-Li estimate of the object's
+                mass: with lambda = kp/kd, s = (v_d - v) + lambda (x_d - x), a_r = a_d + lambda (v_d - v), the
+                force is m_hat (a_r - g) + kd s and m_hat_dot = gamma (a_r - g) . s (the translational part of
+                the thesis' adaptive grasp law (5.46)-(5.60), whose V = m s^2 / 2 + (m_hat - m)^2 / (2 gamma)
+                is non-increasing for a rigid grasp).
         """
         super().__init__()
         if not isinstance(nominal, Hand):
@@ -83,6 +89,9 @@ class GraspForceController(Controller):
             raise InputError(f"`kp` must be positive and `kd` non-negative, got {kp}, {kd}")
         self.approach_torque = as_real(approach_torque, "approach_torque")
         self.gravity = as_vector(gravity, "gravity", 3)
+        self.mass_adaptation = None if mass_adaptation is None else as_positive(mass_adaptation, "mass_adaptation")
+        self.mass_estimate = self.object_mass
+        self._time: float | None = None
         self.sensing = ContactSensing(nominal)
         self._qps: dict[int, ContactForceQP] = {}
         self._hold: pin.SE3 | None = None
@@ -97,9 +106,11 @@ class GraspForceController(Controller):
         return torque
 
     def reset(self, state: State) -> None:
-        """Forget the held pose and the QP warm starts."""
+        """Forget the held pose, the QP warm starts and the mass estimate."""
         self._hold = None
         self._qps.clear()
+        self.mass_estimate = self.object_mass
+        self._time = None
 
     def __call__(self, t: float, state: State) -> np.ndarray:
         """Joint torques [N m]."""
@@ -121,9 +132,15 @@ class GraspForceController(Controller):
         links = [c[2] for c in touching.values()]
         gmap = grasp_map(points, normals, pose.translation)
         jacobian = hand_jacobian(hand, q, points, links, normals)
-        wrench = self._wrench(t, pose, twist)
+        dt = 0.0 if self._time is None else max(t - self._time, 0.0)
+        self._time = t
+        wrench = self._wrench(t, pose, twist, dt)
         result = self._qp(len(touching)).solve(gmap, wrench, np.tile([0.0, 0.0, self.squeeze], (len(touching), 1)))
         self._record(result, wrench)
+        commanded = np.zeros(len(hand.fingers))
+        for finger, force in zip(touching, result.forces):
+            commanded[hand.fingers.index(finger)] = force[2]
+        self.log["commanded_normal"] = commanded
         return tau + jacobian.T @ result.forces.ravel()
 
     def _touching(self, state: State) -> dict[str, tuple[np.ndarray, np.ndarray, str]]:
@@ -141,7 +158,7 @@ class GraspForceController(Controller):
             touching[finger] = (point, normal / np.linalg.norm(normal), state.contact_bodies[rows[0]][0])
         return touching
 
-    def _wrench(self, t: float, pose: pin.SE3, twist: np.ndarray) -> np.ndarray:
+    def _wrench(self, t: float, pose: pin.SE3, twist: np.ndarray, dt: float) -> np.ndarray:
         """Object wrench [N, N m] about the COM: weight + PD to the reference (+ its acceleration feed-forward)."""
         if self.reference is None:
             target, velocity, acceleration = self._hold, np.zeros(6), np.zeros(6)
@@ -151,8 +168,17 @@ class GraspForceController(Controller):
         position_error = target.translation - pose.translation
         rotation_error = pin.log3(target.rotation @ pose.rotation.T)  # world-frame rotation vector
         self.log["object_error"] = np.concatenate((-position_error, -rotation_error))
-        force = self.object_mass * (acceleration[:3] - self.gravity)
-        force += self.kp[0] * position_error + self.kd[0] * (velocity[:3] - twist[:3])
+        velocity_error = velocity[:3] - twist[:3]
+        if self.mass_adaptation is None:
+            force = self.object_mass * (acceleration[:3] - self.gravity)
+            force += self.kp[0] * position_error + self.kd[0] * velocity_error
+        else:
+            lam = self.kp[0] / self.kd[0]
+            sliding = velocity_error + lam * position_error
+            regressor = acceleration[:3] + lam * velocity_error - self.gravity
+            self.mass_estimate = max(self.mass_estimate + dt * self.mass_adaptation * (regressor @ sliding), 1e-6)
+            force = self.mass_estimate * regressor + self.kd[0] * sliding
+            self.log["mass_estimate"] = np.array(self.mass_estimate)
         torque = self.kp[1] * rotation_error + self.kd[1] * (velocity[3:] - twist[3:])
         return np.concatenate((force, torque))
 

@@ -40,8 +40,13 @@ class HoldScenario:
     hand: Hand
 
 
-def reference_hold(dt: float = 1e-3, stiffness: float = 1e4, damping: float | None = None) -> HoldScenario:
-    """Build the reference hold with contact stiffness [N/m] (damping default 2e-3 s * stiffness) and step [s]."""
+def reference_hold(
+    dt: float = 1e-3, stiffness: float = 1e4, damping: float | None = None, box_mass: float = BOX_MASS
+) -> HoldScenario:
+    """Build the reference hold: contact stiffness [N/m] (damping default 2e-3 s * stiffness), step [s], box mass [kg].
+
+    The built-in squeeze controller is sized for the default 0.2 kg box.
+    """
     hand = BarrettHand()
     q0 = hand.configuration(
         F1_proximal=1.2, F1_distal=0.3, F2_proximal=1.2, F2_distal=0.3, F3_proximal=1.2, F3_distal=0.3
@@ -49,7 +54,7 @@ def reference_hold(dt: float = 1e-3, stiffness: float = 1e4, damping: float | No
     tips = hand.fingertip_positions(q0)
     size = (0.08, 2 * (tips[2, 1] - 0.010) + 0.0004, 0.05)  # between the 10 mm pads, 0.2 mm preload each side
     height = float(tips[2, 2])
-    box = Box(size=size, mass=BOX_MASS, friction=0.8, pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, height])))
+    box = Box(size=size, mass=box_mass, friction=0.8, pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, height])))
     law = SpringDamper(stiffness=stiffness, damping=2e-3 * stiffness if damping is None else damping, friction=0.8)
     simulator = Simulator(Scene(hand, [box]), dt=dt, contact=law, actuation=FullyActuated(hand, damping=JOINT_DAMPING))
 
