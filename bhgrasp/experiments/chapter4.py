@@ -390,12 +390,11 @@ def three_fingers(scale: float = 1.0) -> Case:
     spring = SpringMounted(box, direction=(0, 0, 1), stiffness=1e3, damping=2.0 * np.sqrt(1e3 * OBJECT_MASS))
     contact = SpringDamper(stiffness=1e4, damping=50.0, friction=0.5)
     sim = Simulator(Scene(hand, objects=[spring]), dt=DT, contact=contact)
-    laws, normals = {}, {}
+    laws = {}
     for i, finger in enumerate(hand.fingers):
         normal = np.array([0.0, -np.sign(tips[i][1]), 0.0])
         setup = Setup(hand, finger, sim, q0, tips[i], normal, 0.0, contact.stiffness)
         setup.surface = probe_surface(setup)
-        normals[finger] = normal
         laws[finger] = ForceImpedance(Constant(tips[i]), normal, 15.0, setup.surface_point(), contact.stiffness,
                                       **F3_IMPEDANCE)  # fmt: skip
     controller = ImpedanceController(hand, laws, *F3_GAINS)
@@ -422,18 +421,25 @@ def impedance_fitness(
     scores 10 f_d.  Top-level and picklable, so generations can be evaluated in worker processes.
     """
     mass, stiffness = 10.0 ** np.asarray(log_params, dtype=float)
-    setup = _cached_f3_setup(spring)
-    law = ForceImpedance(Constant(setup.tip0), setup.normal, force, setup.surface_point(), setup.k_e,
-                         mass=mass, stiffness=stiffness, period=DT)  # fmt: skip
     try:
-        traj = run(setup, ImpedanceController(setup.hand, {"F3": law}, *F3_GAINS), duration)
+        _, measured = _discrete_fim(mass, stiffness, force, spring, duration)
     except SimulationDiverged:
         return 10.0 * force
-    measured = normal_force(setup, traj)
     touching = np.flatnonzero(measured > 0)
     if len(touching) == 0:
         return 10.0 * force
     return float(np.mean(np.abs(force - measured[touching[0] :])))  # (4.49) over the samples since contact
+
+
+def _discrete_fim(
+    mass: float, stiffness: float, force: float, spring: float, duration: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """F3 pressing the object under FIM with the Tustin filter: times [s] and normal force [N] of the run."""
+    setup = _cached_f3_setup(spring)
+    law = ForceImpedance(Constant(setup.tip0), setup.normal, force, setup.surface_point(), setup.k_e,
+                         mass=mass, stiffness=stiffness, period=DT)  # fmt: skip
+    traj = run(setup, ImpedanceController(setup.hand, {"F3": law}, *F3_GAINS), duration)
+    return traj.t, normal_force(setup, traj)
 
 
 @functools.lru_cache(maxsize=4)
@@ -473,13 +479,9 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
 
 
 def _evaluate(params: tuple[float, float], desired: float, spring: float = 500.0) -> tuple[ForceMetrics, float]:
-    setup = _cached_f3_setup(spring)
-    law = ForceImpedance(Constant(setup.tip0), setup.normal, desired, setup.surface_point(), setup.k_e,
-                         mass=params[0], stiffness=params[1], period=DT)  # fmt: skip
-    traj = run(setup, ImpedanceController(setup.hand, {"F3": law}, *F3_GAINS), 1.5)
-    force = normal_force(setup, traj)
+    t, force = _discrete_fim(params[0], params[1], desired, spring, 1.5)
     start = int(np.argmax(force > 0))
-    return force_metrics(traj.t, force, desired), float(np.mean(np.abs(desired - force[start:])))
+    return force_metrics(t, force, desired), float(np.mean(np.abs(desired - force[start:])))
 
 
 CASES: dict[str, Callable[..., Case]] = {
