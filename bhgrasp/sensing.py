@@ -8,7 +8,7 @@ contact forces produce (thesis (4.8), tau_d = J_f^T F_c).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -25,12 +25,16 @@ class FingerContact:
         normal_force: Sum of the normal components n . F [N] (>= 0 while pressing).
         normal: Force-weighted mean unit normal from finger to object, or zeros without contact.
         count: Number of contact points.
+        point: Force-weighted mean contact point [m] of the pressing contacts (zeros without any).
+        link: Link frame of the contact that presses hardest (``None`` without any).
     """
 
     force: np.ndarray
     normal_force: float
     normal: np.ndarray
     count: int
+    point: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    link: str | None = None
 
     @property
     def touching(self) -> bool:
@@ -72,10 +76,13 @@ class ContactSensing:
             forces, normals = state.contact_forces[rows], state.contact_normals[rows]
             components = np.einsum("ij,ij->i", forces, normals)
             weights = np.maximum(components, 0.0)
-            mean = (weights @ normals) if weights.sum() > 0.0 else normals.sum(axis=0)
+            pressing = weights.sum() > 0.0
+            mean = (weights @ normals) if pressing else normals.sum(axis=0)
             norm = np.linalg.norm(mean)
             normal = mean / norm if norm > 0.0 else np.zeros(3)
-            result[finger] = FingerContact(forces.sum(axis=0), float(components.sum()), normal, len(rows))
+            point = weights @ state.contact_points[rows] / weights.sum() if pressing else np.zeros(3)
+            link = state.contact_bodies[rows[int(np.argmax(weights))]][0] if pressing else None
+            result[finger] = FingerContact(forces.sum(axis=0), float(components.sum()), normal, len(rows), point, link)
         return result
 
     def reaction_torques(self, state: State) -> np.ndarray:

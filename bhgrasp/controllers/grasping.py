@@ -144,19 +144,12 @@ class GraspForceController(Controller):
         return tau + jacobian.T @ result.forces.ravel()
 
     def _touching(self, state: State) -> dict[str, tuple[np.ndarray, np.ndarray, str]]:
-        """Per touching finger: force-weighted contact point, normal (finger -> object) and the link it is on."""
-        grouped: dict[str, list[int]] = {}
-        for k, (link, _) in enumerate(state.contact_bodies):
-            finger = self.sensing.finger_of(link)
-            if finger is not None and state.contact_forces[k] @ state.contact_normals[k] > 0.0:
-                grouped.setdefault(finger, []).append(k)
-        touching = {}
-        for finger, rows in grouped.items():
-            weights = np.einsum("ij,ij->i", state.contact_forces[rows], state.contact_normals[rows])
-            point = weights @ state.contact_points[rows] / weights.sum()
-            normal = weights @ state.contact_normals[rows]
-            touching[finger] = (point, normal / np.linalg.norm(normal), state.contact_bodies[rows[0]][0])
-        return touching
+        """Per pressing finger: force-weighted contact point, normal (finger -> object) and the link it is on."""
+        return {
+            finger: (contact.point, contact.normal, contact.link)
+            for finger, contact in self.sensing.fingers(state).items()
+            if contact.link is not None
+        }
 
     def _wrench(self, t: float, pose: pin.SE3, twist: np.ndarray, dt: float) -> np.ndarray:
         """Object wrench [N, N m] about the COM: weight + PD to the reference (+ its acceleration feed-forward)."""
