@@ -138,9 +138,9 @@ class WorkspaceComputedTorque(Controller):
             dyn = workspace_dynamics(hand, q, v, finger)
             basis = dyn.basis
             error = positions[hand.fingers.index(finger)] - x_d
-            error_dot = hand.fingertip_jacobian(q, finger) @ v - xd_d
+            error_dot = dyn.jacobian @ v[index] - basis.T @ xd_d  # task coordinates: J_t q_dot_f = B^T x_dot
             kp, kv = basis.T @ self.kp @ basis, basis.T @ self.kv @ basis
-            command = basis.T @ xdd_d - kv @ (basis.T @ error_dot) - kp @ (basis.T @ error)
+            command = basis.T @ xdd_d - kv @ error_dot - kp @ (basis.T @ error)
             tau[index] = dyn.jacobian.T @ (dyn.mass @ command + dyn.coriolis + dyn.gravity)
             targets.append(x_d)
             errors.append(error)
