@@ -1,4 +1,4 @@
-"""Command line: ``bhgrasp demo`` (the main job; headless by default), ``bhgrasp experiments`` and ``bhgrasp info``."""
+"""Command line: ``bhgrasp demo`` (the main job: a grasp, headless), ``tour``, ``experiments`` and ``info``."""
 
 from __future__ import annotations
 
@@ -9,18 +9,33 @@ from pathlib import Path
 
 import numpy as np
 
+from bhgrasp.experiments.grasp_demo import CONTROLLERS
+
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``bhgrasp`` command."""
     parser = argparse.ArgumentParser(prog="bhgrasp", description="Barrett hand modelling, simulation and control.")
     commands = parser.add_subparsers(dest="command", required=True)
     demo = commands.add_parser(
-        "demo", help="load the Barrett hand, print its model, plot its workspace, simulate a three-finger hold"
+        "demo",
+        help="the main job: grasp a box of unknown mass, lift it 10 mm and turn it 0.1 rad (headless); "
+        "prints the pose and force errors, slip events and time, writes a figure and the trajectory",
     )
-    demo.add_argument("--output", type=Path, default=Path("bhgrasp_demo"), help="folder for the figure")
-    demo.add_argument("--samples", type=int, default=20_000, help="workspace samples per finger")
-    demo.add_argument("--seed", type=int, default=0, help="random seed of the workspace sampling")
-    demo.add_argument("--hold", type=float, default=1.0, help="simulated duration of the grasp hold [s]")
+    demo.add_argument("--output", type=Path, default=Path("bhgrasp_demo"), help="folder for figure and trajectory")
+    demo.add_argument("--controller", choices=CONTROLLERS, default="smc-adaptive", help="object-space controller")
+    demo.add_argument("--mass", type=float, default=0.6, help="true box mass [kg]")
+    demo.add_argument("--estimate", type=float, default=0.3, help="mass the controller starts from [kg]")
+    demo.add_argument(
+        "--distribution", choices=["qp", "pinv"], default="qp", help="contact forces: friction-cone QP or G^+ (5.45)"
+    )
+    demo.add_argument("--duration", type=float, default=3.0, help="simulated time [s]")
+    tour = commands.add_parser(
+        "tour", help="print the hand model, check IK, plot the workspace, simulate a three-finger hold"
+    )
+    tour.add_argument("--output", type=Path, default=Path("bhgrasp_tour"), help="folder for the figure")
+    tour.add_argument("--samples", type=int, default=20_000, help="workspace samples per finger")
+    tour.add_argument("--seed", type=int, default=0, help="random seed of the workspace sampling")
+    tour.add_argument("--hold", type=float, default=1.0, help="simulated duration of the grasp hold [s]")
     commands.add_parser("info", help="print the hand summary only")
     experiments = commands.add_parser("experiments", help="reproduce a thesis chapter: report (markdown) and figures")
     experiments.add_argument(
@@ -39,10 +54,24 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         print(BarrettHand().summary())
         return 0
-    return _demo(args.output, args.samples, args.seed, args.hold)
+    if args.command == "demo":
+        return _grasp_demo(args)
+    return _tour(args.output, args.samples, args.seed, args.hold)
 
 
-def _demo(output: Path, samples: int, seed: int, duration: float) -> int:
+def _grasp_demo(args: argparse.Namespace) -> int:
+    from bhgrasp import BarrettHand
+    from bhgrasp.experiments.grasp_demo import run_grasp_demo, save_demo
+
+    print(f"simulating {args.duration:g} s: approach, squeeze, lift and turn a {args.mass:g} kg box ...")
+    result = run_grasp_demo(args.mass, args.estimate, args.controller, args.duration, distribution=args.distribution)
+    print(result.summary())
+    for path in save_demo(result, BarrettHand(), args.output):
+        print(f"wrote {path}")
+    return 0
+
+
+def _tour(output: Path, samples: int, seed: int, duration: float) -> int:
     import bhgrasp as bh
     from bhgrasp.experiments.chapter2 import workspace_table
 

@@ -39,6 +39,7 @@ class GraspDynamics:
         joint_map: P = J_h^+ G^T (nv, 6): joint velocities of an object twist; ``P.T @ tau`` is F of (5.25).
         grasp_map: G (6, 3n) at the centre of mass.
         hand_jacobian: J_h (3n, nv).
+        joint_map_rate: P_dot (nv, 6) along the current motion [1/s].
     """
 
     mass: np.ndarray
@@ -47,6 +48,7 @@ class GraspDynamics:
     joint_map: np.ndarray
     grasp_map: np.ndarray
     hand_jacobian: np.ndarray
+    joint_map_rate: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -133,7 +135,7 @@ def grasp_dynamics(
     mass = mass_o + p_map.T @ mass_h @ p_map
     coriolis = coriolis_o + p_map.T @ (mass_h @ p_dot + coriolis_h @ p_map)
     return GraspDynamics(0.5 * (mass + mass.T), coriolis, gravity_o + p_map.T @ hand.gravity_torques(q), p_map, grasp,
-                         jacobian)  # fmt: skip
+                         jacobian, p_dot)  # fmt: skip
 
 
 def grasp_mobility(grasp: Any, jacobian: Any, tolerance: float = 1e-9) -> np.ndarray:

@@ -43,8 +43,19 @@ class Recorder:
         for name in self.contacts:
             self.contacts[name].append(getattr(contacts, name))
         if isinstance(log, dict):
-            for name, value in log.items():
-                self.log.setdefault(name, []).append(np.array(value, dtype=float))
+            self._add_log(log)
+
+    def _add_log(self, log: dict) -> None:
+        """Append the controller's log; a key absent from a sample (before it first appears, or skipped) is NaN."""
+        count = len(self.t)
+        for name, value in log.items():
+            value = np.array(value, dtype=float)
+            values = self.log.setdefault(name, [])
+            values.extend(np.full(value.shape, np.nan) for _ in range(count - 1 - len(values)))
+            values.append(value)
+        for values in self.log.values():
+            if len(values) < count:
+                values.append(np.full(values[-1].shape, np.nan))
 
     def trajectory(self) -> Trajectory:
         """The recorded run."""

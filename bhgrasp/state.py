@@ -82,7 +82,8 @@ class Trajectory:
         contact_offsets: (N + 1,) contacts of sample k are rows ``contact_offsets[k]:contact_offsets[k + 1]``.
         contact_pair, contact_point, contact_normal, contact_depth, contact_force, contact_sticking: flat
             per-contact arrays (pair index, [m], unit, [m], force on body b [N], bool).
-        log: Controller internals, name -> (N, ...) array.
+        log: Controller internals, name -> (N, ...) array; NaN in the samples where the controller did not log
+            that name (e.g. a grasp controller's keys before a supervisor starts it).
         joint_names, object_names: Labels; pair_bodies: (n_pairs, 2) body names of each collision pair.
     """
 

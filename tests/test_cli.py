@@ -1,4 +1,4 @@
-"""The main job as a user runs it: ``bhgrasp demo`` prints the model and writes a real PNG figure."""
+"""The command line as a user runs it: the grasp demo, the tour, the experiments, errors."""
 
 from __future__ import annotations
 
@@ -11,8 +11,23 @@ import pytest
 from bhgrasp.cli import main
 
 
-def test_demo_prints_the_hand_and_writes_the_workspace_figure(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    assert main(["demo", "--output", str(tmp_path), "--samples", "500", "--seed", "3", "--hold", "0.5"]) == 0
+def test_demo_grasps_lifts_and_turns_the_box_without_slip(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """The README's main job: 0.6 kg box, controller told 0.3 kg; it learns the mass and moves the box, no slip."""
+    assert main(["demo", "--output", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    lines = {line.split(":")[0].strip(): line for line in out.splitlines()}
+    assert "estimated 0.60" in out.splitlines()[1]  # mass learnt to 1e-2 kg
+    assert "slip events: 0 " in lines["slip events"]
+    position_mm, rotation_mrad = (float(word) for word in lines["object pose error"].split()[3:6:2])
+    assert position_mm < 0.1 and rotation_mrad < 1.0  # 10 mm lift and 0.1 rad turn reached
+    assert float(lines["contact force error"].split()[3]) < 5.0  # [%] after settling
+    figure = tmp_path / "grasp_demo.png"
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and figure.stat().st_size > 30_000
+    assert (tmp_path / "grasp_demo.npz").stat().st_size > 0
+
+
+def test_tour_prints_the_hand_and_writes_the_workspace_figure(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    assert main(["tour", "--output", str(tmp_path), "--samples", "500", "--seed", "3", "--hold", "0.5"]) == 0
     out = capsys.readouterr().out
     assert "BarrettHand BH8-280: 8 joints, 3 fingers, 1.2022 kg" in out
     assert "closed-form IK of F3 back from that point: [1. 0.] rad" in out

@@ -15,6 +15,8 @@ only compensates gravity and closes each finger with ``approach_torque``.
 
 from __future__ import annotations
 
+from abc import abstractmethod
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -23,20 +25,205 @@ import pinocchio as pin
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.controllers.base import Controller
 from bhgrasp.errors import InputError
-from bhgrasp.grasp import grasp_map, hand_jacobian
-from bhgrasp.grasp_forces import ContactForceQP, ContactForceResult
+from bhgrasp.grasp import contact_frames, grasp_map, hand_jacobian
+from bhgrasp.grasp_forces import ContactForceQP, cone_violations, pseudo_inverse_forces
 from bhgrasp.hand import Hand
-from bhgrasp.sensing import ContactSensing
+from bhgrasp.sensing import ContactSensing, FingerContact
 from bhgrasp.state import State
 from bhgrasp.trajectories import Reference
 
 
-class GraspForceController(Controller):
-    """Hold or move a grasped object through contact forces computed by the friction-cone QP.
+class ObjectGraspController(Controller):
+    """Base of the object-space grasp controllers: contacts, grasp map, reference, and the force distribution.
 
-    Logged: ``object_error`` (position [m], rotation vector [rad]), ``wrench`` (commanded), ``commanded_normal``
-    (QP normal force per finger of the hand [N], 0 if not touching), ``feasible``, ``cone_margin`` (smallest
-    mu f_n - |f_t| of the commanded forces [N]), ``contacts`` (number of touching fingers), ``mass_estimate``.
+    With two or more touching fingers, a subclass's :meth:`grasp_torques` turns the object pose error into joint
+    torques; before that every finger is closed with ``approach_torque`` on top of gravity compensation.  The
+    wrench the contacts must exert is distributed either by the friction-cone QP (``distribution="qp"``, forces
+    inside the cones, closest to ``squeeze`` along every normal) or by the thesis' pseudo-inverse form (5.45)
+    (``"pinv"``: f = G^+ w + (I - G^+ G) f_squeeze, no cone constraint; kept as the baseline).
+
+    Logged: ``object_error`` (position [m], rotation vector [rad], world), ``wrench`` (commanded on the object),
+    ``commanded_normal`` (normal force per finger of the hand [N], 0 if not touching), ``feasible``,
+    ``cone_margin`` (smallest mu f_n - |f_t| of the commanded forces [N], negative = outside the assumed cone),
+    ``contacts`` (number of touching fingers).
+    """
+
+    DISTRIBUTIONS = ("qp", "pinv")
+
+    def __init__(
+        self,
+        nominal: Hand,
+        reference: Reference | None = None,
+        mu: float = 0.5,
+        squeeze: float = 3.0,
+        min_normal_force: float = 0.5,
+        approach_torque: float = 0.05,
+        gravity: Any = (0.0, 0.0, -9.81),
+        distribution: str = "qp",
+    ) -> None:
+        """Set up the shared parts.
+
+        Args:
+            nominal: The controller's hand model.
+            reference: Desired object pose as a Reference of size 6 (COM position [m], rotation vector [rad] of
+                world <- body, both world); ``None`` holds the pose found when the grasp is first established.
+            mu: Friction coefficient assumed by the QP (use a margin below the true one).
+            squeeze: Desired normal force per contact [N] (the internal force the distribution stays closest to).
+            min_normal_force: Lower bound of every normal force in the QP [N].
+            approach_torque: Closing torque [N m] on each finger's proximal-most non-spread joint before contact.
+            gravity: World gravity [m/s^2].
+            distribution: ``"qp"`` (friction-cone QP) or ``"pinv"`` (thesis (5.45), the baseline).
+        """
+        super().__init__()
+        if not isinstance(nominal, Hand):
+            raise InputError(f"`nominal` must be a bhgrasp Hand, got {nominal!r}")
+        if reference is not None and (not isinstance(reference, Reference) or reference.size != 6):
+            raise InputError(f"`reference` must be a Reference of size 6 (position, rotation vector), got {reference}")
+        if distribution not in self.DISTRIBUTIONS:
+            raise InputError(f"`distribution` must be one of {self.DISTRIBUTIONS}, got {distribution!r}")
+        self.nominal = nominal
+        self.reference = reference
+        self.mu = as_positive(mu, "mu")
+        self.squeeze = as_positive(squeeze, "squeeze")
+        self.min_normal_force = as_real(min_normal_force, "min_normal_force")
+        self.approach_torque = as_real(approach_torque, "approach_torque")
+        self.gravity = as_vector(gravity, "gravity", 3)
+        self.distribution = distribution
+        self.sensing = ContactSensing(nominal)
+        self._qps: dict[int, ContactForceQP] = {}
+        self._hold: pin.SE3 | None = None
+        self._time: float | None = None
+        self._closing = self._closing_torque()
+
+    def _closing_torque(self) -> np.ndarray:
+        torque = np.zeros(self.nominal.nv)
+        for finger in self.nominal.fingers:
+            joints = [j for j in self.nominal.finger_joints(finger) if "spread" not in j]
+            if joints:
+                torque[self.nominal.joint_index(joints[0])] = self.approach_torque
+        return torque
+
+    def reset(self, state: State) -> None:
+        """Forget the held pose, the QP warm starts and the clock."""
+        self._hold = None
+        self._qps.clear()
+        self._time = None
+
+    def __call__(self, t: float, state: State) -> np.ndarray:
+        """Joint torques [N m]."""
+        hand = self.nominal
+        q = as_vector(state.q, "state.q", hand.nq)
+        if not state.object_poses:
+            raise InputError(f"{type(self).__name__} needs the object's pose in the state (a scene with an object)")
+        touching = self.touching(state)
+        self.log["contacts"] = np.array(float(len(touching)))
+        if len(touching) < 2:
+            self._hold = None
+            self.log["commanded_normal"] = np.zeros(len(hand.fingers))
+            return hand.gravity_torques(q) + self._closing
+        pose = state.object_poses[0]
+        if self._hold is None:
+            self._hold = pin.SE3(pose)
+        dt = 0.0 if self._time is None else t - self._time
+        if dt < 0.0:
+            raise InputError(f"time went backwards: t = {t} after {self._time}; call reset() to restart")
+        self._time = t
+        contacts = GraspContacts(
+            points=np.array([c.point for c in touching.values()]),
+            normals=np.array([c.normal for c in touching.values()]),
+            links=[c.link for c in touching.values()],
+            fingers=list(touching),
+            forces=np.array([c.force for c in touching.values()]),
+        )
+        tau = self.grasp_torques(t, dt, state, contacts)
+        if not np.all(np.isfinite(tau)):
+            raise InputError(f"{type(self).__name__} produced non-finite torques {tau} at t = {t} s")
+        return tau
+
+    def touching(self, state: State) -> dict[str, FingerContact]:
+        """The sensed contacts of the fingers that press on the object, by finger."""
+        return {f: c for f, c in self.sensing.fingers(state).items() if c.link is not None}
+
+    @abstractmethod
+    def grasp_torques(self, t: float, dt: float, state: State, contacts: GraspContacts) -> np.ndarray:
+        """Joint torques [N m] once two or more fingers touch; ``dt`` [s] since the previous grasp step."""
+
+    def target(self, t: float) -> tuple[pin.SE3, np.ndarray, np.ndarray]:
+        """Desired object pose, twist (v, omega) [m/s, rad/s] and its derivative, world."""
+        if self.reference is None:
+            return self._hold, np.zeros(6), np.zeros(6)
+        sample, velocity, acceleration = self.reference(t)
+        return pin.SE3(pin.exp3(sample[3:]), sample[:3]), velocity, acceleration
+
+    def errors(self, t: float, state: State) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Pose error e = (x - x_d, log(R R_d^T)), twist error e_dot, desired twist and its derivative (world)."""
+        pose, twist = state.object_poses[0], np.asarray(state.object_twists[0], dtype=float)
+        target, velocity, acceleration = self.target(t)
+        error = np.concatenate((pose.translation - target.translation, pin.log3(pose.rotation @ target.rotation.T)))
+        self.log["object_error"] = error
+        return error, twist - velocity, velocity, acceleration
+
+    def distribute(self, contacts: GraspContacts, wrench: np.ndarray) -> np.ndarray:
+        """Contact forces (n, 3) (contact frames: t1, t2, n) [N] that exert ``wrench`` about the object's COM."""
+        n = len(contacts.fingers)
+        gmap = contacts.grasp_map
+        desired = np.tile([0.0, 0.0, self.squeeze], (n, 1))
+        if self.distribution == "qp":
+            if n not in self._qps:
+                self._qps[n] = ContactForceQP(n, self.mu, min_normal_force=self.min_normal_force)
+            result = self._qps[n].solve(gmap, wrench, desired)
+            forces, feasible = result.forces, result.feasible
+        else:
+            forces, feasible = pseudo_inverse_forces(gmap, wrench, desired), True
+        self.log["wrench"] = wrench
+        self.log["feasible"] = np.array(float(feasible))
+        self.log["cone_margin"] = np.array(-np.max(cone_violations(forces, self.mu)))
+        commanded = np.zeros(len(self.nominal.fingers))
+        for finger, force in zip(contacts.fingers, forces):
+            commanded[self.nominal.fingers.index(finger)] = force[2]
+        self.log["commanded_normal"] = commanded
+        return forces
+
+
+@dataclass
+class GraspContacts:
+    """One sensed contact per touching finger (world frame), with the grasp map and hand Jacobian on demand.
+
+    Attributes:
+        points: (n, 3) force-weighted contact points [m]; normals: (n, 3) unit normals from finger to object;
+        links: the hand link of each contact; fingers: the finger names; forces: (n, 3) measured forces on the
+        object [N] (world).  ``reference`` [m] (the object's COM) must be set before :attr:`grasp_map` is read.
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    links: list[str]
+    fingers: list[str]
+    forces: np.ndarray
+    reference: np.ndarray | None = None
+
+    @property
+    def grasp_map(self) -> np.ndarray:
+        """G (6, 3n) about :attr:`reference`."""
+        if self.reference is None:
+            raise InputError("GraspContacts.reference (the object's COM) is not set")
+        return grasp_map(self.points, self.normals, self.reference)
+
+    def jacobian(self, hand: Hand, q: np.ndarray) -> np.ndarray:
+        """J_h (3n, nv) in contact coordinates."""
+        return hand_jacobian(hand, q, self.points, self.links, self.normals)
+
+    def measured(self) -> np.ndarray:
+        """Measured forces in contact coordinates (t1, t2, n), (n, 3) [N]."""
+        return np.einsum("nij,ni->nj", contact_frames(self.normals), self.forces)
+
+
+class GraspForceController(ObjectGraspController):
+    """Hold or move a grasped object: object PD + weight feed-forward, contact forces from the distribution.
+
+    tau = g(q) + J_h^T f with G f = w: the structure of (5.32) without the reduced model's inertia (the BH8-280's
+    links weigh tens of grams; :class:`~bhgrasp.controllers.object_space.ObjectSpaceController` has it).  Also
+    logs ``mass_estimate``.
     """
 
     def __init__(
@@ -52,138 +239,52 @@ class GraspForceController(Controller):
         approach_torque: float = 0.05,
         gravity: Any = (0.0, 0.0, -9.81),
         mass_adaptation: float | None = None,
+        distribution: str = "qp",
     ) -> None:
-        """Set up the controller.
+        """Set up the controller (see :class:`ObjectGraspController` for the shared arguments).
 
         Args:
             nominal: The controller's hand model.
             object_mass: Mass [kg] the controller assumes for the object (it may be wrong).
-            reference: Desired object pose as a Reference of size 6 (COM position [m], rotation vector [rad] of
-                world <- body, both world); ``None`` holds the pose found when the grasp is first established.
-            mu: Friction coefficient assumed by the QP (use a margin below the true one).
-            squeeze: Desired normal force per contact [N] (the internal force the QP stays closest to).
-            min_normal_force: Lower bound of every normal force [N].
+            reference, mu, squeeze, min_normal_force, approach_torque, gravity, distribution: As in the base.
             kp, kd: Object PD gains (translation [N/m], [N s/m]; rotation [N m/rad], [N m s/rad]).
-            approach_torque: Closing torque [N m] on each finger's proximal-most non-spread joint before contact.
-            gravity: World gravity [m/s^2].
             mass_adaptation: ``None``, or the rate gamma [kg s / m^2 ...] of a Slotine-Li estimate of the object's
                 mass: with lambda = kp/kd, s = (v_d - v) + lambda (x_d - x), a_r = a_d + lambda (v_d - v), the
                 force is m_hat (a_r - g) + kd s and m_hat_dot = gamma (a_r - g) . s (the translational part of
                 the thesis' adaptive grasp law (5.46)-(5.60), whose V = m s^2 / 2 + (m_hat - m)^2 / (2 gamma)
                 is non-increasing for a rigid grasp).
         """
-        super().__init__()
-        if not isinstance(nominal, Hand):
-            raise InputError(f"`nominal` must be a bhgrasp Hand, got {nominal!r}")
-        if reference is not None and (not isinstance(reference, Reference) or reference.size != 6):
-            raise InputError(f"`reference` must be a Reference of size 6 (position, rotation vector), got {reference}")
-        self.nominal = nominal
+        super().__init__(nominal, reference, mu, squeeze, min_normal_force, approach_torque, gravity, distribution)
         self.object_mass = as_positive(object_mass, "object_mass")
-        self.reference = reference
-        self.mu = as_real(mu, "mu")
-        self.squeeze = as_real(squeeze, "squeeze")
-        self.min_normal_force = as_real(min_normal_force, "min_normal_force")
         self.kp = as_vector(kp, "kp", 2)
         self.kd = as_vector(kd, "kd", 2)
         if np.any(self.kp <= 0) or np.any(self.kd < 0):
             raise InputError(f"`kp` must be positive and `kd` non-negative, got {kp}, {kd}")
-        self.approach_torque = as_real(approach_torque, "approach_torque")
-        self.gravity = as_vector(gravity, "gravity", 3)
         self.mass_adaptation = None if mass_adaptation is None else as_positive(mass_adaptation, "mass_adaptation")
         self.mass_estimate = self.object_mass
-        self._time: float | None = None
-        self.sensing = ContactSensing(nominal)
-        self._qps: dict[int, ContactForceQP] = {}
-        self._hold: pin.SE3 | None = None
-        self._closing = self._closing_torque()
-
-    def _closing_torque(self) -> np.ndarray:
-        torque = np.zeros(self.nominal.nv)
-        for finger in self.nominal.fingers:
-            joints = [j for j in self.nominal.finger_joints(finger) if "spread" not in j]
-            if joints:
-                torque[self.nominal.joint_index(joints[0])] = self.approach_torque
-        return torque
 
     def reset(self, state: State) -> None:
         """Forget the held pose, the QP warm starts and the mass estimate."""
-        self._hold = None
-        self._qps.clear()
+        super().reset(state)
         self.mass_estimate = self.object_mass
-        self._time = None
 
-    def __call__(self, t: float, state: State) -> np.ndarray:
-        """Joint torques [N m]."""
-        hand = self.nominal
-        q = as_vector(state.q, "state.q", hand.nq)
-        tau = hand.gravity_torques(q)
-        if not state.object_poses:
-            raise InputError("GraspForceController needs the object's pose in the state (a scene with an object)")
-        touching = self._touching(state)
-        self.log["contacts"] = np.array(float(len(touching)))
-        if len(touching) < 2:
-            self._hold = None
-            return tau + self._closing
-        pose, twist = state.object_poses[0], np.asarray(state.object_twists[0], dtype=float)
-        if self._hold is None:
-            self._hold = pin.SE3(pose)
-        points = np.array([c[0] for c in touching.values()])
-        normals = np.array([c[1] for c in touching.values()])
-        links = [c[2] for c in touching.values()]
-        gmap = grasp_map(points, normals, pose.translation)
-        jacobian = hand_jacobian(hand, q, points, links, normals)
-        dt = 0.0 if self._time is None else max(t - self._time, 0.0)
-        self._time = t
-        wrench = self._wrench(t, pose, twist, dt)
-        result = self._qp(len(touching)).solve(gmap, wrench, np.tile([0.0, 0.0, self.squeeze], (len(touching), 1)))
-        self._record(result, wrench)
-        commanded = np.zeros(len(hand.fingers))
-        for finger, force in zip(touching, result.forces):
-            commanded[hand.fingers.index(finger)] = force[2]
-        self.log["commanded_normal"] = commanded
-        return tau + jacobian.T @ result.forces.ravel()
-
-    def _touching(self, state: State) -> dict[str, tuple[np.ndarray, np.ndarray, str]]:
-        """Per pressing finger: force-weighted contact point, normal (finger -> object) and the link it is on."""
-        return {
-            finger: (contact.point, contact.normal, contact.link)
-            for finger, contact in self.sensing.fingers(state).items()
-            if contact.link is not None
-        }
-
-    def _wrench(self, t: float, pose: pin.SE3, twist: np.ndarray, dt: float) -> np.ndarray:
-        """Object wrench [N, N m] about the COM: weight + PD to the reference (+ its acceleration feed-forward)."""
-        if self.reference is None:
-            target, velocity, acceleration = self._hold, np.zeros(6), np.zeros(6)
-        else:
-            sample, velocity, acceleration = self.reference(t)
-            target = pin.SE3(pin.exp3(sample[3:]), sample[:3])
-        position_error = target.translation - pose.translation
-        rotation_error = pin.log3(target.rotation @ pose.rotation.T)  # world-frame rotation vector
-        self.log["object_error"] = np.concatenate((-position_error, -rotation_error))
-        velocity_error = velocity[:3] - twist[:3]
+    def grasp_torques(self, t: float, dt: float, state: State, contacts: GraspContacts) -> np.ndarray:
+        """Tau = g(q) + J_h^T f, f distributing the object PD wrench."""
+        contacts.reference = state.object_poses[0].translation
+        error, velocity_error, _, acceleration = self.errors(t, state)
         if self.mass_adaptation is None:
             force = self.object_mass * (acceleration[:3] - self.gravity)
-            force += self.kp[0] * position_error + self.kd[0] * velocity_error
+            force -= self.kp[0] * error[:3] + self.kd[0] * velocity_error[:3]
         else:
             lam = self.kp[0] / self.kd[0]
-            sliding = velocity_error + lam * position_error
-            regressor = acceleration[:3] + lam * velocity_error - self.gravity
+            sliding = -(velocity_error[:3] + lam * error[:3])
+            regressor = acceleration[:3] - lam * velocity_error[:3] - self.gravity
             self.mass_estimate = max(self.mass_estimate + dt * self.mass_adaptation * (regressor @ sliding), 1e-6)
             force = self.mass_estimate * regressor + self.kd[0] * sliding
             self.log["mass_estimate"] = np.array(self.mass_estimate)
-        torque = self.kp[1] * rotation_error + self.kd[1] * (velocity[3:] - twist[3:])
-        return np.concatenate((force, torque))
-
-    def _qp(self, n: int) -> ContactForceQP:
-        if n not in self._qps:
-            self._qps[n] = ContactForceQP(n, self.mu, min_normal_force=self.min_normal_force)
-        return self._qps[n]
-
-    def _record(self, result: ContactForceResult, wrench: np.ndarray) -> None:
-        self.log["wrench"] = wrench
-        self.log["feasible"] = np.array(float(result.feasible))
-        self.log["cone_margin"] = np.array(-result.cone_violation)
+        torque = -self.kp[1] * error[3:] - self.kd[1] * velocity_error[3:]
+        forces = self.distribute(contacts, np.concatenate((force, torque)))
+        return self.nominal.gravity_torques(state.q) + contacts.jacobian(self.nominal, state.q).T @ forces.ravel()
 
 
-__all__ = ["GraspForceController"]
+__all__ = ["GraspContacts", "GraspForceController", "ObjectGraspController"]

@@ -1,0 +1,199 @@
+"""The SMC-adaptive grasp controller of thesis 5.6, (5.46)-(5.60): object and hand parameters learnt online.
+
+Object level (world, COM): e = (x - x_d, log(R R_d^T)), v_r = X_dot_d - rho e (5.46), a_r = X_dd_d - rho e_dot,
+s_o = X_dot - v_r.  The desired object wrench is F_do = Y_o(R, omega, v_r, a_r) sigma_o - k_o s_o (5.49)-(5.51) with
+sigma_o = (m, I_xx, I_xy, I_xz, I_yy, I_yz, I_zz) (body-frame inertia about the COM) and
+
+    Y_o sigma_o = [m (a_r,v - g);  I_w alpha_r + C(omega, I_w) omega_r],
+    C(omega, I_w) = (skew(omega) I_w - I_w skew(omega) - skew(I_w omega)) / 2,   I_w = R I R^T,
+
+a Coriolis form for which M_o_dot - 2 C_o = skew(I_w omega) is skew-symmetric, as the Lyapunov argument (5.63)
+needs.  The estimate follows sigma_o_dot = -Gamma_o Y_o^T s_o (the thesis prints (5.52) without the sign and with
+Gamma^-1; with s_o = X_dot - v_r the minus sign is the one that makes V_dot <= 0).  The desired contact forces are
+F_dc = QP(G, F_do) (inside the friction cones, closest to the squeeze) or the thesis' (5.53) G^+ F_do + (I - G^+ G)
+f_squeeze (``distribution="pinv"``).
+
+Finger level: with P = J_h^+ G^T (J_h^-1 G^T of (5.55) for square J_h), the reference joint velocity (5.57) is
+q_dot_r = P v_r + J_h^+ (c e_fc + h eta), e_fc = F_dc - F_c the contact force error (measured, contact frames;
+``force_error="normal"`` keeps only its normal components) and eta its integral; s_f = q_dot - q_dot_r (5.59) and
+
+    tau = Y_f(q, q_dot, q_dot_r, q_dd_r) sigma_f + J_h^T F_dc - k_f s_f        (5.58)
+
+with q_dd_r = P a_r + P_dot v_r (the force terms are not differentiated) and, when ``hand_adaptation`` is given,
+sigma_f_dot = -Gamma_f Y_f^T s_f (5.60) over the hand's Pinocchio inertial parameters (10 per body).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp._validation import as_positive, as_real
+from bhgrasp.controllers.base import gain_vector
+from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
+from bhgrasp.controllers.object_space import pose_gains, reduced_dynamics
+from bhgrasp.errors import InputError
+from bhgrasp.hand import Hand
+from bhgrasp.objects import RigidObject
+from bhgrasp.state import State
+from bhgrasp.trajectories import Reference
+
+# Body-frame inertia basis matching sigma_o[1:] = (I_xx, I_xy, I_xz, I_yy, I_yz, I_zz).
+_INERTIA_BASIS = np.zeros((6, 3, 3))
+for _k, (_i, _j) in enumerate([(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)]):
+    _INERTIA_BASIS[_k, _i, _j] = _INERTIA_BASIS[_k, _j, _i] = 1.0
+
+
+def object_parameters(mass: float, inertia: Any) -> np.ndarray:
+    """sigma_o = (m, I_xx, I_xy, I_xz, I_yy, I_yz, I_zz) from a mass [kg] and a body inertia [kg m^2]."""
+    inertia = np.asarray(inertia, dtype=float)
+    return np.array([mass, inertia[0, 0], inertia[0, 1], inertia[0, 2], inertia[1, 1], inertia[1, 2], inertia[2, 2]])
+
+
+def object_regressor(rotation: Any, twist: Any, v_r: Any, a_r: Any, gravity: Any) -> np.ndarray:
+    """Y_o (6, 7) with Y_o sigma_o = M_o a_r + C_o(omega) v_r + N_o at the COM (world; see the module docstring)."""
+    rotation, omega = np.asarray(rotation, dtype=float), np.asarray(twist, dtype=float)[3:]
+    v_r, a_r = np.asarray(v_r, dtype=float), np.asarray(a_r, dtype=float)
+    regressor = np.zeros((6, 7))
+    regressor[:3, 0] = a_r[:3] - np.asarray(gravity, dtype=float)
+    skew = pin.skew(omega)
+    for k, basis in enumerate(_INERTIA_BASIS):
+        inertia = rotation @ basis @ rotation.T
+        coriolis = 0.5 * (skew @ inertia - inertia @ skew - pin.skew(inertia @ omega))
+        regressor[3:, k + 1] = inertia @ a_r[3:] + coriolis @ v_r[3:]
+    return regressor
+
+
+class SMCAdaptiveGrasp(ObjectGraspController):
+    """Thesis (5.46)-(5.60): adaptive object wrench, QP contact forces, sliding finger law with force PI.
+
+    Logs, besides the base's: ``object_parameters`` (sigma_o estimate), ``mass_estimate`` [kg], ``object_sliding``
+    (s_o), ``joint_sliding`` (s_f, zeros without a grasp), ``force_error`` (e_fc per touching finger's contact,
+    contact frame, in finger order of the hand; zeros for fingers not touching), ``desired_force`` (F_dc, same
+    layout) [N].
+    """
+
+    def __init__(
+        self,
+        nominal: Hand,
+        nominal_object: RigidObject,
+        reference: Reference | None = None,
+        rho: float = 50.0,
+        k_o: Any = (8.0, 0.01),
+        object_adaptation: Any = (5.0, 0.0),
+        force_gain: float = 0.02,
+        force_integral: float = 1.0,
+        k_f: Any = 0.05,
+        hand_adaptation: float | None = None,
+        force_error: str = "normal",
+        mu: float = 0.5,
+        squeeze: float = 3.0,
+        min_normal_force: float = 0.5,
+        approach_torque: float = 0.05,
+        gravity: Any = (0.0, 0.0, -9.81),
+        distribution: str = "qp",
+    ) -> None:
+        """Set up the controller.
+
+        Args:
+            nominal: The controller's hand model (its parameters start sigma_f).
+            nominal_object: Initial object estimate (mass, inertia about the COM): sigma_o(0).
+            reference: Object pose reference of size 6; ``None`` holds the pose where the grasp closed.
+            rho: rho [1/s] of (5.46): the sliding surface's bandwidth.
+            k_o: Object gains on s_o (translation [N s/m], rotation [N m s/rad]; scalar, pair or six): with rho
+                they make a PD of stiffness k_o rho.
+            object_adaptation: Gamma_o as (mass rate, inertia rate) or seven rates; 0 freezes a parameter.
+            force_gain: c [m/s / N] of (5.57).
+            force_integral: h [m/s / (N s)] of (5.57).
+            k_f: Joint gain k_f [N m s/rad] of (5.58), scalar or per joint.
+            hand_adaptation: Gamma_f rate of (5.60) (same for every hand parameter), or ``None`` (hand model fixed).
+            force_error: ``"normal"`` (feed back the normal force errors) or ``"full"`` (all three components, as
+                printed in (5.57)).
+            mu, squeeze, min_normal_force, approach_torque, gravity, distribution: As in
+                :class:`~bhgrasp.controllers.grasping.ObjectGraspController`.
+        """
+        super().__init__(nominal, reference, mu, squeeze, min_normal_force, approach_torque, gravity, distribution)
+        if not isinstance(nominal_object, RigidObject):
+            raise InputError(f"`nominal_object` must be a bhgrasp RigidObject (e.g. Box), got {nominal_object!r}")
+        if force_error not in ("normal", "full"):
+            raise InputError(f"`force_error` must be 'normal' or 'full', got {force_error!r}")
+        self.nominal_object = nominal_object
+        self.rho = as_positive(rho, "rho")
+        self.k_o = pose_gains(k_o, "k_o")
+        rates = np.asarray(object_adaptation, dtype=float)
+        self.object_adaptation = gain_vector(np.repeat(rates, (1, 6)) if rates.shape == (2,) else rates, 7,
+                                             "object_adaptation", allow_zero=True)  # fmt: skip
+        self.force_gain = as_real(force_gain, "force_gain")
+        self.force_integral = as_real(force_integral, "force_integral")
+        if self.force_gain < 0.0 or self.force_integral < 0.0:
+            raise InputError(f"`force_gain` and `force_integral` must be >= 0, got {force_gain}, {force_integral}")
+        self.k_f = gain_vector(k_f, nominal.nv, "k_f")
+        self.hand_adaptation = None if hand_adaptation is None else as_positive(hand_adaptation, "hand_adaptation")
+        self.force_error = force_error
+        self._initial_object = object_parameters(nominal_object.mass, nominal_object.inertia)
+        self.object_estimate = self._initial_object.copy()
+        self.hand_estimate = nominal.inertial_parameters()
+        self._integral: dict[str, np.ndarray] = {}
+
+    def reset(self, state: State) -> None:
+        """Restart the estimates from the nominal models and clear the force integrals."""
+        super().reset(state)
+        self.object_estimate = self._initial_object.copy()
+        self.hand_estimate = self.nominal.inertial_parameters()
+        self._integral.clear()
+
+    def __call__(self, t: float, state: State) -> np.ndarray:
+        """Joint torques [N m]; before the grasp the base closes the fingers."""
+        n = len(self.nominal.fingers)
+        self.log["joint_sliding"] = np.zeros(self.nominal.nv)
+        self.log["force_error"] = self.log["desired_force"] = np.zeros((n, 3))
+        self.log["object_sliding"] = np.zeros(6)
+        self.log["object_parameters"], self.log["mass_estimate"] = self.object_estimate, self.object_estimate[:1]
+        return super().__call__(t, state)
+
+    def grasp_torques(self, t: float, dt: float, state: State, contacts: GraspContacts) -> np.ndarray:
+        """Thesis (5.46)-(5.60)."""
+        hand = self.nominal
+        current, dynamics = reduced_dynamics(hand, state, contacts, self.nominal_object, self.gravity)
+        contacts.reference = current.com
+        error, velocity_error, velocity, acceleration = self.errors(t, state)
+        v_r, a_r = velocity - self.rho * error, acceleration - self.rho * velocity_error
+        s_o = current.twist - v_r
+        regressor = object_regressor(current.rotation, current.twist, v_r, a_r, self.gravity)
+        self.object_estimate = self.object_estimate - dt * self.object_adaptation * (regressor.T @ s_o)
+        self.object_estimate[0] = max(self.object_estimate[0], 1e-3)  # projection: a mass stays positive
+        wrench = regressor @ self.object_estimate - self.k_o * s_o
+        desired = self.distribute(contacts, wrench)
+
+        force_error = desired - contacts.measured()
+        if self.force_error == "normal":
+            force_error[:, :2] = 0.0
+        integral = np.array([self._integral.get(f, np.zeros(3)) for f in contacts.fingers]) + dt * force_error
+        self._integral = dict(zip(contacts.fingers, integral))
+        pinv = np.linalg.pinv(dynamics.hand_jacobian)
+        correction = self.force_gain * force_error + self.force_integral * integral
+        q_dot_r = dynamics.joint_map @ v_r + pinv @ correction.ravel()
+        q_dd_r = dynamics.joint_map @ a_r + dynamics.joint_map_rate @ v_r
+        s_f = np.asarray(state.v, dtype=float) - q_dot_r
+        if self.hand_adaptation is None:
+            model = hand.slotine_li_torque(state.q, state.v, q_dot_r, q_dd_r)
+        else:
+            y_f = hand.slotine_li_regressor(state.q, state.v, q_dot_r, q_dd_r)
+            self.hand_estimate = self.hand_estimate - dt * self.hand_adaptation * (y_f.T @ s_f)
+            model = y_f @ self.hand_estimate
+        self._log(contacts, s_o, s_f, force_error, desired)
+        return model + dynamics.hand_jacobian.T @ desired.ravel() - self.k_f * s_f
+
+    def _log(self, contacts: GraspContacts, s_o, s_f, force_error, desired) -> None:
+        per_finger_error, per_finger_desired = np.zeros((2, len(self.nominal.fingers), 3))
+        for k, finger in enumerate(contacts.fingers):
+            index = self.nominal.fingers.index(finger)
+            per_finger_error[index], per_finger_desired[index] = force_error[k], desired[k]
+        self.log.update(object_sliding=s_o, joint_sliding=s_f, force_error=per_finger_error,
+                        desired_force=per_finger_desired, object_parameters=self.object_estimate,
+                        mass_estimate=self.object_estimate[:1])  # fmt: skip
+
+
+__all__ = ["SMCAdaptiveGrasp", "object_parameters", "object_regressor"]

@@ -1,0 +1,177 @@
+"""Grasp supervisor: approach -> contact -> squeeze -> manipulate (thesis 5.4.2 and Figs 5.6-5.7).
+
+Phases (logged as ``phase``: 0 approach, 1 squeeze, 2 manipulate):
+
+0. **approach** — joint-space computed torque along a smooth step (5.36) from the start configuration to the
+   contact configuration (from IK) closed a little further by ``closing`` [rad] on every non-spread joint, so that
+   the fingers press once they touch.  A finger counts as arrived when its sensed normal force exceeds
+   ``contact_force``; when every finger has arrived (or at ``approach_timeout``) the grasp controller takes over.
+1. **squeeze** — the object-space grasp controller holds the object where it was caught (its QP brings the
+   contact forces to the desired squeeze) for ``squeeze_time``.
+2. **manipulate** — the grasp controller follows a minimum-jerk motion from the caught pose by ``offset``
+   (position [m], rotation vector [rad], world) over ``move_time``.
+
+:class:`MotorCommands` adapts any joint-torque controller to an actuation with fewer inputs (the BH8-280's four
+motors): u solves T^T B u = T^T tau, i.e. the motors do the same work as tau on every motion the transmission T
+allows (B: joint torques per unit motor input).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp._validation import as_positive, as_vector
+from bhgrasp.actuation import Actuation
+from bhgrasp.controllers.base import Controller
+from bhgrasp.controllers.grasping import ObjectGraspController
+from bhgrasp.controllers.joint import ComputedTorque
+from bhgrasp.errors import InputError
+from bhgrasp.hand import Hand
+from bhgrasp.sensing import ContactSensing
+from bhgrasp.state import State
+from bhgrasp.trajectories import Quintic, SmoothStep
+
+APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
+
+
+class GraspSupervisor(Controller):
+    """Sequence a joint-space approach and an object-space grasp controller.
+
+    Logs ``phase``, ``arrived`` (per finger of the hand, 1.0 once it touched), plus the active controller's log
+    (a recorded :class:`~bhgrasp.state.Trajectory` has NaN for the grasp controller's keys during the approach).
+    """
+
+    def __init__(
+        self,
+        nominal: Hand,
+        q_contact: Any,
+        grasp: ObjectGraspController,
+        offset: Any = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+        approach_time: float = 0.15,
+        closing: float = 0.05,
+        contact_force: float = 0.2,
+        approach_timeout: float = 2.0,
+        squeeze_time: float = 0.3,
+        move_time: float = 1.0,
+        kp: float = 400.0,
+        kv: float = 40.0,
+    ) -> None:
+        """Set up the sequence.
+
+        Args:
+            nominal: The controller's hand model.
+            q_contact: Joint configuration [rad] with the fingertips at the contact points (from IK).
+            grasp: The object-space controller for squeeze and manipulation (its reference is set here).
+            offset: Object motion after the squeeze: position [m] and rotation vector [rad] change, world.
+            approach_time: Time constant [s] of the approach's smooth step.
+            closing: Extra closing [rad] beyond ``q_contact`` on the non-spread joints.
+            contact_force: Normal force [N] at which a finger counts as arrived.
+            approach_timeout: Longest approach [s] before the grasp controller takes over anyway.
+            squeeze_time: Hold [s] before the motion starts.
+            move_time: Duration [s] of the minimum-jerk object motion.
+            kp, kv: Joint computed-torque gains of the approach [1/s^2, 1/s].
+        """
+        super().__init__()
+        if not isinstance(grasp, ObjectGraspController):
+            raise InputError(f"`grasp` must be an ObjectGraspController, got {grasp!r}")
+        self.nominal = nominal
+        self.q_contact = as_vector(q_contact, "q_contact", nominal.nq)
+        outside = (self.q_contact < nominal.lower - 1e-9) | (self.q_contact > nominal.upper + 1e-9)
+        if np.any(outside):
+            names = [n for n, o in zip(nominal.joint_names, outside) if o]
+            raise InputError(f"`q_contact` is outside the joint limits at {names}: {self.q_contact[outside]}")
+        self.grasp = grasp
+        self.offset = as_vector(offset, "offset", 6)
+        self.approach_time = as_positive(approach_time, "approach_time")
+        self.closing = float(closing)
+        self.contact_force = as_positive(contact_force, "contact_force")
+        self.approach_timeout = as_positive(approach_timeout, "approach_timeout")
+        self.squeeze_time = as_positive(squeeze_time, "squeeze_time")
+        self.move_time = as_positive(move_time, "move_time")
+        self.kp, self.kv = as_positive(kp, "kp"), as_positive(kv, "kv")
+        self.sensing = ContactSensing(nominal)
+        closing_joints = np.array(["spread" not in name for name in nominal.joint_names], dtype=float)
+        self.q_close = np.clip(self.q_contact + self.closing * closing_joints, nominal.lower, nominal.upper)
+        self.phase = APPROACH
+        self.switch_time: float | None = None
+        self._approach: ComputedTorque | None = None
+        self._arrived = np.zeros(len(nominal.fingers))
+
+    def reset(self, state: State) -> None:
+        """Start over with the approach from ``state``."""
+        self.phase, self.switch_time = APPROACH, None
+        self._approach = None
+        self._arrived[:] = 0.0
+        self.grasp.reset(state)
+        self.grasp.reference = None
+
+    def __call__(self, t: float, state: State) -> np.ndarray:
+        """Joint torques [N m] of the active phase."""
+        if self._approach is None:
+            step = SmoothStep(np.asarray(state.q, dtype=float), self.q_close, self.approach_time, delay=t)
+            self._approach = ComputedTorque(self.nominal, step, kp=self.kp, kv=self.kv)
+        if self.phase == APPROACH:
+            for finger, contact in self.sensing.fingers(state).items():
+                if contact.normal_force >= self.contact_force:
+                    self._arrived[self.nominal.fingers.index(finger)] = 1.0
+            if np.all(self._arrived) or t >= self.approach_timeout:
+                self._start_grasp(t, state)
+        if self.phase == SQUEEZE and t >= self.switch_time + self.squeeze_time:
+            self.phase = MANIPULATE
+        if self.phase == APPROACH:
+            tau = self._approach(t, state)
+            self.log.update(self._approach.log)
+        else:
+            tau = self.grasp(t, state)
+            self.log.update(self.grasp.log)
+            self.log["q_d"], self.log["error"] = self.q_close, np.asarray(state.q) - self.q_close
+        self.log["phase"] = np.array(float(self.phase))
+        self.log["arrived"] = self._arrived.copy()
+        return tau
+
+    def _start_grasp(self, t: float, state: State) -> None:
+        pose = state.object_poses[0]
+        start = np.concatenate((pose.translation, pin.log3(pose.rotation)))
+        self.grasp.reset(state)
+        self.grasp.reference = Quintic(start, start + self.offset, self.move_time, delay=t + self.squeeze_time)
+        self.phase, self.switch_time = SQUEEZE, t
+
+
+class MotorCommands(Controller):
+    """Run a joint-torque controller through an actuation with fewer inputs: u with T^T B u = T^T (tau + D v).
+
+    D v compensates the actuation's known viscous damping (for the BH8-280 mostly the motors' torque-speed line
+    reflected through 125:1 gears, ~5.6 N m s/rad at a proximal joint, which a model-based joint law ignores).
+    """
+
+    def __init__(self, controller: Controller, actuation: Actuation) -> None:
+        """Wrap ``controller`` (joint torques, nv) for ``actuation`` (its ``n_inputs`` motor inputs)."""
+        super().__init__()
+        if not isinstance(actuation, Actuation):
+            raise InputError(f"`actuation` must be a bhgrasp Actuation, got {actuation!r}")
+        self.controller = controller
+        self.actuation = actuation
+        self.log = controller.log
+
+    def reset(self, state: State) -> None:
+        """Reset the wrapped controller."""
+        self.controller.reset(state)
+
+    def __call__(self, t: float, state: State) -> np.ndarray:
+        """Motor inputs for the wrapped controller's joint torques."""
+        tau = self.controller(t, state) + self.actuation.joint_damping() * np.asarray(state.v, dtype=float)
+        return motor_inputs(self.actuation, tau)
+
+
+def motor_inputs(actuation: Actuation, tau: Any) -> np.ndarray:
+    """Inputs u whose joint torques do the work of ``tau`` [N m] on every motion the transmission allows."""
+    transmission = actuation.transmission()
+    per_input = np.column_stack([actuation.joint_torques(e) for e in np.eye(actuation.n_inputs)])
+    tau = as_vector(tau, "tau", transmission.shape[0])
+    return np.linalg.solve(transmission.T @ per_input, transmission.T @ tau)
+
+
+__all__ = ["APPROACH", "MANIPULATE", "SQUEEZE", "GraspSupervisor", "MotorCommands", "motor_inputs"]

@@ -1,0 +1,91 @@
+"""The chapter-5 grasp scene: the Barrett hand, a 0.06 x 0.05 x 0.05 m box (thesis 5.7) on a small pedestal.
+
+The box stands on a 20 mm fixed pedestal between the fingers, its 50 mm faces normal to y.  The contact points are
+the centres of those faces, F1 and F2 on the -y face at x = -/+ 25 mm and F3 on the +y face; the contact
+configuration comes from the fingertip IK (thesis 5.4.2) with each fingertip pad (radius 10 mm) touching its face.
+The hand starts opened by ``opening`` [rad] on every proximal joint.  Contacts are spring-dampers of 10 kN/m
+(the thesis' K_s) with friction 0.8; the joints have 0.05 N m s/rad of damping.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp._validation import as_positive
+from bhgrasp.actuation import Actuation, BarrettActuation, FullyActuated
+from bhgrasp.contact import SpringDamper
+from bhgrasp.errors import InputError
+from bhgrasp.hand import BarrettHand, Hand
+from bhgrasp.ik import ik
+from bhgrasp.objects import Box, FixedBox
+from bhgrasp.scene import Scene
+from bhgrasp.sim import Simulator
+from bhgrasp.state import State
+
+BOX_SIZE = (0.06, 0.05, 0.05)  # [m] thesis 5.7 (x along the palm, y between the fingers, z up)
+PAD_RADIUS = 0.010  # [m] fingertip pad of the packaged URDF
+CONTACT_HEIGHT = 0.172  # [m] box centre above the palm: F3's distal joint near mid-range at contact
+PEDESTAL = 0.02  # [m] edge of the pedestal cube
+FRICTION = 0.8
+STIFFNESS = 1e4  # [N/m]
+JOINT_DAMPING = 0.05  # [N m s/rad]
+
+
+@dataclass
+class BoxGrasp:
+    """A ready-to-run grasp: simulator, start state, hand, the box, the contact and start configurations."""
+
+    simulator: Simulator
+    state: State
+    hand: Hand
+    box: Box
+    q_contact: np.ndarray
+    q_start: np.ndarray
+
+
+def box_grasp(
+    mass: float = 1.0, actuation: str = "full", opening: float = 0.3, dt: float = 1e-3, stiffness: float = STIFFNESS
+) -> BoxGrasp:
+    """Build the scene.
+
+    Args:
+        mass: Box mass [kg] (the thesis' m_o = 1 kg).
+        actuation: ``"full"`` (one torque per joint) or ``"barrett"`` (the BH8-280's four motors).
+        opening: Proximal opening [rad] of the start configuration relative to the contact configuration.
+        dt: Simulator step [s].
+        stiffness: Contact stiffness [N/m] (damping 2e-3 s times it).
+    """
+    mass = as_positive(mass, "mass")
+    hand = BarrettHand()
+    centre = np.array([0.0, 0.0, CONTACT_HEIGHT])
+    half = 0.5 * BOX_SIZE[1] + PAD_RADIUS
+    targets = {
+        "F1": centre + np.array([-0.025, -half, 0.0]),
+        "F2": centre + np.array([0.025, -half, 0.0]),
+        "F3": centre + np.array([0.0, half, 0.0]),
+    }
+    guess = hand.configuration(F1_proximal=1.2, F1_distal=0.5, F2_proximal=1.2, F2_distal=0.5, F3_proximal=1.2,
+                               F3_distal=0.5)  # fmt: skip
+    q_contact = ik(hand, targets, guess, tolerance=1e-7).q
+    q_start = q_contact.copy()
+    for finger in hand.fingers:
+        index = hand.joint_index(f"{finger}_proximal")
+        q_start[index] = max(q_contact[index] - opening, hand.lower[index])
+    box = Box(size=BOX_SIZE, mass=mass, friction=FRICTION, pose=pin.SE3(np.eye(3), centre))
+    pedestal_centre = centre - [0.0, 0.0, 0.5 * BOX_SIZE[2] + 0.5 * PEDESTAL]
+    pedestal = FixedBox(size=(PEDESTAL,) * 3, pose=pin.SE3(np.eye(3), pedestal_centre), friction=FRICTION)
+    if actuation == "full":
+        drive: Actuation = FullyActuated(hand, damping=JOINT_DAMPING)
+    elif actuation == "barrett":
+        drive = BarrettActuation(hand, damping=JOINT_DAMPING)
+    else:
+        raise InputError(f"`actuation` must be 'full' or 'barrett', got {actuation!r}")
+    law = SpringDamper(stiffness=stiffness, damping=2e-3 * stiffness, friction=FRICTION)
+    simulator = Simulator(Scene(hand, [box], environment=[pedestal]), dt=dt, contact=law, actuation=drive)
+    return BoxGrasp(simulator, simulator.initial_state(q_start), hand, box, q_contact, q_start)
+
+
+__all__ = ["BOX_SIZE", "BoxGrasp", "box_grasp"]
