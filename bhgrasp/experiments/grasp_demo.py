@@ -114,9 +114,7 @@ def run_grasp_demo(
         as_positive(duration, "duration"),
     )
     offset = as_vector(offset, "offset", 6)
-    if actuation == "barrett" and np.any(offset != 0.0):
-        raise InputError("the BH8-280's four motors cannot move a held box to a pose; use offset 0 with 'barrett'")
-    setup = box_grasp(mass=mass, actuation=actuation)
+    setup = box_grasp(mass=mass)
     nominal_box = Box(size=setup.box.size, mass=estimate)
     grasp = grasp_controller(controller, setup.hand, nominal_box, distribution)
     supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=offset)
