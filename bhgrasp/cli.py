@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bhgrasp.errors import BhgraspError
 from bhgrasp.experiments.grasp_demo import CONTROLLERS
 
 
@@ -39,7 +40,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     commands.add_parser("info", help="print the hand summary only")
     experiments = commands.add_parser("experiments", help="reproduce a thesis chapter: report (markdown) and figures")
     experiments.add_argument(
-        "chapter", choices=["ch3", "ch4"], help="ch3: joint-space control (CTC, SMC, ASMC, HOSM); ch4: force control"
+        "chapter",
+        choices=["ch3", "ch4", "ch5"],
+        help="ch3: joint-space control (CTC, SMC, ASMC, HOSM); ch4: force control; ch5: grasping and manipulation",
     )
     experiments.add_argument("--output", type=Path, default=Path("docs/results"), help="folder for report and figures")
     experiments.add_argument(
@@ -47,6 +50,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     experiments.add_argument("--no-figures", action="store_true", help="write the report only")
     args = parser.parse_args(argv)
+    try:
+        return _run(args)
+    except BhgraspError as error:  # a user mistake or an infeasible request: one line, no traceback
+        print(f"bhgrasp: error: {error}", file=sys.stderr)
+        return 2
+
+
+def _run(args: argparse.Namespace) -> int:
     if args.command == "experiments":
         return _experiments(args.chapter, args.output, args.scale, not args.no_figures)
     if args.command == "info":
@@ -107,6 +118,14 @@ def _experiments(chapter: str, output: Path, scale: float, figures: bool) -> int
         runs = sum(len(case.runs) for case in cases)
         print(f"{chapter}: {len(cases)} cases, {runs} runs in {time.perf_counter() - start:.1f} s")
         print(f"report: {output / 'chapter3.md'}")
+        return 0
+    if chapter == "ch5":
+        from bhgrasp.experiments.chapter5 import run_chapter5
+
+        cases = run_chapter5(output, scale=scale, figures=figures)
+        runs = sum(len(case.runs) for case in cases)
+        print(f"{chapter}: {len(cases)} cases, {runs} runs in {time.perf_counter() - start:.1f} s")
+        print(f"report: {output / 'chapter5.md'}")
         return 0
     from bhgrasp.experiments.chapter4 import run_chapter4
 

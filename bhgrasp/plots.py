@@ -1,4 +1,4 @@
-"""Matplotlib figures of runs: joint tracking, tracking errors and torques.
+"""Matplotlib figures of runs: joint tracking, errors and torques, contact forces, object pose errors, cone margins.
 
 Figures are built with :class:`matplotlib.figure.Figure` (no pyplot state, no backend change): they work headless,
 display in notebooks and save with ``figure.savefig``.
@@ -104,4 +104,93 @@ def save_force_figure(case: Any, path: Path) -> Path:
     return path
 
 
-__all__ = ["force_figure", "save_case_figures", "save_force_figure", "tracking_figure"]
+def _grasping(traj: Trajectory) -> np.ndarray:
+    """Samples where a grasp controller ran (its ``object_error`` is logged and finite)."""
+    if "object_error" not in traj.log:
+        raise InputError("the run has no logged `object_error` (use an object-space grasp controller)")
+    return np.all(np.isfinite(traj.log["object_error"]), axis=1)
+
+
+def object_error_figure(runs: dict[str, Trajectory], channels: Sequence[int] = (2, 3), title: str = "") -> Figure:
+    """Object pose error against time for several runs, one panel per channel.
+
+    Channels 0-2 are the position [mm], 3-5 the rotation vector [mrad] (world) of ``log["object_error"]``.
+    """
+    if not runs:
+        raise InputError("`runs` must hold at least one trajectory")
+    names = ("x", "y", "z", "rotation about x", "rotation about y", "rotation about z")
+    figure = Figure(figsize=(11, 3.2 * len(channels)), layout="tight")
+    axes = figure.subplots(len(channels), 1, squeeze=False, sharex=True)[:, 0]
+    for name, traj in runs.items():
+        mask = _grasping(traj)
+        for axis, channel in zip(axes, channels):
+            axis.plot(traj.t[mask], 1e3 * traj.log["object_error"][mask, channel], lw=1.0, label=name)
+    for axis, channel in zip(axes, channels):
+        unit = "mm" if channel < 3 else "mrad"
+        axis.set(ylabel=f"{names[channel]} error [{unit}]")
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize=7)
+    axes[0].set_title(title)
+    axes[-1].set_xlabel("t [s]")
+    return figure
+
+
+def grasp_figure(traj: Trajectory, finger_names: Sequence[str], measured_normal: np.ndarray, true_mass=None) -> Figure:
+    """One grasp run: object pose error, measured vs. commanded normal forces, mass estimate or cone margin.
+
+    Args:
+        traj: The run (logs ``object_error``, ``commanded_normal``).
+        finger_names: The hand's fingers, in the order of ``commanded_normal``.
+        measured_normal: (N, n_fingers) measured normal forces [N] (see ``grasp_metrics.finger_normal_forces``).
+        true_mass: Drawn beside the mass estimate [kg].
+    """
+    grasping = _grasping(traj)
+    t = traj.t[grasping]
+    figure = Figure(figsize=(12, 7), layout="tight")
+    axes = figure.subplots(2, 2, sharex=True).ravel()
+    error = traj.log["object_error"][grasping]
+    for k, axis in enumerate("xyz"):
+        axes[0].plot(t, 1e3 * error[:, k], label=axis)
+        axes[1].plot(t, 1e3 * error[:, 3 + k], label=f"about {axis}")
+    axes[0].set(ylabel="object position error [mm]", title="object pose error (world, COM)")
+    axes[1].set(ylabel="object rotation error [mrad]")
+    measured, commanded = measured_normal[grasping], traj.log["commanded_normal"][grasping]
+    for k, finger in enumerate(finger_names):
+        line = axes[2].plot(t, measured[:, k], label=f"{finger} measured")[0]
+        axes[2].plot(t, commanded[:, k], "--", color=line.get_color(), label=f"{finger} commanded")
+    axes[2].set(xlabel="t [s]", ylabel="normal force [N]", title="contact forces")
+    if "mass_estimate" in traj.log:
+        axes[3].plot(t, np.ravel(traj.log["mass_estimate"][grasping]), label="estimate")
+        if true_mass is not None:
+            axes[3].axhline(true_mass, color="k", linestyle=":", label="true mass")
+        axes[3].set(ylabel="object mass [kg]", title="mass estimate")
+    else:
+        axes[3].plot(t, traj.log["cone_margin"][grasping], label="cone margin")
+        axes[3].set(ylabel="cone margin [N]", title="commanded forces: mu f_n - |f_t|")
+    axes[3].set(xlabel="t [s]")
+    for axis in axes:
+        axis.grid(True, alpha=0.3)
+        axis.legend(fontsize=7)
+    return figure
+
+
+def cone_margin_figure(runs: dict[str, Trajectory], title: str = "") -> Figure:
+    """Cone margin mu f_n - |f_t| [N] of the commanded forces (negative: outside the assumed cone) of several runs."""
+    if not runs:
+        raise InputError("`runs` must hold at least one trajectory")
+    figure = Figure(figsize=(9, 4), layout="tight")
+    axis = figure.subplots()
+    for name, traj in runs.items():
+        mask = _grasping(traj)
+        axis.plot(traj.t[mask], traj.log["cone_margin"][mask], lw=1.0, label=name)
+    axis.axhline(0.0, color="k", lw=0.7)
+    axis.set(xlabel="t [s]", ylabel="cone margin [N]", title=title, yscale="symlog")
+    axis.grid(alpha=0.3)
+    axis.legend(fontsize=7)
+    return figure
+
+
+__all__ = [
+    "cone_margin_figure", "force_figure", "grasp_figure", "object_error_figure", "save_case_figures",
+    "save_force_figure", "tracking_figure",
+]  # fmt: skip

@@ -140,3 +140,16 @@ def test_grasp_controllers_reject_bad_arguments():
         GraspSupervisor(hand, np.full(8, 5.0), SMCAdaptiveGrasp(hand, box))
     with pytest.raises(bh.InputError, match="controller"):
         grasp_controller("pid", hand, box)
+
+
+def test_hand_adaptation_path_matches_the_fixed_model_at_vanishing_rate():
+    """(5.58) through the regressor Y_f sigma_f (hand adaptation on, rate -> 0) equals the fixed nominal model."""
+    runs = []
+    for rate in (None, 1e-12):
+        setup = box_grasp(mass=0.3)
+        grasp = SMCAdaptiveGrasp(setup.hand, Box(size=setup.box.size, mass=0.3), hand_adaptation=rate)
+        supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=(0, 0, 0.005, 0, 0, 0))
+        runs.append(setup.simulator.run(supervisor, 1.2, state=setup.state))
+    assert np.any(runs[0].log["phase"] >= 1)
+    np.testing.assert_allclose(runs[1].u, runs[0].u, atol=1e-9)
+    np.testing.assert_allclose(runs[1].q, runs[0].q, atol=1e-10)

@@ -29,6 +29,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.experiments.box_grasp import box_grasp
 from bhgrasp.grasp_metrics import finger_normal_forces, slip_events
 from bhgrasp.objects import Box
+from bhgrasp.plots import grasp_figure
 from bhgrasp.state import Trajectory
 
 CONTROLLERS = ("smc-adaptive", "ctc", "natural", "stiffness", "pd")
@@ -39,7 +40,12 @@ SQUEEZE = 5.0  # [N] desired normal force per contact (the thesis' 5 N)
 
 @dataclass
 class GraspDemoResult:
-    """The run and its figures of merit (errors at the end; force error over the settled window)."""
+    """The run and its figures of merit (errors at the end; force error over the settled window).
+
+    Times [s] are absolute: the grasp closes at ``grasp_time``, the object moves from ``motion_start`` to
+    ``motion_end``, and the force error is taken from ``settle_time`` on.  ``q_contact`` is the IK contact
+    configuration the approach aimed at.
+    """
 
     trajectory: Trajectory
     controller: str
@@ -47,6 +53,8 @@ class GraspDemoResult:
     initial_estimate: float
     mass_estimate: float | None
     grasp_time: float
+    motion_start: float
+    motion_end: float
     settle_time: float
     position_error: float
     rotation_error: float
@@ -55,6 +63,7 @@ class GraspDemoResult:
     cone_margin: float
     infeasible_samples: int
     wall_time: float
+    q_contact: np.ndarray
 
     def summary(self) -> str:
         """A few lines for the terminal."""
@@ -63,7 +72,7 @@ class GraspDemoResult:
         return "\n".join([
             f"grasp demo ({self.controller}): box {self.true_mass:.2f} kg, "
             f"controller told {self.initial_estimate:.2f} kg{estimate}",
-            f"  grasp closed at {self.grasp_time:.3f} s; motion done at {self.settle_time - 0.5:.2f} s",
+            f"  grasp closed at {self.grasp_time:.3f} s; motion {self.motion_start:.2f}-{self.motion_end:.2f} s",
             f"  object pose error: {1e3 * self.position_error:.3f} mm, {1e3 * self.rotation_error:.3f} mrad (final)",
             f"  contact force error: {100 * self.force_error:.2f} % of the commanded normal force "
             f"(max over fingers from {self.settle_time:.2f} s)",
@@ -74,17 +83,24 @@ class GraspDemoResult:
         ])  # fmt: skip
 
 
-def grasp_controller(name: str, hand, nominal_box: Box, distribution: str = "qp") -> ObjectGraspController:
-    """The object-space controller called ``name`` (one of :data:`CONTROLLERS`) with the demo's gains."""
+def grasp_controller(
+    name: str, hand, nominal_box: Box, distribution: str = "qp", gains: tuple[Any, Any] | None = None
+) -> ObjectGraspController:
+    """The object-space controller called ``name`` (one of :data:`CONTROLLERS`) with the demo's gains.
+
+    ``gains`` = (kp, kv) overrides the gains of "ctc", "natural" and "stiffness".
+    """
     shared = {"mu": MU_ASSUMED, "squeeze": SQUEEZE, "distribution": distribution}
     if name == "smc-adaptive":
         return SMCAdaptiveGrasp(hand, nominal_box, **shared)
     if name == "pd":
         return GraspForceController(hand, nominal_box.mass, **shared)
     if name == "ctc":
-        return ObjectSpaceController(hand, nominal_box, "ctc", kp=2500.0, kv=100.0, **shared)
+        kp, kv = gains or (2500.0, 100.0)
+        return ObjectSpaceController(hand, nominal_box, "ctc", kp=kp, kv=kv, **shared)
     if name in ("natural", "stiffness"):
-        return ObjectSpaceController(hand, nominal_box, name, kp=(400.0, 0.5), kv=(8.0, 0.01), **shared)
+        kp, kv = gains or ((400.0, 0.5), (8.0, 0.01))
+        return ObjectSpaceController(hand, nominal_box, name, kp=kp, kv=kv, **shared)
     raise InputError(f"`controller` must be one of {CONTROLLERS}, got {name!r}")
 
 
@@ -95,6 +111,8 @@ def run_grasp_demo(
     duration: float = 3.0,
     offset: Any = OFFSET,
     distribution: str = "qp",
+    approach_gains: tuple[float, float] = (400.0, 40.0),
+    gains: tuple[Any, Any] | None = None,
     progress: bool = False,
 ) -> GraspDemoResult:
     """Grasp, lift and turn the box; see the module docstring.
@@ -106,6 +124,8 @@ def run_grasp_demo(
         duration: Simulated time [s].
         offset: Object motion after the squeeze (position [m], rotation vector [rad], world).
         distribution: ``"qp"`` (friction-cone QP) or ``"pinv"`` (the thesis' G^+ baseline).
+        approach_gains: Joint computed-torque gains (Kp [1/s^2], Kv [1/s]) of the approach.
+        gains: (kp, kv) of the "ctc", "natural" or "stiffness" controller instead of the demo's.
         progress: Show a progress bar.
     """
     mass, estimate, duration = (
@@ -116,8 +136,9 @@ def run_grasp_demo(
     offset = as_vector(offset, "offset", 6)
     setup = box_grasp(mass=mass)
     nominal_box = Box(size=setup.box.size, mass=estimate)
-    grasp = grasp_controller(controller, setup.hand, nominal_box, distribution)
-    supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=offset)
+    grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains)
+    kp, kv = approach_gains
+    supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=offset, kp=kp, kv=kv)
     start = time.perf_counter()
     traj = setup.simulator.run(supervisor, duration, state=setup.state, progress=progress)
     wall = time.perf_counter() - start
@@ -129,7 +150,9 @@ def _evaluate(traj, hand, controller, mass, estimate, supervisor, wall) -> Grasp
     if not np.any(phase >= 1):
         raise InputError(f"the fingers did not close on the box within {traj.t[-1]:.2f} s (no grasp to evaluate)")
     grasp_time = float(traj.t[np.argmax(phase >= 1)])
-    settle = grasp_time + supervisor.squeeze_time + supervisor.move_time + 0.5
+    motion_start = grasp_time + supervisor.squeeze_time
+    motion_end = motion_start + supervisor.move_time
+    settle = motion_end + 0.5
     settled = traj.t >= min(settle, float(traj.t[-1]))
     measured = finger_normal_forces(hand, traj)[settled]
     commanded = traj.log["commanded_normal"][settled]
@@ -145,6 +168,8 @@ def _evaluate(traj, hand, controller, mass, estimate, supervisor, wall) -> Grasp
         initial_estimate=estimate,
         mass_estimate=final_estimate if controller in ("smc-adaptive",) else None,
         grasp_time=grasp_time,
+        motion_start=motion_start,
+        motion_end=motion_end,
         settle_time=settle,
         position_error=float(np.linalg.norm(error[:3])),
         rotation_error=float(np.linalg.norm(error[3:])),
@@ -153,39 +178,14 @@ def _evaluate(traj, hand, controller, mass, estimate, supervisor, wall) -> Grasp
         cone_margin=float(np.nanmin(traj.log["cone_margin"][grasping])),
         infeasible_samples=int(np.sum(traj.log["feasible"][grasping] < 1.0)),
         wall_time=wall,
+        q_contact=supervisor.q_contact,
     )
 
 
 def demo_figure(result: GraspDemoResult, hand) -> Figure:
-    """Object position and rotation error, measured vs. commanded normal forces, and the mass estimate."""
-    traj, grasping = result.trajectory, result.trajectory.log["phase"] >= 1
-    t = traj.t[grasping]
-    figure = Figure(figsize=(12, 7), layout="tight")
-    axes = figure.subplots(2, 2, sharex=True).ravel()
-    error = traj.log["object_error"][grasping]
-    for k, axis in enumerate("xyz"):
-        axes[0].plot(t, 1e3 * error[:, k], label=axis)
-        axes[1].plot(t, 1e3 * error[:, 3 + k], label=f"about {axis}")
-    axes[0].set(ylabel="object position error [mm]", title="object pose error (world, COM)")
-    axes[1].set(ylabel="object rotation error [mrad]")
-    measured = finger_normal_forces(hand, traj)[grasping]
-    commanded = traj.log["commanded_normal"][grasping]
-    for k, finger in enumerate(hand.fingers):
-        line = axes[2].plot(t, measured[:, k], label=f"{finger} measured")[0]
-        axes[2].plot(t, commanded[:, k], "--", color=line.get_color(), label=f"{finger} commanded")
-    axes[2].set(xlabel="t [s]", ylabel="normal force [N]", title="contact forces")
-    if result.mass_estimate is not None:
-        axes[3].plot(t, np.ravel(traj.log["mass_estimate"][grasping]), label="estimate")
-        axes[3].axhline(result.true_mass, color="k", linestyle=":", label="true mass")
-        axes[3].set(ylabel="object mass [kg]", title="mass estimate")
-    else:
-        axes[3].plot(t, traj.log["cone_margin"][grasping])
-        axes[3].set(ylabel="cone margin [N]", title="commanded forces: mu f_n - |f_t|")
-    axes[3].set(xlabel="t [s]")
-    for axis in axes:
-        axis.grid(True, alpha=0.3)
-        axis.legend(fontsize=7)
-    return figure
+    """Object pose error, measured vs. commanded normal forces, and the mass estimate (or the cone margin)."""
+    measured = finger_normal_forces(hand, result.trajectory)
+    return grasp_figure(result.trajectory, hand.fingers, measured, result.true_mass)
 
 
 def save_demo(result: GraspDemoResult, hand, output: Path) -> list[Path]:
