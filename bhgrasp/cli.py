@@ -30,6 +30,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--distribution", choices=["qp", "pinv"], default="qp", help="contact forces: friction-cone QP or G^+ (5.45)"
     )
     demo.add_argument("--duration", type=float, default=3.0, help="simulated time [s]")
+    demo.add_argument(
+        "--html", type=Path, default=None, help="also write the MeshCat replay as one self-contained HTML file"
+    )
     tour = commands.add_parser(
         "tour", help="print the hand model, check IK, plot the workspace, simulate a three-finger hold"
     )
@@ -79,6 +82,15 @@ def _grasp_demo(args: argparse.Namespace) -> int:
     print(result.summary())
     for path in save_demo(result, BarrettHand(), args.output):
         print(f"wrote {path}")
+    if args.html is not None:
+        from bhgrasp.viz import SceneViewer
+
+        viewer = SceneViewer(result.scene)
+        try:
+            viewer.replay(result.trajectory)
+            print(f"wrote {viewer.save_html(args.html)} (MeshCat replay; opens offline)")
+        finally:
+            viewer.close()
     return 0
 
 

@@ -30,6 +30,7 @@ from bhgrasp.experiments.box_grasp import box_grasp
 from bhgrasp.grasp_metrics import finger_normal_forces, slip_events
 from bhgrasp.objects import Box
 from bhgrasp.plots import grasp_figure
+from bhgrasp.scene import Scene
 from bhgrasp.state import Trajectory
 
 CONTROLLERS = ("smc-adaptive", "ctc", "natural", "stiffness", "pd")
@@ -44,7 +45,7 @@ class GraspDemoResult:
 
     Times [s] are absolute: the grasp closes at ``grasp_time``, the object moves from ``motion_start`` to
     ``motion_end``, and the force error is taken from ``settle_time`` on.  ``q_contact`` is the IK contact
-    configuration the approach aimed at.
+    configuration the approach aimed at; ``scene`` the simulated scene (for :mod:`bhgrasp.viz`).
     """
 
     trajectory: Trajectory
@@ -64,6 +65,7 @@ class GraspDemoResult:
     infeasible_samples: int
     wall_time: float
     q_contact: np.ndarray
+    scene: Scene
 
     def summary(self) -> str:
         """A few lines for the terminal."""
@@ -142,10 +144,10 @@ def run_grasp_demo(
     start = time.perf_counter()
     traj = setup.simulator.run(supervisor, duration, state=setup.state, progress=progress)
     wall = time.perf_counter() - start
-    return _evaluate(traj, setup.hand, controller, mass, estimate, supervisor, wall)
+    return _evaluate(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
 
 
-def _evaluate(traj, hand, controller, mass, estimate, supervisor, wall) -> GraspDemoResult:
+def _evaluate(traj, hand, controller, mass, estimate, supervisor, wall, scene) -> GraspDemoResult:
     phase = traj.log["phase"]
     if not np.any(phase >= 1):
         raise InputError(f"the fingers did not close on the box within {traj.t[-1]:.2f} s (no grasp to evaluate)")
@@ -179,6 +181,7 @@ def _evaluate(traj, hand, controller, mass, estimate, supervisor, wall) -> Grasp
         infeasible_samples=int(np.sum(traj.log["feasible"][grasping] < 1.0)),
         wall_time=wall,
         q_contact=supervisor.q_contact,
+        scene=scene,
     )
 
 

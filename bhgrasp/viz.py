@@ -1,0 +1,378 @@
+"""MeshCat views of a scene: live display, overlays, animated replays and self-contained HTML export.
+
+A thin layer over :class:`pinocchio.visualize.MeshcatVisualizer` (which loads the scene's hand, objects and fixed
+environment from its collision geometry, all primitives for the packaged Barrett hand).  The MeshCat server runs
+on 127.0.0.1 and no browser is opened unless asked (``open=True``).  Overlays:
+
+- contact force arrows (force on the object, ``force_scale`` [m/N]), green while sticking, red while sliding;
+- friction cones at the contacts (apex at the contact point, axis along the normal, half-angle atan(mu));
+- the object's desired pose (a translucent ghost) from a grasp controller's logged ``object_error``;
+- fingertip references (small spheres) from a joint controller's logged ``q_d``.
+
+:meth:`SceneViewer.replay` turns a recorded :class:`~bhgrasp.state.Trajectory` into a MeshCat animation decimated to
+at most 60 frames per second; :meth:`SceneViewer.save_html` writes the scene and its animation as one HTML file
+that works offline (meshcat's ``static_html``: the JavaScript is inlined).  ``bhgrasp.viz`` is not imported by
+``import bhgrasp``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import meshcat
+import meshcat.geometry as mg
+import numpy as np
+import pinocchio as pin
+from meshcat.animation import Animation
+from pinocchio.visualize import MeshcatVisualizer
+
+from bhgrasp._validation import as_positive
+from bhgrasp.controllers.base import Controller
+from bhgrasp.errors import InputError
+from bhgrasp.objects import Box, Capsule, Cylinder, RigidObject, Sphere
+from bhgrasp.scene import Scene
+from bhgrasp.state import State, Trajectory
+
+MAX_FPS = 60.0
+ROOT = "bhgrasp"
+HAND_RGBA = (0.55, 0.57, 0.62, 1.0)
+OBJECT_RGBA = (0.95, 0.55, 0.15, 1.0)
+ENVIRONMENT_RGBA = (0.45, 0.35, 0.25, 1.0)
+STICK, SLIP, CONE, GHOST, TIP = 0x22AA44, 0xDD2222, 0x3377FF, 0xFFAA33, 0xAA33FF
+CONE_HEIGHT = 0.015  # [m] drawn friction cones
+DISPLAY_FORCE_SCALE = 0.005  # [m/N] arrows of display()
+CAMERA_TARGET = (0.0, 0.0, 0.15)  # [m] between the Barrett hand's fingers
+CAMERA_POSITION = (0.17, -0.24, 0.27)  # [m]
+
+
+class SceneViewer:
+    """A MeshCat view of a :class:`~bhgrasp.scene.Scene` (hand, free objects, environment)."""
+
+    def __init__(
+        self,
+        scene: Scene,
+        viewer: meshcat.Visualizer | None = None,
+        open: bool = False,
+        zmq_url: str | None = None,
+        max_contacts: int = 24,
+    ) -> None:
+        """Load the scene into a (new, localhost) MeshCat server.
+
+        Args:
+            scene: What to show.
+            viewer: An existing ``meshcat.Visualizer`` to draw into (default: start a server on 127.0.0.1).
+            open: Open a browser tab on the viewer.
+            zmq_url: Connect to a running ``meshcat-server`` instead of starting one.
+            max_contacts: Contact overlay slots (contacts beyond this many in one frame are not drawn).
+        """
+        if not isinstance(scene, Scene):
+            raise InputError(f"`scene` must be a bhgrasp Scene, got {type(scene).__name__}")
+        self.scene = scene
+        self.max_contacts = int(max_contacts)
+        geometry = scene.geometry.copy()
+        for index, geometry_object in enumerate(geometry.geometryObjects):
+            geometry_object.meshColor = np.array(self._colour(index))
+        self._geometry = geometry
+        self._geometry_data = pin.GeometryData(geometry)
+        self._data = scene.model.createData()
+        self.visualizer = MeshcatVisualizer(scene.model, geometry, geometry)
+        self.visualizer.initViewer(viewer=viewer, open=open, zmq_url=zmq_url)
+        self.visualizer.loadViewerModel(rootNodeName=ROOT)
+        self.viewer: meshcat.Visualizer = self.visualizer.viewer
+        self._overlays_loaded = False
+        self.viewer["/Grid"].set_property("visible", False)
+        self.viewer["/Axes"].set_property("visible", False)
+        self.look_at(CAMERA_TARGET, CAMERA_POSITION)
+
+    def look_at(self, target: Any, position: Any) -> None:
+        """Point the camera from ``position`` to ``target`` (world, z up) [m].
+
+        MeshCat's orbit controls always turn about the viewer's origin, so the scene (everything under the
+        ``bhgrasp`` node) is shifted by -target instead of moving the camera's target.
+        """
+        target = np.asarray(target, dtype=float)
+        offset = np.asarray(position, dtype=float) - target
+        self.viewer[ROOT].set_transform(_translation(-target))
+        # the camera node's frame is three.js's (y up): world (x, y, z) is (x, z, -y) there
+        self.viewer["/Cameras/default/rotated/<object>"].set_property("position", [offset[0], offset[2], -offset[1]])
+
+    def _colour(self, index: int) -> tuple[float, float, float, float]:
+        if index in self.scene.object_geometries:
+            return OBJECT_RGBA
+        if index in self.scene.environment_geometries:
+            return ENVIRONMENT_RGBA
+        return HAND_RGBA
+
+    @property
+    def url(self) -> str:
+        """The viewer's address (http://127.0.0.1:...)."""
+        return self.viewer.url()
+
+    def node(self, geometry_index: int) -> str:
+        """MeshCat path of a geometry object of the scene."""
+        geometry_object = self._geometry.geometryObjects[geometry_index]
+        return self.visualizer.getViewerNodeName(geometry_object, pin.GeometryType.VISUAL)
+
+    def placements(self, q_hand: Any, object_poses: Any = ()) -> list[np.ndarray]:
+        """4 x 4 world placement of every geometry object for hand joints ``q_hand`` and object poses (SE3)."""
+        scene = self.scene
+        q = pin.neutral(scene.model)
+        q[: scene.nq_hand] = np.asarray(q_hand, dtype=float)
+        pin.forwardKinematics(scene.model, self._data, q)
+        pin.updateGeometryPlacements(scene.model, self._data, self._geometry, self._geometry_data)
+        result = [placement.homogeneous for placement in self._geometry_data.oMg]
+        for index, pose in zip(scene.object_geometries, object_poses):
+            result[index] = (pose * self._geometry.geometryObjects[index].placement).homogeneous
+        return result
+
+    def display(self, state: State) -> None:
+        """Show a state (hand joints and object poses) and its contacts."""
+        for index, transform in enumerate(self.placements(state.q, state.object_poses)):
+            self.viewer[self.node(index)].set_transform(transform)
+        self._load_overlays()
+        mu = self._friction()
+        contacts = list(zip(state.contact_points, state.contact_normals, state.contact_forces))
+        for slot in range(self.max_contacts):
+            if slot < len(contacts):
+                point, normal, force = contacts[slot]
+                normal_force = float(force @ normal)
+                sliding = np.linalg.norm(force - normal_force * normal) >= 0.999 * mu * normal_force
+                overlays = _contact_overlays(point, normal, force, not sliding, DISPLAY_FORCE_SCALE, mu)
+            else:
+                overlays = _hidden_overlays()
+            for name, (transform, scale, visible) in overlays.items():
+                node = self.viewer[f"{ROOT}/contacts/{slot}/{name}"]
+                node.set_transform(transform @ np.diag((*scale, 1.0)))
+                node.set_property("visible", bool(visible))
+
+    def _friction(self) -> float:
+        return self.scene.objects[0].friction if self.scene.objects else 0.8
+
+    def _load_overlays(self) -> None:
+        if self._overlays_loaded:
+            return
+        for slot in range(self.max_contacts):
+            base = self.viewer[f"{ROOT}/contacts/{slot}"]
+            arrow = mg.Cylinder(1.0, 0.0015)
+            base["stick"].set_object(arrow, mg.MeshLambertMaterial(color=STICK))
+            base["slip"].set_object(arrow, mg.MeshLambertMaterial(color=SLIP))
+            cone = mg.Cylinder(1.0, radiusTop=1.0, radiusBottom=0.0)
+            base["cone"].set_object(cone, mg.MeshLambertMaterial(color=CONE, opacity=0.25, transparent=True))
+            for name in ("stick", "slip", "cone"):
+                base[name].set_property("visible", False)
+        self._overlays_loaded = True
+
+    def replay(
+        self,
+        traj: Trajectory,
+        fps: float = 30.0,
+        force_scale: float = 0.005,
+        mu: float | None = None,
+        cones: bool = True,
+        play: bool = True,
+    ) -> Animation:
+        """Animate a recorded run in the viewer, decimated to ``fps`` (<= 60) frames per second of sim time.
+
+        Args:
+            traj: The run (hand joints, object poses, contacts and the controller log).
+            fps: Frames per simulated second, at most 60.
+            force_scale: Arrow length per newton [m/N].
+            mu: Friction coefficient of the drawn cones (default: the first object's friction).
+            cones: Draw friction cones at the contacts.
+            play: Start playing (looping) at once.
+        """
+        fps = as_positive(fps, "fps")
+        if fps > MAX_FPS:
+            raise InputError(f"`fps` must be <= {MAX_FPS:g} (a set_transform costs ~0.2 ms per node), got {fps}")
+        force_scale = as_positive(force_scale, "force_scale")
+        if len(traj) < 1:
+            raise InputError("`traj` has no samples")
+        mu = self._friction() if mu is None else as_positive(mu, "mu")
+        frames = _frame_samples(traj.t, fps)
+        self._load_overlays()
+        ghost = self._load_ghost(traj)
+        tips = self._load_tips(traj)
+        animation = Animation(default_framerate=fps)
+        nodes = [self.node(index) for index in range(self._geometry.ngeoms)]
+        for frame, k in enumerate(frames):
+            with animation.at_frame(self.viewer, frame) as view:
+                poses = _object_poses(traj, k)
+                for node, transform in zip(nodes, self.placements(traj.q[k], poses)):
+                    view[node].set_transform(transform)
+                self._animate_contacts(view, traj, k, force_scale, mu, cones)
+                if ghost:
+                    _animate_ghost(view, traj, k, poses)
+                if tips:
+                    self._animate_tips(view, traj, k)
+        self.viewer.set_animation(animation, play=play, repetitions=0 if play else 1)
+        return animation
+
+    def _animate_contacts(self, view, traj: Trajectory, k: int, force_scale: float, mu: float, cones: bool) -> None:
+        contacts = traj.contacts_at(k)
+        count = min(len(contacts["point"]), self.max_contacts)
+        for slot in range(self.max_contacts):
+            if slot < count:
+                point, force = contacts["point"][slot], contacts["force"][slot]
+                normal, sticking = contacts["normal"][slot], bool(contacts["sticking"][slot])
+                overlays = _contact_overlays(point, normal, force, sticking, force_scale, mu)
+            else:
+                overlays = _hidden_overlays()
+            for name, (transform, scale, visible) in overlays.items():
+                node = view[f"{ROOT}/contacts/{slot}/{name}"]
+                node.set_transform(transform)  # animation tracks carry position and rotation; scale on its own
+                node.set_property("scale", "vector3", list(scale))
+                node.set_property("visible", "boolean", bool(visible and (cones or name != "cone")))
+
+    def _load_ghost(self, traj: Trajectory) -> bool:
+        if "object_error" not in traj.log or not self.scene.objects:
+            return False
+        shape = _meshcat_shape(self.scene.objects[0])
+        if shape is None:
+            return False
+        material = mg.MeshLambertMaterial(color=GHOST, opacity=0.3, transparent=True)
+        self.viewer[f"{ROOT}/desired_pose"].set_object(shape, material)
+        return True
+
+    def _load_tips(self, traj: Trajectory) -> bool:
+        if "q_d" not in traj.log or traj.log["q_d"].shape[1] != self.scene.hand.nv:
+            return False
+        for finger in self.scene.hand.fingers:
+            self.viewer[f"{ROOT}/tip_references/{finger}"].set_object(
+                mg.Sphere(0.004), mg.MeshLambertMaterial(color=TIP)
+            )
+        return True
+
+    def _animate_tips(self, view, traj: Trajectory, k: int) -> None:
+        q_d = traj.log["q_d"][k]
+        visible = bool(np.all(np.isfinite(q_d)))
+        tips = self.scene.hand.fingertip_positions(q_d) if visible else np.zeros((len(self.scene.hand.fingers), 3))
+        for finger, tip in zip(self.scene.hand.fingers, tips):
+            node = view[f"{ROOT}/tip_references/{finger}"]
+            node.set_transform(_translation(tip))
+            node.set_property("visible", "boolean", visible)
+
+    def static_html(self) -> str:
+        """The scene (and its animation, after :meth:`replay`) as one self-contained HTML page."""
+        return self.viewer.static_html()
+
+    def save_html(self, path: str | Path) -> Path:
+        """Write :meth:`static_html` to ``path``; it opens offline in any WebGL browser."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(self.static_html())
+        return path
+
+    def close(self) -> None:
+        """Stop the MeshCat server this viewer started (a viewer passed in or reached by ``zmq_url`` keeps running)."""
+        process = getattr(self.viewer.window, "server_proc", None)
+        if process is not None:
+            process.kill()
+            process.wait()
+
+
+class LiveView(Controller):
+    """Wrap a controller so that the viewer shows the sensed state every ``every`` control calls.
+
+    Use it in place of the controller: ``sim.run(LiveView(controller, viewer, every=20), ...)``.
+    """
+
+    def __init__(self, controller: Callable[[float, State], Any], viewer: SceneViewer, every: int = 20) -> None:
+        """Args: the controller to run, the viewer, and the decimation (calls between two displays)."""
+        super().__init__()
+        if not isinstance(viewer, SceneViewer):
+            raise InputError(f"`viewer` must be a SceneViewer, got {type(viewer).__name__}")
+        if int(every) < 1:
+            raise InputError(f"`every` must be a positive integer, got {every}")
+        self.controller, self.viewer, self.every = controller, viewer, int(every)
+        self.log = getattr(controller, "log", {})
+        self._calls = 0
+
+    def reset(self, state: State) -> None:
+        """Reset the wrapped controller and show the start state."""
+        self._calls = 0
+        if hasattr(self.controller, "reset"):
+            self.controller.reset(state)
+
+    def __call__(self, t: float, state: State) -> np.ndarray:
+        """The wrapped controller's command; shows the state on every ``every``-th call."""
+        if self._calls % self.every == 0:
+            self.viewer.display(state)
+        self._calls += 1
+        return self.controller(t, state)
+
+
+def _frame_samples(t: np.ndarray, fps: float) -> np.ndarray:
+    """Indices of the samples nearest to t0, t0 + 1/fps, ... up to the last sample."""
+    times = np.arange(t[0], t[-1] + 0.5 / fps, 1.0 / fps)
+    return np.unique(np.clip(np.searchsorted(t, times), 0, len(t) - 1))
+
+
+def _object_poses(traj: Trajectory, k: int) -> list[pin.SE3]:
+    poses = []
+    for position, quaternion in zip(traj.object_position[k], traj.object_quaternion[k]):
+        poses.append(pin.XYZQUATToSE3(np.concatenate((position, quaternion))))
+    return poses
+
+
+def _contact_overlays(point, normal, force, sticking: bool, force_scale: float, mu: float) -> dict[str, tuple]:
+    """(transform, scale, visible) of a contact's force arrow (stick or slip colour) and friction cone.
+
+    The arrow is the force on the object, from the contact point, ``force_scale`` [m/N] long per newton; the cone
+    has its apex at the point, its axis along the normal and radius mu * height (the friction cone's half-angle).
+    """
+    point, normal, force = (np.asarray(a, dtype=float) for a in (point, normal, force))
+    magnitude = float(np.linalg.norm(force))
+    direction = force / magnitude if magnitude > 1e-9 else normal
+    length = max(force_scale * magnitude, 1e-4)
+    arrow = _along(direction, point + 0.5 * length * direction)
+    cone = _along(normal, point + 0.5 * CONE_HEIGHT * normal)
+    return {
+        "stick": (arrow, (1.0, length, 1.0), sticking),
+        "slip": (arrow, (1.0, length, 1.0), not sticking),
+        "cone": (cone, (mu * CONE_HEIGHT, CONE_HEIGHT, mu * CONE_HEIGHT), True),
+    }
+
+
+def _hidden_overlays() -> dict[str, tuple]:
+    return dict.fromkeys(("stick", "slip", "cone"), (np.eye(4), (1.0, 1.0, 1.0), False))
+
+
+def _along(direction: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """A rigid transform whose local y axis (three.js cylinders' axis) points along ``direction``, at ``centre``."""
+    transform = np.eye(4)
+    transform[:3, :3] = pin.Quaternion.FromTwoVectors(np.array([0.0, 1.0, 0.0]), direction).toRotationMatrix()
+    transform[:3, 3] = centre
+    return transform
+
+
+def _translation(position: np.ndarray) -> np.ndarray:
+    transform = np.eye(4)
+    transform[:3, 3] = position
+    return transform
+
+
+def _animate_ghost(view, traj: Trajectory, k: int, poses: list[pin.SE3]) -> None:
+    error = traj.log["object_error"][k]
+    node = view[f"{ROOT}/desired_pose"]
+    if not (poses and np.all(np.isfinite(error))):
+        node.set_property("visible", "boolean", False)
+        return
+    pose = poses[0]
+    rotation = pin.exp3(-error[3:]) @ pose.rotation  # log(R R_d^T) = e_rot
+    node.set_transform(pin.SE3(rotation, pose.translation - error[:3]).homogeneous)
+    node.set_property("visible", "boolean", True)
+
+
+def _meshcat_shape(item: RigidObject) -> mg.Geometry | None:
+    if isinstance(item, Box):
+        return mg.Box(list(item.size))
+    if isinstance(item, Sphere):
+        return mg.Sphere(item.radius)
+    if isinstance(item, Cylinder | Capsule):
+        return None  # along z in coal, along y in three.js: not drawn as a ghost
+    return None
+
+
+__all__ = ["LiveView", "SceneViewer"]
