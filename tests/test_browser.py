@@ -21,6 +21,7 @@ from bhgrasp.cli import main
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 FLAGS = ["--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--disable-quic"]  # fmt: skip
+BOX_HEIGHT = "viewer.scene_tree.find(['meshcat','bhgrasp','visuals','object0']).object.position.z"
 LINKS = ["palm_0", "F1_proximal_link_0", "F2_distal_link_0", "F3_distal_link_0", "object0"]
 
 pytestmark = pytest.mark.browser

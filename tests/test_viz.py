@@ -67,7 +67,7 @@ def test_frames_are_decimated_to_at_most_60_per_second():
 
 
 def test_replay_exports_a_self_contained_animated_page(held, tmp_path):
-    hold, traj, viewer = held
+    _, traj, viewer = held
     animation = viewer.replay(traj, fps=30)
     paths = {clip.lower().casefold() for clip in animation.clips}  # meshcat Path.lower() gives "/meshcat/bhgrasp/..."
     assert "/meshcat/bhgrasp/visuals/f3_distal_link_0" in paths  # hand links are animated
