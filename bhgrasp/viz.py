@@ -17,6 +17,7 @@ that works offline (meshcat's ``static_html``: the JavaScript is inlined).  ``bh
 
 from __future__ import annotations
 
+import html
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -256,6 +257,11 @@ class SceneViewer:
     def static_html(self) -> str:
         """The scene (and its animation, after :meth:`replay`) as one self-contained HTML page."""
         return self.viewer.static_html()
+
+    def iframe(self, height: int = 450) -> str:
+        """:meth:`static_html` in an ``<iframe srcdoc=...>``, for ``IPython.display.HTML`` in a notebook."""
+        page = html.escape(self.static_html(), quote=True)
+        return f'<iframe srcdoc="{page}" style="width: 100%; height: {int(height)}px; border: none"></iframe>'
 
     def save_html(self, path: str | Path) -> Path:
         """Write :meth:`static_html` to ``path``; it opens offline in any WebGL browser."""
