@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
-from bhgrasp.errors import BhgraspError
+from bhgrasp.errors import BhgraspError, InputError
 from bhgrasp.experiments.grasp_demo import CONTROLLERS
 
 
@@ -40,12 +41,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     tour.add_argument("--samples", type=int, default=20_000, help="workspace samples per finger")
     tour.add_argument("--seed", type=int, default=0, help="random seed of the workspace sampling")
     tour.add_argument("--hold", type=float, default=1.0, help="simulated duration of the grasp hold [s]")
-    commands.add_parser("info", help="print the hand summary only")
+    info = commands.add_parser("info", help="print a hand's joints, limits and link masses")
+    info.add_argument("--urdf", type=Path, default=None, help="any hand URDF instead of the packaged Barrett hand")
+    tune = commands.add_parser(
+        "tune", help="tune F3's force-based impedance (M_I, K_I) with CMA-ES on the fitness (4.49) of thesis chapter 4"
+    )
+    tune.add_argument("--generations", type=int, default=10, help="CMA-ES generations")
+    tune.add_argument("--population", type=int, default=8, help="candidates per generation")
+    tune.add_argument("--seed", type=int, default=0, help="CMA-ES seed")
+    tune.add_argument("--force", type=float, default=6.0, help="desired contact force [N]")
+    tune.add_argument("--serial", action="store_true", help="evaluate in this process instead of a process pool")
+    bench = commands.add_parser("bench", help="run benchmarks/*.py of a source checkout (ratios, see BENCHMARKS.md)")
+    bench.add_argument("--quick", action="store_true", help="a few repetitions only (a smoke run)")
     experiments = commands.add_parser("experiments", help="reproduce a thesis chapter: report (markdown) and figures")
     experiments.add_argument(
         "chapter",
-        choices=["ch3", "ch4", "ch5"],
-        help="ch3: joint-space control (CTC, SMC, ASMC, HOSM); ch4: force control; ch5: grasping and manipulation",
+        choices=["ch3", "ch4", "ch5", "all"],
+        help="ch3: joint-space control (CTC, SMC, ASMC, HOSM); ch4: force control; ch5: grasping and "
+        "manipulation; all: the three",
     )
     experiments.add_argument("--output", type=Path, default=Path("docs/results"), help="folder for report and figures")
     experiments.add_argument(
@@ -62,15 +75,63 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     if args.command == "experiments":
-        return _experiments(args.chapter, args.output, args.scale, not args.no_figures)
-    if args.command == "info":
-        from bhgrasp import BarrettHand
-
-        print(BarrettHand().summary())
+        chapters = ("ch3", "ch4", "ch5") if args.chapter == "all" else (args.chapter,)
+        for chapter in chapters:
+            status = _experiments(chapter, args.output, args.scale, not args.no_figures)
+            if status:
+                return status
         return 0
+    if args.command == "info":
+        from bhgrasp import BarrettHand, Hand
+
+        print((BarrettHand() if args.urdf is None else Hand.from_urdf(args.urdf)).summary())
+        return 0
+    if args.command == "tune":
+        return _tune(args)
+    if args.command == "bench":
+        return _bench(args.quick)
     if args.command == "demo":
         return _grasp_demo(args)
     return _tour(args.output, args.samples, args.seed, args.hold)
+
+
+def _tune(args: argparse.Namespace) -> int:
+    from bhgrasp import tuning
+    from bhgrasp.experiments.chapter4 import impedance_fitness
+
+    if args.generations < 1 or args.population < 2:
+        raise InputError(f"--generations must be >= 1 and --population >= 2, got {args.generations}, {args.population}")
+    print(f"tuning log10 (M_I [kg], K_I [N/m]) of F3's impedance for f_d = {args.force:g} N ...")
+    result = tuning.cma_es(
+        functools.partial(impedance_fitness, force=args.force), x0=[-1.0, 2.0], sigma0=0.5, seed=args.seed,
+        max_generations=args.generations, population=args.population, bounds=([-2.5, 0.5], [0.5, 3.5]),
+        executor="serial" if args.serial else None,
+    )  # fmt: skip
+    mass, stiffness = 10.0**result.best
+    print(f"best M_I = {mass:.4g} kg, K_I = {stiffness:.4g} N/m: mean force error {result.best_fitness:.4f} N")
+    print(f"{result.generations} generations, {result.evaluations} simulations")
+    return 0
+
+
+BENCH_QUICK = {"bench_hand.py": ["--repeat", "200"], "bench_sim.py": ["--duration", "0.05"],
+               "bench_control.py": ["--repeat", "50"], "bench_qp.py": ["--cycles", "50"]}  # fmt: skip
+
+
+def _bench(quick: bool) -> int:
+    import subprocess
+
+    folder = Path(__file__).resolve().parents[1] / "benchmarks"
+    scripts = sorted(folder.glob("bench_*.py"))
+    if not scripts:
+        raise InputError(f"no benchmarks at {folder}: `bhgrasp bench` runs from a source checkout (pip install -e .)")
+    for script in scripts:
+        print(f"== {script.name}", flush=True)
+        extra = BENCH_QUICK.get(script.name, []) if quick else []
+        status = subprocess.run([sys.executable, str(script), *extra], check=False).returncode
+        if status:
+            print(f"bhgrasp: error: {script.name} exited with {status}", file=sys.stderr)
+            return status
+    return 0
 
 
 def _grasp_demo(args: argparse.Namespace) -> int:

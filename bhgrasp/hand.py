@@ -469,11 +469,14 @@ class Hand:
     def summary(self) -> str:
         """A human-readable table of joints, limits, fingers and mass."""
         lines = [f"{self.name}: {self.nv} joints, {len(self.fingers)} fingers, {self.total_mass:.4f} kg"]
-        lines.append(f"  {'joint':<16}{'lower':>9}{'upper':>9}  [deg]{'vel':>8} [rad/s]{'effort':>8} [N m]")
+        lines.append(
+            f"  {'joint':<16}{'lower':>9}{'upper':>9}  [deg]{'vel':>8} [rad/s]{'effort':>8} [N m]{'link mass':>11} [kg]"
+        )
         for i, joint in enumerate(self.joint_names):
+            mass = self._model.inertias[self._model.getJointId(joint)].mass
             lines.append(
                 f"  {joint:<16}{np.degrees(self.lower[i]):9.1f}{np.degrees(self.upper[i]):9.1f}"
-                f"{self.velocity_limit[i]:13.3f}{self.effort_limit[i]:15.3f}"
+                f"{self.velocity_limit[i]:13.3f}{self.effort_limit[i]:15.3f}{mass:14.4f}"
             )
         for finger in self.fingers:
             lines.append(

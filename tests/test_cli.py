@@ -8,7 +8,10 @@ from pathlib import Path
 
 import pytest
 
+import bhgrasp as bh
 from bhgrasp.cli import main
+
+ALLEGRO = "allegro_hand_description/urdf/allegro_right_hand.urdf"
 
 
 def test_demo_grasps_lifts_and_turns_the_box_without_slip(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
@@ -92,3 +95,40 @@ def test_demo_reports_a_bad_mass_in_one_line(capsys: pytest.CaptureFixture) -> N
     assert main(["demo", "--mass", "-1"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("bhgrasp: error:") and "mass" in err and len(err.strip().splitlines()) == 1
+
+
+def test_info_prints_joints_limits_and_link_masses(capsys: pytest.CaptureFixture) -> None:
+    assert main(["info"]) == 0
+    out = capsys.readouterr().out
+    assert "link mass [kg]" in out and "F3_distal" in out
+    assert main(["info", "--urdf", str(bh.example_robot_data_urdf(ALLEGRO))]) == 0
+    assert "16 joints, 4 fingers" in capsys.readouterr().out
+    assert main(["info", "--urdf", "/no/such/hand.urdf"]) == 2
+    assert "no/such/hand.urdf" in capsys.readouterr().err
+
+
+def test_tune_runs_cma_es_on_the_impedance_fitness(capsys: pytest.CaptureFixture) -> None:
+    assert main(["tune", "--generations", "1", "--population", "3", "--serial"]) == 0
+    out = capsys.readouterr().out
+    assert "1 generations, 3 simulations" in out and "best M_I = " in out
+    assert main(["tune", "--generations", "0"]) == 2
+
+
+def test_bench_runs_the_benchmark_scripts(capfd: pytest.CaptureFixture) -> None:
+    assert main(["bench", "--quick"]) == 0
+    out = capfd.readouterr().out
+    assert all(f"== bench_{name}.py" in out for name in ("control", "hand", "qp", "sim"))
+
+
+@pytest.mark.parametrize("command", ["demo", "tour", "info", "tune", "bench", "experiments"])
+def test_every_subcommand_has_help(command: str, capsys: pytest.CaptureFixture) -> None:
+    with pytest.raises(SystemExit) as caught:
+        main([command, "--help"])
+    assert caught.value.code == 0 and f"usage: bhgrasp {command}" in capsys.readouterr().out
+
+
+def test_bad_arguments_exit_with_usage(capsys: pytest.CaptureFixture) -> None:
+    for argv in (["demo", "--controller", "pid"], ["experiments", "ch9"], ["tune", "--seed", "x"]):
+        with pytest.raises(SystemExit) as caught:
+            main(argv)
+        assert caught.value.code == 2 and "error:" in capsys.readouterr().err
