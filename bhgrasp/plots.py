@@ -104,6 +104,36 @@ def save_force_figure(case: Any, path: Path) -> Path:
     return path
 
 
+def log_figure(
+    runs: dict[str, Trajectory], key: str, channels: Sequence[int], labels: Sequence[str], ylabel: str, title: str = ""
+) -> Figure:
+    """Any logged controller internal against time, one panel per channel, one line per run.
+
+    For example the sliding variables ``s`` of the sliding-mode family, the parameter estimates ``theta`` of the
+    adaptive laws (channels = parameter indices), ``mass_estimate`` or ``object_parameters`` of the grasp laws.
+    Samples where the run did not log ``key`` (NaN) are left blank.
+    """
+    if not runs:
+        raise InputError("`runs` must hold at least one trajectory")
+    if len(channels) != len(labels) or not channels:
+        raise InputError(f"`channels` and `labels` must be non-empty and of equal length, got {channels}, {labels}")
+    figure = Figure(figsize=(11, 2.6 * len(channels)), layout="tight")
+    axes = figure.subplots(len(channels), 1, squeeze=False, sharex=True)[:, 0]
+    for name, traj in runs.items():
+        if key not in traj.log:
+            raise InputError(f"run {name!r} has no logged {key!r}; it logs {sorted(traj.log)}")
+        values = traj.log[key].reshape(len(traj), -1)
+        for axis, channel in zip(axes, channels):
+            axis.plot(traj.t, values[:, channel], lw=1.0, label=name)
+    for axis, label in zip(axes, labels):
+        axis.set(ylabel=f"{label} {ylabel}")
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize=7)
+    axes[0].set_title(title)
+    axes[-1].set_xlabel("t [s]")
+    return figure
+
+
 def _grasping(traj: Trajectory) -> np.ndarray:
     """Samples where a grasp controller ran (its ``object_error`` is logged and finite)."""
     if "object_error" not in traj.log:
@@ -191,6 +221,6 @@ def cone_margin_figure(runs: dict[str, Trajectory], title: str = "") -> Figure:
 
 
 __all__ = [
-    "cone_margin_figure", "force_figure", "grasp_figure", "object_error_figure", "save_case_figures",
+    "cone_margin_figure", "force_figure", "grasp_figure", "log_figure", "object_error_figure", "save_case_figures",
     "save_force_figure", "tracking_figure",
 ]  # fmt: skip

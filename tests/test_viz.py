@@ -10,7 +10,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.experiments.hold import reference_hold
-from bhgrasp.viz import MAX_FPS, SceneViewer, _contact_overlays, _frame_samples
+from bhgrasp.viz import MAX_FPS, LiveView, SceneViewer, _contact_overlays, _frame_samples
 
 
 @pytest.fixture(scope="module")
@@ -78,3 +78,17 @@ def test_replay_exports_a_self_contained_animated_page(held, tmp_path):
     assert not re.search(r"<script[^>]+src=", html)  # no external script: it works offline
     with pytest.raises(bh.InputError, match="fps"):
         viewer.replay(traj, fps=120)
+
+
+def test_live_view_shows_every_nth_state_and_leaves_the_run_unchanged(held, monkeypatch):
+    _, _, viewer = held
+    shown = []
+    real_display = viewer.display
+    monkeypatch.setattr(viewer, "display", lambda state: (shown.append(state.t), real_display(state)))
+    hold, other = reference_hold(), reference_hold()  # fresh simulators: contacts keep their stick anchors
+    plain = hold.simulator.run(hold.controller, 0.05, state=hold.state, progress=False)
+    live = other.simulator.run(LiveView(other.controller, viewer, every=10), 0.05, state=other.state, progress=False)
+    np.testing.assert_array_equal(live.q, plain.q)
+    np.testing.assert_allclose(shown, plain.t[:-1:10])  # the sensed states of calls 0, 10, 20, ...
+    with pytest.raises(bh.InputError, match="every"):
+        LiveView(hold.controller, viewer, every=0)
