@@ -34,6 +34,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     demo.add_argument(
         "--html", type=Path, default=None, help="also write the MeshCat replay as one self-contained HTML file"
     )
+    demo.add_argument(
+        "--viz", action="store_true", help="show the run live in MeshCat (a server on 127.0.0.1; open the printed URL)"
+    )
+    demo.add_argument(
+        "--serve",
+        type=float,
+        default=None,
+        help="with --viz: keep the replay served this many seconds (default: until Enter or Ctrl-C)",
+    )
     tour = commands.add_parser(
         "tour", help="print the hand model, check IK, plot the workspace, simulate a three-finger hold"
     )
@@ -139,8 +148,23 @@ def _grasp_demo(args: argparse.Namespace) -> int:
     from bhgrasp.experiments.grasp_demo import run_grasp_demo, save_demo
 
     print(f"simulating {args.duration:g} s: approach, squeeze, lift and turn a {args.mass:g} kg box ...")
-    result = run_grasp_demo(args.mass, args.estimate, args.controller, args.duration, distribution=args.distribution)
-    print(result.summary())
+    viewer = None
+    if args.viz:
+        from bhgrasp.experiments.box_grasp import box_grasp
+        from bhgrasp.viz import SceneViewer
+
+        viewer = SceneViewer(box_grasp(args.mass).simulator.scene)
+        print(f"MeshCat: {viewer.url}", flush=True)
+    try:
+        result = run_grasp_demo(args.mass, args.estimate, args.controller, args.duration,
+                                distribution=args.distribution, viewer=viewer)  # fmt: skip
+        print(result.summary())
+        if viewer is not None:
+            viewer.replay(result.trajectory)
+            _serve(viewer.url, args.serve)
+    finally:
+        if viewer is not None:
+            viewer.close()
     for path in save_demo(result, BarrettHand(), args.output):
         print(f"wrote {path}")
     if args.html is not None:
@@ -153,6 +177,20 @@ def _grasp_demo(args: argparse.Namespace) -> int:
         finally:
             viewer.close()
     return 0
+
+
+def _serve(url: str, seconds: float | None) -> None:
+    """Keep the MeshCat server (and its replay) up for ``seconds``, or until Enter / Ctrl-C."""
+    import time
+
+    print(f"replay at {url}", flush=True)
+    if seconds is not None:
+        time.sleep(max(seconds, 0.0))
+        return
+    try:
+        input("press Enter to quit ")
+    except (EOFError, KeyboardInterrupt):
+        pass
 
 
 def _tour(output: Path, samples: int, seed: int, duration: float) -> int:

@@ -132,3 +132,9 @@ def test_bad_arguments_exit_with_usage(capsys: pytest.CaptureFixture) -> None:
         with pytest.raises(SystemExit) as caught:
             main(argv)
         assert caught.value.code == 2 and "error:" in capsys.readouterr().err
+
+
+def test_demo_viz_streams_to_a_local_meshcat_server(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    assert main(["demo", "--output", str(tmp_path), "--duration", "1.0", "--viz", "--serve", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "MeshCat: http://127.0.0.1:" in out and "replay at http://127.0.0.1:" in out

@@ -116,6 +116,7 @@ def run_grasp_demo(
     approach_gains: tuple[float, float] = (400.0, 40.0),
     gains: tuple[Any, Any] | None = None,
     progress: bool = False,
+    viewer: Any = None,
 ) -> GraspDemoResult:
     """Grasp, lift and turn the box; see the module docstring.
 
@@ -129,6 +130,7 @@ def run_grasp_demo(
         approach_gains: Joint computed-torque gains (Kp [1/s^2], Kv [1/s]) of the approach.
         gains: (kp, kv) of the "ctc", "natural" or "stiffness" controller instead of the demo's.
         progress: Show a progress bar.
+        viewer: A :class:`bhgrasp.viz.SceneViewer` of this scene to stream the run to (every 20 ms).
     """
     mass, estimate, duration = (
         as_positive(mass, "mass"),
@@ -141,8 +143,13 @@ def run_grasp_demo(
     grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains)
     kp, kv = approach_gains
     supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=offset, kp=kp, kv=kv)
+    law = supervisor
+    if viewer is not None:
+        from bhgrasp.viz import LiveView
+
+        law = LiveView(supervisor, viewer, every=20)
     start = time.perf_counter()
-    traj = setup.simulator.run(supervisor, duration, state=setup.state, progress=progress)
+    traj = setup.simulator.run(law, duration, state=setup.state, progress=progress)
     wall = time.perf_counter() - start
     return _evaluate(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
 
