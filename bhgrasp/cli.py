@@ -216,33 +216,20 @@ def _tour(output: Path, samples: int, seed: int, duration: float) -> int:
 
 
 def _experiments(chapter: str, output: Path, scale: float, figures: bool) -> int:
+    import importlib
     import time
 
     if not (np.isfinite(scale) and scale > 0.0):
         print(f"bhgrasp: error: --scale must be a positive number, got {scale}", file=sys.stderr)
         return 2
+    number = chapter[2:]
+    module = importlib.import_module(f"bhgrasp.experiments.chapter{number}")
     start = time.perf_counter()
-    if chapter == "ch3":
-        from bhgrasp.experiments.chapter3 import run_chapter3
-
-        cases = run_chapter3(output, scale=scale, figures=figures)
-        runs = sum(len(case.runs) for case in cases)
-        print(f"{chapter}: {len(cases)} cases, {runs} runs in {time.perf_counter() - start:.1f} s")
-        print(f"report: {output / 'chapter3.md'}")
-        return 0
-    if chapter == "ch5":
-        from bhgrasp.experiments.chapter5 import run_chapter5
-
-        cases = run_chapter5(output, scale=scale, figures=figures)
-        runs = sum(len(case.runs) for case in cases)
-        print(f"{chapter}: {len(cases)} cases, {runs} runs in {time.perf_counter() - start:.1f} s")
-        print(f"report: {output / 'chapter5.md'}")
-        return 0
-    from bhgrasp.experiments.chapter4 import run_chapter4
-
-    cases = run_chapter4(output, scale=scale, figures=figures)
-    print(f"{chapter}: {len(cases)} cases in {time.perf_counter() - start:.1f} s")
-    print(f"report: {output / 'chapter4.md'}")
+    cases = getattr(module, f"run_chapter{number}")(output, scale=scale, figures=figures)
+    runs = sum(len(getattr(case, "runs", ())) for case in cases)
+    counted = f", {runs} runs" if runs else ""
+    print(f"{chapter}: {len(cases)} cases{counted} in {time.perf_counter() - start:.1f} s")
+    print(f"report: {output / f'chapter{number}.md'}")
     return 0
 
 
