@@ -60,6 +60,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     tune.add_argument("--seed", type=int, default=0, help="CMA-ES seed")
     tune.add_argument("--force", type=float, default=6.0, help="desired contact force [N]")
     tune.add_argument("--serial", action="store_true", help="evaluate in this process instead of a process pool")
+    sweep = commands.add_parser(
+        "sweep", help="run a parameter sweep of the grasp demo from a TOML file (grid or random design, process pool)"
+    )
+    sweep.add_argument(
+        "config", type=Path, help="TOML: [sweep] output, log, workers, seed; [grid] or [random]; [fixed]"
+    )
     bench = commands.add_parser("bench", help="run benchmarks/*.py of a source checkout (ratios, see BENCHMARKS.md)")
     bench.add_argument("--quick", action="store_true", help="a few repetitions only (a smoke run)")
     experiments = commands.add_parser("experiments", help="reproduce a thesis chapter: report (markdown) and figures")
@@ -97,6 +103,8 @@ def _run(args: argparse.Namespace) -> int:
         return 0
     if args.command == "tune":
         return _tune(args)
+    if args.command == "sweep":
+        return _sweep(args.config)
     if args.command == "bench":
         return _bench(args.quick)
     if args.command == "demo":
@@ -122,8 +130,47 @@ def _tune(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sweep(config_path: Path) -> int:
+    import tomllib
+
+    from bhgrasp import sweep
+
+    try:
+        config = tomllib.loads(config_path.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as error:
+        raise InputError(f"cannot read the sweep configuration {str(config_path)!r}: {error}") from error
+    settings = config.get("sweep", {})
+    unknown = set(config) - {"sweep", "grid", "random", "fixed"}
+    if unknown or ("grid" in config) == ("random" in config):
+        raise InputError(f"{config_path}: give [sweep], exactly one of [grid] or [random], and optionally [fixed]; "
+                         f"unknown tables {sorted(unknown)}")  # fmt: skip
+    if "grid" in config:
+        design = sweep.grid(**config["grid"])
+    else:
+        ranges = dict(config["random"])
+        n = ranges.pop("n", None)
+        if n is None:
+            raise InputError(f"{config_path}: [random] needs n = <number of cases>")
+        design = sweep.random_design(n, settings.get("seed", 0), **ranges)
+    fixed = config.get("fixed", {})
+    design = [{**fixed, **case} for case in design]
+    output = Path(settings.get("output", "sweep.csv"))
+    log = Path(settings.get("log", output.with_suffix(".jsonl")))
+    workers = int(settings.get("workers", 0)) or None
+    executor = "serial" if workers == 1 else None
+    print(f"sweep: {len(design)} cases, log {log}, {workers or 'all'} worker(s)")
+    table = sweep.run_sweep(sweep.grasp_rollout, design, seed=settings.get("seed", 0), log=log, executor=executor,
+                            workers=workers, progress=bool(settings.get("progress", True)))  # fmt: skip
+    output.parent.mkdir(parents=True, exist_ok=True)
+    table.to_csv(output, index=False)
+    failed = int((table["status"] != "ok").sum())
+    print(f"wrote {output}: {len(table)} cases, {failed} failed")
+    return 0
+
+
 BENCH_QUICK = {"bench_hand.py": ["--repeat", "200"], "bench_sim.py": ["--duration", "0.05"],
-               "bench_control.py": ["--repeat", "50"], "bench_qp.py": ["--cycles", "50"]}  # fmt: skip
+               "bench_control.py": ["--repeat", "50"], "bench_qp.py": ["--cycles", "50"],
+               "bench_sweep.py": ["--cases", "2", "--duration", "0.8"]}  # fmt: skip
 
 
 def _bench(quick: bool) -> int:

@@ -26,7 +26,7 @@ from bhgrasp.controllers.grasping import GraspForceController, ObjectGraspContro
 from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.errors import InputError
-from bhgrasp.experiments.box_grasp import box_grasp
+from bhgrasp.experiments.box_grasp import STIFFNESS, box_grasp
 from bhgrasp.grasp_metrics import finger_normal_forces, slip_events
 from bhgrasp.objects import Box
 from bhgrasp.plots import grasp_figure
@@ -117,6 +117,9 @@ def run_grasp_demo(
     gains: tuple[Any, Any] | None = None,
     progress: bool = False,
     viewer: Any = None,
+    stiffness: float = STIFFNESS,
+    sensor_noise: tuple[float, float] | None = None,
+    seed: int = 0,
 ) -> GraspDemoResult:
     """Grasp, lift and turn the box; see the module docstring.
 
@@ -131,6 +134,9 @@ def run_grasp_demo(
         gains: (kp, kv) of the "ctc", "natural" or "stiffness" controller instead of the demo's.
         progress: Show a progress bar.
         viewer: A :class:`bhgrasp.viz.SceneViewer` of this scene to stream the run to (every 20 ms).
+        stiffness: Contact stiffness [N/m].
+        sensor_noise: (sigma_q [rad], sigma_v [rad/s]) Gaussian noise on the joint state the controller reads.
+        seed: Seed of the sensor noise.
     """
     mass, estimate, duration = (
         as_positive(mass, "mass"),
@@ -138,7 +144,7 @@ def run_grasp_demo(
         as_positive(duration, "duration"),
     )
     offset = as_vector(offset, "offset", 6)
-    setup = box_grasp(mass=mass)
+    setup = box_grasp(mass=mass, stiffness=as_positive(stiffness, "stiffness"))
     nominal_box = Box(size=setup.box.size, mass=estimate)
     grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains)
     kp, kv = approach_gains
@@ -149,7 +155,9 @@ def run_grasp_demo(
 
         law = LiveView(supervisor, viewer, every=20)
     start = time.perf_counter()
-    traj = setup.simulator.run(law, duration, state=setup.state, progress=progress)
+    traj = setup.simulator.run(
+        law, duration, state=setup.state, progress=progress, sensor_noise=sensor_noise, seed=seed
+    )
     wall = time.perf_counter() - start
     return _evaluate(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
 

@@ -1,0 +1,213 @@
+"""Parameter sweeps: a grid or seeded random design, one seeded rollout per case, on any executor.
+
+A *rollout* is a top-level (picklable) function ``rollout(parameters: dict, seed: int) -> dict[str, float]`` that
+returns per-case metrics.  :func:`run_sweep` runs it for every case of a design through any
+:class:`concurrent.futures.Executor`: a local process pool by default, or a Dask cluster unchanged
+(``distributed.Client(...).get_executor()``).  Every finished case is appended at once to a JSON-lines log; a case
+that raises is recorded with ``status = "failed"`` and its error, and never stops the sweep.  Running again with the
+same log skips the cases already in it (resume after an interruption).  The result is a pandas DataFrame, one row per
+case: ``case``, ``seed``, the parameters, ``status``, ``error``, ``wall_time`` [s] and the metrics.
+
+:func:`grasp_rollout` is the built-in scenario: the grasp demo (:func:`~bhgrasp.experiments.grasp_demo.run_grasp_demo`)
+with any of its parameters varied.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from bhgrasp.errors import InputError
+
+Rollout = Callable[[dict[str, Any], int], Mapping[str, Any]]
+RESERVED = ("case", "seed", "status", "error", "wall_time")
+
+
+def grid(**axes: Sequence[Any]) -> list[dict[str, Any]]:
+    """Every combination of the given values (a full factorial design), in ``itertools.product`` order."""
+    if not axes:
+        raise InputError("`grid` needs at least one parameter axis, e.g. grid(mass=[0.2, 0.5])")
+    for name, values in axes.items():
+        if isinstance(values, str) or not isinstance(values, Iterable) or len(list(values)) == 0:
+            raise InputError(f"axis {name!r} must be a non-empty list of values, got {values!r}")
+    names = list(axes)
+    return [dict(zip(names, combination)) for combination in itertools.product(*(list(axes[n]) for n in names))]
+
+
+def random_design(n: int, seed: int, **ranges: tuple[float, float]) -> list[dict[str, float]]:
+    """``n`` cases drawn uniformly in each ``(low, high)`` range, from a seeded generator."""
+    if int(n) < 1:
+        raise InputError(f"`n` must be a positive integer, got {n}")
+    if not ranges:
+        raise InputError("`random_design` needs at least one range, e.g. mass=(0.2, 1.0)")
+    rng = np.random.default_rng(seed)
+    bounds = {}
+    for name, value in ranges.items():
+        low, high = (float(v) for v in value)
+        if not (np.isfinite(low) and np.isfinite(high) and low <= high):
+            raise InputError(f"range {name!r} must be finite (low, high) with low <= high, got {value!r}")
+        bounds[name] = (low, high)
+    return [{name: float(rng.uniform(low, high)) for name, (low, high) in bounds.items()} for _ in range(int(n))]
+
+
+def case_seeds(n: int, seed: int) -> list[int]:
+    """Independent per-case seeds from one sweep seed (numpy SeedSequence spawning)."""
+    return [int(child.generate_state(1)[0]) for child in np.random.SeedSequence(seed).spawn(n)]
+
+
+def run_sweep(
+    rollout: Rollout,
+    design: Sequence[Mapping[str, Any]],
+    *,
+    seed: int = 0,
+    log: str | Path | None = None,
+    executor: Executor | Literal["serial"] | None = None,
+    workers: int | None = None,
+    progress: bool = False,
+):
+    """Run ``rollout`` on every case of ``design``; returns a pandas DataFrame (one row per case, case order).
+
+    Args:
+        rollout: Top-level function ``(parameters, seed) -> metrics`` (must pickle for a process pool or Dask).
+        design: The cases' parameter dicts (:func:`grid`, :func:`random_design`, or any list).
+        seed: Sweep seed; case ``i`` gets ``case_seeds(len(design), seed)[i]``.
+        log: JSON-lines file that receives each finished case; cases already in it are skipped (resume).
+        executor: ``None`` (a local process pool of ``workers`` processes, default the CPU count), ``"serial"``
+            (in this process), or any ``concurrent.futures.Executor`` such as a Dask ``Client.get_executor()``.
+        workers: Processes of the default pool.
+        progress: Show a tqdm progress bar.
+    """
+    import pandas as pd
+
+    cases = [dict(case) for case in design]
+    if not cases:
+        raise InputError("`design` has no cases")
+    for index, case in enumerate(cases):
+        clash = [name for name in case if name in RESERVED]
+        if clash:
+            raise InputError(f"case {index} uses reserved column names {clash}; rename the parameters")
+    seeds = case_seeds(len(cases), seed)
+    path = None if log is None else Path(log)
+    rows = _read_log(path, len(cases), seeds) if path is not None else {}
+    todo = [i for i in range(len(cases)) if i not in rows]
+    bar = _progress(progress, len(cases), len(rows))
+    for row in _execute(rollout, cases, seeds, todo, executor, workers):
+        rows[row["case"]] = row
+        if path is not None:
+            _append(path, row)
+        if bar is not None:
+            bar.update(1)
+    if bar is not None:
+        bar.close()
+    return pd.DataFrame([rows[i] for i in sorted(rows)])
+
+
+def _execute(rollout, cases, seeds, todo, executor, workers):
+    if executor == "serial":
+        for i in todo:
+            yield _run_case(rollout, i, cases[i], seeds[i])
+        return
+    owned = executor is None
+    if owned:
+        executor = ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1)
+    elif not isinstance(executor, Executor):
+        raise InputError(f"`executor` must be None, 'serial' or a concurrent.futures.Executor, got {executor!r}")
+    try:
+        futures: dict[Future, int] = {executor.submit(_run_case, rollout, i, cases[i], seeds[i]): i for i in todo}
+        for future in as_completed(futures):
+            yield future.result()  # _run_case never raises: failures come back as rows
+    finally:
+        if owned:
+            executor.shutdown(cancel_futures=True)
+
+
+def _run_case(rollout: Rollout, index: int, parameters: dict[str, Any], seed: int) -> dict[str, Any]:
+    """One case as a row; an exception becomes ``status = "failed"`` with its message."""
+    row: dict[str, Any] = {"case": index, "seed": seed, **parameters}
+    start = time.perf_counter()
+    try:
+        metrics = dict(rollout(dict(parameters), seed))
+    except Exception as error:
+        row.update(status="failed", error=f"{type(error).__name__}: {error}")
+    else:
+        clash = [name for name in metrics if name in RESERVED or name in parameters]
+        if clash:
+            row.update(status="failed", error=f"rollout returned reserved or parameter names {clash}")
+        else:
+            row.update(status="ok", error="", **{k: _plain(v) for k, v in metrics.items()})
+    row["wall_time"] = time.perf_counter() - start
+    return row
+
+
+def _plain(value: Any) -> Any:
+    """JSON-friendly scalars (numpy numbers to Python numbers)."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def _read_log(path: Path, n: int, seeds: list[int]) -> dict[int, dict[str, Any]]:
+    """Rows already in the log, checked against this sweep (same case count and seeds)."""
+    rows: dict[int, dict[str, Any]] = {}
+    if not path.exists():
+        return rows
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
+        if not line.strip():
+            continue
+        try:
+            row = json.loads(line)
+            case = int(row["case"])
+        except (ValueError, KeyError, TypeError) as error:
+            raise InputError(f"{path}:{number} is not a sweep log line ({error})") from error
+        if not 0 <= case < n or row.get("seed") != seeds[case]:
+            raise InputError(f"{path} belongs to another sweep (case {case}, seed {row.get('seed')}); use a new log")
+        rows[case] = row
+    return rows
+
+
+def _append(path: Path, row: dict[str, Any]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("a") as stream:
+        stream.write(json.dumps(row) + "\n")
+        stream.flush()
+
+
+def _progress(enabled: bool, total: int, done: int):
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, initial=done, desc="sweep", unit="case")
+
+
+def grasp_rollout(parameters: dict[str, Any], seed: int) -> dict[str, float]:
+    """The grasp demo as a sweep scenario; ``parameters`` are keyword arguments of ``run_grasp_demo``.
+
+    For example ``mass``, ``estimate``, ``controller``, ``distribution``, ``stiffness``, ``duration`` and
+    ``sensor_noise`` (whose draws use the case's ``seed``).  Returns the demo's figures of merit: pose errors
+    [m, rad], force error (fraction), slip events, the final mass estimate [kg] (NaN for non-adaptive controllers),
+    the grasp time [s] and the minimum cone margin [N].
+    """
+    from bhgrasp.experiments.grasp_demo import run_grasp_demo
+
+    if "seed" in parameters:
+        raise InputError("the case seed comes from the sweep; do not give `seed` as a parameter")
+    result = run_grasp_demo(**parameters, seed=seed)
+    return {
+        "position_error": result.position_error,
+        "rotation_error": result.rotation_error,
+        "force_error": result.force_error,
+        "slip_events": float(result.slip_events),
+        "mass_estimate": float("nan") if result.mass_estimate is None else result.mass_estimate,
+        "grasp_time": result.grasp_time,
+        "cone_margin": result.cone_margin,
+    }
+
+
+__all__ = ["case_seeds", "grasp_rollout", "grid", "random_design", "run_sweep"]
