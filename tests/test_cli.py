@@ -138,3 +138,9 @@ def test_demo_viz_streams_to_a_local_meshcat_server(tmp_path: Path, capsys: pyte
     assert main(["demo", "--output", str(tmp_path), "--duration", "1.0", "--viz", "--serve", "0"]) == 0
     out = capsys.readouterr().out
     assert "MeshCat: http://127.0.0.1:" in out and "replay at http://127.0.0.1:" in out
+
+
+def test_cli_starts_without_matplotlib_or_meshcat() -> None:
+    """`bhgrasp info` / `--help` must stay quick: plotting and 3D libraries load only when a command draws."""
+    code = "import sys, bhgrasp.cli; print('matplotlib' in sys.modules, 'meshcat' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.split() == ["False"] * 2

@@ -15,10 +15,9 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from matplotlib.figure import Figure
 
 from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
@@ -29,9 +28,11 @@ from bhgrasp.errors import InputError
 from bhgrasp.experiments.box_grasp import STIFFNESS, box_grasp
 from bhgrasp.grasp_metrics import finger_normal_forces, slip_events
 from bhgrasp.objects import Box
-from bhgrasp.plots import grasp_figure
 from bhgrasp.scene import Scene
 from bhgrasp.state import Trajectory
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 CONTROLLERS = ("smc-adaptive", "ctc", "natural", "stiffness", "pd")
 OFFSET = (0.0, 0.0, 0.010, 0.1, 0.0, 0.0)  # [m, rad]: 10 mm up, 0.1 rad about x
@@ -202,6 +203,8 @@ def _evaluate(traj, hand, controller, mass, estimate, supervisor, wall, scene) -
 
 def demo_figure(result: GraspDemoResult, hand) -> Figure:
     """Object pose error, measured vs. commanded normal forces, and the mass estimate (or the cone margin)."""
+    from bhgrasp.plots import grasp_figure
+
     measured = finger_normal_forces(hand, result.trajectory)
     return grasp_figure(result.trajectory, hand.fingers, measured, result.true_mass)
 
