@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from bhgrasp.errors import BhgraspError, InputError
-from bhgrasp.experiments.grasp_demo import CONTROLLERS
+from bhgrasp.experiments.grasp_demo import CONTROLLERS, HANDS
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -24,6 +24,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         "prints the pose and force errors, slip events and time, writes a figure and the trajectory",
     )
     demo.add_argument("--output", type=Path, default=Path("bhgrasp_demo"), help="folder for figure and trajectory")
+    demo.add_argument(
+        "--hand", choices=HANDS, default="barrett", help="the Barrett hand, or the Allegro hand of example-robot-data"
+    )
     demo.add_argument("--controller", choices=CONTROLLERS, default="smc-adaptive", help="object-space controller")
     demo.add_argument("--mass", type=float, default=0.6, help="true box mass [kg]")
     demo.add_argument("--estimate", type=float, default=0.3, help="mass the controller starts from [kg]")
@@ -191,20 +194,18 @@ def _bench(quick: bool) -> int:
 
 
 def _grasp_demo(args: argparse.Namespace) -> int:
-    from bhgrasp import BarrettHand
-    from bhgrasp.experiments.grasp_demo import run_grasp_demo, save_demo
+    from bhgrasp.experiments.grasp_demo import grasp_scene, run_grasp_demo, save_demo
 
     print(f"simulating {args.duration:g} s: approach, squeeze, lift and turn a {args.mass:g} kg box ...")
     viewer = None
     if args.viz:
-        from bhgrasp.experiments.box_grasp import box_grasp
         from bhgrasp.viz import SceneViewer
 
-        viewer = SceneViewer(box_grasp(args.mass).simulator.scene)
+        viewer = SceneViewer(grasp_scene(args.hand, args.mass).simulator.scene)
         print(f"MeshCat: {viewer.url}", flush=True)
     try:
         result = run_grasp_demo(args.mass, args.estimate, args.controller, args.duration,
-                                distribution=args.distribution, viewer=viewer)  # fmt: skip
+                                distribution=args.distribution, viewer=viewer, hand=args.hand)  # fmt: skip
         print(result.summary())
         if viewer is not None:
             viewer.replay(result.trajectory)
@@ -212,7 +213,7 @@ def _grasp_demo(args: argparse.Namespace) -> int:
     finally:
         if viewer is not None:
             viewer.close()
-    for path in save_demo(result, BarrettHand(), args.output):
+    for path in save_demo(result, result.scene.hand, args.output):
         print(f"wrote {path}")
     if args.html is not None:
         from bhgrasp.viz import SceneViewer

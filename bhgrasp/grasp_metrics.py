@@ -5,22 +5,24 @@ from __future__ import annotations
 import numpy as np
 
 from bhgrasp.hand import Hand
+from bhgrasp.sensing import ContactSensing
 from bhgrasp.state import Trajectory
 
 
 def finger_of(hand: Hand, link: str) -> str | None:
-    """The finger whose link frame is ``link`` (name prefix), or ``None`` (palm, environment)."""
-    return next((finger for finger in hand.fingers if link.startswith(finger)), None)
+    """The finger whose joints move the link frame ``link``, or ``None`` (palm, environment)."""
+    return ContactSensing(hand).finger_of(link)
 
 
 def finger_normal_forces(hand: Hand, traj: Trajectory) -> np.ndarray:
     """(N, n_fingers) measured normal force [N] of each finger on the objects (sum over its contact points)."""
     forces = np.zeros((len(traj), len(hand.fingers)))
     objects = set(traj.object_names)
+    sensing = ContactSensing(hand)
     for k in range(len(traj)):
         contacts = traj.contacts_at(k)
         for (link, other), force, normal in zip(contacts["bodies"], contacts["force"], contacts["normal"]):
-            finger = finger_of(hand, link)
+            finger = sensing.finger_of(link)
             if finger is not None and other in objects:
                 forces[k, hand.fingers.index(finger)] += force @ normal
     return forces

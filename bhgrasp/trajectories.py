@@ -9,6 +9,7 @@ references in [rad], [rad/s], [rad/s^2]; Cartesian ones in [m], [m/s], [m/s^2] i
 - :func:`exponential_approach`: the same curve written with a rate, as in thesis (4.29).
 - :class:`Sinusoid`: ``offset + amplitude sin(2 pi f t + phase)``.
 - :class:`Quintic`: minimum-jerk point-to-point motion (zero velocity and acceleration at both ends).
+- :class:`PoseMotion`: minimum-jerk motion of a rigid-body pose by a world offset (twist as its velocity).
 - :class:`Constant`: a set point.
 - :class:`CartesianReference`: a fingertip reference in the world turned into a joint reference of a whole hand
   by closed-form IK and the finger Jacobian.
@@ -24,6 +25,7 @@ from abc import ABC, abstractmethod
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_real, as_vector, require_name
 from bhgrasp.errors import InputError, ModelError
@@ -181,6 +183,45 @@ class Quintic(Reference):
         return position, velocity, acceleration
 
 
+class PoseMotion(Reference):
+    """Minimum-jerk motion of a rigid-body pose by a world offset: the object reference of the grasp supervisor.
+
+    With the minimum-jerk blend b(t) of :class:`Quintic` (0 -> 1 over ``duration`` after ``delay``):
+    ``x(t) = x_0 + b dx`` and ``R(t) = exp(b dtheta) R_0`` (a rotation about the fixed world axis of
+    ``dtheta``).  The sample is (x [m], rotation vector log(R) [rad]); the velocity and acceleration are the world
+    twist (v [m/s], omega [rad/s]) and its derivative, omega = b' dtheta, which is what the object-space
+    controllers read.  (Adding ``dtheta`` to the rotation vector of R_0 instead, as a :class:`Quintic` on the six
+    components would, turns about the wrong axis unless R_0 = I.)
+    """
+
+    def __init__(self, start: Any, offset: Any, duration: float, delay: float = 0.0) -> None:
+        """Build the motion.
+
+        Args:
+            start: Initial pose as a ``pinocchio.SE3`` (world <- body).
+            offset: (dx [m], dtheta [rad]): translation and rotation vector of the change, world.
+            duration: Time of the motion [s] > 0.
+            delay: Start time [s] >= 0.
+        """
+        if not isinstance(start, pin.SE3):
+            raise InputError(f"`start` must be a pinocchio.SE3, got {type(start).__name__}")
+        self.start = pin.SE3(start)
+        self.offset = as_vector(offset, "offset", 6)
+        self._blend = Quintic(0.0, 1.0, duration, delay)
+
+    @property
+    def size(self) -> int:
+        """Six: position and rotation vector."""
+        return 6
+
+    def __call__(self, t: float) -> Sample:
+        """Pose (x, log R), twist (v, omega) and its derivative at time ``t`` [s]."""
+        blend, rate, curvature = (float(value[0]) for value in self._blend(t))
+        rotation = pin.exp3(blend * self.offset[3:]) @ self.start.rotation
+        position = np.concatenate((self.start.translation + blend * self.offset[:3], pin.log3(rotation)))
+        return position, rate * self.offset, curvature * self.offset
+
+
 class Constant(Reference):
     """A set point: ``value`` with zero velocity and acceleration."""
 
@@ -311,6 +352,7 @@ def _require(condition: np.ndarray, name: str, value: np.ndarray, expected: str)
 __all__ = [
     "CartesianReference",
     "Constant",
+    "PoseMotion",
     "Quintic",
     "Reference",
     "Sample",

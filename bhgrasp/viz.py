@@ -44,8 +44,8 @@ ENVIRONMENT_RGBA = (0.45, 0.35, 0.25, 1.0)
 STICK, SLIP, CONE, GHOST, TIP = 0x22AA44, 0xDD2222, 0x3377FF, 0xFFAA33, 0xAA33FF
 CONE_HEIGHT = 0.015  # [m] drawn friction cones
 DISPLAY_FORCE_SCALE = 0.005  # [m/N] arrows of display()
-CAMERA_TARGET = (0.0, 0.0, 0.15)  # [m] between the Barrett hand's fingers
-CAMERA_POSITION = (0.17, -0.24, 0.27)  # [m]
+CAMERA_TARGET = (0.0, 0.0, 0.15)  # [m] between the Barrett hand's fingers (a scene without objects)
+CAMERA_OFFSET = (0.17, -0.24, 0.12)  # [m] camera position relative to its target
 
 
 class SceneViewer:
@@ -85,7 +85,10 @@ class SceneViewer:
         self._overlays_loaded = False
         self.viewer["/Grid"].set_property("visible", False)
         self.viewer["/Axes"].set_property("visible", False)
-        self.look_at(CAMERA_TARGET, CAMERA_POSITION)
+        first = scene.objects[0] if scene.objects else None
+        first = getattr(first, "body", first)  # a spring-mounted object's rest pose is its body's
+        target = np.asarray(CAMERA_TARGET if first is None else first.pose.translation, dtype=float)
+        self.look_at(target, target + CAMERA_OFFSET)
 
     def look_at(self, target: Any, position: Any) -> None:
         """Point the camera from ``position`` to ``target`` (world, z up) [m].

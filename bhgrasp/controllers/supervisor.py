@@ -3,9 +3,10 @@
 Phases (logged as ``phase``: 0 approach, 1 squeeze, 2 manipulate):
 
 0. **approach** — joint-space computed torque along a smooth step (5.36) from the start configuration to the
-   contact configuration (from IK) closed a little further by ``closing`` [rad] on every non-spread joint, so that
-   the fingers press once they touch.  A finger counts as arrived when its sensed normal force exceeds
-   ``contact_force``; when every finger has arrived (or at ``approach_timeout``) the grasp controller takes over.
+   contact configuration (from IK) closed a little further by ``closing`` [rad] on every non-spread joint (or to a
+   given ``q_close``), so that the fingers press once they touch.  A finger counts as arrived when its sensed
+   normal force exceeds ``contact_force``; when every grasping finger has arrived (or at ``approach_timeout``) the
+   grasp controller takes over.
 1. **squeeze** — the object-space grasp controller holds the object where it was caught (its QP brings the
    contact forces to the desired squeeze) for ``squeeze_time``.
 2. **manipulate** — the grasp controller follows a minimum-jerk motion from the caught pose by ``offset``
@@ -18,12 +19,12 @@ allows (B: joint torques per unit motor input).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
-from bhgrasp._validation import as_positive, as_vector
+from bhgrasp._validation import as_positive, as_vector, require_name
 from bhgrasp.actuation import Actuation
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.grasping import ObjectGraspController
@@ -32,7 +33,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.sensing import ContactSensing
 from bhgrasp.state import State
-from bhgrasp.trajectories import Quintic, SmoothStep
+from bhgrasp.trajectories import PoseMotion, SmoothStep
 
 APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
 
@@ -58,6 +59,8 @@ class GraspSupervisor(Controller):
         move_time: float = 1.0,
         kp: float = 400.0,
         kv: float = 40.0,
+        q_close: Any = None,
+        fingers: Sequence[str] | None = None,
     ) -> None:
         """Set up the sequence.
 
@@ -73,6 +76,10 @@ class GraspSupervisor(Controller):
             squeeze_time: Hold [s] before the motion starts.
             move_time: Duration [s] of the minimum-jerk object motion.
             kp, kv: Joint computed-torque gains of the approach [1/s^2, 1/s].
+            q_close: Configuration [rad] the approach drives to, instead of ``q_contact`` closed by ``closing``
+                (for hands whose joint names do not say which joints spread; e.g. from IK with the contact
+                points pushed into the object).
+            fingers: The fingers that grasp (default: all); the grasp starts when all of them have arrived.
         """
         super().__init__()
         if not isinstance(grasp, ObjectGraspController):
@@ -93,12 +100,18 @@ class GraspSupervisor(Controller):
         self.move_time = as_positive(move_time, "move_time")
         self.kp, self.kv = as_positive(kp, "kp"), as_positive(kv, "kv")
         self.sensing = ContactSensing(nominal)
-        closing_joints = np.array(["spread" not in name for name in nominal.joint_names], dtype=float)
-        self.q_close = np.clip(self.q_contact + self.closing * closing_joints, nominal.lower, nominal.upper)
+        if q_close is None:
+            closing_joints = np.array(["spread" not in name for name in nominal.joint_names], dtype=float)
+            q_close = self.q_contact + self.closing * closing_joints
+        self.q_close = np.clip(as_vector(q_close, "q_close", nominal.nq), nominal.lower, nominal.upper)
         self.phase = APPROACH
         self.switch_time: float | None = None
         self._approach: ComputedTorque | None = None
         self._arrived = np.zeros(len(nominal.fingers))
+        grasping = nominal.fingers if fingers is None else [require_name(f, nominal.fingers, "finger") for f in fingers]
+        if not grasping:
+            raise InputError("`fingers` must name at least one finger of the hand")
+        self._grasping = np.array([nominal.fingers.index(f) for f in grasping])
 
     def reset(self, state: State) -> None:
         """Start over with the approach from ``state``."""
@@ -117,7 +130,7 @@ class GraspSupervisor(Controller):
             for finger, contact in self.sensing.fingers(state).items():
                 if contact.normal_force >= self.contact_force:
                     self._arrived[self.nominal.fingers.index(finger)] = 1.0
-            if np.all(self._arrived) or t >= self.approach_timeout:
+            if np.all(self._arrived[self._grasping]) or t >= self.approach_timeout:
                 self._start_grasp(t, state)
         if self.phase == SQUEEZE and t >= self.switch_time + self.squeeze_time:
             self.phase = MANIPULATE
@@ -133,10 +146,8 @@ class GraspSupervisor(Controller):
         return tau
 
     def _start_grasp(self, t: float, state: State) -> None:
-        pose = state.object_poses[0]
-        start = np.concatenate((pose.translation, pin.log3(pose.rotation)))
         self.grasp.reset(state)
-        self.grasp.reference = Quintic(start, start + self.offset, self.move_time, delay=t + self.squeeze_time)
+        self.grasp.reference = PoseMotion(state.object_poses[0], self.offset, self.move_time, t + self.squeeze_time)
         self.phase, self.switch_time = SQUEEZE, t
 
 

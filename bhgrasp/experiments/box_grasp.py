@@ -36,7 +36,11 @@ JOINT_DAMPING = 0.05  # [N m s/rad]
 
 @dataclass
 class BoxGrasp:
-    """A ready-to-run grasp: simulator, start state, hand, the box, the contact and start configurations."""
+    """A ready-to-run grasp: simulator, start state, hand, the box, the contact and start configurations.
+
+    ``q_close`` is the configuration the approach should drive to (``None``: the supervisor's default, the
+    contact configuration closed on the non-spread joints); ``fingers`` the grasping fingers (``None``: all).
+    """
 
     simulator: Simulator
     state: State
@@ -44,6 +48,8 @@ class BoxGrasp:
     box: Box
     q_contact: np.ndarray
     q_start: np.ndarray
+    q_close: np.ndarray | None = None
+    fingers: tuple[str, ...] | None = None
 
 
 def box_grasp(

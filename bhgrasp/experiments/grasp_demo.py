@@ -21,11 +21,13 @@ import numpy as np
 
 from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
+from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.grasping import GraspForceController, ObjectGraspController
 from bhgrasp.controllers.object_space import ObjectSpaceController
-from bhgrasp.controllers.supervisor import GraspSupervisor
+from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
 from bhgrasp.errors import InputError
-from bhgrasp.experiments.box_grasp import STIFFNESS, box_grasp
+from bhgrasp.experiments.allegro_grasp import allegro_box_grasp
+from bhgrasp.experiments.box_grasp import STIFFNESS, BoxGrasp, box_grasp
 from bhgrasp.grasp_metrics import finger_normal_forces, slip_events
 from bhgrasp.objects import Box
 from bhgrasp.scene import Scene
@@ -35,6 +37,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 CONTROLLERS = ("smc-adaptive", "ctc", "natural", "stiffness", "pd")
+HANDS = ("barrett", "allegro")
 OFFSET = (0.0, 0.0, 0.010, 0.1, 0.0, 0.0)  # [m, rad]: 10 mm up, 0.1 rad about x
 MU_ASSUMED = 0.6  # the true friction is 0.8
 SQUEEZE = 5.0  # [N] desired normal force per contact (the thesis' 5 N)
@@ -73,7 +76,7 @@ class GraspDemoResult:
         duration = float(self.trajectory.t[-1])
         estimate = "" if self.mass_estimate is None else f", estimated {self.mass_estimate:.3f} kg"
         return "\n".join([
-            f"grasp demo ({self.controller}): box {self.true_mass:.2f} kg, "
+            f"grasp demo ({self.scene.hand.name}, {self.controller}): box {self.true_mass:.2f} kg, "
             f"controller told {self.initial_estimate:.2f} kg{estimate}",
             f"  grasp closed at {self.grasp_time:.3f} s; motion {self.motion_start:.2f}-{self.motion_end:.2f} s",
             f"  object pose error: {1e3 * self.position_error:.3f} mm, {1e3 * self.rotation_error:.3f} mrad (final)",
@@ -121,6 +124,7 @@ def run_grasp_demo(
     stiffness: float = STIFFNESS,
     sensor_noise: tuple[float, float] | None = None,
     seed: int = 0,
+    hand: str = "barrett",
 ) -> GraspDemoResult:
     """Grasp, lift and turn the box; see the module docstring.
 
@@ -138,6 +142,11 @@ def run_grasp_demo(
         stiffness: Contact stiffness [N/m].
         sensor_noise: (sigma_q [rad], sigma_v [rad/s]) Gaussian noise on the joint state the controller reads.
         seed: Seed of the sensor noise.
+        hand: ``"barrett"`` (the thesis' scene, :func:`~bhgrasp.experiments.box_grasp.box_grasp`) or
+            ``"allegro"`` (the 16-DOF Allegro hand of example-robot-data grasping a box with thumb, index and
+            middle finger, :func:`~bhgrasp.experiments.allegro_grasp.allegro_box_grasp`).  The controllers are
+            the same; on the Allegro the commands also cancel the joints' viscous damping (known to the
+            controller), which dominates its light links' inertia.
     """
     mass, estimate, duration = (
         as_positive(mass, "mass"),
@@ -145,22 +154,32 @@ def run_grasp_demo(
         as_positive(duration, "duration"),
     )
     offset = as_vector(offset, "offset", 6)
-    setup = box_grasp(mass=mass, stiffness=as_positive(stiffness, "stiffness"))
+    setup = grasp_scene(hand, mass, as_positive(stiffness, "stiffness"))
     nominal_box = Box(size=setup.box.size, mass=estimate)
     grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains)
     kp, kv = approach_gains
-    supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=offset, kp=kp, kv=kv)
-    law = supervisor
+    supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=offset, kp=kp, kv=kv,
+                                 q_close=setup.q_close, fingers=setup.fingers)  # fmt: skip
+    law: Controller = supervisor if hand == "barrett" else MotorCommands(supervisor, setup.simulator.actuation)
     if viewer is not None:
         from bhgrasp.viz import LiveView
 
-        law = LiveView(supervisor, viewer, every=20)
+        law = LiveView(law, viewer, every=20)
     start = time.perf_counter()
     traj = setup.simulator.run(
         law, duration, state=setup.state, progress=progress, sensor_noise=sensor_noise, seed=seed
     )
     wall = time.perf_counter() - start
     return _evaluate(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
+
+
+def grasp_scene(hand: str, mass: float, stiffness: float = STIFFNESS) -> BoxGrasp:
+    """The demo's scene for ``hand`` (one of :data:`HANDS`) with a box of ``mass`` [kg]."""
+    if hand == "barrett":
+        return box_grasp(mass=mass, stiffness=stiffness)
+    if hand == "allegro":
+        return allegro_box_grasp(mass=mass, stiffness=stiffness)
+    raise InputError(f"`hand` must be one of {HANDS}, got {hand!r}")
 
 
 def _evaluate(traj, hand, controller, mass, estimate, supervisor, wall, scene) -> GraspDemoResult:
@@ -219,4 +238,13 @@ def save_demo(result: GraspDemoResult, hand, output: Path) -> list[Path]:
     return [figure_path, data_path]
 
 
-__all__ = ["CONTROLLERS", "GraspDemoResult", "demo_figure", "grasp_controller", "run_grasp_demo", "save_demo"]
+__all__ = [
+    "CONTROLLERS",
+    "HANDS",
+    "GraspDemoResult",
+    "demo_figure",
+    "grasp_controller",
+    "grasp_scene",
+    "run_grasp_demo",
+    "save_demo",
+]
