@@ -285,6 +285,29 @@ class Hand:
         origin = self.frame_placement(q, frame).translation  # world, base placement included
         return jacobian[:3] - pin.skew(point - origin) @ jacobian[3:]
 
+    def point_jacobians(self, q: Any, frames: Sequence[str], points: Any) -> np.ndarray:
+        """:meth:`point_jacobian` of several points at once, shape (n, 3, nv): one kinematics pass for all.
+
+        Args:
+            q: Configuration [rad].
+            frames: n frame names, the body each point is fixed on.
+            points: (n, 3) points [m], world.
+        """
+        points = as_array(points, "points", (len(frames), 3))
+        model, data = self._model, self._data
+        pin.computeJointJacobians(model, data, self._q(q))  # also places the joints (data.oMi)
+        if not self._base_at_origin:
+            points = (points - self._placement.translation) @ self._placement.rotation  # base-frame points
+        result = np.empty((len(frames), 3, model.nv))
+        for i, frame in enumerate(frames):
+            joint = model.frames[self._frame_id(frame)].parentJoint
+            on_joint = pin.SE3(np.eye(3), data.oMi[joint].actInv(points[i]))  # the point, fixed on its body
+            jacobian = pin.getFrameJacobian(model, data, joint, on_joint, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+            result[i] = np.reshape(jacobian, (6, model.nv))[:3]  # (a one-joint model's comes back as a vector)
+        if not self._base_at_origin:
+            result = np.einsum("ij,njk->nik", self._placement.rotation, result)
+        return result
+
     def fingertip_bias_acceleration(self, q: Any, v: Any, finger: str) -> np.ndarray:
         """J_dot(q, v) v: the fingertip's classical acceleration at zero joint acceleration, world frame [m/s^2].
 
@@ -302,7 +325,7 @@ class Hand:
     def _jacobian(self, q: np.ndarray, frame_id: int, rows: int) -> np.ndarray:
         jacobian = pin.computeFrameJacobian(
             self._model, self._data, q, frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-        )
+        ).reshape(6, self._model.nv)  # a one-joint model's comes back as a vector
         if self._base_at_origin:
             return jacobian[:rows].copy()
         rotation = self._placement.rotation

@@ -238,3 +238,44 @@ def test_point_jacobian_matches_finite_differences_of_a_carried_point(barrett):
     h = 1e-7
     expected = (carried(q + h * v) - carried(q - h * v)) / (2 * h)
     np.testing.assert_allclose(hand.point_jacobian(q, link, carried(q)) @ v, expected, atol=1e-7)
+
+
+@pytest.mark.parametrize("hand_name", ["barrett", "allegro"])
+def test_point_jacobians_batch_matches_finite_differences(hand_name, allegro):
+    """point_jacobians (one kinematics pass) against finite differences of carried points, on a placed base."""
+    rng = np.random.default_rng(12)
+    placement = pin.SE3(pin.exp3(np.array([-0.4, 0.1, 0.9])), np.array([0.0, 0.3, -0.1]))
+    if hand_name == "barrett":
+        hand = bh.BarrettHand(base_placement=placement)
+    else:
+        hand = bh.Hand(allegro.model, allegro.fingertip_frames, base_placement=placement)
+    q, v = hand.random_configuration(rng), rng.normal(size=hand.nv)
+    frames = [frame for frame in hand.frame_names() if frame != "universe"][2::3]
+    offsets = rng.normal(scale=0.03, size=(len(frames), 3))  # in each frame
+
+    def carried(configuration):
+        return np.array([hand.frame_placement(configuration, f).act(o) for f, o in zip(frames, offsets)])
+
+    h = 1e-7
+    expected = (carried(q + h * v) - carried(q - h * v)) / (2 * h)
+    np.testing.assert_allclose(hand.point_jacobians(q, frames, carried(q)) @ v, expected, atol=1e-7)
+    with pytest.raises(bh.InputError, match="points"):
+        hand.point_jacobians(q, frames, np.zeros((len(frames) + 1, 3)))
+
+
+def test_point_jacobians_of_a_one_joint_hand_keep_their_shape() -> None:
+    """A 1-DOF finger (Pinocchio returns its 6 x 1 Jacobian as a vector): v_p = omega x (p - o) by hand."""
+    from bhgrasp.planar import thesis_one_link_finger
+
+    hand = thesis_one_link_finger()
+    q = np.array([0.4])
+    frame = hand.fingertip_frames[hand.fingers[0]]
+    point = hand.frame_placement(q, frame).translation
+    jacobians = hand.point_jacobians(q, [frame], point[None, :])
+    assert jacobians.shape == (1, 3, 1)
+    assert hand.frame_jacobian(q, frame).shape == (6, 1)
+    axis = hand.frame_jacobian(q, frame)[3:, 0]  # the joint's angular velocity per rad/s
+    data = hand.model.createData()
+    pin.forwardKinematics(hand.model, data, q)
+    origin = hand.base_placement.act(data.oMi[1].translation)  # on the joint axis
+    np.testing.assert_allclose(jacobians[0, :, 0], np.cross(axis, point - origin), atol=1e-12)
