@@ -66,15 +66,23 @@ def contact_frames(normals: Any) -> np.ndarray:
     Raises:
         InputError: Wrong shape, or a zero or non-finite normal (the message names the contact index).
     """
-    unit = _unit_normals(normals)
+    return _frames(_unit_normals(normals))
+
+
+def _frames(unit: np.ndarray) -> np.ndarray:
+    """:func:`contact_frames` of validated unit normals (n, 3): t1, t2 = n x t1 written out component-wise."""
     switch = np.abs(unit[:, 0]) > TANGENT_SWITCH
     axis = np.zeros_like(unit)
     axis[~switch, 0] = 1.0
     axis[switch, 1] = 1.0
     t1 = axis - np.einsum("ij,ij->i", axis, unit)[:, None] * unit
-    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
-    t2 = np.cross(unit, t1)
-    return np.stack([t1, t2, unit], axis=2)
+    t1 /= np.sqrt(np.einsum("ij,ij->i", t1, t1))[:, None]
+    frames = np.empty((unit.shape[0], 3, 3))
+    frames[:, :, 0], frames[:, :, 2] = t1, unit
+    nx, ny, nz = unit.T
+    ax, ay, az = t1.T
+    frames[:, 0, 1], frames[:, 1, 1], frames[:, 2, 1] = ny * az - nz * ay, nz * ax - nx * az, nx * ay - ny * ax
+    return frames
 
 
 def grasp_map(points: Any, normals: Any, reference: Any) -> np.ndarray:
@@ -89,8 +97,11 @@ def grasp_map(points: Any, normals: Any, reference: Any) -> np.ndarray:
         reference: Point the torque is taken about (e.g. the object's centre of mass), world [m], shape (3,).
     """
     points, normals = _contacts(points, normals)
-    reference = as_vector(reference, "reference", 3)
-    frames = contact_frames(normals)
+    return _grasp_map(points, contact_frames(normals), as_vector(reference, "reference", 3))
+
+
+def _grasp_map(points: np.ndarray, frames: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """:func:`grasp_map` from validated points (n, 3) and their contact frames (n, 3, 3)."""
     levers = _skew_rows(points - reference)  # (n, 3, 3)
     blocks = np.concatenate([frames, levers @ frames], axis=1)  # (n, 6, 3)
     return blocks.transpose(1, 0, 2).reshape(6, 3 * points.shape[0])
@@ -120,11 +131,13 @@ def hand_jacobian(hand: Hand, q: Any, points: Any, links: Sequence[str] | str, n
         links = [links] * count
     if not isinstance(links, Sequence) or len(links) != count or not all(isinstance(link, str) for link in links):
         raise InputError(f"`links` must be {count} frame name(s), one per contact, got {links!r}")
-    frames = contact_frames(normals)
-    result = np.empty((3 * count, hand.nv))
-    for i, link in enumerate(links):
-        result[3 * i : 3 * i + 3] = frames[i].T @ hand.point_jacobian(q, link, points[i])
-    return result
+    return _hand_jacobian(hand, q, points, links, contact_frames(normals))
+
+
+def _hand_jacobian(hand: Hand, q: Any, points: np.ndarray, links: Sequence[str], frames: np.ndarray) -> np.ndarray:
+    """:func:`hand_jacobian` from validated points, link names and contact frames (n, 3, 3)."""
+    jacobians = hand.point_jacobians(q, links, points)  # (n, 3, nv), one kinematics pass
+    return np.einsum("nji,njk->nik", frames, jacobians).reshape(3 * len(links), hand.nv)
 
 
 def grasp_constraint_residual(grasp_matrix: Any, jacobian: Any, object_twist: Any, v: Any) -> np.ndarray:
@@ -393,15 +406,15 @@ def _rows(value: Any, name: str) -> np.ndarray:
         raise InputError(f"`{name}` must be a numeric array of shape (n, 3), got {value!r}") from error
     if array.ndim != 2 or array.shape[1] != 3 or array.shape[0] < 1:
         raise InputError(f"`{name}` must have shape (n, 3) with n >= 1 contacts, got shape {array.shape}")
-    bad = np.flatnonzero(~np.all(np.isfinite(array), axis=1))
-    if bad.size:
+    if not np.isfinite(array).all():
+        bad = np.flatnonzero(~np.all(np.isfinite(array), axis=1))
         raise InputError(f"`{name}` must be finite, got NaN/inf at contact index {bad.tolist()[:5]}")
     return array
 
 
 def _unit_normals(normals: Any) -> np.ndarray:
     normals = _rows(normals, "normals")
-    lengths = np.linalg.norm(normals, axis=1)
+    lengths = np.sqrt(np.einsum("ij,ij->i", normals, normals))
     bad = np.flatnonzero(lengths < ZERO_NORMAL)
     if bad.size:
         raise InputError(f"`normals` must be non-zero, got a zero normal at contact index {bad.tolist()[:5]}")

@@ -24,7 +24,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_array, as_positive, as_vector
 from bhgrasp.errors import InputError
-from bhgrasp.grasp import grasp_map, hand_jacobian
+from bhgrasp.grasp import _frames, _grasp_map, contact_frames
 from bhgrasp.hand import Hand
 
 
@@ -49,6 +49,25 @@ class GraspDynamics:
     grasp_map: np.ndarray
     hand_jacobian: np.ndarray
     joint_map_rate: np.ndarray
+
+
+@dataclass(frozen=True)
+class GraspKinematics:
+    """The maps of a grasp at one instant, without the inertia (what the object-space control laws need).
+
+    Attributes:
+        joint_map: P = J_h^+ G^T (nv, 6).
+        joint_map_rate: P_dot (nv, 6) along the current motion [1/s].
+        grasp_map: G (6, 3n) at the centre of mass.
+        hand_jacobian: J_h (3n, nv).
+        hand_jacobian_pinv: J_h^+ (nv, 3n).
+    """
+
+    joint_map: np.ndarray
+    joint_map_rate: np.ndarray
+    grasp_map: np.ndarray
+    hand_jacobian: np.ndarray
+    hand_jacobian_pinv: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -77,6 +96,47 @@ class ObjectState:
                            self.twist)  # fmt: skip
 
 
+def grasp_kinematics(
+    hand: Hand, q: Any, obj: ObjectState, points_body: Any, normals_body: Any, links: Any, step: float = 1e-6
+) -> GraspKinematics:
+    """P = J_h^+ G^T, its rate P_dot, G and J_h for contacts fixed on the object (body frame) and on hand links.
+
+    Arguments as :func:`grasp_dynamics`.  P_dot is the central difference of P along the motion: the object
+    advanced and retreated by ``step`` [s] at its twist, the joints by P x_dot (no numerical derivative of the
+    kinematics themselves: each P is exact).
+    """
+    q = as_vector(q, "q", hand.nq)
+    points_body = as_array(points_body, "points_body", (None, 3))
+    normals_body = as_array(normals_body, "normals_body", (points_body.shape[0], 3))
+    count = points_body.shape[0]
+    if isinstance(links, str) or len(links) != count or not all(isinstance(link, str) for link in links):
+        raise InputError(f"`links` must be {count} frame name(s), one per contact, got {links!r}")
+    if not isinstance(obj, ObjectState):
+        raise InputError(f"`obj` must be an ObjectState, got {type(obj).__name__}")
+    twist = as_vector(obj.twist, "obj.twist", 6)
+    step = as_positive(step, "step")
+    unit_body = contact_frames(normals_body)[:, :, 2]  # validated, normalised
+    world_aligned = np.broadcast_to(np.eye(3), (count, 3, 3))
+
+    def joint_map(configuration: np.ndarray, state: ObjectState) -> tuple[np.ndarray, ...]:
+        # P = J_h^+ G^T does not depend on the contact frames (R^T cancels), so P is built world-aligned
+        points = state.com + points_body @ state.rotation.T
+        jacobian = hand.point_jacobians(configuration, links, points)  # (n, 3, nv) world
+        pinv = np.linalg.pinv(jacobian.reshape(3 * count, hand.nv))
+        grasp = _grasp_map(points, world_aligned, state.com)
+        return pinv @ grasp.T, jacobian, pinv, points
+
+    p_map, jacobian_world, pinv_world, points = joint_map(q, obj)
+    q_dot = p_map @ twist
+    ahead = joint_map(pin.integrate(hand.model, q, step * q_dot), obj.advanced(step))[0]
+    behind = joint_map(pin.integrate(hand.model, q, -step * q_dot), obj.advanced(-step))[0]
+    frames = _frames(unit_body @ obj.rotation.T)  # contact coordinates: J_h = R^T J, J_h^+ = J^+ R, G = G_w R
+    jacobian = np.einsum("nji,njk->nik", frames, jacobian_world).reshape(3 * count, hand.nv)
+    pinv = np.einsum("vni,nij->vnj", pinv_world.reshape(hand.nv, count, 3), frames).reshape(hand.nv, 3 * count)
+    grasp = _grasp_map(points, frames, obj.com)
+    return GraspKinematics(p_map, (ahead - behind) / (2.0 * step), grasp, jacobian, pinv)
+
+
 def grasp_dynamics(
     hand: Hand,
     q: Any,
@@ -99,28 +159,15 @@ def grasp_dynamics(
         gravity: World gravity [m/s^2].
         step: Time step [s] of the central difference that gives P_dot along the motion.
     """
-    q = as_vector(q, "q", hand.nq)
-    points_body = as_array(points_body, "points_body", (None, 3))
-    normals_body = as_array(normals_body, "normals_body", (points_body.shape[0], 3))
     if not isinstance(obj, ObjectState):
         raise InputError(f"`obj` must be an ObjectState, got {type(obj).__name__}")
     as_positive(obj.mass, "obj.mass")
-    twist = as_vector(obj.twist, "obj.twist", 6)
     gravity = as_vector(gravity, "gravity", 3)
-    step = as_positive(step, "step")
-
-    def joint_map(configuration: np.ndarray, state: ObjectState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        points = state.com + points_body @ state.rotation.T
-        normals = normals_body @ state.rotation.T
-        grasp = grasp_map(points, normals, state.com)
-        jacobian = hand_jacobian(hand, configuration, points, links, normals)
-        return np.linalg.pinv(jacobian) @ grasp.T, grasp, jacobian
-
-    p_map, grasp, jacobian = joint_map(q, obj)
+    kinematics = grasp_kinematics(hand, q, obj, points_body, normals_body, links, step)
+    q = np.asarray(q, dtype=float)
+    p_map, p_dot = kinematics.joint_map, kinematics.joint_map_rate
+    twist = np.asarray(obj.twist, dtype=float)
     q_dot = p_map @ twist
-    ahead = joint_map(pin.integrate(hand.model, q, step * q_dot), obj.advanced(step))[0]
-    behind = joint_map(pin.integrate(hand.model, q, -step * q_dot), obj.advanced(-step))[0]
-    p_dot = (ahead - behind) / (2.0 * step)
 
     inertia = obj.inertia_world
     omega = twist[3:]
@@ -134,8 +181,8 @@ def grasp_dynamics(
     gravity_o = np.concatenate((-obj.mass * gravity, np.zeros(3)))
     mass = mass_o + p_map.T @ mass_h @ p_map
     coriolis = coriolis_o + p_map.T @ (mass_h @ p_dot + coriolis_h @ p_map)
-    return GraspDynamics(0.5 * (mass + mass.T), coriolis, gravity_o + p_map.T @ hand.gravity_torques(q), p_map, grasp,
-                         jacobian, p_dot)  # fmt: skip
+    return GraspDynamics(0.5 * (mass + mass.T), coriolis, gravity_o + p_map.T @ hand.gravity_torques(q), p_map,
+                         kinematics.grasp_map, kinematics.hand_jacobian, p_dot)  # fmt: skip
 
 
 def grasp_mobility(grasp: Any, jacobian: Any, tolerance: float = 1e-9) -> np.ndarray:
@@ -156,4 +203,4 @@ def grasp_mobility(grasp: Any, jacobian: Any, tolerance: float = 1e-9) -> np.nda
     return u[:, s > tolerance]
 
 
-__all__ = ["GraspDynamics", "ObjectState", "grasp_dynamics", "grasp_mobility"]
+__all__ = ["GraspDynamics", "GraspKinematics", "ObjectState", "grasp_dynamics", "grasp_kinematics", "grasp_mobility"]

@@ -92,11 +92,13 @@ class ContactSensing:
         The hand's dynamics read M q_dd + C q_d + G = tau + this.
         """
         hand = self.hand
-        torque = np.zeros(hand.nv)
-        for k, (link, _) in enumerate(state.contact_bodies):
-            if link in self._finger_of or hand.model.existFrame(link):
-                torque -= hand.point_jacobian(state.q, link, state.contact_points[k]).T @ state.contact_forces[k]
-        return torque
+        rows = [k for k, (link, _) in enumerate(state.contact_bodies)
+                if link in self._finger_of or hand.model.existFrame(link)]  # fmt: skip
+        if not rows:
+            return np.zeros(hand.nv)
+        links = [state.contact_bodies[k][0] for k in rows]
+        jacobians = hand.point_jacobians(state.q, links, state.contact_points[rows])  # (n, 3, nv)
+        return -np.einsum("nij,ni->j", jacobians, state.contact_forces[rows])
 
 
 __all__ = ["ContactSensing", "FingerContact"]

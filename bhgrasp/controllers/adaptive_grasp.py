@@ -58,11 +58,11 @@ def object_regressor(rotation: Any, twist: Any, v_r: Any, a_r: Any, gravity: Any
     v_r, a_r = np.asarray(v_r, dtype=float), np.asarray(a_r, dtype=float)
     regressor = np.zeros((6, 7))
     regressor[:3, 0] = a_r[:3] - np.asarray(gravity, dtype=float)
-    skew = pin.skew(omega)
-    for k, basis in enumerate(_INERTIA_BASIS):
-        inertia = rotation @ basis @ rotation.T
-        coriolis = 0.5 * (skew @ inertia - inertia @ skew - pin.skew(inertia @ omega))
-        regressor[3:, k + 1] = inertia @ a_r[3:] + coriolis @ v_r[3:]
+    inertias = np.einsum("ij,kjl,ml->kim", rotation, _INERTIA_BASIS, rotation)  # R B_k R^T, (6, 3, 3)
+    w, alpha = v_r[3:], a_r[3:]
+    # column k: I_k alpha + C_k w with C_k = (skew(omega) I_k - I_k skew(omega) - skew(I_k omega)) / 2
+    coriolis = (inertias @ w) @ pin.skew(omega).T - inertias @ np.cross(omega, w) + (inertias @ omega) @ pin.skew(w).T
+    regressor[3:, 1:] = (inertias @ alpha + 0.5 * coriolis).T
     return regressor
 
 
@@ -156,7 +156,7 @@ class SMCAdaptiveGrasp(ObjectGraspController):
     def grasp_torques(self, t: float, dt: float, state: State, contacts: GraspContacts) -> np.ndarray:
         """Thesis (5.46)-(5.60)."""
         hand = self.nominal
-        current, dynamics = reduced_dynamics(hand, state, contacts, self.nominal_object, self.gravity)
+        current, dynamics = reduced_dynamics(hand, state, contacts, self.nominal_object)
         contacts.reference = current.com
         error, velocity_error, velocity, acceleration = self.errors(t, state)
         v_r, a_r = velocity - self.rho * error, acceleration - self.rho * velocity_error
@@ -172,9 +172,8 @@ class SMCAdaptiveGrasp(ObjectGraspController):
             force_error[:, :2] = 0.0
         integral = np.array([self._integral.get(f, np.zeros(3)) for f in contacts.fingers]) + dt * force_error
         self._integral = dict(zip(contacts.fingers, integral))
-        pinv = np.linalg.pinv(dynamics.hand_jacobian)
         correction = self.force_gain * force_error + self.force_integral * integral
-        q_dot_r = dynamics.joint_map @ v_r + pinv @ correction.ravel()
+        q_dot_r = dynamics.joint_map @ v_r + dynamics.hand_jacobian_pinv @ correction.ravel()
         q_dd_r = dynamics.joint_map @ a_r + dynamics.joint_map_rate @ v_r
         s_f = np.asarray(state.v, dtype=float) - q_dot_r
         if self.hand_adaptation is None:

@@ -28,7 +28,7 @@ from bhgrasp._validation import as_positive
 from bhgrasp.controllers.base import gain_vector
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
 from bhgrasp.errors import InputError
-from bhgrasp.grasp_dynamics import GraspDynamics, ObjectState, grasp_dynamics
+from bhgrasp.grasp_dynamics import GraspKinematics, ObjectState, grasp_kinematics
 from bhgrasp.hand import Hand
 from bhgrasp.objects import RigidObject
 from bhgrasp.state import State
@@ -56,17 +56,20 @@ def object_model(obj: ObjectState, gravity: np.ndarray) -> tuple[np.ndarray, np.
     return mass, coriolis, np.concatenate((-obj.mass * gravity, np.zeros(3)))
 
 
-def reduced_dynamics(hand: Hand, state: State, contacts: GraspContacts, obj: RigidObject, gravity: np.ndarray):
-    """The controller's model of the grasp now: the object's state and the reduced dynamics (5.25)."""
+def reduced_dynamics(hand: Hand, state: State, contacts: GraspContacts, obj: RigidObject):
+    """The controller's model of the grasp now: the object's state and the grasp's maps P, P_dot, G, J_h of (5.25).
+
+    (The laws need only these maps: the fingers' share of M~, C~, N~ enters through :func:`hand_part`.)
+    """
     pose = state.object_poses[0]
     rotation, com = pose.rotation, pose.translation
     current = ObjectState(obj.mass, obj.inertia, com, rotation, np.asarray(state.object_twists[0], dtype=float))
-    dynamics = grasp_dynamics(hand, state.q, current, (contacts.points - com) @ rotation, contacts.normals @ rotation,
-                              contacts.links, gravity)  # fmt: skip
-    return current, dynamics
+    kinematics = grasp_kinematics(hand, state.q, current, (contacts.points - com) @ rotation,
+                                  contacts.normals @ rotation, contacts.links)  # fmt: skip
+    return current, kinematics
 
 
-def hand_part(hand: Hand, state: State, dynamics: GraspDynamics, acceleration, velocity) -> np.ndarray:
+def hand_part(hand: Hand, state: State, dynamics: GraspKinematics, acceleration, velocity) -> np.ndarray:
     """The fingers' inverse dynamics along the grasp: M (P a + P_dot v) + C(q, q_dot) P v + g(q) [N m]."""
     p_map, p_dot = dynamics.joint_map, dynamics.joint_map_rate
     return hand.slotine_li_torque(state.q, state.v, p_map @ velocity, p_map @ acceleration + p_dot @ velocity)
@@ -122,7 +125,7 @@ class ObjectSpaceController(ObjectGraspController):
     def grasp_torques(self, t: float, dt: float, state: State, contacts: GraspContacts) -> np.ndarray:
         """Tau = J_h^T f + tau_h for the law's (a, v, F_fb)."""
         hand = self.nominal
-        current, dynamics = reduced_dynamics(hand, state, contacts, self.nominal_object, self.gravity)
+        current, dynamics = reduced_dynamics(hand, state, contacts, self.nominal_object)
         contacts.reference = current.com
         error, velocity_error, velocity, acceleration = self.errors(t, state)
         feedback = np.zeros(6)
