@@ -198,6 +198,9 @@ class ContactEngine:
         self._joint_a = np.array([pair.joint_a for pair in scene.pairs], dtype=int)
         self._joint_b = np.array([pair.joint_b for pair in scene.pairs], dtype=int)
         self._memory = (np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)))  # pair, point in b's frame, u
+        # the per-pair results, wrapped once (coal refills them in place; indexing the vector each step costs more)
+        self._results = list(scene.geometry_data.collisionResults)
+        self._patches = list(scene.geometry_data.contactPatchResults)
         self._probe = coal.Sphere(1e-12)  # a point, for signed-distance queries
         self._probe_placement = coal.Transform3s()
         self._distance_request, self._distance_result = coal.DistanceRequest(), coal.DistanceResult()
@@ -216,11 +219,11 @@ class ContactEngine:
         scene = self.scene
         if not pin.computeCollisions(scene.model, scene.data, scene.geometry, scene.geometry_data, q, False):
             return empty_contact_set()
-        colliding = [k for k, result in enumerate(scene.geometry_data.collisionResults) if result.isCollision()]
+        colliding = [k for k, result in enumerate(self._results) if result.isCollision()]
         pin.computeContactPatches(scene.geometry, scene.geometry_data)
         pairs, points, normals, depths, weights = [], [], [], [], []
         for k in colliding:
-            patches = scene.geometry_data.contactPatchResults[k]
+            patches = self._patches[k]
             for p in range(patches.numContactPatches()):
                 patch = patches.getContactPatch(p)
                 size = patch.size()
