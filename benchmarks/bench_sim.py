@@ -1,10 +1,11 @@
-"""Simulator speed on the reference grasp scene, against MuJoCo on the same URDF and box, measured in one run.
+"""Simulator speed on the reference grasp scene, against MuJoCo and Drake on the same URDF and box, in one run.
 
 Reference scene (issue "simulation engine"): the Barrett hand squeezes a 0.08 x 0.067 x 0.05 m, 0.2 kg box between
 F1 + F2 and F3 (three fingertip contacts) under a posture PD with gravity compensation and Jacobian-transpose
-squeeze forces; 2 s simulated.  Both engines run the same controller law from Python, each with its own
+squeeze forces; 2 s simulated.  Every engine runs the same controller law from Python, each with its own
 kinematics.  Prints microseconds per step, real-time factor, the box's creep, and wall-time ratios.
-MuJoCo is a benchmark-only dependency (``pip install mujoco``).
+MuJoCo and Drake (its SAP discrete solver, point contact) are benchmark-only dependencies (``pip install mujoco
+drake``); a missing one is reported and skipped.
 
 Usage: ``python benchmarks/bench_sim.py [--duration 2.0] [--stiffness-sweep]``.
 """
@@ -67,6 +68,71 @@ def run_mujoco(duration: float, dt: float) -> dict:
     return {"wall": wall, "steps": steps, "drop": height - data.qpos[10]}
 
 
+def run_drake(duration: float, dt: float) -> dict:
+    """The same scene in Drake: MultibodyPlant with the SAP discrete solver, point contact, same controller law."""
+    from pydrake.geometry import AddContactMaterial, ProximityProperties, RoleAssign
+    from pydrake.geometry import Box as DrakeBox
+    from pydrake.math import RigidTransform
+    from pydrake.multibody.parsing import Parser
+    from pydrake.multibody.plant import (
+        AddMultibodyPlantSceneGraph,
+        CoulombFriction,
+        DiscreteContactApproximation,
+    )
+    from pydrake.multibody.tree import JacobianWrtVariable, RevoluteJoint, SpatialInertia
+    from pydrake.systems.analysis import Simulator as DrakeSimulator
+    from pydrake.systems.framework import DiagramBuilder
+
+    hold = reference_hold(dt=dt)
+    q0, height = hold.state.q, hold.box_height
+    size = np.array(hold.simulator.scene.objects[0].size)
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=dt)
+    plant.set_discrete_contact_approximation(DiscreteContactApproximation.kSap)
+    (hand,) = Parser(plant).AddModels(str(bh.barrett_urdf_path()))
+    plant.WeldFrames(plant.world_frame(), plant.GetFrameByName("palm", hand))
+    box = plant.AddRigidBody("box", plant.AddModelInstance("box"), SpatialInertia.SolidBoxWithMass(0.2, *size))
+    # Our contact law on every surface: k = 1e4 N/m, c = 20 N s/m (SAP's linear dissipation: relaxation time c / k),
+    # mu = 0.8; the hand's URDF geometries get the same properties (Drake combines the two sides' values)
+    properties = ProximityProperties()
+    AddContactMaterial(point_stiffness=1e4, friction=CoulombFriction(0.8, 0.8), properties=properties)
+    properties.AddProperty("material", "relaxation_time", 2e-3)
+    plant.RegisterCollisionGeometry(box, RigidTransform(), DrakeBox(*size), "box", properties)
+    for index in plant.GetBodyIndices(hand):
+        for geometry in plant.GetCollisionGeometriesForBody(plant.get_body(index)):
+            scene_graph.AssignRole(plant.get_source_id(), geometry, properties, RoleAssign.kReplace)
+    names = hold.hand.joint_names
+    joints = [plant.GetJointByName(name, hand) for name in names]
+    for joint in joints:
+        if isinstance(joint, RevoluteJoint):
+            joint.set_default_damping(JOINT_DAMPING)
+    plant.Finalize()
+    simulator = DrakeSimulator(builder.Build())
+    context = plant.GetMyMutableContextFromRoot(simulator.get_mutable_context())
+    for joint, value in zip(joints, q0):
+        joint.set_angle(context, value)
+    plant.SetFreeBodyPose(context, box, RigidTransform([0.0, 0.0, height]))
+    rows = [joint.velocity_start() for joint in joints]
+    tips = [plant.GetBodyByName(f"{finger}_tip", hand).body_frame() for finger in SQUEEZE]
+    port = plant.get_applied_generalized_force_input_port()
+    steps = round(duration / dt)
+    start = time.perf_counter()
+    for k in range(steps):
+        q = plant.GetPositions(context)[[joint.position_start() for joint in joints]]
+        tau = plant.CalcBiasTerm(context) - plant.CalcGravityGeneralizedForces(context)  # gravity + Coriolis
+        tau[rows] += POSTURE_GAIN * (q0 - q)
+        for frame, force in zip(tips, SQUEEZE.values()):
+            jacobian = plant.CalcJacobianTranslationalVelocity(context, JacobianWrtVariable.kV, frame, np.zeros(3),
+                                                               plant.world_frame(), plant.world_frame())  # fmt: skip
+            tau[rows] += jacobian[:, rows].T @ force
+        mask = np.zeros_like(tau)
+        mask[rows] = tau[rows]
+        port.FixValue(context, mask)
+        simulator.AdvanceTo((k + 1) * dt)
+    wall = time.perf_counter() - start
+    return {"wall": wall, "steps": steps, "drop": height - plant.EvalBodyPoseInWorld(context, box).translation()[2]}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--duration", type=float, default=2.0, help="simulated time [s]")
@@ -88,13 +154,26 @@ def main() -> None:
     except ImportError:
         theirs = None
         print("mujoco not installed: no comparison")
+    drake_rows = []
+    try:
+        import pydrake
+
+        print(f"drake {pydrake.__version__ if hasattr(pydrake, '__version__') else ''}".strip())
+        for dt in (1e-3, 1e-2):
+            drake_rows.append((f"drake SAP, dt {dt * 1e3:g} ms", run_drake(args.duration, dt)))
+    except ImportError:
+        print("drake not installed (pip install drake): no Drake comparison")
+    rows += drake_rows
     print(f"\n{'engine':<30}{'us/step':>10}{'RTF':>8}{'wall/sim-s [s]':>16}{'box drop [mm]':>15}")
     for name, result in rows:
         per_step = result["wall"] / result["steps"] * 1e6
         rtf = args.duration / result["wall"]
         print(f"{name:<30}{per_step:10.1f}{rtf:8.2f}{result['wall'] / args.duration:16.3f}{result['drop'] * 1e3:15.3f}")
+    for name, result in drake_rows:
+        same = next(r for n, r in rows[:4] if n.endswith(name.rsplit(",", 1)[1]))
+        print(f"ratio bhgrasp / {name} (wall per simulated second, same step): {same['wall'] / result['wall']:.2f}")
     if theirs is not None:
-        ours_rows, mujoco_rows = rows[:4], rows[4:]
+        ours_rows, mujoco_rows = rows[:4], rows[4:8]
         for (name, result), (_, matched) in zip(ours_rows, mujoco_rows):
             print(
                 f"ratio {name} / mujoco (wall per simulated second): {result['wall'] / theirs['wall']:.1f} vs its 1 ms"
