@@ -7,11 +7,11 @@
   (same contact law and step);
 - the step of each scene with no contact at all (objects lifted clear) as the baseline.
 
-Prints the median microseconds per physics step over ``--steps`` steps after 100 settling steps (controller time
-excluded), the mean number of contact points per step, and a least-squares line cost = a + b contacts (the
-linearity check of issue 8).
+Prints the best of ``--repeat`` medians of the microseconds per physics step over ``--steps`` steps, after 100
+settling steps (controller time excluded), the mean number of contact points per step, and a least-squares line
+cost = a + b contacts (the linearity check of issue 8).
 
-Usage: ``python benchmarks/bench_scaling.py [--steps 300]``.
+Usage: ``python benchmarks/bench_scaling.py [--steps 300] [--repeat 3]``.
 """
 
 from __future__ import annotations
@@ -96,6 +96,7 @@ def grasp_controller(setup):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=300)
+    parser.add_argument("--repeat", type=int, default=3, help="timed runs per scene (continuing), best median kept")
     args = parser.parse_args()
     print(f"{platform.processor() or platform.machine()}, Python {platform.python_version()}, pin {pin.__version__}")
 
@@ -103,13 +104,17 @@ def main() -> None:
 
     def measure(name: str, simulator: Simulator, torque, state=None) -> None:
         state = settled(simulator, torque) if state is None else state
-        cost, contacts, _ = time_steps(simulator, state, torque, args.steps)
+        best, contacts = np.inf, 0.0
+        for _ in range(args.repeat):  # the best of a few medians: this machine's noise comes in bursts
+            cost, contacts, state = time_steps(simulator, state, torque, args.steps)
+            best = min(best, cost)
+        cost = best
         rows.append((name, cost, contacts))
         print(f"{name:<36}{cost:10.1f} us/step{contacts:8.1f} contacts", flush=True)
 
     idle = lambda sim: lambda state: sim.scene.hand.gravity_torques(state.q)  # noqa: E731
     print("contacts: plate on n vertex-up cubes")
-    free = plate_on_cubes(3, lifted=1.0)
+    free = plate_on_cubes(3, lifted=20.0)
     measure("plate, no contact (baseline)", free, idle(free), free.initial_state(free.scene.hand.neutral()))
     for n in (3, 4, 6, 8, 12, 16, 20):
         simulator = plate_on_cubes(n)
@@ -125,7 +130,7 @@ def main() -> None:
     for k in (1, 2, 3, 4, 5):
         simulator = boxes_on_table(k)
         measure(f"{k} box(es) on the table", simulator, idle(simulator))
-    free = boxes_on_table(5, lifted=1.0)
+    free = boxes_on_table(5, lifted=20.0)
     measure("5 boxes, no contact", free, idle(free), free.initial_state(free.scene.hand.neutral()))
 
     print("hand DOF: box grasp scenes, the demo's supervisor + SMC-adaptive law (timed from 0.6 s, grasp closed)")

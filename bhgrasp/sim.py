@@ -209,7 +209,14 @@ class Simulator:
         rhs = mass @ v + dt * (tau - bias + passive)
         transmission = self._transmission()
         m = len(contacts)
-        jacobians = self.engine.jacobians(contacts) if m else np.zeros((0, 3, self.scene.nv))
+        if m == 0:  # free motion: one linear solve, no contact bookkeeping
+            reduced = transmission.T @ matrix @ transmission
+            v_next = transmission @ np.linalg.solve(reduced, transmission.T @ rhs)
+            contacts.force, contacts.sticking = np.zeros((0, 3)), np.zeros(0, dtype=bool)
+            self.engine.remember(contacts, np.zeros((0, 3)))
+            drive = self._drive(mass, v, v_next, bias - passive, dt * stiffness + damping)
+            return pin.integrate(model, q, v_next * dt), v_next, contacts, drive
+        jacobians = self.engine.jacobians(contacts)
         status = np.ones(m, dtype=int)  # 0 off, 1 stick, 2 slide
         slide_force = np.zeros((m, 3))
         start_velocity = jacobians @ v
@@ -234,10 +241,16 @@ class Simulator:
         contacts.force, contacts.sticking = forces, status == 1
         self.engine.remember(contacts, displacement)
         generalized = stacked.T @ forces.ravel()
-        acceleration = (v_next - v) / dt
-        drive = (mass @ acceleration + bias - generalized - passive + (dt * stiffness + damping) * v_next)[: self._nvh]
-        drive -= self._motor_damping() * v_next[: self._nvh]  # the clutch passes what the motor's losses leave
+        drive = self._drive(mass, v, v_next, bias - generalized - passive, dt * stiffness + damping)
         return pin.integrate(model, q, v_next * dt), v_next, contacts, drive
+
+    def _drive(self, mass, v, v_next, forces, implicit_damping) -> np.ndarray:
+        """Hand joint torques the drive delivered over the step (M a + bias - contact - passive + implicit terms).
+
+        ``forces`` is bias - contact - passive torques, ``implicit_damping`` the diagonal (dt K + C) acting on v+.
+        """
+        drive = (mass @ ((v_next - v) / self.dt) + forces + implicit_damping * v_next)[: self._nvh]
+        return drive - self._motor_damping() * v_next[: self._nvh]  # the clutch passes what the motor's losses leave
 
     def _explicit(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray):
         dt, model = self.dt, self.model
