@@ -33,7 +33,7 @@ import pinocchio as pin
 from bhgrasp._validation import as_positive, as_real
 from bhgrasp.controllers.base import gain_vector
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
-from bhgrasp.controllers.object_space import pose_gains, reduced_dynamics
+from bhgrasp.controllers.object_space import grasp_maps, pose_gains
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.objects import RigidObject
@@ -156,7 +156,7 @@ class SMCAdaptiveGrasp(ObjectGraspController):
     def grasp_torques(self, t: float, dt: float, state: State, contacts: GraspContacts) -> np.ndarray:
         """Thesis (5.46)-(5.60)."""
         hand = self.nominal
-        current, dynamics = reduced_dynamics(hand, state, contacts, self.nominal_object)
+        current, maps = grasp_maps(hand, state, contacts, self.nominal_object)
         contacts.reference = current.com
         error, velocity_error, velocity, acceleration = self.errors(t, state)
         v_r, a_r = velocity - self.rho * error, acceleration - self.rho * velocity_error
@@ -173,8 +173,8 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         integral = np.array([self._integral.get(f, np.zeros(3)) for f in contacts.fingers]) + dt * force_error
         self._integral = dict(zip(contacts.fingers, integral))
         correction = self.force_gain * force_error + self.force_integral * integral
-        q_dot_r = dynamics.joint_map @ v_r + dynamics.hand_jacobian_pinv @ correction.ravel()
-        q_dd_r = dynamics.joint_map @ a_r + dynamics.joint_map_rate @ v_r
+        q_dot_r = maps.joint_map @ v_r + maps.hand_jacobian_pinv @ correction.ravel()
+        q_dd_r = maps.joint_map @ a_r + maps.joint_map_rate @ v_r
         s_f = np.asarray(state.v, dtype=float) - q_dot_r
         if self.hand_adaptation is None:
             model = hand.slotine_li_torque(state.q, state.v, q_dot_r, q_dd_r)
@@ -183,7 +183,7 @@ class SMCAdaptiveGrasp(ObjectGraspController):
             self.hand_estimate = self.hand_estimate - dt * self.hand_adaptation * (y_f.T @ s_f)
             model = y_f @ self.hand_estimate
         self._log(contacts, s_o, s_f, force_error, desired)
-        return model + dynamics.hand_jacobian.T @ desired.ravel() - self.k_f * s_f
+        return model + maps.hand_jacobian.T @ desired.ravel() - self.k_f * s_f
 
     def _log(self, contacts: GraspContacts, s_o, s_f, force_error, desired) -> None:
         per_finger_error, per_finger_desired = np.zeros((2, len(self.nominal.fingers), 3))

@@ -56,7 +56,7 @@ def object_model(obj: ObjectState, gravity: np.ndarray) -> tuple[np.ndarray, np.
     return mass, coriolis, np.concatenate((-obj.mass * gravity, np.zeros(3)))
 
 
-def reduced_dynamics(hand: Hand, state: State, contacts: GraspContacts, obj: RigidObject):
+def grasp_maps(hand: Hand, state: State, contacts: GraspContacts, obj: RigidObject):
     """The controller's model of the grasp now: the object's state and the grasp's maps P, P_dot, G, J_h of (5.25).
 
     (The laws need only these maps: the fingers' share of M~, C~, N~ enters through :func:`hand_part`.)
@@ -69,9 +69,9 @@ def reduced_dynamics(hand: Hand, state: State, contacts: GraspContacts, obj: Rig
     return current, kinematics
 
 
-def hand_part(hand: Hand, state: State, dynamics: GraspKinematics, acceleration, velocity) -> np.ndarray:
+def hand_part(hand: Hand, state: State, maps: GraspKinematics, acceleration, velocity) -> np.ndarray:
     """The fingers' inverse dynamics along the grasp: M (P a + P_dot v) + C(q, q_dot) P v + g(q) [N m]."""
-    p_map, p_dot = dynamics.joint_map, dynamics.joint_map_rate
+    p_map, p_dot = maps.joint_map, maps.joint_map_rate
     return hand.slotine_li_torque(state.q, state.v, p_map @ velocity, p_map @ acceleration + p_dot @ velocity)
 
 
@@ -125,7 +125,7 @@ class ObjectSpaceController(ObjectGraspController):
     def grasp_torques(self, t: float, dt: float, state: State, contacts: GraspContacts) -> np.ndarray:
         """Tau = J_h^T f + tau_h for the law's (a, v, F_fb)."""
         hand = self.nominal
-        current, dynamics = reduced_dynamics(hand, state, contacts, self.nominal_object)
+        current, maps = grasp_maps(hand, state, contacts, self.nominal_object)
         contacts.reference = current.com
         error, velocity_error, velocity, acceleration = self.errors(t, state)
         feedback = np.zeros(6)
@@ -140,9 +140,9 @@ class ObjectSpaceController(ObjectGraspController):
         mass, coriolis, gravity = object_model(current, self.gravity)
         wrench = mass @ acceleration + coriolis @ velocity + gravity + feedback
         forces = self.distribute(contacts, wrench)
-        tau_h = hand_part(hand, state, dynamics, acceleration, velocity)
+        tau_h = hand_part(hand, state, maps, acceleration, velocity)
         self.log["object_force"], self.log["hand_torque"] = wrench, tau_h
-        return dynamics.hand_jacobian.T @ forces.ravel() + tau_h
+        return maps.hand_jacobian.T @ forces.ravel() + tau_h
 
 
-__all__ = ["LAWS", "ObjectSpaceController", "object_model", "pose_gains", "reduced_dynamics"]
+__all__ = ["LAWS", "ObjectSpaceController", "grasp_maps", "object_model", "pose_gains"]
