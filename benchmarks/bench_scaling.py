@@ -88,7 +88,7 @@ def grasp_controller(setup):
     """The demo's supervisor with the SMC-adaptive grasp law, as a function of the state (its own clock)."""
     law = GraspSupervisor(setup.hand, setup.q_contact, SMCAdaptiveGrasp(setup.hand, Box(size=setup.box.size, mass=0.2)),
                           q_close=setup.q_close, fingers=setup.fingers)  # fmt: skip
-    if setup.q_close is not None:  # the Allegro scene: cancel the joints' known damping (as the demo does)
+    if setup.cancel_damping:  # the Allegro scene: cancel the joints' known damping, as the demo does
         law = MotorCommands(law, setup.simulator.actuation)
     return lambda state: law(state.t, state)
 

@@ -78,7 +78,9 @@ def allegro_box_grasp(
         damping: Viscous joint damping [N m s/rad].
 
     Returns:
-        The :class:`~bhgrasp.experiments.box_grasp.BoxGrasp`; its ``q_close`` is the approach's target.
+        The :class:`~bhgrasp.experiments.box_grasp.BoxGrasp`; its ``q_close`` is the approach's target, and it asks
+        for the joint damping to be cancelled (0.05 N m s/rad against distal-link inertias of ~5e-6 kg m^2: a
+        computed-torque law that ignores it lags by tenths of a radian).
     """
     mass = as_positive(mass, "mass")
     opening, closing = as_positive(opening, "opening"), as_positive(closing, "closing")
@@ -99,7 +101,8 @@ def allegro_box_grasp(
     law = SpringDamper(stiffness=stiffness, damping=2e-3 * stiffness, friction=FRICTION)
     drive = FullyActuated(hand, damping=as_positive(damping, "damping"))
     simulator = Simulator(Scene(hand, [box], environment=[pedestal]), dt=dt, contact=law, actuation=drive)
-    return BoxGrasp(simulator, simulator.initial_state(q_start), hand, box, q_contact, q_start, q_close, GRASPING)
+    state = simulator.initial_state(q_start)
+    return BoxGrasp(simulator, state, hand, box, q_contact, q_start, q_close, GRASPING, cancel_damping=True)
 
 
 __all__ = ["ALLEGRO_URDF", "BOX_CENTRE", "BOX_SIZE", "FINGERTIPS", "allegro_box_grasp", "allegro_hand"]

@@ -39,7 +39,10 @@ class BoxGrasp:
     """A ready-to-run grasp: simulator, start state, hand, the box, the contact and start configurations.
 
     ``q_close`` is the configuration the approach should drive to (``None``: the supervisor's default, the
-    contact configuration closed on the non-spread joints); ``fingers`` the grasping fingers (``None``: all).
+    contact configuration closed on the non-spread joints); ``fingers`` the grasping fingers (``None``: all);
+    ``cancel_damping``: the controller should cancel the drive's known viscous damping (wrap it in
+    :class:`~bhgrasp.controllers.supervisor.MotorCommands`), for hands whose links are too light for a model-based
+    law to ignore it.
     """
 
     simulator: Simulator
@@ -50,6 +53,7 @@ class BoxGrasp:
     q_start: np.ndarray
     q_close: np.ndarray | None = None
     fingers: tuple[str, ...] | None = None
+    cancel_damping: bool = False
 
 
 def box_grasp(

@@ -145,8 +145,8 @@ def run_grasp_demo(
         hand: ``"barrett"`` (the thesis' scene, :func:`~bhgrasp.experiments.box_grasp.box_grasp`) or
             ``"allegro"`` (the 16-DOF Allegro hand of example-robot-data grasping a box with thumb, index and
             middle finger, :func:`~bhgrasp.experiments.allegro_grasp.allegro_box_grasp`).  The controllers are
-            the same; on the Allegro the commands also cancel the joints' viscous damping (known to the
-            controller), which dominates its light links' inertia.
+            the same; where the scene asks for it (the Allegro) the commands also cancel the joints' viscous
+            damping (known to the controller), which dominates its light links' inertia.
     """
     mass, estimate, duration = (
         as_positive(mass, "mass"),
@@ -160,7 +160,7 @@ def run_grasp_demo(
     kp, kv = approach_gains
     supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=offset, kp=kp, kv=kv,
                                  q_close=setup.q_close, fingers=setup.fingers)  # fmt: skip
-    law: Controller = supervisor if hand == "barrett" else MotorCommands(supervisor, setup.simulator.actuation)
+    law: Controller = MotorCommands(supervisor, setup.simulator.actuation) if setup.cancel_damping else supervisor
     if viewer is not None:
         from bhgrasp.viz import LiveView
 
