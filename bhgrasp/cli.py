@@ -174,7 +174,8 @@ def _sweep(config_path: Path) -> int:
 BENCH_QUICK = {"bench_hand.py": ["--repeat", "200"], "bench_sim.py": ["--duration", "0.05"],
                "bench_control.py": ["--repeat", "50"], "bench_qp.py": ["--cycles", "50"],
                "bench_sweep.py": ["--cases", "2", "--duration", "0.8"],
-               "bench_scaling.py": ["--steps", "20"]}  # fmt: skip
+               "bench_scaling.py": ["--steps", "20"],
+               "bench_instructions.py": ["--cases", "free", "--short", "2", "--long", "12"]}  # fmt: skip
 
 
 def _bench(quick: bool) -> int:
