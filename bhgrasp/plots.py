@@ -125,13 +125,18 @@ def log_figure(
         values = traj.log[key].reshape(len(traj), -1)
         for axis, channel in zip(axes, channels):
             axis.plot(traj.t, values[:, channel], lw=1.0, label=name)
-    for axis, label in zip(axes, labels):
-        axis.set(ylabel=f"{label} {ylabel}")
+    _finish_time_panels(axes, [f"{label} {ylabel}" for label in labels], title)
+    return figure
+
+
+def _finish_time_panels(axes, ylabels: Sequence[str], title: str) -> None:
+    """Y labels, grid and legend on stacked time panels; the title on top, the time axis below."""
+    for axis, ylabel in zip(axes, ylabels):
+        axis.set(ylabel=ylabel)
         axis.grid(alpha=0.3)
         axis.legend(fontsize=7)
     axes[0].set_title(title)
     axes[-1].set_xlabel("t [s]")
-    return figure
 
 
 def _grasping(traj: Trajectory) -> np.ndarray:
@@ -155,13 +160,8 @@ def object_error_figure(runs: dict[str, Trajectory], channels: Sequence[int] = (
         mask = _grasping(traj)
         for axis, channel in zip(axes, channels):
             axis.plot(traj.t[mask], 1e3 * traj.log["object_error"][mask, channel], lw=1.0, label=name)
-    for axis, channel in zip(axes, channels):
-        unit = "mm" if channel < 3 else "mrad"
-        axis.set(ylabel=f"{names[channel]} error [{unit}]")
-        axis.grid(alpha=0.3)
-        axis.legend(fontsize=7)
-    axes[0].set_title(title)
-    axes[-1].set_xlabel("t [s]")
+    ylabels = [f"{names[channel]} error [{'mm' if channel < 3 else 'mrad'}]" for channel in channels]
+    _finish_time_panels(axes, ylabels, title)
     return figure
 
 
