@@ -70,6 +70,11 @@ class Actuation(ABC):
     def reset(self, q_hand: np.ndarray) -> None:  # noqa: B027  (optional hook)
         """Start of a run at hand configuration ``q_hand`` (mode switches re-armed)."""
 
+    def restore(self, modes: np.ndarray | None, q_hand: np.ndarray) -> None:
+        """Take the mode flags a :class:`~bhgrasp.state.State` carries (``None``: re-armed, as a run starts)."""
+        if modes is None or len(modes) == 0:
+            self.reset(q_hand)
+
     def update(self, q_hand: np.ndarray, v_hand: np.ndarray, u: np.ndarray, drive_torques: np.ndarray) -> None:  # noqa: B027
         """After each step: ``drive_torques`` are the joint torques the drive delivered (inputs + reactions)."""
 
@@ -176,6 +181,13 @@ class BarrettActuation(Actuation):
     def reset(self, q_hand: np.ndarray) -> None:
         """Re-arm every TorqueSwitch."""
         self.mode[:] = 0
+
+    def restore(self, modes: np.ndarray | None, q_hand: np.ndarray) -> None:
+        """Take the TorqueSwitch modes a state carries (``None``: every switch re-armed)."""
+        if modes is None or len(modes) == 0:
+            self.reset(q_hand)
+        else:
+            self.mode[:] = np.asarray(modes, dtype=int)
 
     def transmission(self) -> np.ndarray:
         """Spread column (1, 1) on F1/F2 spread; per finger (1, 1/3) on (proximal, distal), or (0, 1) if broken."""

@@ -126,6 +126,31 @@ class Contact:
         return self.point - 0.5 * self.depth * self.normal
 
 
+@dataclass(frozen=True)
+class ContactMemory:
+    """What a run carries from one step to the next about its contacts (part of :class:`~bhgrasp.state.State`).
+
+    Attributes:
+        pair: (m,) collision-pair index of each remembered contact.
+        local_b: (m, 3) the contact point in its body b's joint frame [m] (contacts are matched by position on b).
+        displacement: (m, 3) end-of-step tangential spring displacement u [m].
+        sliding: (m,) whether the contact ended the step sliding (the next step starts it sliding).
+    """
+
+    pair: np.ndarray
+    local_b: np.ndarray
+    displacement: np.ndarray
+    sliding: np.ndarray
+
+    @classmethod
+    def empty(cls) -> ContactMemory:
+        """No contact remembered (the start of a run, or contacts cleared)."""
+        return cls(np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, bool))
+
+    def __len__(self) -> int:
+        return len(self.pair)
+
+
 @dataclass
 class ContactSet:
     """The contact points of one instant as arrays (m contacts); ``contacts`` gives :class:`Contact` records."""
@@ -140,12 +165,15 @@ class ContactSet:
     local_b: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (m, 3) points in b's joint frame [m]
     force: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (m, 3) on b [N]
     sticking: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    was_sliding: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))  # (m,) slid the last step
 
     def __post_init__(self) -> None:
         m = len(self.pair)
         if len(self.force) != m:  # detected, forces not computed yet
             self.force = np.zeros((m, 3))
             self.sticking = np.zeros(m, dtype=bool)
+        if len(self.was_sliding) != m:
+            self.was_sliding = np.zeros(m, dtype=bool)
 
     def __len__(self) -> int:
         return len(self.pair)
@@ -197,7 +225,7 @@ class ContactEngine:
         self._pair_friction = np.array([pair.friction(law.friction) for pair in scene.pairs])
         self._joint_a = np.array([pair.joint_a for pair in scene.pairs], dtype=int)
         self._joint_b = np.array([pair.joint_b for pair in scene.pairs], dtype=int)
-        self._memory = (np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)))  # pair, point in b's frame, u
+        self.memory = ContactMemory.empty()  # the contacts of the last step (restored from each step's State)
         # the per-pair results, wrapped once (coal refills them in place; indexing the vector each step costs more)
         self._results = list(scene.geometry_data.collisionResults)
         self._patches = list(scene.geometry_data.contactPatchResults)
@@ -207,7 +235,7 @@ class ContactEngine:
 
     def reset(self) -> None:
         """Forget every contact (a new run)."""
-        self._memory = (np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)))
+        self.memory = ContactMemory.empty()
 
     # ------------------------------------------------------------------ detection
     def detect(self, q: np.ndarray) -> ContactSet:
@@ -245,9 +273,12 @@ class ContactEngine:
         point, normal = np.concatenate(points)[keep], np.array(normals)[keep]
         pair = np.array(pairs, dtype=int)[keep]
         local = self._in_frame_b(pair, point)
-        displacement = self._recall(pair, local, normal)
+        displacement, was_sliding = self._recall(pair, local, normal)
         weight = np.array(weights)[keep]
-        return ContactSet(pair, point, normal, depth[keep], self._pair_friction[pair], displacement, weight, local)
+        return ContactSet(
+            pair, point, normal, depth[keep], self._pair_friction[pair], displacement, weight, local,
+            was_sliding=was_sliding,
+        )  # fmt: skip
 
     def _point_depths(self, k: int, points: np.ndarray, normal: np.ndarray) -> np.ndarray:
         """Penetration at each point of a multi-point patch, from signed distances to both shapes.
@@ -304,33 +335,38 @@ class ContactEngine:
         placements = self.scene.data.oMi
         return np.array([placements[int(j)].actInv(p) for j, p in zip(self._joint_b[pair], point)])
 
-    def _recall(self, pair: np.ndarray, local: np.ndarray, normal: np.ndarray) -> np.ndarray:
-        """Tangential displacement of each contact carried over from the last step (0 for a new contact).
+    def _recall(self, pair: np.ndarray, local: np.ndarray, normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Tangential displacement and sliding flag of each contact carried over from the last step.
 
         A contact matches the nearest remembered point of the same pair within ``match_radius`` (on body b); a point
         coal did not report last step (patches change size as a body rocks) inherits the mean displacement of its
-        pair, so that a sticking patch keeps its anchor.
+        pair, so that a sticking patch keeps its anchor, and slides if any point of its pair slid.  A new contact
+        starts with no displacement, sticking.
         """
-        old_pair, old_local, old_u = self._memory
+        memory = self.memory
+        old_pair, old_local, old_u, old_sliding = memory.pair, memory.local_b, memory.displacement, memory.sliding
         if len(old_pair) == 0:
-            return np.zeros_like(local)
+            return np.zeros_like(local), np.zeros(len(pair), dtype=bool)
         same_pair = pair[:, None] == old_pair[None, :]
         gap = local[:, None, :] - old_local[None, :, :]
         distance = np.where(same_pair, (gap * gap).sum(axis=2), np.inf)
         nearest = distance.argmin(axis=1)
         matched = distance[np.arange(len(pair)), nearest] <= self.match_radius**2
         u = old_u[nearest]
+        sliding = old_sliding[nearest] & matched
         if not matched.all():
             u[~matched] = 0.0
             for i in np.flatnonzero(~matched & same_pair.any(axis=1)):
                 u[i] = old_u[same_pair[i]].mean(axis=0)
+                sliding[i] = old_sliding[same_pair[i]].any()
         projected = u - (u * normal).sum(axis=1)[:, None] * normal  # onto the new tangent plane ...
         length, new_length = np.sqrt((u * u).sum(axis=1)), np.sqrt((projected * projected).sum(axis=1))
-        return projected * (length / np.maximum(new_length, 1e-300))[:, None]  # ... keeping its length
+        return projected * (length / np.maximum(new_length, 1e-300))[:, None], sliding  # ... keeping its length
 
-    def remember(self, contacts: ContactSet, displacement: np.ndarray) -> None:
-        """Store the end-of-step tangential displacements (call once per step, after the forces are final)."""
-        self._memory = (contacts.pair.copy(), contacts.local_b.copy(), displacement.copy())
+    def remember(self, contacts: ContactSet, displacement: np.ndarray, sliding: np.ndarray) -> ContactMemory:
+        """Store the end-of-step tangential displacements and slide flags (once per step, forces final)."""
+        self.memory = ContactMemory(contacts.pair.copy(), contacts.local_b.copy(), displacement.copy(), sliding.copy())
+        return self.memory
 
     # ------------------------------------------------------------------ kinematics of the contact points
     def jacobians(self, contacts: ContactSet) -> np.ndarray:
@@ -423,12 +459,52 @@ class ContactEngine:
             f_0[off], d[off] = 0.0, 0.0
         return f_0, d
 
+    def start_status(
+        self, contacts: ContactSet, parts: tuple, start_velocity: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The active set a step starts from: each contact sticks unless it is predicted to slide.
+
+        A contact starts sliding when it slid at the end of the last step and still slips (faster than
+        ``1e-6`` m/s), or when its stick spring-damper evaluated at the start-of-step velocity already pulls outside
+        the friction cone of the normal force predicted the same way; its kinetic friction starts on that cone,
+        along the stick force.  (Starting every contact sticking forces a fast slider to stick on the first pass:
+        the huge stick force pitches the body and unloads its trailing contacts for the step.)
+
+        Returns:
+            Status per contact (1 stick, 2 slide) and the sliding contacts' tangential forces (m, 3) [N].
+        """
+        m = len(contacts)
+        status, slide = np.ones(m, dtype=int), np.zeros((m, 3))
+        if self.law.friction_law != "stick-slip" or m == 0:
+            return status, slide
+        _, _, f0_stick, gains_stick = parts
+        normal = contacts.normal
+        predicted = f0_stick - (gains_stick @ start_velocity[:, :, None])[:, :, 0]
+        normal_force = (predicted * normal).sum(axis=1)
+        tangential = predicted - normal_force[:, None] * normal
+        magnitude = np.sqrt((tangential * tangential).sum(axis=1))
+        cone = contacts.friction * np.maximum(normal_force, 0.0)
+        v_t = start_velocity - (start_velocity * normal).sum(axis=1)[:, None] * normal
+        slipping = contacts.was_sliding & ((v_t * v_t).sum(axis=1) > 1e-12)
+        sliding = (normal_force > 0.0) & (magnitude > 0.0) & ((magnitude > cone * (1 + 1e-9)) | slipping)
+        status[sliding] = 2
+        slide[sliding] = tangential[sliding] * (cone[sliding] / magnitude[sliding])[:, None]
+        return status, slide
+
     def classify(
-        self, contacts: ContactSet, forces: np.ndarray, status: np.ndarray, start_velocity: np.ndarray
+        self,
+        contacts: ContactSet,
+        forces: np.ndarray,
+        status: np.ndarray,
+        start_velocity: np.ndarray,
+        relative: np.ndarray | None = None,
+        may_stick: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Drop pulling contacts; turn sticking contacts outside the cone into sliding ones (force on the cone).
 
-        With the tanh law every contact "slides" with the regularised force of its start-of-step slip velocity.
+        A sliding contact in ``may_stick`` whose end-of-step slip ``relative`` runs along its kinetic friction (the
+        friction would have reversed the slip: it overshoots) sticks instead.  With the tanh law every contact
+        "slides" with the regularised force of its start-of-step slip velocity.
         """
         normal = contacts.normal
         normal_force = (forces * normal).sum(axis=1)
@@ -445,6 +521,11 @@ class ContactEngine:
             return new_status, slide
         magnitude = np.sqrt((tangential * tangential).sum(axis=1))
         sliding = (new_status > 0) & ((magnitude > cone * (1 + 1e-9)) | (status == 2))
+        if relative is not None and may_stick is not None:
+            v_t = relative - (relative * normal).sum(axis=1)[:, None] * normal
+            overshoot = may_stick & (status == 2) & (new_status > 0) & ((tangential * v_t).sum(axis=1) > 0.0)
+            new_status[overshoot] = 1
+            sliding &= ~overshoot
         if sliding.any():
             new_status[sliding] = 2
             # Kinetic friction lies on the cone, along the direction the sticking spring was pulling.

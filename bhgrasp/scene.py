@@ -1,8 +1,11 @@
 """Scene: the hand, free rigid objects and a fixed environment as one Pinocchio model plus coal collision geometry.
 
 Layout of the state: ``q = (q_hand, q_object_1, ...)``, ``v = (v_hand, v_object_1, ...)``.  A free object adds a
-free-flyer joint (7 coordinates: position [m], quaternion (x, y, z, w); 6 velocities: linear [m/s] and angular
-[rad/s] of its centre of mass *in its body frame*, Pinocchio's convention).  A spring-mounted object
+translation joint and a spherical joint below it (7 coordinates: position [m] and quaternion (x, y, z, w), as a
+free flyer's; 6 velocities: the linear velocity [m/s] of its centre of mass in the *world* frame, then its angular
+velocity [rad/s] in its *body* frame).  Translating world-aligned keeps the translational dynamics free of Coriolis
+terms (``m dv/dt = f`` exactly), so the integrators conserve linear momentum; Pinocchio's free flyer would step the
+linear velocity in the rotating body frame, where the explicit ``w x v`` term pumps energy.  A spring-mounted object
 (:class:`~bhgrasp.objects.SpringMounted`) adds one prismatic coordinate: its displacement [m] from rest along
 its direction.  World = the frame the hand base is placed in (``hand.base_placement``); gravity is the hand's.
 """
@@ -88,10 +91,12 @@ class Scene:
         self.model.gravity.linear = hand.gravity
         self.nq_hand, self.nv_hand = hand.nq, hand.nv
         self.joint_stiffness = np.zeros(0)  # filled below: spring of spring-mounted objects [N/m]
-        self.object_joints: list[int] = []
+        self.object_joints: list[int] = []  # the joint carrying each object's body (its spherical joint)
+        self._object_root: list[int] = []  # the object's first joint (its translation joint when free)
         stiffness, damping = [], []
         for name, item in zip(self.object_names, self.objects):
-            joint = self._add_object(name, item)
+            root, joint = self._add_object(name, item)
+            self._object_root.append(root)
             self.object_joints.append(joint)
             if isinstance(item, SpringMounted):
                 stiffness.append(item.stiffness)
@@ -138,13 +143,13 @@ class Scene:
 
     def object_q_slice(self, index: int) -> slice:
         """Slice of an object's coordinates in the scene ``q``."""
-        joint = self.model.joints[self.object_joints[index]]
-        return slice(joint.idx_q, joint.idx_q + joint.nq)
+        root, body = (self.model.joints[j] for j in (self._object_root[index], self.object_joints[index]))
+        return slice(root.idx_q, body.idx_q + body.nq)
 
     def object_v_slice(self, index: int) -> slice:
         """Slice of an object's velocities in the scene ``v``."""
-        joint = self.model.joints[self.object_joints[index]]
-        return slice(joint.idx_v, joint.idx_v + joint.nv)
+        root, body = (self.model.joints[j] for j in (self._object_root[index], self.object_joints[index]))
+        return slice(root.idx_v, body.idx_v + body.nv)
 
     # ------------------------------------------------------------------ states
     def initial_state(self, q_hand: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -156,8 +161,7 @@ class Scene:
             if isinstance(item, SpringMounted):
                 continue  # displacement 0, at rest
             q[self.object_q_slice(i)] = pin.SE3ToXYZQUAT(item.pose)
-            rotation = item.pose.rotation
-            v[self.object_v_slice(i)] = np.concatenate((rotation.T @ item.velocity[:3], rotation.T @ item.velocity[3:]))
+            v[self.object_v_slice(i)] = np.concatenate((item.velocity[:3], item.pose.rotation.T @ item.velocity[3:]))
         return q, v
 
     def object_pose(self, q: np.ndarray, index: int) -> pin.SE3:
@@ -175,7 +179,7 @@ class Scene:
             return np.concatenate((v[self.object_v_slice(index)][0] * item.direction, np.zeros(3)))
         rotation = pin.XYZQUATToSE3(q[self.object_q_slice(index)]).rotation
         local = v[self.object_v_slice(index)]
-        return np.concatenate((rotation @ local[:3], rotation @ local[3:]))
+        return np.concatenate((local[:3], rotation @ local[3:]))
 
     def energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """Kinetic + gravitational potential + object-spring energy [J] (contacts excluded)."""
@@ -188,17 +192,19 @@ class Scene:
         return float(kinetic + potential + springs)
 
     # ------------------------------------------------------------------ construction helpers
-    def _add_object(self, name: str, item: RigidObject | SpringMounted) -> int:
+    def _add_object(self, name: str, item: RigidObject | SpringMounted) -> tuple[int, int]:
+        """Add an object's joints and body; returns (first joint, joint carrying the body)."""
         if isinstance(item, SpringMounted):
             axis_local = item.pose.rotation.T @ item.direction
-            joint = self.model.addJoint(0, pin.JointModelPrismaticUnaligned(axis_local), item.pose, name)
+            root = joint = self.model.addJoint(0, pin.JointModelPrismaticUnaligned(axis_local), item.pose, name)
             inertia = item.body.spatial_inertia()
         else:
-            joint = self.model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), name)
+            root = self.model.addJoint(0, pin.JointModelTranslation(), pin.SE3.Identity(), f"{name}_translation")
+            joint = self.model.addJoint(root, pin.JointModelSpherical(), pin.SE3.Identity(), name)
             inertia = item.spatial_inertia()
         self.model.appendBodyToJoint(joint, inertia, pin.SE3.Identity())
         self.model.addFrame(pin.Frame(name, joint, pin.SE3.Identity(), pin.FrameType.BODY))
-        return joint
+        return root, joint
 
     def _hand_geometry(self) -> pin.GeometryModel:
         path = self.hand.urdf_path

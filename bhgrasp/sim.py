@@ -26,8 +26,9 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.actuation import Actuation, FullyActuated
-from bhgrasp.contact import ContactEngine, ContactSet, SpringDamper, empty_contact_set
+from bhgrasp.contact import ContactEngine, ContactMemory, ContactSet, SpringDamper, empty_contact_set
 from bhgrasp.errors import InputError, SimulationDiverged
+from bhgrasp.objects import RigidObject
 from bhgrasp.recorder import Recorder
 from bhgrasp.scene import Scene
 from bhgrasp.state import State, Trajectory
@@ -93,6 +94,12 @@ class Simulator:
         self._lower_triangle = np.tril_indices(scene.nv, -1)
         self._object_v = [scene.object_v_slice(i) for i in range(len(scene.objects))]
         self._pair_bodies = [(pair.body_a, pair.body_b) for pair in scene.pairs]
+        # free bodies: (angular velocity coordinates, body inertia about the centre of mass [kg m^2])
+        self._spinning = [
+            (slice(scene.object_v_slice(i).start + 3, scene.object_v_slice(i).stop), item.spatial_inertia().inertia)
+            for i, item in enumerate(scene.objects)
+            if isinstance(item, RigidObject)
+        ]
         springs = [i for i, item in enumerate(scene.objects) if hasattr(item, "stiffness")]
         self._spring_q = np.array([scene.object_q_slice(i).start for i in springs], dtype=int)
         self._spring_v = np.array([scene.object_v_slice(i).start for i in springs], dtype=int)
@@ -104,24 +111,23 @@ class Simulator:
         q, v = self.scene.initial_state(q_hand)
         self.engine.reset()
         self.actuation.reset(q[: self.scene.nq_hand])
-        return self._state(0.0, q, v, self.engine.detect(q))
+        return self._state(0.0, q, v, self.engine.detect(q), ContactMemory.empty())
 
-    def _state(self, t: float, q: np.ndarray, v: np.ndarray, contacts: ContactSet) -> State:
+    def _state(self, t: float, q: np.ndarray, v: np.ndarray, contacts: ContactSet, memory: ContactMemory) -> State:
         scene = self.scene
         n = len(scene.objects)
         poses = tuple(scene.object_pose(q, i) for i in range(n))
         twists = np.zeros((n, 6))
         for i, pose in enumerate(poses):
             local = v[self._object_v[i]]
-            if len(local) == 6:
-                rotation = pose.rotation
-                twists[i, :3], twists[i, 3:] = rotation @ local[:3], rotation @ local[3:]
+            if len(local) == 6:  # world-aligned linear velocity, body angular velocity
+                twists[i, :3], twists[i, 3:] = local[:3], pose.rotation @ local[3:]
             else:  # spring-mounted: slides along its direction
                 twists[i, :3] = local[0] * scene.objects[i].direction
         bodies = tuple(self._pair_bodies[k] for k in contacts.pair)
         return State(
             t, q[: scene.nq_hand].copy(), v[: self._nvh].copy(), poses, twists, contacts.point, contacts.normal,
-            contacts.force, bodies, q, v,
+            contacts.force, bodies, q, v, memory, self.actuation.modes().copy(),
         )  # fmt: skip
 
     # ------------------------------------------------------------------ one step
@@ -137,9 +143,12 @@ class Simulator:
         if not np.all(np.isfinite(u)):
             raise SimulationDiverged(state.t, "control input u", u.tolist(), "the controller returned NaN/inf")
         q, v = state.scene_q, state.scene_v
+        # The step depends only on the state: its contact memory and actuation modes, not the last run's.
+        self.engine.memory = state.contact_memory if state.contact_memory is not None else ContactMemory.empty()
+        self.actuation.restore(state.actuation_modes, q[: self.scene.nq_hand])
         tau_hand = self.actuation.joint_torques(u)
         if disturbance is not None:
-            tau_hand = tau_hand + disturbance
+            tau_hand = tau_hand + self._disturbance(disturbance, "disturbance")
         if self.integrator == "implicit":
             q_next, v_next, contacts, drive = self._implicit(q, v, tau_hand)
         else:
@@ -147,7 +156,48 @@ class Simulator:
         t = round(state.t / self.dt + 1) * self.dt  # k dt exactly: no accumulated rounding
         self._check(t, q_next, v_next, contacts)
         self.actuation.update(q_next[: self.scene.nq_hand], v_next[: self._nvh], u, drive)
-        return self._state(t, q_next, v_next, contacts), StepInfo(contacts, drive)
+        return self._state(t, q_next, v_next, contacts, self.engine.memory), StepInfo(contacts, drive)
+
+    def _implicit_gyroscopic(self, v: np.ndarray, bias: np.ndarray) -> None:
+        """Replace each free body's explicit gyroscopic torque ``w x I w`` in ``bias`` by the implicit midpoint one.
+
+        The torque-free spin over the step solves ``I (w+ - w) / dt + m x I m = 0`` with ``m = (w + w+) / 2``
+        (Newton, to round-off); dotting with ``m`` and ``I m`` shows that it keeps the kinetic energy
+        ``w.I w / 2`` and the body angular momentum's length ``|I w|`` exactly, at any step (explicit ``w x I w``
+        gains energy at every step).  The step then uses ``m x I m`` as the body's gyroscopic torque.
+        """
+        dt = self.dt
+        for angular, inertia in self._spinning:
+            w = v[angular]
+            spin = inertia @ w
+            explicit = np.cross(w, spin)
+            if not explicit.any():
+                continue  # a sphere, or spinning about a principal axis: nothing to correct
+            w_next = w.copy()
+            for _ in range(20):
+                middle = 0.5 * (w + w_next)
+                momentum = inertia @ middle
+                residual = inertia @ (w_next - w) / dt + np.cross(middle, momentum)
+                jacobian = inertia / dt + 0.5 * (_skew(middle) @ inertia - _skew(momentum))
+                delta = np.linalg.solve(jacobian, residual)
+                w_next -= delta
+                if np.abs(delta).max() <= 1e-15 * (1.0 + np.abs(w_next).max()):
+                    break
+            middle = 0.5 * (w + w_next)
+            bias[angular] += np.cross(middle, inertia @ middle) - explicit
+
+    def _disturbance(self, torque: Any, name: str) -> np.ndarray | None:
+        """A disturbance as finite joint torques of shape (nv_hand,) [N m] (``None``: none)."""
+        if torque is None:
+            return None
+        array = np.asarray(torque, dtype=float)
+        if array.shape != (self._nvh,):
+            raise InputError(
+                f"`{name}` must be {self._nvh} joint torques [N m] (one per hand joint), got shape {array.shape}"
+            )
+        if not np.isfinite(array).all():
+            raise InputError(f"`{name}` must be finite, got {array.tolist()}")
+        return array
 
     def _motor_damping(self) -> np.ndarray:
         """The drive's own damping (joint damping of the actuation minus the passive joints')."""
@@ -199,7 +249,8 @@ class Simulator:
         contacts = self.engine.detect(q)
         pin.computeJointJacobians(model, data, q)
         mass = self._mass_matrix(q)
-        bias = pin.nonLinearEffects(model, data, q, v)
+        bias = pin.nonLinearEffects(model, data, q, v).copy()
+        self._implicit_gyroscopic(v, bias)
         passive, stiffness, damping = self._passive(q, v)
         tau = np.zeros(self.scene.nv)
         tau[: self._nvh] = tau_hand
@@ -213,15 +264,15 @@ class Simulator:
             reduced = transmission.T @ matrix @ transmission
             v_next = transmission @ np.linalg.solve(reduced, transmission.T @ rhs)
             contacts.force, contacts.sticking = np.zeros((0, 3)), np.zeros(0, dtype=bool)
-            self.engine.remember(contacts, np.zeros((0, 3)))
+            self.engine.remember(contacts, np.zeros((0, 3)), np.zeros(0, dtype=bool))
             drive = self._drive(mass, v, v_next, bias - passive, dt * stiffness + damping)
             return pin.integrate(model, q, v_next * dt), v_next, contacts, drive
         jacobians = self.engine.jacobians(contacts)
-        status = np.ones(m, dtype=int)  # 0 off, 1 stick, 2 slide
-        slide_force = np.zeros((m, 3))
         start_velocity = jacobians @ v
         stacked = jacobians.reshape(-1, self.scene.nv)  # (3m, nv)
         parts = self.engine.linear_parts(contacts, dt)
+        status, slide_force = self.engine.start_status(contacts, parts, start_velocity)  # 0 off, 1 stick, 2 slide
+        may_stick = status == 2  # a contact that starts sliding may stick once, if its friction would overshoot
         for _ in range(8):
             f0, gains = self.engine.linearise(parts, status, slide_force)
             matrix_c = matrix + dt * stacked.T @ (gains @ jacobians).reshape(-1, self.scene.nv)
@@ -230,16 +281,17 @@ class Simulator:
             v_next = transmission @ np.linalg.solve(reduced, transmission.T @ rhs_c)
             relative = jacobians @ v_next
             forces = f0 - (gains @ relative[:, :, None])[:, :, 0]
-            new_status, new_slide = self.engine.classify(contacts, forces, status, start_velocity)
+            new_status, new_slide = self.engine.classify(contacts, forces, status, start_velocity, relative, may_stick)
             if (new_status == status).all() and (
                 not (status == 2).any() or np.abs(new_slide - slide_force).max() < 1e-12
             ):
                 break
+            may_stick &= new_status == 2
             status, slide_force = new_status, new_slide
         forces[status == 0] = 0.0
         displacement = self.engine.end_displacement(contacts, relative, forces, status, dt)
         contacts.force, contacts.sticking = forces, status == 1
-        self.engine.remember(contacts, displacement)
+        self.engine.remember(contacts, displacement, status == 2)
         generalized = stacked.T @ forces.ravel()
         drive = self._drive(mass, v, v_next, bias - generalized - passive, dt * stiffness + damping)
         return pin.integrate(model, q, v_next * dt), v_next, contacts, drive
@@ -272,7 +324,7 @@ class Simulator:
             v_next = v + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
             q_next = pin.integrate(model, q, dt / 6 * (v + 2 * v2 + 2 * v3 + v4))
         contacts.force, contacts.sticking = forces, sticking
-        self.engine.remember(contacts, displacement)
+        self.engine.remember(contacts, displacement, ~sticking)
         return q_next, v_next, contacts, drive
 
     def _acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, transmission: np.ndarray):
@@ -290,7 +342,9 @@ class Simulator:
             forces, sticking, displacement = self.engine.forces(contacts, relative, self.dt)
             generalized = np.einsum("mij,mi->j", jacobians, forces)
         mass = self._mass_matrix(q)
-        bias = pin.nonLinearEffects(model, data, q, v)
+        bias = pin.nonLinearEffects(model, data, q, v).copy()
+        if self.integrator == "semi-implicit":  # RK4's explicit stages are accurate to O(dt^4) as they are
+            self._implicit_gyroscopic(v, bias)
         reduced = transmission.T @ mass @ transmission
         acceleration = transmission @ np.linalg.solve(reduced, transmission.T @ (total + generalized - bias))
         drive = (mass @ acceleration + bias - generalized - passive + damping * v)[: self._nvh]
@@ -346,8 +400,20 @@ class Simulator:
             raise InputError(f"`control_dt` must be a positive multiple of dt = {self.dt}, got {control_dt}")
         if sensor_noise is not None and seed is None:
             raise InputError("`sensor_noise` needs a `seed` (runs are deterministic)")
+        if isinstance(record_every, bool) or not isinstance(record_every, int | np.integer) or record_every < 1:
+            raise InputError(
+                f"`record_every` must be a positive integer (physics steps per sample), got {record_every!r}"
+            )
+        if disturbance is not None and not callable(disturbance):
+            disturbance = self._disturbance(disturbance, "disturbance")
         rng = np.random.default_rng(seed)
         state = self.initial_state() if state is None else state
+        if state.scene_q is None or state.scene_q.shape != (self.scene.nq,):
+            raise InputError(
+                f"`state` must be a state of this simulator's scene (nq = {self.scene.nq}); use "
+                "Simulator.initial_state() or a state a run of this simulator returned"
+            )
+        self.actuation.restore(state.actuation_modes, state.scene_q[: self.scene.nq_hand])
         if hasattr(controller, "reset"):
             controller.reset(state)
         recorder = Recorder(self.scene, self.actuation)
@@ -364,10 +430,16 @@ class Simulator:
                 u = np.array(controller(state.t, sensed), dtype=float)
             if k % record_every == 0:
                 recorder.add(state, u, info, getattr(controller, "log", None))
-            torque = disturbance(state.t) if callable(disturbance) else disturbance
+            torque = self._disturbance(disturbance(state.t), "disturbance(t)") if callable(disturbance) else disturbance
             state, info = self.step(state, u, torque)
         recorder.add(state, u, info, getattr(controller, "log", None))
         return recorder.trajectory()
+
+
+def _skew(vector: np.ndarray) -> np.ndarray:
+    """The cross-product matrix ``[a]x`` with ``[a]x b = a x b``."""
+    x, y, z = vector
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
 def _noisy(state: State, noise: tuple[float, float] | None, rng: np.random.Generator) -> State:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -32,6 +33,10 @@ class State:
         contact_bodies: (m, 2) names of (body a, body b).
         scene_q: Full scene configuration (hand + objects), for the simulator.
         scene_v: Full scene velocity.
+        contact_memory: The simulator's memory of the last step's contacts (tangential spring displacements and
+            stick/slip flags, a :class:`~bhgrasp.contact.ContactMemory`); ``None`` = no contact remembered.  A run
+            from this state continues it exactly; ``dataclasses.replace(state, contact_memory=None)`` clears it.
+        actuation_modes: The actuation's mode flags (e.g. TorqueSwitch per finger); ``None`` = re-armed.
     """
 
     t: float
@@ -45,6 +50,8 @@ class State:
     contact_bodies: tuple[tuple[str, str], ...] = ()
     scene_q: np.ndarray | None = None
     scene_v: np.ndarray | None = None
+    contact_memory: Any = None
+    actuation_modes: np.ndarray | None = None
 
 
 _ARRAYS = (
@@ -191,14 +198,37 @@ class Trajectory:
 
     @classmethod
     def load(cls, path: str | Path) -> Trajectory:
-        """Read a file written by :meth:`save` (``allow_pickle=False``: untrusted files cannot run code)."""
-        with np.load(Path(path), allow_pickle=False) as data:
+        """Read a file written by :meth:`save` (``allow_pickle=False``: untrusted files cannot run code).
+
+        Raises:
+            InputError: The file is missing, is not an ``.npz`` archive, or holds pickled objects or other arrays.
+        """
+        path = Path(path)
+        if not path.is_file():
+            raise InputError(f"no trajectory file at {str(path)!r} (expected an .npz written by Trajectory.save)")
+        try:
+            data = np.load(path, allow_pickle=False)
+        except (ValueError, OSError, EOFError) as error:  # raw pickles and other files: refused unread
+            raise InputError(
+                f"{str(path)!r} is not a bhgrasp trajectory (.npz of plain arrays written by Trajectory.save): {error}"
+            ) from error
+        if not isinstance(data, np.lib.npyio.NpzFile):
+            raise InputError(
+                f"{str(path)!r} is not a bhgrasp trajectory: a single .npy array, expected an .npz archive"
+            )
+        with data:
             missing = [name for name in _ARRAYS if name not in data.files]
             if missing:
                 raise InputError(f"{str(path)!r} is not a bhgrasp trajectory: missing arrays {missing}")
-            arrays = {name: data[name] for name in _ARRAYS}
-            log = {name[4:]: data[name] for name in data.files if name.startswith("log/")}
+            try:
+                arrays = {name: data[name] for name in _ARRAYS}
+                log = {name[4:]: data[name] for name in data.files if name.startswith("log/")}
+                names = (data["joint_names"], data["object_names"], data["pair_bodies"])
+            except ValueError as error:  # an object array would need pickle: never unpickled
+                raise InputError(
+                    f"{str(path)!r} holds pickled objects, which are never loaded (untrusted code): {error}"
+                ) from error
             return cls(
-                **arrays, log=log, joint_names=tuple(str(n) for n in data["joint_names"]),
-                object_names=tuple(str(n) for n in data["object_names"]), pair_bodies=data["pair_bodies"],
+                **arrays, log=log, joint_names=tuple(str(n) for n in names[0]),
+                object_names=tuple(str(n) for n in names[1]), pair_bodies=names[2],
             )  # fmt: skip
