@@ -66,12 +66,21 @@ def read_urdf(path: str | Path) -> tuple[str, Element]:
         The file's text (to hand to Pinocchio) and its parsed root ``<robot>`` element.
 
     Raises:
-        ModelError: If the file is missing, is not well-formed XML, declares a DTD/entities, or is not a URDF.
+        ModelError: If the file is missing, is not UTF-8, is not well-formed XML, declares a DTD/entities, or is
+            not a URDF.
     """
     path = Path(path)
     if not path.is_file():
         raise ModelError(f"URDF file not found: {str(path)!r}")
-    text = path.read_text(encoding="utf-8", errors="strict")
+    data = path.read_bytes()
+    try:
+        text = data.decode("utf-8", errors="strict")
+    except UnicodeDecodeError as error:
+        line = data.count(b"\n", 0, error.start) + 1
+        raise ModelError(
+            f"URDF {str(path)!r} is not UTF-8 text: byte 0x{data[error.start]:02x} at offset {error.start} "
+            f"(line {line}) is invalid UTF-8 ({error.reason}); save the file as UTF-8"
+        ) from error
     try:
         root = safe_fromstring(text, forbid_dtd=True, forbid_entities=True, forbid_external=True)
     except DefusedXmlException as error:

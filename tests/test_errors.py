@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -76,6 +77,153 @@ def test_urdf_without_moving_joints(tmp_path: Path) -> None:
 def test_unknown_fingertip_frame() -> None:
     with pytest.raises(bh.InputError, match="unknown frame 'F4_tip'; valid frames: universe, .*F3_tip"):
         bh.Hand.from_urdf(bh.barrett_urdf_path(), fingertips=["F1_tip", "F4_tip"])
+
+
+# ---------------------------------------------------------------------- URDF inertias and encoding
+KNUCKLE_MASS = '<mass value="0.14109"/>'  # first occurrence: F1_knuckle_link
+KNUCKLE_ORIGIN = '<origin xyz="0.030616 -7.3219e-05 -0.011201" rpy="0 0 0"/>'
+KNUCKLE_INERTIA = (
+    '<inertia ixx="2.0672e-05" ixy="2.6024e-07" ixz="6.3481e-06" iyy="7.4105e-05" iyz="1.7118e-08" izz="6.8207e-05"/>'
+)
+ZERO_INERTIA = '<inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>'
+
+
+def inertia(ixx: float, ixy: float, ixz: float, iyy: float, iyz: float, izz: float) -> str:
+    return f'<inertia ixx="{ixx}" ixy="{ixy}" ixz="{ixz}" iyy="{iyy}" iyz="{iyz}" izz="{izz}"/>'
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        pytest.param(
+            KNUCKLE_MASS,
+            '<mass value="-0.14109"/>',
+            r"<inertial> mass must be a finite number >= 0 \[kg\], got '-0.14109'",
+            id="negative-mass",
+        ),
+        pytest.param(
+            KNUCKLE_MASS,
+            '<mass value="nan"/>',
+            r"<inertial> mass must be a finite number >= 0 \[kg\], got 'nan'",
+            id="nan-mass",
+        ),
+        pytest.param(
+            KNUCKLE_MASS,
+            '<mass value="inf"/>',
+            r"<inertial> mass must be a finite number >= 0 \[kg\], got 'inf'",
+            id="inf-mass",
+        ),
+        pytest.param(
+            KNUCKLE_MASS,
+            "",
+            r"<inertial> mass must be a finite number >= 0 \[kg\], got no <mass value=...>",
+            id="no-mass",
+        ),
+        pytest.param(
+            'iyy="7.4105e-05"',
+            'iyy="nan"',
+            r"<inertial> needs six finite <inertia> components ixx, ixy, ixz, iyy, iyz, izz \[kg m\^2\], got iyy='nan'",
+            id="nan-inertia",
+        ),
+        pytest.param(
+            KNUCKLE_INERTIA,
+            "",
+            r"<inertial> needs six finite <inertia> components .* got no <inertia>",
+            id="no-inertia",
+        ),
+        pytest.param(
+            KNUCKLE_ORIGIN,
+            '<origin xyz="0.03 nan 0"/>',
+            r"<inertial> <origin xyz> must be 3 finite numbers, got '0.03 nan 0'",
+            id="nan-origin",
+        ),
+        pytest.param(
+            'ixx="2.0672e-05"',
+            'ixx="-2.0672e-05"',
+            r"the inertia tensor must be positive semi-definite, got principal moments \[-2.1\d+e-05, .*\] kg m\^2 "
+            r"\(ixx=-2.0672e-05, ixy=2.6024e-07, .*\)",
+            id="negative-ixx",
+        ),
+        pytest.param(
+            KNUCKLE_INERTIA,
+            inertia(1e-5, 0, 0, 1e-5, 2e-5, 1e-5),
+            r"the inertia tensor must be positive semi-definite, got principal moments \[-1e-05, 1e-05, 3e-05\]",
+            id="indefinite-with-positive-diagonal",
+        ),
+        pytest.param(
+            'ixx="2.0672e-05"',
+            'ixx="2.0e-04"',
+            r"the moments of inertia ixx, iyy, izz break the triangle inequality "
+            r"\(6.8207e-05 \+ 7.4105e-05 < 0.0002 kg m\^2\): no rigid body has them",
+            id="triangle-inequality",
+        ),
+    ],
+)
+def test_urdf_with_an_impossible_inertial_is_refused(tmp_path: Path, old: str, new: str, message: str) -> None:
+    assert old in VALID_URDF
+    with pytest.raises(bh.ModelError, match=r"URDF '.*hand.urdf' link 'F1_knuckle_link': " + message):
+        bh.Hand.from_urdf(write(tmp_path, VALID_URDF.replace(old, new, 1)))
+
+
+def test_urdf_inertia_that_pinocchio_merges_into_inf_is_refused(tmp_path: Path) -> None:
+    """Each link is finite, but the fixed fingertip link merges into its parent body with an infinite mass."""
+    huge = VALID_URDF.replace('<mass value="0.04166"/>', '<mass value="1e308"/>', 1).replace(
+        '<link name="F1_tip"/>',
+        f'<link name="F1_tip"><inertial><mass value="1e308"/>{ZERO_INERTIA}</inertial></link>',
+    )
+    with pytest.raises(
+        bh.ModelError,
+        match=r"URDF '.*hand.urdf': the body of joint 'F1_distal' \(links F1_distal_link, F1_tip\) must have a finite "
+        r"mass >= 0 \[kg\], centre of mass and inertia in Pinocchio's model, got mass inf",
+    ):
+        bh.Hand.from_urdf(write(tmp_path, huge))
+
+
+def test_urdf_point_masses_and_massless_links_stay_legal(tmp_path: Path) -> None:
+    legal = VALID_URDF.replace(
+        '<link name="F1_tip"/>', f'<link name="F1_tip"><inertial><mass value="0"/>{ZERO_INERTIA}</inertial></link>'
+    ).replace(
+        '<link name="F2_tip"/>', f'<link name="F2_tip"><inertial><mass value="0.01"/>{ZERO_INERTIA}</inertial></link>'
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        hand = bh.Hand.from_urdf(write(tmp_path, legal))
+    assert hand.total_mass == pytest.approx(bh.BarrettHand().total_mass + 0.01)
+
+
+def test_urdf_principal_moments_breaking_the_triangle_inequality_warn(tmp_path: Path) -> None:
+    """Positive definite, ixx, iyy, izz fine, but the products of inertia make I1 + I2 < I3 (as in Allegro's tips)."""
+    allegro_tip = inertia(4.701248e-06, 1.255968e-06, 1.2936e-06, 3.649312e-06, 1.7622e-06, 4.701248e-06)
+    with pytest.warns(
+        UserWarning,
+        match=r"link 'F1_knuckle_link': the principal moments of inertia \[2.30064e-06, 3.48527e-06, 7.2659e-06\] "
+        r"kg m\^2 break the triangle inequality .* check the signs of ixy, ixz, iyz",
+    ):
+        hand = bh.Hand.from_urdf(write(tmp_path, VALID_URDF.replace(KNUCKLE_INERTIA, allegro_tip, 1)))
+    assert hand.nv == 8
+
+
+def test_published_hands_pass_the_inertia_checks() -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        bh.BarrettHand()
+    with pytest.warns(UserWarning, match="the principal moments of inertia") as record:  # its fingertips: see above
+        allegro = bh.Hand.from_urdf(bh.example_robot_data_urdf("allegro_hand_description/urdf/allegro_right_hand.urdf"))
+    assert allegro.nv == 16
+    warned = sorted(str(warning.message).split("link '")[1].split("'")[0] for warning in record)
+    assert warned == ["link_11.0", "link_15.0", "link_3.0", "link_7.0"]
+
+
+def test_urdf_that_is_not_utf8(tmp_path: Path) -> None:
+    path = tmp_path / "hand.urdf"
+    path.write_bytes(VALID_URDF.replace("F1_knuckle_link", "F1_kn\xfcckle_link", 1).encode("latin-1"))
+    line = VALID_URDF[: VALID_URDF.index("F1_knuckle_link")].count("\n") + 1
+    with pytest.raises(
+        bh.ModelError,
+        match=rf"URDF '.*hand.urdf' is not UTF-8 text: byte 0xfc at offset \d+ \(line {line}\) is invalid UTF-8 "
+        r"\(invalid start byte\); save the file as UTF-8",
+    ):
+        bh.Hand.from_urdf(path)
 
 
 # ---------------------------------------------------------------------- names
@@ -176,3 +324,50 @@ def test_bad_input_loses_nothing(barrett: bh.Hand) -> None:
         barrett.mass_matrix(np.full(8, np.nan))
     np.testing.assert_array_equal(barrett.mass_matrix(q), before[0])
     np.testing.assert_array_equal(barrett.gravity, before[1])
+
+
+# ---------------------------------------------------------------------- object poses
+def spring_mounted(pose: pin.SE3) -> bh.SpringMounted:
+    return bh.SpringMounted(bh.Box(size=(0.1, 0.1, 0.1), mass=1.0, pose=pose), direction=(0, 0, 1), stiffness=100.0)
+
+
+OBJECTS = {
+    "Box": lambda pose: bh.Box(size=(0.1, 0.2, 0.3), mass=1.0, pose=pose),
+    "Sphere": lambda pose: bh.Sphere(radius=0.05, mass=1.0, pose=pose),
+    "Cylinder": lambda pose: bh.Cylinder(radius=0.05, length=0.2, density=500.0, pose=pose),
+    "Capsule": lambda pose: bh.Capsule(radius=0.05, length=0.2, mass=1.0, pose=pose),
+    "FixedBox": lambda pose: bh.FixedBox(size=(1.0, 1.0, 0.1), pose=pose),
+    "SpringMounted": spring_mounted,
+}
+
+
+@pytest.mark.parametrize("kind", OBJECTS)
+@pytest.mark.parametrize(
+    ("rotation", "message"),
+    [
+        pytest.param(2.0 * np.eye(3), r"max \|R\^T R - I\| = 3, det R = 8: R = \[\[2.0, 0.0, 0.0\]", id="scaled"),
+        pytest.param(np.diag([1.0, 1.0, -1.0]), r"max \|R\^T R - I\| = 0, det R = -1", id="reflection"),
+        pytest.param(
+            pin.rpy.rpyToMatrix(0.1, 0.2, 0.3) @ np.diag([1.0, 1.0, 1.0 + 1e-6]),
+            r"max \|R\^T R - I\| = 2e-06",
+            id="stretched",
+        ),
+    ],
+)
+def test_object_pose_whose_rotation_is_not_a_rotation(kind: str, rotation: np.ndarray, message: str) -> None:
+    """Scene.initial_state turned such a pose into a quaternion, silently normalising 2 I to the identity."""
+    with pytest.raises(
+        bh.InputError,
+        match=r"`pose` must have a rotation matrix as its rotation \(orthonormal, det \+1, within 1e-09\), got "
+        + message,
+    ):
+        OBJECTS[kind](pin.SE3(rotation, np.array([0.1, 0.0, 0.2])))
+
+
+@pytest.mark.parametrize("kind", OBJECTS)
+def test_object_pose_with_nan_and_nearly_orthonormal_rotation(kind: str) -> None:
+    rotation = pin.rpy.rpyToMatrix(0.3, -0.2, 1.0)
+    with pytest.raises(bh.InputError, match="`pose` must be finite"):
+        OBJECTS[kind](pin.SE3(rotation, np.array([0.1, np.nan, 0.2])))
+    rounded = rotation + 1e-12  # within the 1e-9 tolerance: accepted, and kept as given
+    assert np.array_equal(OBJECTS[kind](pin.SE3(rounded, np.zeros(3))).pose.rotation, rounded)
