@@ -6,9 +6,17 @@ Integrators (``integrator=``):
   stops, object springs and joint damping are folded into the velocity solve
   ``(M + dt sum J^T D J + dt (dt K + C)) v+ = M v + dt (tau - h + sum J^T f0 - K q)``, then ``q+ = q (+) dt v+``.
   Contacts whose force would pull are dropped and sticking contacts that leave the friction cone switch to
-  sliding (a few active-set passes), so stiff contacts (k up to 5e4 N/m) stay stable at millisecond steps.
+  sliding (a few active-set passes), so stiff contacts (k up to 5e4 N/m) stay stable at millisecond steps.  The
+  passes start from the previous step's stick/slip state (or the predicted slip), so a sliding contact is never
+  forced to stick first.
 - ``"semi-implicit"``: symplectic Euler with explicit forces (``v+ = v + dt a(q, v)``, ``q+ = q (+) dt v+``).
 - ``"rk4"``: classical Runge-Kutta on the manifold with explicit forces, contacts re-detected at each stage.
+
+Free bodies translate world-aligned (``m dv/dt = f``: linear momentum is conserved to round-off in any collision,
+friction included) and, with the implicit and semi-implicit steps, turn under an implicit-midpoint gyroscopic torque
+that keeps a torque-free body's kinetic energy and ``|I w|`` exactly (the explicit ``w x I w`` gains energy every
+step).  A run depends only on its inputs: the :class:`~bhgrasp.state.State` carries the contact memory (tangential
+springs, stick/slip) and the actuation modes, so two runs from one state give the same bits.
 
 Actuation couplings (:class:`~bhgrasp.actuation.BarrettActuation`) enter as a transmission ``T``: the solve is
 done for the driven coordinates ``w`` with ``v_hand = T w``.  Contact forces enter the dynamics as generalised
