@@ -207,6 +207,20 @@ class Simulator:
             raise InputError(f"`{name}` must be finite, got {array.tolist()}")
         return array
 
+    def _increment_rate(self, increment: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Rate of the increment ``theta`` in ``q (+) theta`` at velocity ``v``.
+
+        A body's rotation ``R exp(theta)`` turns at body rate ``w`` when ``theta`` changes at
+        ``dexp^-1_{-theta}(w) = w + theta x w / 2 + theta x (theta x w) / 12`` (to O(theta^3), enough for RK4); hand
+        joints and translations are vector spaces, whose increments change at ``v``.
+        """
+        rate = v.copy()
+        for angular, _ in self._spinning:
+            theta, w = increment[angular], v[angular]
+            half = np.cross(theta, w)
+            rate[angular] = w + 0.5 * half + np.cross(theta, half) / 12.0
+        return rate
+
     def _motor_damping(self) -> np.ndarray:
         """The drive's own damping (joint damping of the actuation minus the passive joints')."""
         return self.actuation.joint_damping() - self.actuation.damping
@@ -322,15 +336,23 @@ class Simulator:
             v_next = v + dt * acceleration
             q_next = pin.integrate(model, q, v_next * dt)
         else:
+            # Runge-Kutta-Munthe-Kaas: each stage's configuration is q (+) theta, and a body's rotation increment
+            # theta grows at dexp^-1_theta(w), not w (adding the stages' w would be second order on SO(3)).
             k1, contacts, forces, sticking, displacement, drive = self._acceleration(q, v, tau, transmission)
-            q2, v2 = pin.integrate(model, q, v * dt / 2), v + dt / 2 * k1
+            v2 = v + dt / 2 * k1
+            q2 = pin.integrate(model, q, v * dt / 2)
+            rate2 = self._increment_rate(v * dt / 2, v2)
             k2 = self._acceleration(q2, v2, tau, transmission)[0]
-            q3, v3 = pin.integrate(model, q, v2 * dt / 2), v + dt / 2 * k2
+            v3 = v + dt / 2 * k2
+            q3 = pin.integrate(model, q, rate2 * dt / 2)
+            rate3 = self._increment_rate(rate2 * dt / 2, v3)
             k3 = self._acceleration(q3, v3, tau, transmission)[0]
-            q4, v4 = pin.integrate(model, q, v3 * dt), v + dt * k3
+            v4 = v + dt * k3
+            q4 = pin.integrate(model, q, rate3 * dt)
+            rate4 = self._increment_rate(rate3 * dt, v4)
             k4 = self._acceleration(q4, v4, tau, transmission)[0]
             v_next = v + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-            q_next = pin.integrate(model, q, dt / 6 * (v + 2 * v2 + 2 * v3 + v4))
+            q_next = pin.integrate(model, q, dt / 6 * (v + 2 * rate2 + 2 * rate3 + rate4))
         contacts.force, contacts.sticking = forces, sticking
         self.engine.remember(contacts, displacement, ~sticking)
         return q_next, v_next, contacts, drive
