@@ -444,6 +444,8 @@ class Simulator:
                 "Simulator.initial_state() or a state a run of this simulator returned"
             )
         self.actuation.restore(state.actuation_modes, state.scene_q[: self.scene.nq_hand])
+        if isinstance(getattr(controller, "log", None), dict):
+            controller.log.clear()  # each run records its own internals, never the last run's
         if hasattr(controller, "reset"):
             controller.reset(state)
         recorder = Recorder(self.scene, self.actuation)

@@ -207,3 +207,23 @@ def test_rerun_keeps_the_torque_switch_modes_of_its_state() -> None:
         np.testing.assert_array_equal(run.q, runs[0].q)
         np.testing.assert_array_equal(run.modes, runs[0].modes)
     assert (runs[0].modes[:, 2] == 1).all()
+
+
+def test_grasp_rerun_with_the_same_controller_is_bit_identical() -> None:
+    """The supervisor, the SMC-adaptive law (estimates, integrals, QP warm starts) and their logs restart with the
+    run: before, the second run's log carried the first run's grasp values into its approach phase."""
+    from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
+    from bhgrasp.controllers.supervisor import GraspSupervisor
+    from bhgrasp.experiments.box_grasp import box_grasp
+
+    setup = box_grasp(mass=0.6)
+    grasp = SMCAdaptiveGrasp(setup.hand, bh.Box(size=setup.box.size, mass=0.3), mu=0.6, squeeze=5.0)
+    supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=(0, 0, 0.01, 0.1, 0, 0))
+    first = setup.simulator.run(supervisor, 1.0, state=setup.state, progress=False)
+    second = setup.simulator.run(supervisor, 1.0, state=setup.state, progress=False)
+    assert np.nanmax(first.log["phase"]) == 2  # it grasped and began the motion
+    for name in ("q", "v", "u", "object_position", "contact_force"):
+        np.testing.assert_array_equal(getattr(first, name), getattr(second, name))
+    assert first.log.keys() == second.log.keys()
+    for name in first.log:
+        np.testing.assert_array_equal(first.log[name], second.log[name], err_msg=name)

@@ -118,6 +118,8 @@ class GraspSupervisor(Controller):
         self.phase, self.switch_time = APPROACH, None
         self._approach = None
         self._arrived[:] = 0.0
+        self.log.clear()
+        self.grasp.log.clear()
         self.grasp.reset(state)
         self.grasp.reference = None
 
