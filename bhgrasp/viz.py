@@ -10,9 +10,9 @@ on 127.0.0.1 and no browser is opened unless asked (``open=True``).  Overlays:
 - fingertip references (small spheres) from a joint controller's logged ``q_d``.
 
 :meth:`SceneViewer.replay` turns a recorded :class:`~bhgrasp.state.Trajectory` into a MeshCat animation decimated to
-at most 60 frames per second; :meth:`SceneViewer.save_html` writes the scene and its animation as one HTML file
-that works offline (meshcat's ``static_html``: the JavaScript is inlined).  ``bhgrasp.viz`` is not imported by
-``import bhgrasp``.
+at most 60 frames per second that loops endlessly (in the live viewer and in the exported page alike);
+:meth:`SceneViewer.save_html` writes the scene and its animation as one HTML file that works offline (meshcat's
+``static_html``: the JavaScript is inlined).  ``bhgrasp.viz`` is not imported by ``import bhgrasp``.
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ from bhgrasp.scene import Scene
 from bhgrasp.state import State, Trajectory
 
 MAX_FPS = 60.0
+LOOP_FOREVER = float("inf")  # replay repetitions (msgpack float64 inf: JavaScript's Infinity)
 ROOT = "bhgrasp"
 HAND_RGBA = (0.55, 0.57, 0.62, 1.0)
 OBJECT_RGBA = (0.95, 0.55, 0.15, 1.0)
@@ -185,7 +186,8 @@ class SceneViewer:
             force_scale: Arrow length per newton [m/N].
             mu: Friction coefficient of the drawn cones (default: the first object's friction).
             cones: Draw friction cones at the contacts.
-            play: Start playing (looping) at once.
+            play: Start playing at once (otherwise the viewer's Animations/play control starts it); either way the
+                replay loops: clip time t shows the run at ``traj.t[0] + t`` and wraps to 0 after the last frame.
         """
         fps = as_positive(fps, "fps")
         if fps > MAX_FPS:
@@ -210,7 +212,9 @@ class SceneViewer:
                     _animate_ghost(view, traj, k, poses)
                 if tips:
                     self._animate_tips(view, traj, k)
-        self.viewer.set_animation(animation, play=play, repetitions=0 if play else 1)
+        # three.js LoopRepeat with `repetitions` passes through the clip's end: Infinity loops for ever (a finite
+        # count, 0 included, stops at the end and meshcat's animator then pauses and rewinds to the first frame)
+        self.viewer.set_animation(animation, play=play, repetitions=LOOP_FOREVER)
         return animation
 
     def _animate_contacts(self, view, traj: Trajectory, k: int, force_scale: float, mu: float, cones: bool) -> None:

@@ -2,6 +2,11 @@
 
 .ci/run installs Debian's chromium and sets BHGRASP_REQUIRE_BROWSER=1, so there a missing browser fails the test;
 elsewhere it is skipped with the reason.  BHGRASP_SCREENSHOT=path also writes the screenshot there (docs/).
+
+No assertion depends on how fast the browser plays: the test waits until every scene command of the page has been
+applied, waits (without a pace assumption) for the clip to play through its end and wrap on its own, then pauses the
+animator and sets its clock itself, reading the box's pose at chosen clip times and comparing it with the recorded
+trajectory (the npz the same `bhgrasp demo` run wrote, not the viewer's own frame list).
 """
 
 from __future__ import annotations
@@ -11,28 +16,84 @@ import http.server
 import os
 import shutil
 import threading
-import time
 from pathlib import Path
 
+import numpy as np
+import pinocchio as pin
 import pytest
 
 from bhgrasp.cli import main
+from bhgrasp.state import Trajectory
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 FLAGS = ["--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--disable-quic"]  # fmt: skip
-BOX_HEIGHT = "viewer.scene_tree.find(['meshcat','bhgrasp','visuals','object0']).object.position.z"
 LINKS = ["palm_0", "F1_proximal_link_0", "F2_distal_link_0", "F3_distal_link_0", "object0"]
+TIMEOUT = 60_000  # [ms] only an upper bound for a loaded machine: nothing below waits a fixed time
+
+# Before the page's scripts: count the scene commands.  MeshCat's static page issues one fetch of a data: URL per
+# command and applies it in the promise chain after `response.arrayBuffer()`, in the same microtask checkpoint as
+# this counter's update; a poll (a later task) that sees handled == issued therefore sees every command applied.
+COUNT_COMMANDS = """
+window.bhgrasp = {issued: 0, handled: 0, loops: 0};
+const pageFetch = window.fetch;
+window.fetch = function (resource, ...rest) {
+    if (String(resource).startsWith("data:")) window.bhgrasp.issued += 1;
+    return pageFetch.call(this, resource, ...rest);
+};
+const arrayBuffer = Response.prototype.arrayBuffer;
+Response.prototype.arrayBuffer = function () {
+    return arrayBuffer.call(this).finally(() => { window.bhgrasp.handled += 1; });
+};
+"""
+LOADED = (
+    "document.readyState === 'complete' && window.bhgrasp.issued > 0"
+    " && window.bhgrasp.handled === window.bhgrasp.issued && viewer.animator.actions.length > 0"
+)
+# the box node's 4 x 4 placement (column-major) in the scene's own frame (the `bhgrasp` node, which look_at shifts)
+BOX_POSE = """() => {
+    const root = viewer.scene_tree.find(["meshcat", "bhgrasp"]).object;
+    const box = viewer.scene_tree.find(["meshcat", "bhgrasp", "visuals", "object0"]).object;
+    box.updateWorldMatrix(true, false);
+    return Array.from(root.matrixWorld.clone().invert().multiply(box.matrixWorld).elements);
+}"""
+BOX_ACTION = """viewer.animator.actions.find(
+    (action) => action.getRoot() === viewer.scene_tree.find(["meshcat", "bhgrasp", "visuals", "object0"]).object)"""
 
 pytestmark = pytest.mark.browser
 
 
 @pytest.fixture(scope="module")
 def replay(tmp_path_factory) -> Path:
-    """`bhgrasp demo --html`: the README's main job writes the replay."""
+    """`bhgrasp demo --html`: the README's main job writes the replay (and the trajectory, grasp_demo.npz)."""
     folder = tmp_path_factory.mktemp("replay")
     assert main(["demo", "--output", str(folder), "--duration", "2.5", "--html", str(folder / "replay.html")]) == 0
     return folder / "replay.html"
+
+
+def recorded_poses(traj: Trajectory, time: float) -> list[np.ndarray]:
+    """The box's recorded 4 x 4 poses at the samples next to ``time`` [s] (a replay frame shows one of them)."""
+    k = int(np.searchsorted(traj.t, time))
+    samples = range(max(k - 1, 0), min(k + 2, len(traj)))
+    poses = np.concatenate((traj.object_position[:, 0], traj.object_quaternion[:, 0]), axis=1)
+    return [pin.XYZQUATToSE3(poses[i]).homogeneous for i in samples]
+
+
+def assert_shows(shown: list[float], traj: Trajectory, time: float) -> None:
+    """The page's box pose (column-major) is the recorded pose at sim time ``time`` (float32 three.js tracks)."""
+    shown = np.reshape(shown, (4, 4)).T
+    error = min(np.abs(shown - truth).max() for truth in recorded_poses(traj, time))
+    assert error < 1e-5, f"the box at t = {time:.4f} s is {error:.2e} off every recorded pose next to that time"
+
+
+def wait_for(page, condition: str, what: str) -> None:
+    """Wait until the page's ``condition`` holds (up to TIMEOUT), failing with ``what`` did not happen."""
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+    try:
+        page.wait_for_function(condition, timeout=TIMEOUT)
+    except PlaywrightTimeout:
+        pytest.fail(f"{what} within {TIMEOUT / 1000:g} s ({condition})")
 
 
 def test_replay_opens_offline_in_chromium_and_animates(replay: Path, tmp_path: Path) -> None:
@@ -42,6 +103,8 @@ def test_replay_opens_offline_in_chromium_and_animates(replay: Path, tmp_path: P
         pytest.skip(f"no Chromium at {CHROMIUM} (apt-get install chromium)")
     from playwright.sync_api import sync_playwright
 
+    traj = Trajectory.load(replay.parent / "grasp_demo.npz")
+    t0 = float(traj.t[0])
     handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(replay.parent))
     server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
     threading.Thread(target=server.serve_forever, daemon=True).start()
@@ -53,28 +116,49 @@ def test_replay_opens_offline_in_chromium_and_animates(replay: Path, tmp_path: P
                 str(tmp_path / "profile"), executable_path=CHROMIUM, headless=True, args=FLAGS
             )
             page = context.new_page()
+            page.add_init_script(COUNT_COMMANDS)
             page.on("request", lambda request: requests.append(request.url))
             page.goto(url)
-            page.wait_for_function("typeof viewer !== 'undefined' && viewer.scene_tree !== undefined", timeout=30_000)
+            wait_for(page, LOADED, "the page did not apply its scene commands")
             visuals = page.evaluate(
                 "Object.keys(viewer.scene_tree.children.meshcat.children.bhgrasp.children.visuals.children)"
             )
             assert set(LINKS) <= set(visuals)  # the hand's links and the box are in the three.js scene tree
-            start = page.evaluate("viewer.animator.mixer.time")
-            height = page.evaluate(
-                "viewer.scene_tree.find(['meshcat','bhgrasp','visuals','object0']).object.position.z"
+            duration = page.evaluate("viewer.animator.duration")
+            assert duration == pytest.approx(traj.t[-1] - t0, abs=1.0 / 30)  # the clip spans the run
+
+            # it plays on its own, through the clip's end and back to its start (however slow the machine)
+            page.evaluate("viewer.animator.mixer.addEventListener('loop', () => { window.bhgrasp.loops += 1; })")
+            wait_for(page, "window.bhgrasp.loops > 0", "the replay did not play through its end and loop")
+            playing, paused, time = page.evaluate(f"[viewer.animator.playing, {BOX_ACTION}.paused, {BOX_ACTION}.time]")
+            assert playing and not paused and 0.0 <= time < duration
+
+            # from here on the test owns the clock: the animator stops reading wall time and each evaluate sets the
+            # clip time and reads the pose in one JavaScript task, so no browser frame can come in between
+            page.evaluate("viewer.animator.pause()")
+            times = np.array(page.evaluate(f"Array.from({BOX_ACTION}.getClip().tracks[0].times)"))
+            assert times[0] == 0.0 and times[-1] == pytest.approx(duration)
+            first, early, late = 0.0, float(times[len(times) // 20]), float(times[round(0.9 * (len(times) - 1))])
+            seek = f"(time) => {{ viewer.animator.seek(time); return ({BOX_POSE})(); }}"
+            start = page.evaluate(seek, first)
+            assert_shows(start, traj, t0 + first)
+            lifted = page.evaluate(seek, late)
+            assert_shows(lifted, traj, t0 + late)  # the box is lifted late in the run ...
+            assert lifted[14] - start[14] > 1e-3  # [m] ... so its node really moved with the clock
+
+            # the loop: from 90 % run the mixer past the clip's end; the clock wraps to `early`, the box with it
+            wrapped = page.evaluate(
+                f"""(step) => {{
+                    const loops = window.bhgrasp.loops;
+                    viewer.animator.mixer.update(step);
+                    return [{BOX_ACTION}.time, window.bhgrasp.loops - loops, ({BOX_POSE})()];
+                }}""",
+                duration - late + early,
             )
-            time.sleep(1.5)
-            later = page.evaluate("viewer.animator.mixer.time")
-            # the animation plays (its pace follows the machine's load: 0.98 s in 1.5 s with both cores busy)
-            assert later > start + 0.3
-            page.evaluate("viewer.animator.seek(0.9 * viewer.animator.duration)")  # the box is lifted late in the run
-            page.evaluate("viewer.set_dirty()")
-            time.sleep(0.3)
-            lifted = page.evaluate(
-                "viewer.scene_tree.find(['meshcat','bhgrasp','visuals','object0']).object.position.z"
-            )
-            assert abs(lifted - height) > 1e-3  # [m] the object node moves with the animation
+            assert wrapped[0] == pytest.approx(early, abs=1e-6) and wrapped[1] > 0
+            assert_shows(wrapped[2], traj, t0 + early)
+
+            page.evaluate(seek, late)  # the screenshot shows the lifted box
             shot = tmp_path / "replay.png"
             page.screenshot(path=str(shot))
             context.close()

@@ -80,6 +80,20 @@ def test_replay_exports_a_self_contained_animated_page(held, tmp_path):
         viewer.replay(traj, fps=120)
 
 
+def test_replays_loop_whether_or_not_they_start_playing(held, monkeypatch):
+    """three.js stops a LoopRepeat action after `repetitions` passes (0 included): a replay asks for Infinity."""
+    _, traj, viewer = held
+    sent = []
+
+    def record(visualizer, animation, **options):
+        sent.append(options)
+
+    monkeypatch.setattr(type(viewer.viewer), "set_animation", record)  # on the class: Visualizer has __slots__
+    viewer.replay(traj, fps=30)
+    viewer.replay(traj, fps=30, play=False)
+    assert sent == [{"play": True, "repetitions": np.inf}, {"play": False, "repetitions": np.inf}]
+
+
 def test_live_view_shows_every_nth_state_and_leaves_the_run_unchanged(held, monkeypatch):
     _, _, viewer = held
     shown = []
