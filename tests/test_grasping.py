@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.controllers.grasping import GraspForceController
+from bhgrasp.controllers.grasping import GraspContacts, GraspForceController
 from bhgrasp.experiments.hold import BOX_MASS, reference_hold
 from bhgrasp.trajectories import Quintic
 
@@ -37,6 +37,8 @@ def test_hold_keeps_the_box_still_with_forces_inside_the_cones():
     assert drift < 2e-5  # [m]
     # sample 0 is the initial state, before any contact is sensed: the QP's log starts at sample 1
     assert np.all(np.isnan(traj.log["feasible"][0])) and np.all(traj.log["feasible"][1:] == 1.0)
+    assert traj.log["infeasible_cycles"][-1] == 0.0 and np.max(traj.log["qp_iterations"][1:]) <= 30
+    assert np.max(traj.log["wrench_residual"][1:]) < 1e-6
     assert np.all(traj.contact_sticking)
     assert np.min(measured_cone_margins(traj, 0.8)) > 0.0  # no measured force leaves the true cone (mu 0.8)
     weight = -np.sum(traj.contacts_at(len(traj) - 1)["force"], axis=0)  # forces on the box balance its weight
@@ -102,3 +104,48 @@ def test_unknown_object_mass_is_learnt_and_contact_forces_follow_the_qp(mass, fi
     measured = finger_normal_forces(hold.hand, traj, len(traj) - 1)
     commanded = traj.log["commanded_normal"][-1]
     np.testing.assert_allclose(measured, commanded, rtol=0.05)  # contact force error within 5 % after settling
+
+
+def test_an_infeasible_wrench_gets_the_nearest_admissible_forces_and_is_logged():
+    """Two contacts on one line exert no torque about it: the controller still gets forces, inside the cones, that
+    meet the rest of the wrench, says so in its log, and counts the infeasible cycles."""
+    hand = bh.BarrettHand()
+    controller = GraspForceController(hand, BOX_MASS, mu=0.5, squeeze=3.0)
+    contacts = GraspContacts(
+        points=np.array([[0.03, 0.0, 0.0], [-0.03, 0.0, 0.0]]),
+        normals=np.array([[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0]]),
+        links=["F1_distal_link", "F3_distal_link"],
+        fingers=["F1", "F3"],
+        forces=np.zeros((2, 3)),
+        reference=np.zeros(3),
+    )
+    wrench = np.array([0.0, 0.0, BOX_MASS * 9.81, 0.05, 0.0, 0.0])  # 0.05 N m about x, the contacts' line
+    for cycle in range(1, 4):
+        forces = controller.distribute(contacts, wrench)
+        assert controller.log["feasible"] == 0.0 and controller.log["infeasible_cycles"] == cycle
+        assert controller.log["qp_iterations"] <= (40 if cycle == 1 else 5)  # then one warm nearest solve
+        assert controller.log["cone_margin"] >= -1e-9 and np.all(forces[:, 2] >= controller.min_normal_force - 1e-9)
+        error = contacts.grasp_map @ forces.ravel() - wrench
+        assert abs(error[3] + 0.05) < 1e-9 and np.linalg.norm(np.delete(error, 3)) < 1e-3  # only the torque missed
+        assert controller.log["wrench_residual"] == pytest.approx(np.linalg.norm(error))
+
+
+class TwoFingerGrasp(GraspForceController):
+    """Uses F1 and F3 only (F2 keeps touching, with gravity compensation alone): no admissible forces of the two
+    hold the box's pose."""
+
+    def touching(self, state):
+        return {finger: c for finger, c in super().touching(state).items() if finger != "F2"}
+
+
+def test_controller_keeps_running_through_infeasible_cycles():
+    """Every grasp cycle is infeasible; each QP call ends within a few iterations (the pre-fix solver took up to
+    12 551 per cycle, 26 s for this run) and the nearest admissible forces still hold the box within a centimetre."""
+    hold = reference_hold()
+    controller = TwoFingerGrasp(hold.hand, BOX_MASS, mu=0.6, squeeze=3.0)
+    traj = hold.simulator.run(controller, 0.5, state=hold.state, progress=False)
+    grasping = traj.log["contacts"][1:] >= 2
+    assert np.all(traj.log["feasible"][1:][grasping] == 0.0)
+    assert traj.log["infeasible_cycles"][-1] >= 490  # of 500 control cycles (1 ms), the first before contact
+    assert np.nanmax(traj.log["qp_iterations"]) <= 100 and np.nanmin(traj.log["cone_margin"]) >= -1e-9
+    assert np.linalg.norm(traj.object_position[-1, 0] - traj.object_position[0, 0]) < 0.01  # [m]

@@ -43,9 +43,13 @@ class ObjectGraspController(Controller):
     (``"pinv"``: f = G^+ w + (I - G^+ G) f_squeeze, no cone constraint; kept as the baseline).
 
     Logged: ``object_error`` (position [m], rotation vector [rad], world), ``wrench`` (commanded on the object),
-    ``commanded_normal`` (normal force per finger of the hand [N], 0 if not touching), ``feasible``,
-    ``cone_margin`` (smallest mu f_n - |f_t| of the commanded forces [N], negative = outside the assumed cone),
-    ``contacts`` (number of touching fingers).
+    ``commanded_normal`` (normal force per finger of the hand [N], 0 if not touching), ``feasible`` (1 if the
+    forces exert the wrench, 0 if no admissible forces do: the QP then returns, and the controller applies, the
+    nearest admissible ones, see :mod:`bhgrasp.grasp_forces`), ``infeasible_cycles`` (how many grasp cycles so far
+    were infeasible), ``wrench_residual`` (|G f - w| of the applied forces [N, N m]), ``qp_iterations`` (solver
+    iterations of the cycle, at most :attr:`~bhgrasp.grasp_forces.ContactForceQP.iteration_bound`; 0 for
+    ``"pinv"``), ``cone_margin`` (smallest mu f_n - |f_t| of the commanded forces [N], negative = outside the
+    assumed cone), ``contacts`` (number of touching fingers).
     """
 
     DISTRIBUTIONS = ("qp", "pinv")
@@ -91,6 +95,7 @@ class ObjectGraspController(Controller):
         self.distribution = distribution
         self.sensing = ContactSensing(nominal)
         self._qps: dict[int, ContactForceQP] = {}
+        self._infeasible_cycles = 0
         self._hold: pin.SE3 | None = None
         self._time: float | None = None
         self._closing = self._closing_torque()
@@ -104,9 +109,10 @@ class ObjectGraspController(Controller):
         return torque
 
     def reset(self, state: State) -> None:
-        """Forget the held pose, the QP warm starts and the clock."""
+        """Forget the held pose, the QP warm starts, the infeasible-cycle count and the clock."""
         self._hold = None
         self._qps.clear()
+        self._infeasible_cycles = 0
         self._time = None
 
     def __call__(self, t: float, state: State) -> np.ndarray:
@@ -164,7 +170,11 @@ class ObjectGraspController(Controller):
         return error, twist - velocity, velocity, acceleration
 
     def distribute(self, contacts: GraspContacts, wrench: np.ndarray) -> np.ndarray:
-        """Contact forces (n, 3) (contact frames: t1, t2, n) [N] that exert ``wrench`` about the object's COM."""
+        """Contact forces (n, 3) (contact frames: t1, t2, n) [N] that exert ``wrench`` about the object's COM.
+
+        When no admissible forces exert it, the QP's nearest admissible forces (never an exception, at most
+        :attr:`~bhgrasp.grasp_forces.ContactForceQP.iteration_bound` iterations); ``log["feasible"]`` is then 0.
+        """
         n = len(contacts.fingers)
         gmap = contacts.grasp_map
         desired = np.tile([0.0, 0.0, self.squeeze], (n, 1))
@@ -172,11 +182,15 @@ class ObjectGraspController(Controller):
             if n not in self._qps:
                 self._qps[n] = ContactForceQP(n, self.mu, min_normal_force=self.min_normal_force)
             result = self._qps[n].solve(gmap, wrench, desired)
-            forces, feasible = result.forces, result.feasible
+            forces, feasible, iterations = result.forces, result.feasible, result.iterations
         else:
-            forces, feasible = pseudo_inverse_forces(gmap, wrench, desired), True
+            forces, feasible, iterations = pseudo_inverse_forces(gmap, wrench, desired), True, 0
+        self._infeasible_cycles += not feasible
         self.log["wrench"] = wrench
         self.log["feasible"] = np.array(float(feasible))
+        self.log["infeasible_cycles"] = np.array(float(self._infeasible_cycles))
+        self.log["wrench_residual"] = np.array(float(np.linalg.norm(gmap @ forces.ravel() - wrench)))
+        self.log["qp_iterations"] = np.array(float(iterations))
         self.log["cone_margin"] = np.array(-np.max(cone_violations(forces, self.mu)))
         commanded = np.zeros(len(self.nominal.fingers))
         for finger, force in zip(contacts.fingers, forces):
