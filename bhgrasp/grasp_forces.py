@@ -149,7 +149,8 @@ class ContactForceQP:
         self._nearest = self._make(size + 6, tolerance, -1.0, self.max_iter)
         self._nearest_H = np.diag(np.concatenate((np.ones(size), np.full(6, NEAREST_WEIGHT))))
         self._nearest_C = np.hstack((self._C, np.zeros((rows, 6))))
-        self._warm = self._warm_nearest = self._infeasible = False
+        self._warm: bool | tuple = False  # how the QP starts: from its last result, from (x, y, z), from scratch
+        self._warm_nearest = self._infeasible = False
         self._grasp_map: np.ndarray | None = None
         self._rows = np.ones(6)
         self._A = np.zeros((6, size))
@@ -170,16 +171,21 @@ class ContactForceQP:
         settings.max_iter, settings.max_iter_in = max_iter, self.max_iter_in
         return qp
 
-    def _run(self, qp, warm: bool, problem: tuple) -> tuple[str, int, np.ndarray]:
-        """One bounded solve of ``problem`` = (H, g, A, b, C, l, u), warm or from scratch: (status, iterations, x)."""
+    def _run(self, qp, warm: bool | tuple, problem: tuple) -> tuple[str, int, np.ndarray]:
+        """One bounded solve of ``problem`` = (H, g, A, b, C, l, u): (status, iterations, x).
+
+        ``warm``: True (from the previous result of ``qp``), a primal-dual point (x, y, z), or False (scratch).
+        """
         guess = self._proxqp.InitialGuess
-        if warm:  # same H, C and bounds: only g, A and b change
-            qp.settings.initial_guess = guess.WARM_START_WITH_PREVIOUS_RESULT
-            qp.update(g=problem[1], A=problem[2], b=problem[3], update_preconditioner=False)
-        else:
+        if warm is False:
             qp.settings.initial_guess = guess.EQUALITY_CONSTRAINED_INITIAL_GUESS
             qp.init(*problem)
-        qp.solve()
+            qp.solve()
+        else:  # same H, C and bounds: only g, A and b change
+            explicit = warm is not True
+            qp.settings.initial_guess = guess.WARM_START if explicit else guess.WARM_START_WITH_PREVIOUS_RESULT
+            qp.update(g=problem[1], A=problem[2], b=problem[3], update_preconditioner=False)
+            qp.solve(*warm) if explicit else qp.solve()
         info = qp.results.info
         x = qp.results.x.copy()
         status = info.status.name if np.all(np.isfinite(x)) else "PROXQP_NOT_FINITE"
@@ -211,7 +217,7 @@ class ContactForceQP:
                 return self._result(grasp, w, nearest, "PROXQP_PRIMAL_INFEASIBLE", iterations)
         status, spent, x = self._run(self._qp, self._warm, problem)
         iterations += spent
-        solved = status == "PROXQP_SOLVED"
+        warm = solved = status == "PROXQP_SOLVED"
         if not solved and nearest is None:
             nearest, spent, doubtful = self._nearest_forces(f_d, b)
             iterations += spent
@@ -219,8 +225,9 @@ class ContactForceQP:
             check, spent, x = self._run(self._check, False, problem)
             iterations += spent
             solved = check == "PROXQP_SOLVED"
-            status = check if solved else status
-        self._warm, self._infeasible = solved, not solved
+            if solved:  # the next cycle starts the QP from here, not from its own failed iterate
+                status, warm = check, (x, self._check.results.y.copy(), self._check.results.z.copy())
+        self._warm, self._infeasible = warm if solved else False, not solved
         return self._result(grasp, w, x if solved else nearest, status, iterations)
 
     def _nearest_forces(self, f_d: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, int, bool]:
