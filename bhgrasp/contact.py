@@ -203,6 +203,16 @@ class ContactSet:
         return records
 
 
+def _fresh_request(template: coal.CollisionRequest) -> coal.CollisionRequest:
+    """A collision request of our own with ``template``'s settings (Pinocchio may store GJK guesses in its own)."""
+    request = coal.CollisionRequest()
+    request.enable_contact = template.enable_contact
+    request.num_max_contacts = template.num_max_contacts
+    request.security_margin = template.security_margin
+    request.break_distance = template.break_distance
+    return request
+
+
 def empty_contact_set() -> ContactSet:
     """A set with no contacts."""
     return ContactSet(
@@ -228,7 +238,19 @@ class ContactEngine:
         self.memory = ContactMemory.empty()  # the contacts of the last step (restored from each step's State)
         # the per-pair results, wrapped once (coal refills them in place; indexing the vector each step costs more)
         self._results = list(scene.geometry_data.collisionResults)
-        self._patches = list(scene.geometry_data.contactPatchResults)
+        # Narrow phase of the colliding pairs, redone by coal's free functions: Pinocchio's per-pair collision
+        # functors keep GJK state from call to call, so at a degenerate contact (two faces flush) the witness, and
+        # with it the patch, depended on the configurations queried before (a box resting flat on its pedestal
+        # gave a 4-point patch or a 1-point patch); the free functions start afresh every time.
+        geometry, data = scene.geometry, scene.geometry_data
+        self._narrow = [
+            (
+                geometry.geometryObjects[pair.geom_a].geometry, geometry.geometryObjects[pair.geom_b].geometry,
+                pair.geom_a, pair.geom_b, _fresh_request(data.collisionRequests[pair.index]),
+                data.contactPatchRequests[pair.index], coal.CollisionResult(), coal.ContactPatchResult(),
+            )
+            for pair in scene.pairs
+        ]  # fmt: skip
         self._probe = coal.Sphere(1e-12)  # a point, for signed-distance queries
         self._probe_placement = coal.Transform3s()
         self._distance_request, self._distance_result = coal.DistanceRequest(), coal.DistanceResult()
@@ -248,10 +270,17 @@ class ContactEngine:
         if not pin.computeCollisions(scene.model, scene.data, scene.geometry, scene.geometry_data, q, False):
             return empty_contact_set()
         colliding = [k for k, result in enumerate(self._results) if result.isCollision()]
-        pin.computeContactPatches(scene.geometry, scene.geometry_data)
+        placements = scene.geometry_data.oMg
         pairs, points, normals, depths, weights = [], [], [], [], []
         for k in colliding:
-            patches = self._patches[k]
+            shape_a, shape_b, geom_a, geom_b, request, patch_request, result, patches = self._narrow[k]
+            placement_a, placement_b = placements[geom_a], placements[geom_b]
+            transform_a = coal.Transform3s(placement_a.rotation, placement_a.translation)
+            transform_b = coal.Transform3s(placement_b.rotation, placement_b.translation)
+            result.clear()
+            if not coal.collide(shape_a, transform_a, shape_b, transform_b, request, result):
+                continue
+            coal.computeContactPatch(shape_a, transform_a, shape_b, transform_b, result, patch_request, patches)
             for p in range(patches.numContactPatches()):
                 patch = patches.getContactPatch(p)
                 size = patch.size()
