@@ -197,6 +197,19 @@ class Simulator:
             rate[angular] = w + 0.5 * half + np.cross(theta, half) / 12.0
         return rate
 
+    def _disturbance(self, torque: Any, name: str) -> np.ndarray | None:
+        """A disturbance as finite joint torques of shape (nv_hand,) [N m] (``None``: none)."""
+        if torque is None:
+            return None
+        array = np.asarray(torque, dtype=float)
+        if array.shape != (self._nvh,):
+            raise InputError(
+                f"`{name}` must be {self._nvh} joint torques [N m] (one per hand joint), got shape {array.shape}"
+            )
+        if not np.isfinite(array).all():
+            raise InputError(f"`{name}` must be finite, got {array.tolist()}")
+        return array
+
     def _motor_damping(self) -> np.ndarray:
         """The drive's own damping (joint damping of the actuation minus the passive joints')."""
         return self.actuation.joint_damping() - self.actuation.damping
