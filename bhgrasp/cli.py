@@ -71,14 +71,32 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     bench = commands.add_parser("bench", help="run benchmarks/*.py of a source checkout (ratios, see BENCHMARKS.md)")
     bench.add_argument("--quick", action="store_true", help="a few repetitions only (a smoke run)")
-    experiments = commands.add_parser("experiments", help="reproduce a thesis chapter: report (markdown) and figures")
+    experiments = commands.add_parser(
+        "experiments",
+        help="reproduce a thesis chapter: report (markdown), figures and figures of merit (chapterN.json); compare "
+        "a run with the committed results; render the README's results table",
+    )
     experiments.add_argument(
         "chapter",
-        choices=["ch3", "ch4", "ch5", "all"],
+        choices=["ch3", "ch4", "ch5", "all", "compare", "readme-table"],
         help="ch3: joint-space control (CTC, SMC, ASMC, HOSM); ch4: force control; ch5: grasping and "
-        "manipulation; all: the three",
+        "manipulation; all: the three; compare FOLDER: check a run's chapterN.json against --reference (exit 1 "
+        "with a table of every value outside tolerance, missing or extra); readme-table: print the README's "
+        "'Results at a glance' table rendered from --reference (with --readme: rewrite it there)",
     )
-    experiments.add_argument("--output", type=Path, default=Path("docs/results"), help="folder for report and figures")
+    experiments.add_argument("folder", nargs="?", type=Path, default=None, help="compare: the new run's folder")
+    experiments.add_argument(
+        "--output", type=Path, default=Path("docs/results"), help="folder for report, figures and chapterN.json"
+    )
+    experiments.add_argument(
+        "--reference", type=Path, default=Path("docs/results"), help="compare, readme-table: the committed results"
+    )
+    experiments.add_argument(
+        "--readme",
+        type=Path,
+        default=None,
+        help="rewrite this README's results table from the chapterN.json in --output (after a run) or --reference",
+    )
     experiments.add_argument(
         "--scale", type=float, default=1.0, help="multiply every case's duration (e.g. 0.5 for a quick look)"
     )
@@ -93,11 +111,17 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     if args.command == "experiments":
+        if args.chapter in ("compare", "readme-table"):
+            return _results(args)
+        if args.folder is not None:
+            raise InputError(f"`bhgrasp experiments {args.chapter}` takes no folder; use --output")
         chapters = ("ch3", "ch4", "ch5") if args.chapter == "all" else (args.chapter,)
         for chapter in chapters:
             status = _experiments(chapter, args.output, args.scale, not args.no_figures)
             if status:
                 return status
+        if args.readme is not None:
+            _readme(args.readme, args.output)
         return 0
     if args.command == "info":
         from bhgrasp import BarrettHand, Hand
@@ -280,7 +304,39 @@ def _experiments(chapter: str, output: Path, scale: float, figures: bool) -> int
     counted = f", {runs} runs" if runs else ""
     print(f"{chapter}: {len(cases)} cases{counted} in {time.perf_counter() - start:.1f} s")
     print(f"report: {output / f'chapter{number}.md'}")
+    from bhgrasp.experiments.results import write_results
+
+    print(f"figures of merit: {write_results(output, int(number), cases, scale)}")
     return 0
+
+
+def _results(args: argparse.Namespace) -> int:
+    """``experiments compare FOLDER`` and ``experiments readme-table``."""
+    from bhgrasp.experiments import results
+
+    if args.chapter == "compare":
+        if args.folder is None:
+            raise InputError("`bhgrasp experiments compare` needs the folder of a run (its chapterN.json)")
+        ok, report = results.compare_folders(args.folder, args.reference)
+        print(report)
+        return 0 if ok else 1
+    if args.folder is not None:
+        raise InputError("`bhgrasp experiments readme-table` takes no folder; use --reference")
+    if args.readme is None:
+        print(results.render_readme_table(args.reference), end="")
+    else:
+        _readme(args.readme, args.reference)
+    return 0
+
+
+def _readme(readme: Path, folder: Path) -> None:
+    from bhgrasp.experiments.results import update_readme
+
+    try:
+        changed = update_readme(readme, folder)
+    except (OSError, ValueError, KeyError, StopIteration) as error:
+        raise InputError(f"cannot render {readme}'s results table from {folder}: {error!r}") from error
+    print(f"{readme}: results table {'rewritten' if changed else 'already up to date'}")
 
 
 def _hold(duration: float) -> None:

@@ -74,7 +74,11 @@ class Run:
 
 @dataclass
 class Case:
-    """A thesis experiment: its runs, a table of our numbers beside the thesis', and notes."""
+    """A thesis experiment: its runs, a table of our numbers beside the thesis', notes, and the table's numbers.
+
+    ``values`` maps names such as ``"clean/SMC/q2/rms_error_pct"`` (unit last) to the unrounded numbers of the table;
+    :mod:`bhgrasp.experiments.results` writes them to ``chapter3.json``.
+    """
 
     key: str
     title: str
@@ -82,6 +86,7 @@ class Case:
     table: list[list[str]] = field(default_factory=list)
     header: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    values: dict[str, float] = field(default_factory=dict)  # the table's numbers, unrounded (chapter3.json)
 
 
 def controller(
@@ -155,7 +160,7 @@ def ctc_steps(scale: float = 1.0) -> Case:
     traj = simulate(hand, lambda: WorkspaceComputedTorque(hand, refs), q_start, duration, False)
     case.runs.append(Run("fingertip CTC", False, traj, tuple(range(hand.nv)), hand.joint_names))
     case.header = ["run", "joint", "overshoot %", "rise 10-90 % [s]", "settling 2 % [s]", "max error % of step"]
-    for run in case.runs[:2]:
+    for run, key in zip(case.runs[:2], ("joint_steps", "spread")):
         t, q = run.trajectory.t, run.trajectory.q
         target = (qs if "spread" in run.name else qf)[list(run.joints)]
         response = metrics.step_response(t, q[:, list(run.joints)], target, start=q0[list(run.joints)])
@@ -165,6 +170,13 @@ def ctc_steps(scale: float = 1.0) -> Case:
                 run.name, label, f"{response.overshoot_percent[k]:.2f}", f"{response.rise_time[k]:.2f}",
                 f"{response.settling_time[k]:.2f}", f"{error.max_percent[k]:.3f}",
             ])  # fmt: skip
+            case.values.update({
+                f"{key}/{label}/overshoot_pct": response.overshoot_percent[k], f"{key}/{label}/rise_s":
+                response.rise_time[k], f"{key}/{label}/settling_s": response.settling_time[k],
+                f"{key}/{label}/max_error_pct": error.max_percent[k],
+            })  # fmt: skip
+        case.values[f"{key}/max_overshoot_pct"] = np.max(response.overshoot_percent)
+        case.values[f"{key}/max_settling_s"] = np.max(response.settling_time)
     tip = case.runs[2].trajectory
     x_error = np.linalg.norm(tip.log["x_error"].reshape(len(tip.t), -1, 3), axis=2)
     travel = np.linalg.norm(goal - start, axis=1)
@@ -172,6 +184,8 @@ def ctc_steps(scale: float = 1.0) -> Case:
     for i, finger in enumerate(hand.fingers):
         overall, after = 100 * x_error[:, i].max() / travel[i], 100 * x_error[late, i].max() / travel[i]
         case.table.append(["fingertip CTC", f"{finger} tip", "-", "-", "-", f"{overall:.3f} ({after:.3f} after 0.5 s)"])
+        case.values[f"fingertip/{finger}/max_error_pct_of_travel"] = overall
+        case.values[f"fingertip/{finger}/max_error_after_0.5s_pct_of_travel"] = after
     case.notes += [
         "Thesis: fingertip max error 5 % of the steady state, rise < 2 s, settling ~2 s; with spread F3 q2 overshoots"
         " 6 %, settling 1-1.5 s (Simulink) / 2.5-3.5 s (SimMechanics).",
@@ -192,11 +206,16 @@ def _sliding_table(case: Case, runs: list[Run], scale_of: Callable[[Run], np.nda
         error = run.tracking(scale_of(run))
         chatter = run.chattering()
         for k, label in enumerate(run.labels):
+            final = 100 * error.final_abs[k] / _scale(error, k)
             case.table.append([
                 run.name, "yes" if run.noise else "no", label, f"{error.max_percent[k]:.3f}",
-                f"{error.rms_percent[k]:.3f}", f"{100 * error.final_abs[k] / _scale(error, k):.4f}",
-                f"{chatter[k]:.3g}",
+                f"{error.rms_percent[k]:.3f}", f"{final:.4f}", f"{chatter[k]:.3g}",
             ])  # fmt: skip
+            key = f"{'noise' if run.noise else 'clean'}/{run.name}/{label.replace(' ', '_')}"
+            case.values.update({
+                f"{key}/max_error_pct": error.max_percent[k], f"{key}/rms_error_pct": error.rms_percent[k],
+                f"{key}/final_error_pct": final, f"{key}/chattering_Nm_per_s": chatter[k],
+            })  # fmt: skip
 
 
 def _scale(error: metrics.TrackingError, k: int) -> float:
@@ -251,6 +270,12 @@ def barrett_smc_asmc(scale: float = 1.0) -> Case:
                 run.name, label, f"{response.overshoot_percent[k]:.2f}", f"{response.settling_time[k]:.2f}",
                 f"{error.rms_percent[k]:.3f}", f"{chatter[k]:.3g}",
             ])  # fmt: skip
+            case.values.update({
+                f"{run.name}/{label}/overshoot_pct": response.overshoot_percent[k],
+                f"{run.name}/{label}/settling_s": response.settling_time[k],
+                f"{run.name}/{label}/rms_error_pct": error.rms_percent[k],
+                f"{run.name}/{label}/chattering_Nm_per_s": chatter[k],
+            })  # fmt: skip
     case.notes += [
         "Thesis: SMC overshoot 5-15 %, ASMC 1-8 %, settling within 2 s.  Reference: smooth step (5.36), a = 0.3 s;"
         " nominal model 30 % too light; lambda = 17 as the thesis.",
@@ -279,6 +304,10 @@ def f3_hosm(scale: float = 1.0) -> Case:
         for name in ("CTC", *SLIDING):
             case.runs.append(f3_case(name, noise, 3.0 * scale, hand))
     _sliding_table(case, case.runs)
+    rms, chatter = uncertainty_ranking(case)
+    for name in rms:
+        case.values[f"noise/{name}/mean_rms_error_pct"] = rms[name]
+        case.values[f"noise/{name}/chattering_relative_to_SMC"] = chatter[name] / chatter["SMC"]
     case.notes += [
         "Thesis (Table 3.3): HOSM e_max 8 % with noise, 5 % without, e_min 1-2 %; HOSMA ~4.5 % either way, e_min"
         " 0.5-1.5 %; abstract: SMC 15 %, HOSM 8 %, HOSMA 5 %.  Our 'final error' is the thesis' e_min analogue.",
@@ -335,14 +364,20 @@ def write_report(cases: list[Case], path: Path, figures: dict[str, list[str]], s
     return path
 
 
+def uncertainty_ranking(f3: Case) -> tuple[dict[str, float], dict[str, float]]:
+    """Per controller of the F3 case's noisy runs: mean RMS error [% of step] and chattering [N m/s] of q2, q3."""
+    noisy = {run.name: run for run in f3.runs if run.noise}
+    rms = {name: float(np.mean(run.tracking().rms_percent)) for name, run in noisy.items()}
+    chatter = {name: float(np.mean(run.chattering())) for name, run in noisy.items()}
+    return rms, chatter
+
+
 def _findings(cases: list[Case]) -> list[str]:
     """The uncertainty case's ranking as sentences computed from the runs."""
     f3 = next((case for case in cases if case.key == "f3"), None)
     if f3 is None:
         return []
-    noisy = {run.name: run for run in f3.runs if run.noise}
-    rms = {name: float(np.mean(run.tracking().rms_percent)) for name, run in noisy.items()}
-    chatter = {name: float(np.mean(run.chattering())) for name, run in noisy.items()}
+    rms, chatter = uncertainty_ranking(f3)
     order = sorted(rms, key=rms.get)
     lines = ["## Findings on the uncertainty case (F3, 30 % mass error, noise)", ""]
     lines.append("Mean RMS error over q2, q3 [% of step], best first: " + ", ".join(f"{n} {rms[n]:.3f}" for n in order))
@@ -384,5 +419,6 @@ __all__ = [
     "planar_sinusoid",
     "run_chapter3",
     "simulate",
+    "uncertainty_ranking",
     "write_report",
 ]

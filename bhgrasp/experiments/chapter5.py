@@ -32,7 +32,11 @@ FORCE_BAND = 0.05  # contact-force settling band, fraction of the commanded forc
 
 @dataclass
 class Case:
-    """One experiment: a table beside the thesis' numbers, notes, and figures (file name -> figure builder)."""
+    """One experiment: a table beside the thesis' numbers, notes, and figures (file name -> figure builder).
+
+    ``values`` maps names such as ``"laws/ctc/final_error_z_mm"`` (unit last) to the table's unrounded numbers;
+    :mod:`bhgrasp.experiments.results` writes them to ``chapter5.json``.
+    """
 
     key: str
     title: str
@@ -42,6 +46,7 @@ class Case:
     notes: list[str] = field(default_factory=list)
     runs: dict[str, GraspDemoResult] = field(default_factory=dict)
     figures: dict[str, Callable] = field(default_factory=dict)
+    values: dict[str, float] = field(default_factory=dict)
 
 
 def motion_metrics(result: GraspDemoResult) -> dict[str, np.ndarray]:
@@ -113,12 +118,17 @@ def pregrasp(scale: float = 1.0) -> Case:
     start = traj.q[0]
     for k, finger in enumerate(hand.fingers):
         touched = arrived[:, k] >= 1.0
-        row = [finger, f"{traj.t[np.argmax(touched)]:.3f}" if np.any(touched) else "never"]
+        touched_at = float(traj.t[np.argmax(touched)]) if np.any(touched) else float("nan")
+        row = [finger, f"{touched_at:.3f}" if np.any(touched) else "never"]
         proximal, distal = hand.joint_index(f"{finger}_proximal"), hand.joint_index(f"{finger}_distal")
         travel = abs(result.q_contact[proximal] - start[proximal])
-        row.append(f"{100 * abs(traj.q[grasped, proximal] - result.q_contact[proximal]) / travel:.1f}")
-        row.append(f"{abs(traj.q[grasped, distal] - result.q_contact[distal]):.4f}")
+        proximal_error = 100 * abs(traj.q[grasped, proximal] - result.q_contact[proximal]) / travel
+        distal_error = abs(traj.q[grasped, distal] - result.q_contact[distal])
+        row += [f"{proximal_error:.1f}", f"{distal_error:.4f}"]
         case.table.append(row)
+        case.values.update({f"{finger}/touched_s": touched_at, f"{finger}/proximal_error_pct_of_travel":
+                            proximal_error, f"{finger}/distal_error_rad": distal_error})  # fmt: skip
+    case.values["grasp_time_s"] = result.grasp_time
     case.notes += [
         f"All three fingers touch and the grasp controller takes over at {result.grasp_time:.3f} s.  The approach "
         "is one smooth step (5.36) of every joint to the contact configuration closed by a further 0.1 rad; the"
@@ -145,6 +155,7 @@ def object_laws(scale: float = 1.0) -> Case:
         ("ctc with G^+", "ctc", "pinv", None),
         ("natural, thesis gains", "natural", "qp", thesis_gains),
     ]
+    keys = {"ctc with G^+": "ctc_pinv", "natural, thesis gains": "natural_thesis_gains"}
     for name, law, distribution, gains in runs:
         result = run_grasp_demo(LAW_MASS, LAW_MASS, law, DURATION * scale, distribution=distribution, gains=gains)
         m = motion_metrics(result)
@@ -153,6 +164,9 @@ def object_laws(scale: float = 1.0) -> Case:
             _pair(1e3 * m["final_error"], ".3f"), str(result.slip_events), f"{result.cone_margin:.3f}",
         ])  # fmt: skip
         case.runs[name] = result
+        case.values.update(_motion_values(f"{keys.get(name, name)}/", m))
+        case.values[f"{keys.get(name, name)}/slip_events"] = result.slip_events
+        case.values[f"{keys.get(name, name)}/min_cone_margin_N"] = result.cone_margin
     case.notes += [
         "Gains: CTC Kp = 2500 1/s^2, Kv = 100 1/s (critically damped at 50 rad/s); natural and stiffness K_p = "
         "(400 N/m, 0.5 N m/rad), K_v = (8 N s/m, 0.01 N m s/rad), lambda = 10 1/s.  With the thesis' translation gains "
@@ -173,6 +187,16 @@ def object_laws(scale: float = 1.0) -> Case:
     return case
 
 
+def _motion_values(prefix: str, m: dict[str, np.ndarray]) -> dict[str, float]:
+    """The motion metrics of :func:`motion_metrics` as numbers named ``prefix + name`` (z [mm], rot x [mrad])."""
+    values = {}
+    for name, scale, units in (("overshoot", 1.0, ("pct", "pct")), ("max_error", 1e3, ("mm", "mrad")),
+                               ("settling", 1.0, ("s", "s")), ("final_error", 1e3, ("mm", "mrad"))):  # fmt: skip
+        for channel, value, unit in zip(("z", "rotx"), m[name], units):
+            values[f"{prefix}{name}_{channel}_{unit}"] = scale * float(value)
+    return values
+
+
 def _pair(values: np.ndarray, spec: str) -> str:
     return " / ".join(format(float(v), spec) for v in values)
 
@@ -186,6 +210,7 @@ def smc_adaptive(scale: float = 1.0) -> Case:
     result = run_grasp_demo(THESIS_MASS, 0.5, "smc-adaptive", DURATION * scale)
     m, f = motion_metrics(result), force_metrics(result)
     move = np.abs(np.asarray(OFFSET)[list(MOVED)])
+    convergence = estimate_convergence(result)
     case.table += [
         ["object overshoot z / rot x [%]", _pair(m["overshoot"], ".2f")],
         ["object max error during the move z [mm] / rot x [mrad]", _pair(1e3 * m["max_error"], ".2f")],
@@ -196,9 +221,17 @@ def smc_adaptive(scale: float = 1.0) -> Case:
         ["contact force error after settling [% of commanded]", f"{f['error_percent']:.2f}"],
         [f"contact force settling ({100 * FORCE_BAND:.0f} % band) after the grasp [s]", f"{f['settling']:.2f}"],
         ["mass estimate (true 1.0 kg, start 0.5 kg) [kg]", f"{result.mass_estimate:.4f}"],
-        ["mass estimate within 2 % after the grasp [s]", f"{estimate_convergence(result):.2f}"],
+        ["mass estimate within 2 % after the grasp [s]", f"{convergence:.2f}"],
         ["slip events", str(result.slip_events)],
     ]  # fmt: skip
+    case.values.update(_motion_values("", m))
+    case.values.update({
+        "max_error_z_pct_of_move": 100 * m["max_error"][0] / move[0],
+        "max_error_rotx_pct_of_move": 100 * m["max_error"][1] / move[1],
+        "contact_force_error_N": f["error_n"], "contact_force_error_pct": f["error_percent"],
+        "contact_force_settling_s": f["settling"], "mass_estimate_kg": result.mass_estimate,
+        "mass_estimate_within_2pct_s": convergence, "slip_events": result.slip_events,
+    })  # fmt: skip
     case.notes += [
         f"Gains: rho = 50 1/s, k_o = (8 N s/m, 0.01 N m s/rad), Gamma_o = 5 (mass; inertia not adapted), c = 0.02 "
         f"m/s/N, h = 1 m/s/(N s), k_f = 0.05 N m s/rad, desired normal force {SQUEEZE:g} N (the thesis' 5 N), mu "
@@ -233,6 +266,21 @@ def mass_sweep(scale: float = 1.0) -> Case:
             f"{1e3 * pinv.position_error:.3f}",
         ])  # fmt: skip
         case.runs[f"QP {mass:.1f} kg"], case.runs[f"G^+ {mass:.1f} kg"] = qp, pinv
+        case.values.update({
+            f"{mass:.1f}kg/qp/mass_estimate_kg": qp.mass_estimate, f"{mass:.1f}kg/qp/force_error_pct":
+            100 * qp.force_error, f"{mass:.1f}kg/qp/slip_events": qp.slip_events,
+            f"{mass:.1f}kg/qp/final_error_mm": 1e3 * qp.position_error,
+            f"{mass:.1f}kg/pinv/min_cone_margin_N": pinv.cone_margin,
+            f"{mass:.1f}kg/pinv/slip_events": pinv.slip_events,
+            f"{mass:.1f}kg/pinv/final_error_mm": 1e3 * pinv.position_error,
+        })  # fmt: skip
+    qp_runs = [case.runs[f"QP {mass:.1f} kg"] for mass in MASSES]
+    outside = [mass for mass in MASSES if case.runs[f"G^+ {mass:.1f} kg"].cone_margin < 0.0]
+    case.values.update({
+        "qp/max_force_error_pct": 100 * max(run.force_error for run in qp_runs),
+        "qp/slip_events": sum(run.slip_events for run in qp_runs),
+        "pinv/lightest_outside_cone_kg": min(outside) if outside else float("nan"),
+    })  # fmt: skip
     case.notes += [
         "Force error: largest |measured - commanded| / commanded normal force over the fingers from 0.5 s after the "
         "move.  A negative cone margin means the commanded forces ask for more tangential force than mu = "
