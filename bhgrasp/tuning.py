@@ -2,7 +2,9 @@
 
 :func:`cma_es` minimises any scalar ``objective(x)`` with the covariance matrix adaptation evolution strategy of the
 ``cma`` package (ask/tell loop), evaluating each generation's candidates in parallel.  It is used to tune
-impedance parameters against the fitness (4.49), the mean of ``|f_d - f_k|`` over a run.
+impedance parameters against the fitness (4.49), the mean of ``|f_d - f_k|`` over a run.  A run ends on cma's own
+termination criteria (``tol_fun``, ``tol_x`` and cma's defaults) or on a cap (``max_generations``,
+``max_evaluations``); :attr:`TuningResult.criteria` is cma's ``stop()`` dictionary, saying which fired.
 
 Evaluation runs in a :class:`~concurrent.futures.ProcessPoolExecutor` created for the run (default), in-process
 (``executor="serial"``), or on any :class:`~concurrent.futures.Executor`, e.g. a Dask
@@ -60,6 +62,9 @@ class TuningResult:
         failures: ``"generation g, candidate i: <ExceptionType>: <message>"`` of every failed evaluation.
         stop: Why the run stopped: ``"max_generations"``, the text of cma's stop dictionary (e.g.
             ``"{'tolfun': 1e-09}"``), or, in a partial result, the error.
+        criteria: cma's own ``stop()`` dictionary after the last generation, verbatim (criterion -> its
+            threshold, e.g. ``{'tolfun': 1e-09}`` or ``{'maxfevals': 600}``; ``maxiter`` is our
+            ``max_generations``); empty if no criterion fired (a partial result).
     """
 
     best: np.ndarray
@@ -72,6 +77,7 @@ class TuningResult:
     sigma: np.ndarray
     failures: tuple[str, ...]
     stop: str
+    criteria: dict[str, Any] = field(default_factory=dict)
 
 
 class TuningError(BhgraspError, RuntimeError):
@@ -120,7 +126,7 @@ class _History:
         finite = [value for value in self.fitness if math.isfinite(value)]
         return max(finite) if finite else None
 
-    def result(self, stop: str) -> TuningResult:
+    def result(self, stop: str, criteria: dict[str, Any] | None = None) -> TuningResult:
         """The :class:`TuningResult` of everything recorded so far."""
         fitness = np.array(self.fitness, dtype=np.float64)
         parameters = np.array(self.parameters, dtype=np.float64).reshape(len(self.fitness), self.n)
@@ -140,6 +146,7 @@ class _History:
             sigma=np.array(self.sigma, dtype=np.float64),
             failures=tuple(self.failures),
             stop=stop,
+            criteria=dict(criteria or {}),
         )
 
 
@@ -156,6 +163,8 @@ def cma_es(
     progress: bool = False,
     failure_fitness: float | None = None,
     tol_fun: float = 1e-9,
+    tol_x: float | None = None,
+    max_evaluations: int | None = None,
 ) -> TuningResult:
     """Minimise ``objective`` with a seeded CMA-ES, evaluating each generation's candidates in parallel.
 
@@ -178,7 +187,15 @@ def cma_es(
         failure_fitness: Finite fitness told to CMA-ES for a failed evaluation.  Default: ``10 x`` the worst
             finite fitness seen so far (this generation included); ``1e6`` if there is none, ``worst + 1e6`` if
             it is not positive.
-        tol_fun: cma's ``tolfun`` (>= 0): stop once the fitness values of recent generations span less.
+        tol_fun: cma's ``tolfun`` (>= 0): stop once the fitness values of the last generation, and the best
+            values of the last ``floor(10 + 30 n / population)`` generations, each span less.
+        tol_x: cma's ``tolx`` (>= 0, in the units of ``x``): stop once every coordinate's step size
+            (``sigma sqrt(C_ii)``, and the evolution path) is below it.  ``None``: cma's default (1e-11).
+        max_evaluations: cma's ``maxfevals`` (>= 1), a safety cap: the run stops after the first generation
+            that takes the evaluation count past it (at most one generation more).  ``None``: no cap.
+
+    cma's other default criteria (``tolstagnation``, ``tolflatfitness``, ``tolfunhist``, ``tolxstagnation``,
+    ``tolconditioncov``, ...) stay active; :attr:`TuningResult.criteria` says which fired.
 
     Returns:
         The :class:`TuningResult`; ``stop`` says whether ``max_generations`` or a cma criterion ended the run.
@@ -196,8 +213,13 @@ def cma_es(
     lower, upper = _as_bounds(bounds, x0)
     failure_fitness = None if failure_fitness is None else as_real(failure_fitness, "failure_fitness", False)
     tol_fun = as_real(tol_fun, "tol_fun")
+    options: dict[str, Any] = {"tolfun": tol_fun, "maxiter": max_generations}
+    if tol_x is not None:
+        options["tolx"] = as_real(tol_x, "tol_x")
+    if max_evaluations is not None:
+        options["maxfevals"] = _as_int(max_evaluations, "max_evaluations", minimum=1)
     _check_objective_and_executor(objective, executor)
-    strategy = _strategy(x0, sigma0, seed, population, lower, upper, tol_fun, max_generations)
+    strategy = _strategy(x0, sigma0, seed, population, lower, upper, options)
     run = _Run(objective, strategy, max_generations, failure_fitness, progress)
     if executor is not None:
         return run.execute(None if executor == "serial" else executor)
@@ -233,8 +255,8 @@ class _Run:
                     bar.set_postfix(best=f"{min(self.history.generation_best):.6g}", refresh=False)
                     bar.update()
                 if stop:
-                    return self.history.result(stop)
-            return self.history.result("max_generations")
+                    return self.history.result(stop, self.strategy.stop())
+            return self.history.result("max_generations", self.strategy.stop())
         finally:
             if bar is not None:
                 bar.close()
@@ -352,8 +374,7 @@ def _strategy(
     population: int | None,
     lower: np.ndarray | None,
     upper: np.ndarray | None,
-    tol_fun: float,
-    max_generations: int,
+    termination: dict[str, Any],
 ) -> Any:
     """The ``cma.CMAEvolutionStrategy``, sampling from a generator of its own rather than numpy's global one."""
     import cma
@@ -367,8 +388,7 @@ def _strategy(
         "seed": math.nan,  # cma leaves numpy's global generator alone: sampling uses `randn` only
         "randn": randn,
         "verbose": -9,
-        "tolfun": tol_fun,
-        "maxiter": max_generations,
+        **termination,
     }
     if population is not None:
         options["popsize"] = population

@@ -169,6 +169,65 @@ def test_adaptive_fim_on_f3_finds_the_environment_and_tracks_the_force(f3_setups
     assert np.max(np.abs(traj.v)) < 5.0  # stable: no joint speed blow-up
 
 
+def test_steady_force_solves_the_static_balance_of_filter_environment_and_inner_loop():
+    """The closed form against a direct solve of the four linear rest equations in (x, x_c, dx, f)."""
+    f_d, k_e, x_e, k_i, k_p, delta = 10.0, 9901.0, 0.035, 100.0, 11.8, -0.02
+    for k_hat, feedforward in ((k_e, False), (0.5 * k_e, False), (k_e, True), (3.0 * k_e, True)):
+        x_hat = x_e + 1e-3  # any estimate consistent at the operating point: k^ (x - x^) = f there
+        f_ff = f_d if feedforward else 0.0
+        # x_c = x_d - dx;  k_i dx = f - f_d;  x = x_c - (f - f_ff)/k_p - delta;  f = k^ (x - x^)  (x_d = x^ + f_d/k^)
+        a = np.array([[0.0, 1.0, 1.0, 0.0], [0.0, 0.0, k_i, -1.0], [1.0, -1.0, 0.0, 1.0 / k_p], [-k_hat, 0, 0, 1.0]])
+        b = np.array([x_hat + f_d / k_hat, -f_d, f_ff / k_p - delta, -k_hat * x_hat])
+        *_, f = np.linalg.solve(a, b)
+        assert chapter4.steady_force(f_d, k_i, k_p, k_hat, feedforward, delta) == pytest.approx(f, rel=1e-12)
+    assert chapter4.steady_force(f_d, k_i, 1e12, k_e) == pytest.approx(f_d, rel=1e-9)  # X = X_c: (4.25) = 0
+    assert chapter4.steady_force(f_d, k_i, 1.0, k_e, feedforward=True) == pytest.approx(f_d, rel=1e-12)
+
+
+@pytest.mark.parametrize("friction", [0.0, 0.5])
+def test_printed_fim_settles_where_the_closed_form_says_and_the_feedforward_at_f_d(friction):
+    """Planar finger, k_e = 999 N/m, K_I = 560 N/m: the thesis' law without J^T f_d n settles near 2.2 N for 10 N.
+
+    On a frictionless face the closed form needs nothing from the run but the final pose's effective mass; with
+    friction it adds the deflection of the measured tangential force.
+    """
+    setup = chapter4.planar_setup(1000.0, friction=friction)
+    finals = {}
+    for feedforward in (False, True):
+        law = ForceImpedance(Constant(setup.tip0), setup.normal, 10.0, setup.surface_point(), setup.k_e,
+                             mass=8.9, damping=167.0, stiffness=560.0)  # fmt: skip
+        if not feedforward:
+            chapter4.as_printed(law)
+        controller = ImpedanceController(setup.hand, {"tip": law}, *chapter4.PLANAR_GAINS, feedforward=feedforward)
+        traj = chapter4.run(setup, controller, 4.0)
+        force = chapter4.normal_force(setup, traj)
+        assert np.ptp(force[-500:]) < 1e-3  # at rest
+        final = float(np.mean(force[-200:]))
+        inner, frictionless, measured = chapter4._closed_form(setup, traj, force, law, 80.0, feedforward)
+        assert inner == pytest.approx(chapter4.inner_loop_stiffness(setup, traj.q[-1], 80.0))
+        assert 80.0 < inner < 120.0  # Kp x ~1.25 kg
+        assert final == pytest.approx(measured, rel=1e-4)
+        if friction == 0.0:
+            assert final == pytest.approx(frictionless, rel=1e-4)
+        finals[feedforward] = final
+    assert finals[True] == pytest.approx(10.0, abs=0.02 if friction else 1e-4)
+    assert 2.0 < finals[False] < 2.6
+
+
+def test_printed_fim_on_f3_misses_f_d_as_the_closed_form_with_friction_predicts(f3_setups):
+    setup = f3_setups[1e4]
+    law = chapter4.as_printed(ForceImpedance(Constant(setup.tip0), setup.normal, 10.0, setup.surface_point(),
+                                             setup.k_e, **chapter4.F3_IMPEDANCE))  # fmt: skip
+    controller = ImpedanceController(setup.hand, {"F3": law}, *chapter4.F3_GAINS, feedforward=False)
+    traj = chapter4.run(setup, controller, 3.0)
+    force = chapter4.normal_force(setup, traj)
+    inner, frictionless, measured = chapter4._closed_form(setup, traj, force, law, chapter4.F3_GAINS[0], False)
+    final = float(np.mean(force[-150:]))
+    assert 1.4 < final < 2.0  # 10 N asked
+    assert final == pytest.approx(measured, rel=0.01)
+    assert 10.0 < inner < 14.0 and frictionless < final  # k_p = 430 x ~0.027 kg; friction holds the tip deeper
+
+
 def test_pim_lowers_peak_and_steady_force_against_the_uncontrolled_push():
     case = chapter4.f3_push(1.0)
     rows = {row[0]: row for row in case.table}
@@ -183,6 +242,19 @@ def test_three_fingers_track_their_desired_forces():
     for finger in ("F1", "F2", "F3"):
         _, force, desired = case.traces[finger]
         assert abs(np.mean(force[-100:]) - desired) < 0.02 * desired
+
+
+def test_tuning_plan_scales_runs_and_evaluations_but_never_skips():
+    runs, cap = chapter4.tuning_plan(1.0)
+    assert len(runs) == len(chapter4.TUNING_STARTS) * len(chapter4.TUNING_SEEDS) and cap == 600
+    assert len(set(runs)) == len(runs)
+    for scale in (0.01, 0.2, 0.5):
+        fewer, smaller = chapter4.tuning_plan(scale)
+        assert 1 <= len(fewer) <= len(runs) and fewer == runs[: len(fewer)] and 12 <= smaller <= cap
+    assert chapter4.tuning_plan(0.2) == (runs[:1], 24)
+    for start in chapter4.TUNING_STARTS:  # starts inside the bounds, or clipped onto them
+        assert np.all(np.asarray(start) > chapter4.TUNING_BOUNDS[0])
+    assert chapter4.TUNING_BOUNDS[1][1] <= chapter4.TUNING_SPRING  # K_I below the environment's stiffness
 
 
 def test_tuned_impedance_beats_its_start_on_a_held_out_force_and_is_reproducible():

@@ -35,6 +35,13 @@ def rosenbrock(x: np.ndarray) -> float:
     return float(100.0 * (x[1] - x[0] ** 2) ** 2 + (1.0 - x[0]) ** 2)
 
 
+ROSENBROCK_SHIFT = np.array([-1.3, 0.4])  # the shifted Rosenbrock's minimum (0 there)
+
+
+def shifted_rosenbrock(x: np.ndarray) -> float:
+    return rosenbrock(np.asarray(x) - ROSENBROCK_SHIFT + 1.0)
+
+
 def sphere_touching_global_rng(x: np.ndarray) -> float:
     np.random.random(3)  # noqa: NPY002  (deliberately) consumes numpy's global generator: must not change what CMA-ES samples
     return shifted_sphere(x)
@@ -67,13 +74,37 @@ def sphere_killing_worker(x: np.ndarray) -> float:
 def assert_same_result(a: TuningResult, b: TuningResult) -> None:
     for name in ARRAY_FIELDS:
         assert np.array_equal(getattr(a, name), getattr(b, name), equal_nan=True), name
-    assert (a.best_fitness, a.generations, a.evaluations, a.failures, a.stop) == (
+    assert (a.best_fitness, a.generations, a.evaluations, a.failures, a.stop, a.criteria) == (
         b.best_fitness,
         b.generations,
         b.evaluations,
         b.failures,
         b.stop,
+        b.criteria,
     )
+
+
+def assert_stop_is_real(result: TuningResult, n: int, population: int, tol_fun: float, tol_x: float) -> None:
+    """Check the criteria cma reports against the run's own history, by cma's definitions.
+
+    tolfun: the last generation's fitness values, and the best values of the last 10 + 30 n / population
+    generations, each span less than tol_fun.  tolx: every step size sigma sqrt(C_ii) is below tol_x, so the last
+    generation's candidates (mean + sigma N(0, C), 6 standard deviations cover any of 6 samples) lie within a few
+    tol_x of each other (bounds only shrink distances: cma's boundary transform has slope <= 1).
+    """
+    assert set(result.criteria) <= {"tolfun", "tolx", "tolfunhist"} and result.criteria, result.criteria
+    assert "tolfun" in result.criteria or "tolx" in result.criteria
+    last = slice(result.evaluations - population, None)
+    recent = result.generation_best[-int(10 + 30 * n / population) :]
+    if "tolfun" in result.criteria:
+        assert result.criteria["tolfun"] == tol_fun
+        assert np.ptp(result.history_fitness[last]) < tol_fun and np.ptp(recent) < tol_fun
+    if "tolfunhist" in result.criteria:  # cma's default 1e-12 on the same history
+        assert len(recent) > 9 and np.ptp(recent) < result.criteria["tolfunhist"]
+    if "tolx" in result.criteria:
+        assert result.criteria["tolx"] == tol_x
+        assert np.all(np.ptp(result.history_parameters[last], axis=0) < 12.0 * tol_x)
+    assert result.stop == str(result.criteria)
 
 
 @pytest.fixture(scope="module")
@@ -132,6 +163,47 @@ def test_rosenbrock_reaches_its_minimum_at_one_one() -> None:
     result = cma_es(rosenbrock, [-1.2, 1.0], 0.5, seed=2, max_generations=600, executor="serial", tol_fun=1e-14)
     assert np.max(np.abs(result.best - 1.0)) < 1e-3
     assert result.best_fitness == rosenbrock(result.best)
+
+
+def test_bounded_shifted_rosenbrock_stops_on_cma_criteria_at_its_minimum() -> None:
+    result = cma_es(shifted_rosenbrock, [0.0, 0.0], 0.5, seed=3, max_generations=5000, bounds=([-2.0, -1.0],
+                    [1.0, 2.0]), executor="serial", tol_fun=1e-12, tol_x=1e-8, max_evaluations=20_000)  # fmt: skip
+    assert np.max(np.abs(result.best - ROSENBROCK_SHIFT)) < 1e-4
+    assert result.best_fitness < 1e-10 and result.evaluations < 20_000
+    assert_stop_is_real(result, 2, 6, 1e-12, 1e-8)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_minimum_on_a_bound_is_found_and_the_stop_criterion_holds(seed: int) -> None:
+    """Sphere centred at (1.5, -0.7) in the box [-1, 1]^2: the constrained minimum (1, -0.7) is on the bound x = 1."""
+    centre = np.array([1.5, -0.7])
+    objective = functools.partial(shifted_sphere, centre=centre)
+    result = cma_es(objective, [0.0, 0.0], 0.5, seed=seed, max_generations=5000, bounds=(-1.0, 1.0),
+                    executor="serial", tol_fun=1e-11, tol_x=1e-7, max_evaluations=20_000)  # fmt: skip
+    assert np.all(result.history_parameters <= 1.0) and np.all(result.history_parameters >= -1.0)
+    assert np.max(np.abs(result.best - [1.0, -0.7])) < 1e-4
+    assert result.best_fitness == pytest.approx(0.25, abs=1e-8)  # (1.5 - 1)^2
+    assert_stop_is_real(result, 2, 6, 1e-11, 1e-7)
+
+
+def test_the_evaluation_cap_stops_a_run_that_has_not_converged() -> None:
+    result = cma_es(shifted_rosenbrock, [0.0, 0.0], 0.5, seed=3, max_generations=5000, executor="serial",
+                    tol_fun=1e-12, tol_x=1e-8, max_evaluations=60)  # fmt: skip
+    assert result.criteria == {"maxfevals": 60}
+    assert 60 < result.evaluations <= 60 + 6  # cma stops after the first generation past the cap
+    assert result.stop == "{'maxfevals': 60}"
+    capped = cma_es(shifted_sphere, np.zeros(3), 1.0, seed=7, max_generations=5, executor="serial")
+    assert capped.stop == "max_generations" and capped.criteria == {"maxiter": 5}
+
+
+def test_bounded_runs_to_convergence_are_deterministic_per_seed() -> None:
+    def run(seed: int) -> TuningResult:
+        return cma_es(shifted_rosenbrock, [0.0, 0.0], 0.5, seed=seed, max_generations=5000, bounds=([-2.0, -1.0],
+                      [1.0, 2.0]), executor="serial", tol_fun=1e-10, tol_x=1e-6)  # fmt: skip
+
+    first, again, other = run(5), run(5), run(6)
+    assert_same_result(first, again)
+    assert not np.array_equal(first.history_parameters[:6], other.history_parameters[:6])
 
 
 # --- determinism and executors ---------------------------------------------------------------------------------
@@ -308,6 +380,10 @@ def test_every_candidate_respects_the_bounds() -> None:
         ({"executor": object()}, r"`executor` must have a submit\(\) method"),
         ({"failure_fitness": math.inf}, r"`failure_fitness` must be a finite number"),
         ({"tol_fun": -1.0}, r"`tol_fun` must be a finite number >= 0"),
+        ({"tol_x": -1.0}, r"`tol_x` must be a finite number >= 0"),
+        ({"tol_x": math.nan}, r"`tol_x` must be a finite number >= 0"),
+        ({"max_evaluations": 0}, r"`max_evaluations` must be an int >= 1"),
+        ({"max_evaluations": 10.0}, r"`max_evaluations` must be an int >= 1"),
         ({"objective": 3.0}, r"`objective` must be callable"),
         ({"objective": lambda x: 0.0, "executor": None}, r"`objective` must be picklable"),
     ],

@@ -57,7 +57,14 @@ def _unit(vector: Any, name: str) -> np.ndarray:
 
 
 class ImpedanceLaw(ABC):
-    """One finger's outer loop: desired fingertip trajectory + sensed contact -> commanded trajectory X_c."""
+    """One finger's outer loop: desired fingertip trajectory + sensed contact -> commanded trajectory X_c.
+
+    Attributes:
+        feed_acceleration: Pass the filter's acceleration on, X_c'' = X_d'' - dx'' (thesis (4.20)-(4.21) as
+            printed).  Off by default: see :meth:`_filtered`.
+    """
+
+    feed_acceleration: bool = False
 
     def __init__(
         self, reference: Reference, mass: float, damping: float | None, stiffness: float, period: float | None
@@ -98,12 +105,13 @@ class ImpedanceLaw(ABC):
     def _filtered(self, desired: Sample, force: np.ndarray, dt: float) -> Sample:
         """X_c = X_d - dx and its velocity, with X_d's acceleration.
 
-        The filter's acceleration is *not* passed on: it is an algebraic function of the sensed force, and feeding
-        it to the inner loop closes a force loop through a one-sample delay that rings on stiff contacts.
+        The filter's acceleration is *not* passed on unless :attr:`feed_acceleration` is set: it is an algebraic
+        function of the sensed force, and feeding it to the inner loop closes a force loop through a one-sample
+        delay that rings on stiff contacts.
         """
-        dx, dx_dot, _ = self.filter.step(force, dt)
+        dx, dx_dot, dx_ddot = self.filter.step(force, dt)
         self.log["delta_x"] = dx
-        return desired[0] - dx, desired[1] - dx_dot, desired[2]
+        return desired[0] - dx, desired[1] - dx_dot, desired[2] - dx_ddot if self.feed_acceleration else desired[2]
 
 
 class PositionImpedance(ImpedanceLaw):
