@@ -426,10 +426,11 @@ def _why_printed(
         f" k^_e = k_e for FIM, the converged estimate for adaptive FIM; (4.25)'s zero error is the limit k_p ->"
         f" infinity): K_I = {impedance:g} N/m, k_e = {k_e:.0f} N/m give {predicted:.3f} N for {desired:g} N; the"
         f" run settles at {final:.3f} N with the commanded point X_c {100 * lag:.1f} cm beyond the fingertip along n."
-        " With the feed-forward J^T f_d n the inner loop has no error at f = f_d, and the same balance gives f_d."
+        "  With the feed-forward J^T f_d n the inner loop has no error at f = f_d, and the same balance gives f_d."
         "  Static friction on the face (mu = 0.5) holds a tangential force whose inner-loop deflection along n"
         " (through M_x^-1 and the contact point's lever about the tip centre) shifts the balance; the last column"
-        " adds it, computed from the measured contact torques (:func:`friction_offset`), and matches the final force."
+        " adds it, computed from the measured contact torques (:func:`friction_offset`); it agrees with the final force"
+        " to a few per cent, exactly where the run has come to rest (the stiffest runs still creep at the end)."
     )
 
 
