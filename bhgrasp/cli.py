@@ -140,20 +140,24 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _tune(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from bhgrasp import tuning
-    from bhgrasp.experiments.chapter4 import impedance_fitness
+    from bhgrasp.experiments import chapter4
 
     if args.generations < 1 or args.population < 2:
         raise InputError(f"--generations must be >= 1 and --population >= 2, got {args.generations}, {args.population}")
-    print(f"tuning log10 (M_I [kg], K_I [N/m]) of F3's impedance for f_d = {args.force:g} N ...")
+    lower, upper = (np.log10(bound) for bound in chapter4.TUNING_BOUNDS)  # physical bounds, argued in chapter 4
+    print(f"tuning log10 (M_I [kg], K_I [N/m]) of F3's impedance for f_d = {args.force:g} N within "
+          f"M_I {10**lower[0]:g}-{10**upper[0]:g} kg, K_I {10**lower[1]:g}-{10**upper[1]:g} N/m ...")  # fmt: skip
     result = tuning.cma_es(
-        functools.partial(impedance_fitness, force=args.force), x0=[-1.0, 2.0], sigma0=0.5, seed=args.seed,
-        max_generations=args.generations, population=args.population, bounds=([-2.5, 0.5], [0.5, 3.5]),
-        executor="serial" if args.serial else None,
+        functools.partial(chapter4.impedance_fitness, force=args.force), x0=[-1.0, 1.5], sigma0=0.5,
+        seed=args.seed, max_generations=args.generations, population=args.population, bounds=(lower, upper),
+        tol_fun=chapter4.TUNING_TOL_FUN, tol_x=chapter4.TUNING_TOL_X, executor="serial" if args.serial else None,
     )  # fmt: skip
     mass, stiffness = 10.0**result.best
     print(f"best M_I = {mass:.4g} kg, K_I = {stiffness:.4g} N/m: mean force error {result.best_fitness:.4f} N")
-    print(f"{result.generations} generations, {result.evaluations} simulations")
+    print(f"{result.generations} generations, {result.evaluations} simulations; cma stopped on {result.criteria}")
     return 0
 
 

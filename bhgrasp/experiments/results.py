@@ -307,7 +307,12 @@ README_ROWS: list[tuple[str, str, str, str]] = [
      "{4:f3_force/adaptive_FIM_K_s_10000/final_N:.2f} N, k_e estimate / true "
      "{4:f3_force/adaptive_FIM_K_s_10000/k_e_estimate_true:.4f}",
      "steady error ~0.02 N"),
-    ("4", "CMA-ES tuning of the discrete impedance (from [0.5, 0.5], f_d = 4 N)",
+    ("4", "the thesis' FIM as printed (no J^T f_d feed-forward) on F3, K_s = 10 kN/m, f_d = 10 N",
+     "{4:f3_force/FIM_as_printed_K_s_10000/final_N:.2f} N; closed form "
+     "{4:f3_force/FIM_as_printed_K_s_10000/closed_form_N_measured_friction:.2f} N (the inner loop is a "
+     "spring Kp m_x in series)",
+     "converges to f_d"),
+    ("4", "CMA-ES tuning to cma's convergence (from [0.5, 0.5]; tuned at 6 N, shown at f_d = 4 N)",
      "found [{4:tuning/0.5_0.5/F_d_N=4/found_M_I_K_I#1:.4f}, {4:tuning/0.5_0.5/F_d_N=4/found_M_I_K_I#2:.4f}] "
      "in {4:tuning/0.5_0.5/F_d_N=4/generations:.0f} generations, mean force error "
      "{4:tuning/0.5_0.5/F_d_N=4/mean_error_N_untuned_to_tuned#1:.3f} -> "
