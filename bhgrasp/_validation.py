@@ -86,3 +86,19 @@ def _require_finite(array: np.ndarray, name: str) -> None:
         raise InputError(
             f"`{name}` must be finite, got NaN/inf at flat index {bad.tolist()[:5]}: {array.ravel()[bad][:5]}"
         )
+
+
+ROTATION_TOLERANCE = 1e-9  # on R^T R - I and det R - 1; pin.rpy / quaternion / product rotations are ~1e-15
+
+
+def require_rotation(rotation: np.ndarray, name: str) -> None:
+    """Refuse a ``rotation`` that is not a rotation matrix (orthonormal, det +1, within ROTATION_TOLERANCE)."""
+    rotation = np.asarray(rotation, dtype=float)
+    error = float(np.max(np.abs(rotation.T @ rotation - np.eye(3))))
+    determinant = float(np.linalg.det(rotation))
+    if not (error <= ROTATION_TOLERANCE and abs(determinant - 1.0) <= ROTATION_TOLERANCE):
+        raise InputError(
+            f"`{name}` must have a rotation matrix as its rotation (orthonormal, det +1, within "
+            f"{ROTATION_TOLERANCE:g}), got max |R^T R - I| = {error:.3g}, det R = {determinant:.6g}: "
+            f"R = {np.round(rotation, 6).tolist()}"
+        )

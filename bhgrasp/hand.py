@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_array, as_vector, require_name
+from bhgrasp._validation import as_array, as_vector, require_name, require_rotation
 from bhgrasp.errors import InputError, ModelError
 from bhgrasp.resources import barrett_urdf_path, leaf_links, read_urdf
 
@@ -197,6 +197,7 @@ class Hand:
         if not isinstance(placement, pin.SE3):
             raise InputError(f"`base_placement` must be a pinocchio.SE3, got {type(placement).__name__}")
         as_array(placement.homogeneous, "base_placement", (4, 4))
+        require_rotation(placement.rotation, "base_placement")
         self._placement = placement.copy()
         self._base_at_origin = bool(placement.isIdentity(0.0))
         self._update_model_gravity()

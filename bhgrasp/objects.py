@@ -19,13 +19,12 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_positive, as_real, as_vector
+from bhgrasp._validation import as_positive, as_real, as_vector, require_rotation
 from bhgrasp.errors import InputError
 
 __all__ = ["Box", "Capsule", "Cylinder", "FixedBox", "Plane", "RigidObject", "Sphere", "SpringMounted", "table", "wall"]
 
 _COMMON = ("mass", "density", "pose", "velocity", "friction", "name")
-_ROTATION_TOLERANCE = 1e-9  # on R^T R - I and det R - 1; pin.rpy / quaternion / product rotations are ~1e-15
 
 
 def _as_pose(value: Any, name: str = "pose") -> pin.SE3:
@@ -35,15 +34,7 @@ def _as_pose(value: Any, name: str = "pose") -> pin.SE3:
         )
     if not (np.all(np.isfinite(value.rotation)) and np.all(np.isfinite(value.translation))):
         raise InputError(f"`{name}` must be finite, got {value!r}")
-    rotation = value.rotation
-    error = float(np.max(np.abs(rotation.T @ rotation - np.eye(3))))
-    determinant = float(np.linalg.det(rotation))
-    if not (error <= _ROTATION_TOLERANCE and abs(determinant - 1.0) <= _ROTATION_TOLERANCE):
-        raise InputError(
-            f"`{name}` must have a rotation matrix as its rotation (orthonormal, det +1, within "
-            f"{_ROTATION_TOLERANCE:g}), got max |R^T R - I| = {error:.3g}, det R = {determinant:.6g}: "
-            f"R = {np.round(rotation, 6).tolist()}"
-        )
+    require_rotation(value.rotation, name)
     return pin.SE3(value)  # a copy: SE3 is mutable
 
 

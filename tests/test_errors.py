@@ -371,3 +371,13 @@ def test_object_pose_with_nan_and_nearly_orthonormal_rotation(kind: str) -> None
         OBJECTS[kind](pin.SE3(rotation, np.array([0.1, np.nan, 0.2])))
     rounded = rotation + 1e-12  # within the 1e-9 tolerance: accepted, and kept as given
     assert np.array_equal(OBJECTS[kind](pin.SE3(rounded, np.zeros(3))).pose.rotation, rounded)
+
+
+def test_hand_base_placement_whose_rotation_is_not_a_rotation() -> None:
+    """A scaled base rotation was accepted: every world quantity of the hand was then scaled with it."""
+    with pytest.raises(bh.InputError, match=r"`base_placement` must have a rotation matrix as its rotation"):
+        bh.BarrettHand(base_placement=pin.SE3(2.0 * np.eye(3), np.zeros(3)))
+    hand = bh.BarrettHand()
+    with pytest.raises(bh.InputError, match=r"det R = -1"):
+        hand.base_placement = pin.SE3(np.diag([1.0, 1.0, -1.0]), np.zeros(3))
+    assert hand.base_placement.isIdentity()  # refused: nothing changed
