@@ -609,6 +609,7 @@ def _check_inertials(root: Any, path: str | Path) -> None:
     Raises:
         ModelError: Naming the file and the link.
     """
+    odd = []  # links whose principal moments break the triangle inequality: one warning for the file
     for link in root.findall("link"):
         where = f"URDF {str(path)!r} link {link.get('name')!r}"
         for inertial in link.findall("inertial"):
@@ -644,13 +645,17 @@ def _check_inertials(root: Any, path: str | Path) -> None:
                 raise ModelError(f"{where}: {error} ({components})")
             moments = np.linalg.eigvalsh(tensor)
             if moments[0] + moments[1] < moments[2] - _inertia_tolerance(moments):
-                warnings.warn(
-                    f"{where}: the principal moments of inertia [{_shown(moments)}] kg m^2 break the triangle "
-                    f"inequality ({moments[0]:.6g} + {moments[1]:.6g} < {moments[2]:.6g}): no rigid body has them; "
-                    f"check the signs of ixy, ixz, iyz ({components})",
-                    UserWarning,
-                    stacklevel=4,
+                odd.append(
+                    f"link {link.get('name')!r}: the principal moments of inertia [{_shown(moments)}] kg m^2 break "
+                    f"the triangle inequality ({moments[0]:.6g} + {moments[1]:.6g} < {moments[2]:.6g}) ({components})"
                 )
+    if odd:
+        warnings.warn(
+            f"URDF {str(path)!r}: no rigid body has these inertias (check the signs of ixy, ixz, iyz); the dynamics "
+            f"use them as given: " + "; ".join(odd),
+            UserWarning,
+            stacklevel=4,
+        )
 
 
 def _check_model_inertias(model: pin.Model, path: str | Path) -> None:
