@@ -7,8 +7,8 @@ Integrators (``integrator=``):
   ``(M + dt sum J^T D J + dt (dt K + C)) v+ = M v + dt (tau - h + sum J^T f0 - K q)``, then ``q+ = q (+) dt v+``.
   Contacts whose force would pull are dropped and sticking contacts that leave the friction cone switch to
   sliding (a few active-set passes), so stiff contacts (k up to 5e4 N/m) stay stable at millisecond steps.  The
-  passes start from the previous step's stick/slip state (or the predicted slip), so a sliding contact is never
-  forced to stick first.
+  passes start from the previous step's stick/slip state, so a contact that is sliding is never forced to stick
+  first.
 - ``"semi-implicit"``: symplectic Euler with explicit forces (``v+ = v + dt a(q, v)``, ``q+ = q (+) dt v+``).
 - ``"rk4"``: classical Runge-Kutta on the manifold with explicit forces, contacts re-detected at each stage.
 
@@ -16,7 +16,8 @@ Free bodies translate world-aligned (``m dv/dt = f``: linear momentum is conserv
 friction included) and, with the implicit and semi-implicit steps, turn under an implicit-midpoint gyroscopic torque
 that keeps a torque-free body's kinetic energy and ``|I w|`` exactly (the explicit ``w x I w`` gains energy every
 step).  A run depends only on its inputs: the :class:`~bhgrasp.state.State` carries the contact memory (tangential
-springs, stick/slip) and the actuation modes, so two runs from one state give the same bits.
+springs, stick/slip) and the actuation modes, so a step depends only on its state and inputs, never on the steps
+or runs before it.
 
 Actuation couplings (:class:`~bhgrasp.actuation.BarrettActuation`) enter as a transmission ``T``: the solve is
 done for the driven coordinates ``w`` with ``v_hand = T w``.  Contact forces enter the dynamics as generalised
@@ -326,7 +327,7 @@ class Simulator:
             q_next = pin.integrate(model, q, v_next * dt)
         else:
             # Runge-Kutta-Munthe-Kaas: each stage's configuration is q (+) theta, and a body's rotation increment
-            # theta grows at dexp^-1_theta(w), not w (adding the stages' w would be second order on SO(3)).
+            # theta grows at dexp^-1_{-theta}(w), not w (adding the stages' w is second order on SO(3)).
             k1, contacts, forces, sticking, displacement, drive = self._acceleration(q, v, tau, transmission)
             v2 = v + dt / 2 * k1
             q2 = pin.integrate(model, q, v * dt / 2)
