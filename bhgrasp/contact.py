@@ -400,10 +400,9 @@ class ContactEngine:
         length, new_length = np.sqrt((u * u).sum(axis=1)), np.sqrt((projected * projected).sum(axis=1))
         return projected * (length / np.maximum(new_length, 1e-300))[:, None], sliding  # ... keeping its length
 
-    def remember(self, contacts: ContactSet, displacement: np.ndarray, sliding: np.ndarray) -> ContactMemory:
+    def remember(self, contacts: ContactSet, displacement: np.ndarray, sliding: np.ndarray) -> None:
         """Store the end-of-step tangential displacements and slide flags (once per step, forces final)."""
         self.memory = ContactMemory(contacts.pair.copy(), contacts.local_b.copy(), displacement.copy(), sliding.copy())
-        return self.memory
 
     # ------------------------------------------------------------------ kinematics of the contact points
     def jacobians(self, contacts: ContactSet) -> np.ndarray:

@@ -147,6 +147,10 @@ class Simulator:
         Raises:
             SimulationDiverged: Non-finite input or state, runaway speed or penetration.
         """
+        return self._advance(state, u, self._disturbance(disturbance, "disturbance"))
+
+    def _advance(self, state: State, u: Any, disturbance: np.ndarray | None) -> tuple[State, StepInfo]:
+        """:meth:`step` with a disturbance already checked (``None`` or finite joint torques)."""
         u = np.asarray(u, dtype=float)
         if u.shape != (self.actuation.n_inputs,):
             raise InputError(f"`u` must have shape ({self.actuation.n_inputs},), got shape {u.shape}")
@@ -158,7 +162,7 @@ class Simulator:
         self.actuation.restore(state.actuation_modes, q[: self.scene.nq_hand])
         tau_hand = self.actuation.joint_torques(u)
         if disturbance is not None:
-            tau_hand = tau_hand + self._disturbance(disturbance, "disturbance")
+            tau_hand = tau_hand + disturbance
         if self.integrator == "implicit":
             q_next, v_next, contacts, drive = self._implicit(q, v, tau_hand)
         else:
@@ -453,7 +457,7 @@ class Simulator:
             if k % record_every == 0:
                 recorder.add(state, u, info, getattr(controller, "log", None))
             torque = self._disturbance(disturbance(state.t), "disturbance(t)") if callable(disturbance) else disturbance
-            state, info = self.step(state, u, torque)
+            state, info = self._advance(state, u, torque)
         recorder.add(state, u, info, getattr(controller, "log", None))
         return recorder.trajectory()
 
