@@ -6,7 +6,14 @@ The public API is re-exported here; ``import bhgrasp`` never imports matplotlib 
 from bhgrasp import controllers, metrics, trajectories, tuning
 from bhgrasp.actuation import BarrettActuation, FullyActuated
 from bhgrasp.contact import Contact, SpringDamper
-from bhgrasp.errors import BhgraspError, InputError, ModelError, SimulationDiverged, UnreachableError
+from bhgrasp.errors import (
+    BhgraspError,
+    CompiledEngineUnavailable,
+    InputError,
+    ModelError,
+    SimulationDiverged,
+    UnreachableError,
+)
 from bhgrasp.grasp import GraspQuality, ferrari_canny, grasp_map, grasp_quality, hand_jacobian, is_force_closure
 from bhgrasp.grasp_forces import ContactForceQP, ContactForceResult, internal_forces, pseudo_inverse_forces
 from bhgrasp.hand import BarrettHand, Hand
@@ -25,6 +32,7 @@ __all__ = [
     "BhgraspError",
     "Box",
     "Capsule",
+    "CompiledEngineUnavailable",
     "Contact",
     "ContactForceQP",
     "ContactForceResult",

@@ -244,12 +244,11 @@ class ContactEngine:
         self._joint_a = np.array([pair.joint_a for pair in scene.pairs], dtype=int)
         self._joint_b = np.array([pair.joint_b for pair in scene.pairs], dtype=int)
         self.memory = ContactMemory.empty()  # the contacts of the last step (restored from each step's State)
-        # the per-pair results, wrapped once (coal refills them in place; indexing the vector each step costs more)
-        self._results = list(scene.geometry_data.collisionResults)
-        # Narrow phase of the colliding pairs, redone by coal's free functions: Pinocchio's per-pair collision
-        # functors keep GJK state from call to call, so at a degenerate contact (two faces flush) the witness, and
-        # with it the patch, depended on the configurations queried before (a box resting flat on its pedestal
-        # gave a 4-point patch or a 1-point patch); the free functions start afresh every time.
+        # Every pair is tested by coal's free functions with requests of our own: Pinocchio's per-pair collision
+        # functors keep GJK state from call to call (at a degenerate contact, two faces flush, the witness and with
+        # it the patch depended on the configurations queried before: a box resting flat on its pedestal gave a
+        # 4-point patch or a 1-point patch), and their default GJK tolerance (1e-6) decided near the threshold
+        # whether a pair touched at all.  The free functions start afresh every time, as the compiled engine does.
         geometry, data = scene.geometry, scene.geometry_data
         self._narrow = [
             (
@@ -275,12 +274,10 @@ class ContactEngine:
         damping among its points, so a body's contact stiffness does not depend on how many points coal reports.
         """
         scene = self.scene
-        if not pin.computeCollisions(scene.model, scene.data, scene.geometry, scene.geometry_data, q, False):
-            return empty_contact_set()
-        colliding = [k for k, result in enumerate(self._results) if result.isCollision()]
+        pin.updateGeometryPlacements(scene.model, scene.data, scene.geometry, scene.geometry_data, q)
         placements = scene.geometry_data.oMg
         pairs, points, normals, depths, weights = [], [], [], [], []
-        for k in colliding:
+        for k in range(len(self._narrow)):
             shape_a, shape_b, geom_a, geom_b, request, patch_request, result, patches = self._narrow[k]
             placement_a, placement_b = placements[geom_a], placements[geom_b]
             transform_a = coal.Transform3s(placement_a.rotation, placement_a.translation)

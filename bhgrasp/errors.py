@@ -34,6 +34,10 @@ class UnreachableError(BhgraspError, ValueError):
         self.result = result
 
 
+class CompiledEngineUnavailable(BhgraspError, ImportError):
+    """The compiled core ``bhgrasp._core`` does not load (the package was installed without building it)."""
+
+
 class SimulationDiverged(BhgraspError, RuntimeError):
     """A simulation produced NaN/inf, runaway speed or runaway penetration.
 

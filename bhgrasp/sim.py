@@ -35,6 +35,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.actuation import Actuation, FullyActuated
+from bhgrasp.compiled import CompiledStep
 from bhgrasp.contact import ContactEngine, ContactMemory, ContactSet, SpringDamper, empty_contact_set
 from bhgrasp.errors import InputError, SimulationDiverged
 from bhgrasp.objects import RigidObject
@@ -43,6 +44,7 @@ from bhgrasp.scene import Scene
 from bhgrasp.state import State, Trajectory
 
 INTEGRATORS = ("implicit", "semi-implicit", "rk4")
+ENGINES = ("compiled", "python")
 _FRICTION_VELOCITY = 1e-3  # [rad/s] regularisation of Coulomb joint friction
 
 
@@ -68,6 +70,7 @@ class Simulator:
         joint_limit_damping: float = 0.05,
         max_penetration: float = 0.02,
         max_speed: float = 100.0,
+        engine: str = "compiled",
     ) -> None:
         """Set up the simulation.
 
@@ -81,9 +84,16 @@ class Simulator:
             joint_limit_damping: Damping [N m s/rad] of the stops (acts only while a stop is penetrated).
             max_penetration: Contact depth [m] beyond which the run is declared diverged.
             max_speed: Joint or object speed [m/s or rad/s] beyond which the run is declared diverged.
+            engine: ``"compiled"`` (the C++ step of ``bhgrasp._core``) or ``"python"`` (the readable reference
+                implementation; the same physics, tests/test_compiled.py holds them in lockstep).
+
+        Raises:
+            CompiledEngineUnavailable: ``engine="compiled"`` but the C++ core was not built.
         """
         if integrator not in INTEGRATORS:
             raise InputError(f"`integrator` must be one of {INTEGRATORS}, got {integrator!r}")
+        if engine not in ENGINES:
+            raise InputError(f"`engine` must be one of {ENGINES}, got {engine!r}")
         self.scene = scene
         self.dt = as_positive(dt, "dt")
         self.law = contact if contact is not None else SpringDamper()
@@ -113,6 +123,8 @@ class Simulator:
         springs = [i for i, item in enumerate(scene.objects) if hasattr(item, "stiffness")]
         self._spring_q = np.array([scene.object_q_slice(i).start for i in springs], dtype=int)
         self._spring_v = np.array([scene.object_v_slice(i).start for i in springs], dtype=int)
+        self.engine_name = engine
+        self._compiled = CompiledStep(self) if engine == "compiled" else None
 
     # ------------------------------------------------------------------ states
     def initial_state(self, q_hand: Any = None) -> State:
@@ -121,7 +133,9 @@ class Simulator:
         q, v = self.scene.initial_state(q_hand)
         self.engine.reset()
         self.actuation.reset(q[: self.scene.nq_hand])
-        return self._state(0.0, q, v, self.engine.detect(q), ContactMemory.empty())
+        memory = ContactMemory.empty()
+        contacts = self.engine.detect(q) if self._compiled is None else self._compiled.detect(q, memory)
+        return self._state(0.0, q, v, contacts, memory)
 
     def _state(self, t: float, q: np.ndarray, v: np.ndarray, contacts: ContactSet, memory: ContactMemory) -> State:
         scene = self.scene
@@ -158,19 +172,24 @@ class Simulator:
             raise SimulationDiverged(state.t, "control input u", u.tolist(), "the controller returned NaN/inf")
         q, v = state.scene_q, state.scene_v
         # The step depends only on the state: its contact memory and actuation modes, not the last run's.
-        self.engine.memory = state.contact_memory if state.contact_memory is not None else ContactMemory.empty()
+        memory = state.contact_memory if state.contact_memory is not None else ContactMemory.empty()
         self.actuation.restore(state.actuation_modes, q[: self.scene.nq_hand])
         tau_hand = self.actuation.joint_torques(u)
         if disturbance is not None:
             tau_hand = tau_hand + disturbance
-        if self.integrator == "implicit":
-            q_next, v_next, contacts, drive = self._implicit(q, v, tau_hand)
+        if self._compiled is not None:
+            q_next, v_next, contacts, drive, memory, _ = self._compiled.step(q, v, tau_hand, memory)
         else:
-            q_next, v_next, contacts, drive = self._explicit(q, v, tau_hand)
+            self.engine.memory = memory
+            if self.integrator == "implicit":
+                q_next, v_next, contacts, drive = self._implicit(q, v, tau_hand)
+            else:
+                q_next, v_next, contacts, drive = self._explicit(q, v, tau_hand)
+            memory = self.engine.memory
         t = round(state.t / self.dt + 1) * self.dt  # k dt exactly: no accumulated rounding
         self._check(t, q_next, v_next, contacts)
         self.actuation.update(q_next[: self.scene.nq_hand], v_next[: self._nvh], u, drive)
-        return self._state(t, q_next, v_next, contacts, self.engine.memory), StepInfo(contacts, drive)
+        return self._state(t, q_next, v_next, contacts, memory), StepInfo(contacts, drive)
 
     def _implicit_gyroscopic(self, v: np.ndarray, bias: np.ndarray) -> None:
         """Replace each free body's explicit gyroscopic torque ``w x I w`` in ``bias`` by the implicit midpoint one.
@@ -248,7 +267,8 @@ class Simulator:
         friction = self.actuation.friction
         if friction.any():
             ratio = v[:nvh] / _FRICTION_VELOCITY
-            slope = friction / _FRICTION_VELOCITY / np.cosh(ratio) ** 2
+            decay = np.exp(-2.0 * np.abs(ratio))  # sech^2 = 4 e^-2|x| / (1 + e^-2|x|)^2: cosh overflows past 0.7 rad/s
+            slope = friction / _FRICTION_VELOCITY * (4.0 * decay / (1.0 + decay) ** 2)
             torque[:nvh] += slope * v[:nvh] - friction * np.tanh(ratio)
             damping[:nvh] += slope
         q_hand = q[:nqh]
@@ -508,4 +528,4 @@ def _noisy(state: State, noise: tuple[float, float] | None, rng: np.random.Gener
     )
 
 
-__all__ = ["INTEGRATORS", "Simulator", "StepInfo"]
+__all__ = ["ENGINES", "INTEGRATORS", "Simulator", "StepInfo"]

@@ -1,52 +1,129 @@
-// Python bindings of bhgrasp._core: thin wrappers, no logic; argument checks stay in Python.
-// Models cross the boundary serialized: pin.Model.saveToString() / pin.GeometryModel.saveToString().
-
-#include <string>
-#include <tuple>
-
+// Python bindings of bhgrasp._core: thin wrappers, no logic.  Input checks that a user can trip live in Python
+// (bhgrasp/compiled.py); the checks here only keep a wrong call from reading out of bounds.  Models cross the
+// boundary serialised: pin.Model.saveToString() / pin.GeometryModel.saveToString().
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/string.h>
-#include <nanobind/stl/tuple.h>
+#include <nanobind/stl/vector.h>
 
-#include <pinocchio/algorithm/crba.hpp>
-#include <pinocchio/geometry.hpp>
-#include <pinocchio/multibody.hpp>
-#include <pinocchio/serialization.hpp>
+#include "engine.hpp"
 
 namespace nb = nanobind;
-
-namespace {
-
-pinocchio::Model load_model(const std::string& model_text) {
-    pinocchio::Model model;
-    model.loadFromString(model_text);
-    return model;
-}
-
-std::tuple<int, int, int> model_sizes(const std::string& model_text, const std::string& geometry_text) {
-    const pinocchio::Model model = load_model(model_text);
-    pinocchio::GeometryModel geometry;
-    geometry.loadFromString(geometry_text);
-    return {model.nq, model.nv, static_cast<int>(geometry.ngeoms)};
-}
-
-// Joint-space inertia matrix M(q) [kg m^2], both triangles, as pin.crba returns it.
-Eigen::MatrixXd mass_matrix(const std::string& model_text, const Eigen::Ref<const Eigen::VectorXd>& q) {
-    const pinocchio::Model model = load_model(model_text);
-    pinocchio::Data data(model);
-    // ConfigVectorType = Eigen::Ref<const Eigen::VectorXd>: the instantiation precompiled in libpinocchio_default.
-    pinocchio::crba(model, data, q);
-    data.M.triangularView<Eigen::StrictlyLower>() = data.M.transpose().triangularView<Eigen::StrictlyLower>();
-    return data.M;
-}
-
-}  // namespace
+using namespace nb::literals;
 
 NB_MODULE(_core, m) {
-    m.doc() = "bhgrasp's compiled core (Pinocchio in C++).";
-    m.def("model_sizes", &model_sizes, nb::arg("model"), nb::arg("geometry"),
-          "(nq, nv, ngeoms) of a pin.Model and a pin.GeometryModel given as their saveToString() texts.");
-    m.def("mass_matrix", &mass_matrix, nb::arg("model"), nb::arg("q"),
-          "Joint-space inertia matrix M(q) [kg m^2] (CRBA, symmetric) of a pin.Model given as saveToString() text.");
+  using namespace bhgrasp;
+  m.doc() = "bhgrasp's compiled core: the simulation step on Pinocchio's and coal's C++ API.";
+  nb::class_<ContactLaw>(m, "ContactLaw")
+      .def(nb::init<>())
+      .def_rw("stiffness", &ContactLaw::stiffness)
+      .def_rw("damping", &ContactLaw::damping)
+      .def_rw("tangential_stiffness", &ContactLaw::tangential_stiffness)
+      .def_rw("tangential_damping", &ContactLaw::tangential_damping)
+      .def_rw("hunt_crossley", &ContactLaw::hunt_crossley)
+      .def_rw("exponent", &ContactLaw::exponent)
+      .def_rw("tanh_friction", &ContactLaw::tanh_friction)
+      .def_rw("slip_velocity", &ContactLaw::slip_velocity)
+      .def_rw("match_radius", &ContactLaw::match_radius);
+
+  nb::class_<Pair>(m, "Pair")
+      .def(nb::init<>())
+      .def_rw("geom_a", &Pair::geom_a)
+      .def_rw("geom_b", &Pair::geom_b)
+      .def_rw("joint_a", &Pair::joint_a)
+      .def_rw("joint_b", &Pair::joint_b)
+      .def_rw("friction", &Pair::friction);
+
+  nb::class_<Query>(m, "Query")
+      .def(nb::init<>())
+      .def_rw("num_max_contacts", &Query::num_max_contacts)
+      .def_rw("security_margin", &Query::security_margin)
+      .def_rw("break_distance", &Query::break_distance)
+      .def_rw("tolerance", &Query::tolerance)
+      .def_rw("max_num_patch", &Query::max_num_patch)
+      .def_rw("num_samples_curved_shapes", &Query::num_samples_curved_shapes)
+      .def_rw("patch_tolerance", &Query::patch_tolerance);
+
+  nb::class_<Spinning>(m, "Spinning")
+      .def(nb::init<>())
+      .def_rw("angular", &Spinning::angular)
+      .def_rw("axes", &Spinning::axes)
+      .def_rw("moments", &Spinning::moments);
+
+  nb::class_<Settings>(m, "Settings")
+      .def(nb::init<>())
+      .def_rw("dt", &Settings::dt)
+      .def_rw("integrator", &Settings::integrator)
+      .def_rw("nq_hand", &Settings::nq_hand)
+      .def_rw("nv_hand", &Settings::nv_hand)
+      .def_rw("lower", &Settings::lower)
+      .def_rw("upper", &Settings::upper)
+      .def_rw("limit_stiffness", &Settings::limit_stiffness)
+      .def_rw("limit_damping", &Settings::limit_damping)
+      .def_rw("joint_stiffness", &Settings::joint_stiffness)
+      .def_rw("joint_damping", &Settings::joint_damping)
+      .def_rw("spring_q", &Settings::spring_q)
+      .def_rw("spring_v", &Settings::spring_v)
+      .def_rw("spinning", &Settings::spinning)
+      .def_rw("pairs", &Settings::pairs)
+      .def_rw("law", &Settings::law)
+      .def_rw("queries", &Settings::queries);
+
+  nb::class_<Drive>(m, "Drive")
+      .def(nb::init<>())
+      .def_rw("transmission", &Drive::transmission)
+      .def_rw("joint_damping", &Drive::joint_damping)
+      .def_rw("friction", &Drive::friction)
+      .def_rw("motor_damping", &Drive::motor_damping);
+
+  nb::class_<Memory>(m, "Memory")
+      .def(nb::init<>())
+      .def("__init__",
+           [](Memory* memory, Indices pair, Points local_b, Points displacement, Flags sliding) {
+             const Eigen::Index n = pair.size();
+             if (local_b.rows() != n || displacement.rows() != n || sliding.size() != n)
+               throw std::invalid_argument("memory arrays of different lengths");
+             new (memory) Memory{std::move(pair), std::move(local_b), std::move(displacement), std::move(sliding)};
+           },
+           "pair"_a, "local_b"_a, "displacement"_a, "sliding"_a)
+      .def_ro("pair", &Memory::pair)
+      .def_ro("local_b", &Memory::local_b)
+      .def_ro("displacement", &Memory::displacement)
+      .def_ro("sliding", &Memory::sliding)
+      .def("__len__", [](const Memory& memory) { return memory.pair.size(); });
+
+  nb::class_<Contacts>(m, "Contacts")
+      .def_ro("pair", &Contacts::pair)
+      .def_ro("point", &Contacts::point)
+      .def_ro("normal", &Contacts::normal)
+      .def_ro("depth", &Contacts::depth)
+      .def_ro("friction", &Contacts::friction)
+      .def_ro("displacement", &Contacts::displacement)
+      .def_ro("weight", &Contacts::weight)
+      .def_ro("local_b", &Contacts::local_b)
+      .def_ro("force", &Contacts::force)
+      .def_ro("sticking", &Contacts::sticking)
+      .def_ro("was_sliding", &Contacts::was_sliding)
+      .def("__len__", &Contacts::size);
+
+  nb::class_<Divergence>(m, "Divergence")
+      .def_ro("kind", &Divergence::kind)
+      .def_ro("index", &Divergence::index)
+      .def_ro("value", &Divergence::value);
+
+  nb::class_<StepResult>(m, "StepResult")
+      .def_ro("q", &StepResult::q)
+      .def_ro("v", &StepResult::v)
+      .def_ro("contacts", &StepResult::contacts)
+      .def_ro("memory", &StepResult::memory)
+      .def_ro("drive", &StepResult::drive)
+      .def_ro("divergence", &StepResult::divergence);
+
+  nb::class_<Engine>(m, "Engine")
+      .def(nb::init<const std::string&, const std::string&, Settings>(), "model"_a, "geometry"_a, "settings"_a)
+      .def("step", &Engine::step, "q"_a, "v"_a, "tau_hand"_a, "drive"_a, "memory"_a, "max_speed"_a,
+           "max_penetration"_a, nb::call_guard<nb::gil_scoped_release>())
+      .def("detect", &Engine::detect, "q"_a, "memory"_a)
+      .def_prop_ro("nq", &Engine::nq)
+      .def_prop_ro("nv", &Engine::nv);
 }

@@ -1,0 +1,137 @@
+"""The compiled engine: the C++ step of ``bhgrasp._core`` set up from a :class:`~bhgrasp.sim.Simulator`.
+
+The C++ step (``src/engine.cpp``) mirrors the Python one line for line: contact detection with coal on every
+collision pair, contact patches and per-point depths, matching to the last step's contacts, the stick-slip
+linearisation with its active set, joint stops, springs, damping and friction, the implicit-midpoint gyroscopic
+torque, and the implicit, semi-implicit and RK4 integrators.  The actuation model stays in Python: each step
+passes its current transmission and damping (cached per actuation mode).  ``tests/test_compiled.py`` steps both
+engines in lockstep.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from bhgrasp.contact import ContactMemory, ContactSet, empty_contact_set
+from bhgrasp.errors import CompiledEngineUnavailable
+
+if TYPE_CHECKING:
+    from bhgrasp.sim import Simulator
+
+_INTEGRATORS = {"implicit": 0, "semi-implicit": 1, "rk4": 2}
+
+
+def core_module():
+    """The compiled extension ``bhgrasp._core``.
+
+    Raises:
+        CompiledEngineUnavailable: It is missing or does not load (the message says why and how to rebuild).
+    """
+    try:
+        from bhgrasp import _core
+    except ImportError as error:
+        raise CompiledEngineUnavailable(
+            f"the compiled engine bhgrasp._core does not load ({error}); reinstall with `pip install -e .` (it needs "
+            "a C++17 compiler, e.g. Debian's g++), or pass engine='python' to use the reference engine"
+        ) from error
+    return _core
+
+
+class CompiledStep:
+    """A simulator's scene, contact law and options in the C++ engine; one :meth:`step` per physics step."""
+
+    def __init__(self, simulator: Simulator) -> None:
+        """Copy the scene (Pinocchio's serialisation), the contact law and the simulator's options into C++."""
+        core = core_module()
+        scene, law = simulator.scene, simulator.law
+        settings = core.Settings()
+        settings.dt = simulator.dt
+        settings.integrator = _INTEGRATORS[simulator.integrator]
+        settings.nq_hand, settings.nv_hand = scene.nq_hand, scene.nv_hand
+        settings.lower, settings.upper = scene.hand.lower, scene.hand.upper
+        settings.limit_stiffness, settings.limit_damping = simulator.limit_stiffness, simulator.limit_damping
+        settings.joint_stiffness, settings.joint_damping = scene.joint_stiffness, scene.joint_damping
+        settings.spring_q = [int(i) for i in simulator._spring_q]
+        settings.spring_v = [int(i) for i in simulator._spring_v]
+        spinning = []
+        for angular, axes, moments in simulator._spinning:
+            body = core.Spinning()
+            body.angular, body.axes, body.moments = angular.start, axes, np.array(moments)
+            spinning.append(body)
+        settings.spinning = spinning
+        contact = core.ContactLaw()
+        contact.stiffness, contact.damping = law.stiffness, law.damping
+        contact.tangential_stiffness, contact.tangential_damping = law.k_t, law.c_t
+        contact.hunt_crossley, contact.exponent = law.normal_law == "hunt-crossley", law.exponent
+        contact.tanh_friction, contact.slip_velocity = law.friction_law == "tanh", law.slip_velocity
+        contact.match_radius = simulator.engine.match_radius
+        settings.law = contact
+        pairs, queries = [], []
+        for pair in scene.pairs:
+            item = core.Pair()
+            item.geom_a, item.geom_b, item.joint_a, item.joint_b = pair.geom_a, pair.geom_b, pair.joint_a, pair.joint_b
+            item.friction = pair.friction(law.friction)
+            pairs.append(item)
+            request = scene.geometry_data.collisionRequests[pair.index]
+            patch = scene.geometry_data.contactPatchRequests[pair.index]
+            query = core.Query()
+            query.num_max_contacts = request.num_max_contacts
+            query.security_margin, query.break_distance = request.security_margin, request.break_distance
+            query.max_num_patch = patch.max_num_patch
+            query.num_samples_curved_shapes = patch.getNumSamplesCurvedShapes()
+            query.patch_tolerance = patch.getPatchTolerance()
+            queries.append(query)
+        settings.pairs, settings.queries = pairs, queries
+        self._core = core
+        self._engine = core.Engine(scene.model.saveToString(), scene.geometry.saveToString(), settings)
+        self._simulator = simulator
+        self._drives: dict[bytes, object] = {}
+
+    def _drive(self):
+        """The actuation's transmission and damping in its current mode (built once per mode)."""
+        actuation = self._simulator.actuation
+        key = actuation.modes().tobytes()
+        drive = self._drives.get(key)
+        if drive is None:
+            drive = self._core.Drive()
+            drive.transmission = actuation.transmission()
+            drive.joint_damping = actuation.joint_damping()
+            drive.friction = actuation.friction
+            drive.motor_damping = actuation.joint_damping() - actuation.damping
+            self._drives[key] = drive
+        return drive
+
+    def memory(self, memory: ContactMemory):
+        """A :class:`~bhgrasp.contact.ContactMemory` as the C++ engine's."""
+        return self._core.Memory(
+            memory.pair.astype(np.int64), memory.local_b, memory.displacement, memory.sliding.astype(bool)
+        )
+
+    def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, memory: ContactMemory):
+        """One step: (q+, v+, contacts with forces, drive torques [N m], memory, divergence)."""
+        simulator = self._simulator
+        result = self._engine.step(
+            q, v, tau_hand, self._drive(), self.memory(memory), simulator.max_speed, simulator.max_penetration
+        )
+        memory = result.memory
+        after = ContactMemory(memory.pair, memory.local_b, memory.displacement, memory.sliding)
+        return result.q, result.v, contact_set(result.contacts), result.drive, after, result.divergence
+
+    def detect(self, q: np.ndarray, memory: ContactMemory) -> ContactSet:
+        """The contacts at ``q`` matched to ``memory`` (no forces)."""
+        return contact_set(self._engine.detect(q, self.memory(memory)))
+
+
+def contact_set(contacts) -> ContactSet:
+    """The C++ engine's contacts as a :class:`~bhgrasp.contact.ContactSet`."""
+    if len(contacts) == 0:
+        return empty_contact_set()
+    return ContactSet(
+        contacts.pair, contacts.point, contacts.normal, contacts.depth, contacts.friction, contacts.displacement,
+        contacts.weight, contacts.local_b, contacts.force, contacts.sticking, contacts.was_sliding,
+    )  # fmt: skip
+
+
+__all__ = ["CompiledStep", "contact_set", "core_module"]

@@ -1,0 +1,193 @@
+// The compiled simulation step of bhgrasp: contact detection (coal), the spring-damper + stick-slip contact law,
+// and the implicit, semi-implicit and RK4 integrators of bhgrasp.sim.Simulator, on Pinocchio's C++ API.
+//
+// The Python engine (bhgrasp/sim.py, bhgrasp/contact.py) is the readable reference: every function here mirrors
+// one there, named alike, and tests/test_compiled.py steps both in lockstep.  Units SI, world frame; arrays of
+// points are (m, 3) row-major, as NumPy's.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include <coal/collision_data.h>
+#include <pinocchio/geometry.hpp>
+#include <pinocchio/multibody.hpp>
+
+namespace bhgrasp {
+
+using Vector = Eigen::VectorXd;
+using Matrix = Eigen::MatrixXd;
+using Vector3 = Eigen::Vector3d;
+using Matrix3 = Eigen::Matrix3d;
+using Points = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;  // (m, 3)
+using Indices = Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>;
+using Flags = Eigen::Matrix<bool, Eigen::Dynamic, 1>;
+
+// The contact force law (bhgrasp.contact.SpringDamper).
+struct ContactLaw {
+  double stiffness = 1e4;             // k [N/m] (Hunt-Crossley: [N/m^e])
+  double damping = 20.0;              // c [N s/m]
+  double tangential_stiffness = 1e4;  // k_t [N/m]
+  double tangential_damping = 20.0;   // c_t [N s/m]
+  bool hunt_crossley = false;         // normal law: linear or Hunt-Crossley
+  double exponent = 1.5;              // Hunt-Crossley exponent e
+  bool tanh_friction = false;         // friction law: stick-slip or regularised tanh
+  double slip_velocity = 1e-3;        // v_s of the tanh law [m/s]
+  double match_radius = 3e-3;         // contacts match last step's within this distance on body b [m]
+};
+
+// One collision pair: forces act on body b along the normal from a to b (bhgrasp.scene.CollisionPair).
+struct Pair {
+  int geom_a = 0, geom_b = 0;    // geometry indices
+  int joint_a = 0, joint_b = 0;  // joints carrying the bodies (0: the world or the fixed palm)
+  double friction = 0.8;         // Coulomb coefficient of the pair
+};
+
+// A free body's angular velocity coordinates and principal axes (for the implicit-midpoint gyroscopic torque).
+struct Spinning {
+  int angular = 0;                        // index of its first angular velocity coordinate in v
+  Matrix3 axes = Matrix3::Identity();     // principal axes (columns) in the body frame
+  Vector3 moments = Vector3::Zero();      // principal moments [kg m^2]
+};
+
+// Collision and contact-patch query settings of one pair (coal's CollisionRequest, ContactPatchRequest).
+struct Query {
+  int num_max_contacts = 4;
+  double security_margin = 0.0, break_distance = 1e-3;
+  double tolerance = 1e-10;  // GJK and EPA
+  int max_num_patch = 1, num_samples_curved_shapes = 12;
+  double patch_tolerance = 1e-3;
+};
+
+// Everything fixed for a simulator: sizes, integrator, joint stops and springs, contact settings.
+struct Settings {
+  double dt = 1e-3;                   // [s]
+  int integrator = 0;                 // 0 implicit, 1 semi-implicit, 2 RK4
+  int nq_hand = 0, nv_hand = 0;
+  Vector lower, upper;                // hand joint limits [rad]
+  double limit_stiffness = 1e3;       // [N m/rad]
+  double limit_damping = 0.05;        // [N m s/rad]
+  Vector joint_stiffness;             // (nv,) springs of spring-mounted objects [N/m]
+  Vector joint_damping;               // (nv,) [N s/m]
+  std::vector<int> spring_q, spring_v;  // coordinates of spring-mounted objects
+  std::vector<Spinning> spinning;
+  std::vector<Pair> pairs;
+  ContactLaw law;
+  std::vector<Query> queries;  // per pair
+};
+
+// The actuation of one step (bhgrasp.actuation.Actuation in its current mode).
+struct Drive {
+  Matrix transmission;    // (nv_hand, n_driven) T: v_hand = T w
+  Vector joint_damping;   // (nv_hand,) passive + drive damping [N m s/rad]
+  Vector friction;        // (nv_hand,) Coulomb joint friction [N m]
+  Vector motor_damping;   // (nv_hand,) the drive's own damping (joint_damping minus the passive joints')
+};
+
+// What a run carries from one step to the next about its contacts (bhgrasp.contact.ContactMemory).
+struct Memory {
+  Indices pair;
+  Points local_b;
+  Points displacement;
+  Flags sliding;
+};
+
+// The contacts of one instant (bhgrasp.contact.ContactSet).
+struct Contacts {
+  Indices pair;
+  Points point, normal;
+  Vector depth, friction;
+  Points displacement;  // tangential spring displacement at the start of the step [m]
+  Vector weight;        // 1 / (points in the patch)
+  Points local_b;       // points in body b's joint frame [m]
+  Points force;         // on body b [N]
+  Flags sticking, was_sliding;
+  Eigen::Index size() const { return pair.size(); }
+  void resize(Eigen::Index m);
+};
+
+// Why a step was declared diverged (0: it was not); Python raises SimulationDiverged with these.
+struct Divergence {
+  int kind = 0;  // 1 position not finite, 2 velocity not finite, 3 speed above max_speed, 4 depth above max
+  int index = -1;
+  double value = 0.0;
+};
+
+struct StepResult {
+  Vector q, v;
+  Contacts contacts;
+  Memory memory;
+  Vector drive;  // hand joint torques the drive delivered [N m]
+  Divergence divergence;
+};
+
+class Engine {
+ public:
+  // `model` and `geometry`: Pinocchio's text serialisations (Model.saveToString, GeometryModel.saveToString).
+  Engine(const std::string& model, const std::string& geometry, Settings settings);
+
+  // Advance dt from (q, v) with hand joint torques tau_hand [N m]; max_speed/max_penetration bound divergence.
+  StepResult step(const Vector& q, const Vector& v, const Vector& tau_hand, const Drive& drive, const Memory& memory,
+                  double max_speed, double max_penetration);
+
+  // The contacts at q, matched to memory (runs forward kinematics).
+  Contacts detect(const Vector& q, const Memory& memory);
+
+  int nq() const { return model_.nq; }
+  int nv() const { return model_.nv; }
+
+ private:
+  struct Parts {  // linear_parts: f0 and D of the normal law alone and with the stick spring
+    Points f0, f0_stick;
+    std::vector<Matrix3> gains, gains_stick;
+  };
+  struct Passive {
+    Vector torque, stiffness, damping;
+  };
+  struct Acceleration {
+    Vector acceleration;
+    Contacts contacts;
+    Points displacement;
+    Vector drive;
+  };
+
+  void point_depths(int pair, const Points& points, const Vector3& normal, std::vector<double>& depths);
+  double signed_distance(int geom, const Vector3& point);
+  void recall(Contacts& contacts, const Memory& memory) const;
+  void jacobians(const Contacts& contacts, std::vector<Matrix>& result);
+  Parts linear_parts(const Contacts& contacts) const;
+  void start_status(const Contacts& contacts, const Parts& parts, const Points& start_velocity,
+                    std::vector<int>& status, Points& slide) const;
+  void classify(const Contacts& contacts, const Points& forces, const std::vector<int>& status,
+                const Points& start_velocity, const Points& relative, const Flags& may_stick, std::vector<int>& new_status, Points& slide) const;
+  void contact_forces(Contacts& contacts, const Points& velocity, Points& displacement) const;
+  Passive passive(const Vector& q, const Vector& v, const Drive& drive) const;
+  Matrix mass_matrix(const Vector& q);
+  Matrix transmission(const Drive& drive) const;
+  void implicit_gyroscopic(const Vector& v, Vector& bias) const;
+  Vector increment_rate(const Vector& increment, const Vector& v) const;
+  void implicit_step(const Vector& q, const Vector& v, const Vector& tau, const Drive& drive, const Memory& memory,
+                     StepResult& result);
+  Acceleration acceleration(const Vector& q, const Vector& v, const Vector& tau, const Matrix& transmission,
+                            const Drive& drive, const Memory& memory, bool gyroscopic);
+  Vector integrate(const Vector& q, const Vector& v) const;
+
+  pinocchio::Model model_;
+  pinocchio::Data data_;
+  pinocchio::GeometryModel geometry_;
+  pinocchio::GeometryData geometry_data_;
+  Settings settings_;
+  Matrix identity_objects_;
+  std::vector<coal::CollisionRequest> requests_;
+  std::vector<coal::ContactPatchRequest> patch_requests_;
+  std::vector<coal::CollisionResult> results_;
+  std::vector<coal::ContactPatchResult> patch_results_;
+  std::shared_ptr<coal::CollisionGeometry> probe_;
+  pinocchio::Data::Matrix6x frame_jacobian_;
+};
+
+}  // namespace bhgrasp
