@@ -67,6 +67,11 @@ Vector3 tangential(const Vector3& x, const Vector3& n) { return x - x.dot(n) * n
 
 // Solve (T^T A T) w = T^T b and return T w (A symmetric positive definite, T of full column rank).
 Vector reduced_solve(const Matrix& transmission, const Matrix& matrix, const Vector& rhs) {
+  if (transmission.rows() == transmission.cols() && transmission.isIdentity(0.0)) {  // every coordinate driven
+    Eigen::LLT<Matrix> cholesky(matrix);
+    if (cholesky.info() == Eigen::Success) return cholesky.solve(rhs);
+    return matrix.partialPivLu().solve(rhs);
+  }
   const Matrix reduced = transmission.transpose() * matrix * transmission;
   const Vector right = transmission.transpose() * rhs;
   Eigen::LLT<Matrix> cholesky(reduced);
@@ -123,6 +128,12 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
   }
   results_.resize(pairs);
   probe_ = std::make_shared<coal::Sphere>(1e-12);
+  for (const auto& object : geometry_.geometryObjects) {  // bounding spheres for the broad phase
+    object.geometry->computeLocalAABB();
+    const bool bounded = std::isfinite(object.geometry->aabb_radius) && object.geometry->aabb_center.allFinite();
+    bound_radius_.push_back(bounded ? object.geometry->aabb_radius : std::numeric_limits<double>::infinity());
+    bound_centre_.push_back(bounded ? Vector3(object.geometry->aabb_center) : Vector3::Zero());
+  }
   frame_jacobian_ = pinocchio::Data::Matrix6x::Zero(6, model_.nv);
 }
 
@@ -138,8 +149,14 @@ Contacts Engine::detect(const Vector& q, const Memory& memory) {
     const Pair& pair = settings_.pairs[k];
     const auto& shape_a = geometry_.geometryObjects[pair.geom_a].geometry;
     const auto& shape_b = geometry_.geometryObjects[pair.geom_b].geometry;
-    const coal::Transform3s transform_a = pinocchio::toCoalTransform3s(geometry_data_.oMg[pair.geom_a]);
-    const coal::Transform3s transform_b = pinocchio::toCoalTransform3s(geometry_data_.oMg[pair.geom_b]);
+    const pinocchio::SE3 &placement_a = geometry_data_.oMg[pair.geom_a], &placement_b = geometry_data_.oMg[pair.geom_b];
+    const double reach = bound_radius_[pair.geom_a] + bound_radius_[pair.geom_b];
+    if (std::isfinite(reach) &&  // broad phase: bounding spheres apart, no contact (the narrow phase would agree)
+        (placement_a.act(bound_centre_[pair.geom_a]) - placement_b.act(bound_centre_[pair.geom_b])).norm() >
+            reach + requests_[k].security_margin + 1e-9)
+      continue;
+    const coal::Transform3s transform_a = pinocchio::toCoalTransform3s(placement_a);
+    const coal::Transform3s transform_b = pinocchio::toCoalTransform3s(placement_b);
     coal::CollisionResult& result = results_[k];
     result.clear();
     if (!coal::collide(shape_a.get(), transform_a, shape_b.get(), transform_b, requests_[k], result))

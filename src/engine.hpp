@@ -187,6 +187,8 @@ class Engine {
   std::vector<coal::CollisionResult> results_;
   std::vector<coal::ContactPatchResult> patch_results_;
   std::shared_ptr<coal::CollisionGeometry> probe_;
+  std::vector<double> bound_radius_;  // per geometry: radius [m] of a sphere about bound_centre_ holding the shape
+  std::vector<Vector3> bound_centre_; // in the geometry's frame; radius inf: unbounded (half-spaces)
   pinocchio::Data::Matrix6x frame_jacobian_;
 };
 
