@@ -105,6 +105,8 @@ class CompiledStep:
 
     def memory(self, memory: ContactMemory):
         """A :class:`~bhgrasp.contact.ContactMemory` as the C++ engine's."""
+        if memory.native is not None:
+            return memory.native
         return self._core.Memory(
             memory.pair.astype(np.int64), memory.local_b, memory.displacement, memory.sliding.astype(bool)
         )
@@ -116,7 +118,7 @@ class CompiledStep:
             q, v, tau_hand, self._drive(), self.memory(memory), simulator.max_speed, simulator.max_penetration
         )
         memory = result.memory
-        after = ContactMemory(memory.pair, memory.local_b, memory.displacement, memory.sliding)
+        after = ContactMemory(memory.pair, memory.local_b, memory.displacement, memory.sliding, native=memory)
         return result.q, result.v, contact_set(result.contacts), result.drive, after, result.divergence
 
     def detect(self, q: np.ndarray, memory: ContactMemory) -> ContactSet:

@@ -20,7 +20,7 @@ at the end of the step): :meth:`ContactEngine.linear_parts` and :meth:`ContactEn
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import coal
 import numpy as np
@@ -135,12 +135,15 @@ class ContactMemory:
         local_b: (m, 3) the contact point in its body b's joint frame [m] (contacts are matched by position on b).
         displacement: (m, 3) end-of-step tangential spring displacement u [m].
         sliding: (m,) whether the contact ended the step sliding (the next step starts it sliding).
+        native: The compiled engine's copy of the same memory (``None`` when built in Python), so that a run of
+            the compiled engine hands it on without converting the arrays back and forth.
     """
 
     pair: np.ndarray
     local_b: np.ndarray
     displacement: np.ndarray
     sliding: np.ndarray
+    native: Any = field(default=None, compare=False, repr=False)
 
     @classmethod
     def empty(cls) -> ContactMemory:

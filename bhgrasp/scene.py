@@ -104,6 +104,11 @@ class Scene:
             else:
                 stiffness += [0.0] * 6
                 damping += [0.0] * 6
+        self._q_slices, self._v_slices = [], []  # read every step: looked up in the model once
+        for root, joint in zip(self._object_root, self.object_joints):
+            first, body = self.model.joints[root], self.model.joints[joint]
+            self._q_slices.append(slice(first.idx_q, body.idx_q + body.nq))
+            self._v_slices.append(slice(first.idx_v, body.idx_v + body.nv))
         self.joint_stiffness = np.concatenate((np.zeros(self.nv_hand), stiffness))
         self.joint_damping = np.concatenate((np.zeros(self.nv_hand), damping))
         self.data = self.model.createData()
@@ -143,13 +148,11 @@ class Scene:
 
     def object_q_slice(self, index: int) -> slice:
         """Slice of an object's coordinates in the scene ``q``."""
-        root, body = (self.model.joints[j] for j in (self._object_root[index], self.object_joints[index]))
-        return slice(root.idx_q, body.idx_q + body.nq)
+        return self._q_slices[index]
 
     def object_v_slice(self, index: int) -> slice:
         """Slice of an object's velocities in the scene ``v``."""
-        root, body = (self.model.joints[j] for j in (self._object_root[index], self.object_joints[index]))
-        return slice(root.idx_v, body.idx_v + body.nv)
+        return self._v_slices[index]
 
     # ------------------------------------------------------------------ states
     def initial_state(self, q_hand: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
