@@ -128,19 +128,26 @@ def test_box_sliding_down_an_incline(integrator: str) -> None:
     assert_agree(lockstep(simulator, zero(8), 1200), 4)
 
 
-def test_barrett_closing_on_a_box_breaks_away() -> None:
-    """The 4-motor transmission: the fingers close on a box, the proximal links block and the TorqueSwitches break
-    away (the distal links then close alone); joint damping and Coulomb joint friction on."""
+def test_barrett_closing_on_a_box_breaks_away_and_reopens() -> None:
+    """The 4-motor transmission in each TorqueSwitch mode: the fingers close on a box, the proximal links block and
+    the switches break away (the distal links close alone: mode 1); opening, the tips return to their stops and the
+    proximal links open alone (mode 2) until the switches re-arm (mode 0).  Joint damping and Coulomb joint friction
+    are on."""
     setup = box_grasp(mass=0.3, actuation="barrett")
     actuation = BarrettActuation(setup.hand, damping=0.01, friction=0.002)
     simulator = Simulator(setup.simulator.scene, dt=setup.simulator.dt, contact=setup.simulator.law,
-                          actuation=actuation)  # fmt: skip
+                          actuation=actuation, engine="python")  # fmt: skip
     state = simulator.initial_state(setup.q_start)
     close = lambda t, s: np.array([0.02, 0.11, 0.11, 0.11])  # noqa: E731
-    worst = lockstep(simulator, close, 1500, state)
-    assert_agree(worst, 3)
-    final = simulator.run(close, 1.5, state=state, progress=False)
-    assert final.modes[-1].max() >= 1  # a TorqueSwitch broke away within the compared span
+    opening = lambda t, s: np.array([0.0, -0.11, -0.11, -0.11])  # noqa: E731
+    assert_agree(lockstep(simulator, close, 1500, state), 3)
+    closed = simulator.run(close, 1.5, state=state, progress=False)
+    assert (closed.modes[-1] == 1).all()  # every TorqueSwitch broke away within the compared span
+    for _ in range(1500):
+        state, _ = simulator.step(state, close(state.t, state))
+    assert_agree(lockstep(simulator, opening, 1200, state), 0)
+    opened = simulator.run(opening, 1.2, state=state, progress=False)
+    assert (opened.modes == 2).any() and (opened.modes[-1] == 0).all()  # re-opened and re-armed
 
 
 def test_fingers_against_their_joint_stops_and_a_spring_mounted_object() -> None:
