@@ -7,6 +7,7 @@ Conventions: SI units and radians; ``q`` (size ``nq``) and ``v`` (size ``nv``) i
 
 from __future__ import annotations
 
+import functools
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -131,10 +132,10 @@ class Hand:
         """Size of the velocity/torque vector."""
         return self._model.nv
 
-    @property
+    @functools.cached_property
     def joint_names(self) -> tuple[str, ...]:
         """Joint names in Pinocchio's order (the order of ``q``, ``v`` and ``tau``)."""
-        return tuple(self._model.names[1:])
+        return tuple(self._model.names[1:])  # read by controllers every cycle: built once (the model is fixed)
 
     @property
     def fingers(self) -> tuple[str, ...]:
@@ -173,14 +174,29 @@ class Hand:
 
     def joint_index(self, joint: str) -> int:
         """Index of a 1-DOF joint in ``q``/``v``."""
-        require_name(joint, self.joint_names, "joint")
-        return self._model.joints[self._model.getJointId(joint)].idx_v
+        index = self._joint_indices.get(joint) if isinstance(joint, str) else None
+        if index is None:
+            require_name(joint, self.joint_names, "joint")  # raises: an unknown name
+        return index
+
+    @functools.cached_property
+    def _joint_indices(self) -> dict[str, int]:
+        return {name: self._model.joints[self._model.getJointId(name)].idx_v for name in self.joint_names}
 
     def finger_joints(self, finger: str) -> tuple[str, ...]:
         """Names of the joints that move a finger's tip, from the base outward."""
-        require_name(finger, self.fingers, "finger")
-        parent = self._model.frames[self._tip_ids[finger]].parentJoint
-        return tuple(self._model.names[j] for j in self._model.supports[parent][1:])
+        joints = self._finger_joints.get(finger) if isinstance(finger, str) else None
+        if joints is None:
+            require_name(finger, self.fingers, "finger")  # raises: an unknown finger
+        return joints
+
+    @functools.cached_property
+    def _finger_joints(self) -> dict[str, tuple[str, ...]]:
+        model = self._model
+        supports = {
+            finger: model.supports[model.frames[frame].parentJoint][1:] for finger, frame in self._tip_ids.items()
+        }
+        return {finger: tuple(model.names[j] for j in joints) for finger, joints in supports.items()}
 
     def finger_indices(self, finger: str) -> np.ndarray:
         """Velocity indices of a finger's joints (columns of its Jacobian that can be non-zero)."""
