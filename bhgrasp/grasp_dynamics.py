@@ -12,19 +12,39 @@ which are (5.25) for invertible J_h.  Definition 5.1 holds for any P: M~ is symm
 M~_dot - 2 C~ is skew-symmetric (P^T (M_dot - 2 C) P plus P_dot^T M P - P^T M P_dot).  The reduction is exact only
 for object twists the grasp allows (G^T x_dot in the range of J_h): :func:`grasp_mobility` gives that subspace;
 for three point contacts on the BH8-280 it has 5 dimensions, not 6, so one object motion needs rolling or sliding.
+
+P and its rate along the motion are analytic, from two Pinocchio passes (:func:`grasp_kinematics`).  Contact i is
+the point p_i = c + R b_i fixed on the object (COM c, body point b_i) and, at this instant, on the link of joint
+j(i).  With Pinocchio's world-frame joint Jacobian J^W_j (6, nv; ``data.J`` of ``computeJointJacobians``: the rows
+are the velocity [m/s] of the body point at the world origin and the angular velocity [rad/s], world) and its time
+derivative J^W_dot_j along q_dot (``data.dJ`` of ``computeJointJacobiansTimeVariation``; columns outside joint j's
+support zeroed):
+
+    J_i     = J^W_lin,j - skew(p_i) J^W_ang,j                                    (3, nv) world [m/rad]
+    J_dot_i = J^W_dot_lin,j - skew(p_i) J^W_dot_ang,j - skew(p_dot_i) J^W_ang,j,  p_dot_i = v + omega x (p_i - c)
+    G_w^T rows of contact i = [I, -skew(p_i - c)],  their rate [0, -skew(omega x (p_i - c))]
+    d(J^+)  = -J^+ J_dot J^+ + J^+ J^+T J_dot^T (I - J J^+) + (I - J^+ J) J_dot^T J^+T J^+
+    P       = J^+ G_w^T,   P_dot = d(J^+) G_w^T + J^+ G_w_dot^T,
+
+along q_dot = P x_dot (the joint motion the reduction assumes) and the object twist x_dot.  The pseudo-inverse's
+derivative is Golub and Pereyra's (SIAM J. Numer. Anal. 10(2), 1973, (4.12)), exact while the rank of J is
+constant (J (9, 8) has full column rank for the Barrett hand's three fingertip contacts; with two contacts J (6, nv)
+has full row rank and the third term carries the null-space motion).  P is the same in contact and world
+coordinates (J_h = R^T J and G = G_w R with R = blockdiag(R_i) orthogonal, so J_h^+ G^T = J^+ G_w^T).
 """
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_array, as_positive, as_vector
+from bhgrasp._validation import as_array, as_positive, as_vector, require_name
 from bhgrasp.errors import InputError
-from bhgrasp.grasp import _frames, _grasp_map, contact_frames
+from bhgrasp.grasp import _frames, _grasp_map, _skew_rows, contact_frames
 from bhgrasp.hand import Hand
 
 
@@ -97,13 +117,13 @@ class ObjectState:
 
 
 def grasp_kinematics(
-    hand: Hand, q: Any, obj: ObjectState, points_body: Any, normals_body: Any, links: Any, step: float = 1e-6
+    hand: Hand, q: Any, obj: ObjectState, points_body: Any, normals_body: Any, links: Any
 ) -> GraspKinematics:
     """P = J_h^+ G^T, its rate P_dot, G and J_h for contacts fixed on the object (body frame) and on hand links.
 
-    Arguments as :func:`grasp_dynamics`.  P_dot is the central difference of P along the motion: the object
-    advanced and retreated by ``step`` [s] at its twist, the joints by P x_dot (no numerical derivative of the
-    kinematics themselves: each P is exact).
+    Arguments as :func:`grasp_dynamics`.  P_dot is analytic (module docstring): its rate along the object's twist
+    and the joint velocities q_dot = P x_dot; two kinematics passes (``computeJointJacobians`` and
+    ``computeJointJacobiansTimeVariation``), no finite difference.
     """
     q = as_vector(q, "q", hand.nq)
     points_body = as_array(points_body, "points_body", (None, 3))
@@ -113,28 +133,107 @@ def grasp_kinematics(
         raise InputError(f"`links` must be {count} frame name(s), one per contact, got {links!r}")
     if not isinstance(obj, ObjectState):
         raise InputError(f"`obj` must be an ObjectState, got {type(obj).__name__}")
-    twist = as_vector(obj.twist, "obj.twist", 6)
-    step = as_positive(step, "step")
+    as_vector(obj.twist, "obj.twist", 6)
     unit_body = contact_frames(normals_body)[:, :, 2]  # validated, normalised
-    world_aligned = np.broadcast_to(np.eye(3), (count, 3, 3))
+    rotation = np.asarray(obj.rotation, dtype=float)
+    points = obj.com + points_body @ rotation.T
+    return contact_kinematics(hand, q, obj, points, _frames(unit_body @ rotation.T), parent_joints(hand, links))
 
-    def joint_map(configuration: np.ndarray, state: ObjectState) -> tuple[np.ndarray, ...]:
-        # P = J_h^+ G^T does not depend on the contact frames (R^T cancels), so P is built world-aligned
-        points = state.com + points_body @ state.rotation.T
-        jacobian = hand.point_jacobians(configuration, links, points)  # (n, 3, nv) world
-        pinv = np.linalg.pinv(jacobian.reshape(3 * count, hand.nv))
-        grasp = _grasp_map(points, world_aligned, state.com)
-        return pinv @ grasp.T, jacobian, pinv, points
 
-    p_map, jacobian_world, pinv_world, points = joint_map(q, obj)
-    q_dot = p_map @ twist
-    ahead = joint_map(pin.integrate(hand.model, q, step * q_dot), obj.advanced(step))[0]
-    behind = joint_map(pin.integrate(hand.model, q, -step * q_dot), obj.advanced(-step))[0]
-    frames = _frames(unit_body @ obj.rotation.T)  # contact coordinates: J_h = R^T J, J_h^+ = J^+ R, G = G_w R
-    jacobian = np.einsum("nji,njk->nik", frames, jacobian_world).reshape(3 * count, hand.nv)
-    pinv = np.einsum("vni,nij->vnj", pinv_world.reshape(hand.nv, count, 3), frames).reshape(hand.nv, 3 * count)
-    grasp = _grasp_map(points, frames, obj.com)
-    return GraspKinematics(p_map, (ahead - behind) / (2.0 * step), grasp, jacobian, pinv)
+def contact_kinematics(
+    hand: Hand, q: np.ndarray, obj: ObjectState, points: np.ndarray, frames: np.ndarray, joints: Any
+) -> GraspKinematics:
+    """:func:`grasp_kinematics` from validated world data (the control laws' hot path: nothing is checked).
+
+    Args:
+        hand: The hand.
+        q: Joint positions (nq,) [rad].
+        obj: The object (its ``com`` [m] and ``twist`` (v [m/s], omega [rad/s]) are read, world).
+        points: (n, 3) contact points [m], world, fixed on the object and on the links.
+        frames: (n, 3, 3) contact frames [t1, t2, n] (columns, world), as :func:`~bhgrasp.grasp.contact_frames`.
+        joints: n Pinocchio joint ids, the joint whose body carries each contact (:func:`parent_joints`).
+    """
+    model, data = hand.model, hand.data
+    count, nv = points.shape[0], model.nv
+    com, twist = np.asarray(obj.com, dtype=float), np.asarray(obj.twist, dtype=float)
+    masks = _support_masks(hand)[joints][:, None, :]  # (n, 1, nv): the columns that move each contact's body
+    placement = hand.base_placement
+    moved = not placement.isIdentity(0.0)  # world = placement * (the model's frame)
+    levers = _skew_rows(points)  # skew(p_i), (n, 3, 3)
+    offsets = points - com  # p_i - c [m]
+
+    pin.computeJointJacobians(model, data, q)
+    spatial = placement.action @ data.J if moved else data.J.copy()  # J^W (6, nv), world
+    angular = spatial[3:]
+    jacobian_world = ((spatial[:3] - levers @ angular) * masks).reshape(3 * count, nv)  # J (3n, nv)
+    pinv_world = np.linalg.pinv(jacobian_world)  # J^+ (nv, 3n)
+    grasp_t = np.zeros((count, 3, 6))  # G_w^T (3n, 6)
+    grasp_t[:, :, :3] = np.eye(3)
+    grasp_t[:, :, 3:] = -_skew_rows(offsets)
+    grasp_t = grasp_t.reshape(3 * count, 6)
+    p_map = pinv_world @ grasp_t  # P (nv, 6)
+
+    omega_skew = pin.skew(twist[3:])
+    swept = offsets @ omega_skew.T  # omega x (p_i - c) [m/s]
+    pin.computeJointJacobiansTimeVariation(model, data, q, p_map @ twist)
+    rate = placement.action @ data.dJ if moved else data.dJ  # J^W_dot (6, nv) [1/s]
+    point_rates = _skew_rows(twist[:3] + swept)  # skew(p_dot_i)
+    jacobian_rate = ((rate[:3] - levers @ rate[3:] - point_rates @ angular) * masks).reshape(3 * count, nv)
+    grasp_t_rate = np.zeros((count, 3, 6))
+    grasp_t_rate[:, :, 3:] = -_skew_rows(swept)
+    grasp_t_rate = grasp_t_rate.reshape(3 * count, 6)
+    # P_dot = d(J^+) G_w^T + J^+ G_w_dot^T, d(J^+) by Golub-Pereyra, multiplied out right to left
+    rate_t = jacobian_rate.T
+    p_dot = (
+        pinv_world @ (grasp_t_rate - jacobian_rate @ p_map)
+        + (pinv_world @ pinv_world.T) @ (rate_t @ (grasp_t - jacobian_world @ p_map))
+        + (rate_t - pinv_world @ (jacobian_world @ rate_t)) @ (pinv_world.T @ p_map)
+    )
+
+    # contact coordinates: J_h = R^T J, J_h^+ = J^+ R, G = G_w R (blockwise)
+    jacobian = np.einsum("nji,njk->nik", frames, jacobian_world.reshape(count, 3, nv)).reshape(3 * count, nv)
+    pinv = np.einsum("vni,nij->vnj", pinv_world.reshape(nv, count, 3), frames).reshape(nv, 3 * count)
+    return GraspKinematics(p_map, p_dot, _grasp_map(points, frames, com), jacobian, pinv)
+
+
+def parent_joints(hand: Hand, links: Any) -> list[int]:
+    """The Pinocchio joint ids of the bodies that carry the frames ``links`` (unknown names are rejected)."""
+    index = _hand_index(hand)
+    try:
+        return [index.joints[link] for link in links]
+    except KeyError:
+        for link in links:
+            require_name(link, hand.frame_names(), "frame")
+        raise
+
+
+@dataclass(frozen=True)
+class _HandIndex:
+    """What the kinematics read from a hand's model once: support masks (njoints, nv) and frame -> joint id."""
+
+    masks: np.ndarray
+    joints: dict[str, int]
+
+
+_INDEX: weakref.WeakKeyDictionary[Hand, _HandIndex] = weakref.WeakKeyDictionary()
+
+
+def _hand_index(hand: Hand) -> _HandIndex:
+    """The hand's :class:`_HandIndex`, built on first use (models are not modified after loading)."""
+    index = _INDEX.get(hand)
+    if index is None:
+        model = hand.model
+        masks = np.zeros((model.njoints, model.nv))
+        for joint in range(1, model.njoints):
+            for ancestor in list(model.supports[joint])[1:]:  # [0] is the universe
+                start = model.joints[ancestor].idx_v
+                masks[joint, start : start + model.joints[ancestor].nv] = 1.0
+        index = _INDEX[hand] = _HandIndex(masks, {frame.name: frame.parentJoint for frame in model.frames})
+    return index
+
+
+def _support_masks(hand: Hand) -> np.ndarray:
+    return _hand_index(hand).masks
 
 
 def grasp_dynamics(
@@ -145,7 +244,6 @@ def grasp_dynamics(
     normals_body: Any,
     links: Any,
     gravity: Any = (0.0, 0.0, -9.81),
-    step: float = 1e-6,
 ) -> GraspDynamics:
     """M~, C~, N~ and P of (5.25) for contacts fixed on the object (body frame) and on hand links.
 
@@ -157,13 +255,12 @@ def grasp_dynamics(
             its COM): contacts move with the object.
         links: n link frame names of the hand that carry the contacts.
         gravity: World gravity [m/s^2].
-        step: Time step [s] of the central difference that gives P_dot along the motion.
     """
     if not isinstance(obj, ObjectState):
         raise InputError(f"`obj` must be an ObjectState, got {type(obj).__name__}")
     as_positive(obj.mass, "obj.mass")
     gravity = as_vector(gravity, "gravity", 3)
-    kinematics = grasp_kinematics(hand, q, obj, points_body, normals_body, links, step)
+    kinematics = grasp_kinematics(hand, q, obj, points_body, normals_body, links)
     q = np.asarray(q, dtype=float)
     p_map, p_dot = kinematics.joint_map, kinematics.joint_map_rate
     twist = np.asarray(obj.twist, dtype=float)
@@ -203,4 +300,13 @@ def grasp_mobility(grasp: Any, jacobian: Any, tolerance: float = 1e-9) -> np.nda
     return u[:, s > tolerance]
 
 
-__all__ = ["GraspDynamics", "GraspKinematics", "ObjectState", "grasp_dynamics", "grasp_kinematics", "grasp_mobility"]
+__all__ = [
+    "GraspDynamics",
+    "GraspKinematics",
+    "ObjectState",
+    "contact_kinematics",
+    "grasp_dynamics",
+    "grasp_kinematics",
+    "grasp_mobility",
+    "parent_joints",
+]

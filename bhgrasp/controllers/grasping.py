@@ -16,7 +16,7 @@ only compensates gravity and closes each finger with ``approach_torque``.
 from __future__ import annotations
 
 from abc import abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -25,7 +25,7 @@ import pinocchio as pin
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.controllers.base import Controller
 from bhgrasp.errors import InputError
-from bhgrasp.grasp import contact_frames, grasp_map, hand_jacobian
+from bhgrasp.grasp import _grasp_map, contact_frames, hand_jacobian
 from bhgrasp.grasp_forces import ContactForceQP, cone_violations, pseudo_inverse_forces
 from bhgrasp.hand import Hand
 from bhgrasp.sensing import ContactSensing, FingerContact
@@ -207,6 +207,7 @@ class GraspContacts:
         points: (n, 3) force-weighted contact points [m]; normals: (n, 3) unit normals from finger to object;
         links: the hand link of each contact; fingers: the finger names; forces: (n, 3) measured forces on the
         object [N] (world).  ``reference`` [m] (the object's COM) must be set before :attr:`grasp_map` is read.
+        The contact frames are built once, on first use (the arrays are not to be changed afterwards).
     """
 
     points: np.ndarray
@@ -215,13 +216,21 @@ class GraspContacts:
     fingers: list[str]
     forces: np.ndarray
     reference: np.ndarray | None = None
+    _frames: np.ndarray | None = field(default=None, init=False, repr=False)
+
+    @property
+    def frames(self) -> np.ndarray:
+        """Contact frames [t1, t2, n] (n, 3, 3) (columns, world) of :func:`~bhgrasp.grasp.contact_frames`."""
+        if self._frames is None:
+            self._frames = contact_frames(self.normals)
+        return self._frames
 
     @property
     def grasp_map(self) -> np.ndarray:
         """G (6, 3n) about :attr:`reference`."""
         if self.reference is None:
             raise InputError("GraspContacts.reference (the object's COM) is not set")
-        return grasp_map(self.points, self.normals, self.reference)
+        return _grasp_map(self.points, self.frames, as_vector(self.reference, "reference", 3))
 
     def jacobian(self, hand: Hand, q: np.ndarray) -> np.ndarray:
         """J_h (3n, nv) in contact coordinates."""
@@ -229,7 +238,7 @@ class GraspContacts:
 
     def measured(self) -> np.ndarray:
         """Measured forces in contact coordinates (t1, t2, n), (n, 3) [N]."""
-        return np.einsum("nij,ni->nj", contact_frames(self.normals), self.forces)
+        return np.einsum("nij,ni->nj", self.frames, self.forces)
 
 
 class GraspForceController(ObjectGraspController):

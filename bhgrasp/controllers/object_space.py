@@ -28,7 +28,7 @@ from bhgrasp._validation import as_positive
 from bhgrasp.controllers.base import gain_vector
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
 from bhgrasp.errors import InputError
-from bhgrasp.grasp_dynamics import GraspKinematics, ObjectState, grasp_kinematics
+from bhgrasp.grasp_dynamics import GraspKinematics, ObjectState, contact_kinematics, parent_joints
 from bhgrasp.hand import Hand
 from bhgrasp.objects import RigidObject
 from bhgrasp.state import State
@@ -59,14 +59,15 @@ def object_model(obj: ObjectState, gravity: np.ndarray) -> tuple[np.ndarray, np.
 def grasp_maps(hand: Hand, state: State, contacts: GraspContacts, obj: RigidObject):
     """The controller's model of the grasp now: the object's state and the grasp's maps P, P_dot, G, J_h of (5.25).
 
-    (The laws need only these maps: the fingers' share of M~, C~, N~ enters through :func:`hand_part`.)
+    The sensed contacts are taken as fixed on the object and on their links (P_dot analytic, see
+    :mod:`bhgrasp.grasp_dynamics`; two kinematics passes).  The laws need only these maps: the fingers' share of
+    M~, C~, N~ enters through :func:`hand_part`.
     """
     pose = state.object_poses[0]
-    rotation, com = pose.rotation, pose.translation
-    current = ObjectState(obj.mass, obj.inertia, com, rotation, np.asarray(state.object_twists[0], dtype=float))
-    kinematics = grasp_kinematics(hand, state.q, current, (contacts.points - com) @ rotation,
-                                  contacts.normals @ rotation, contacts.links)  # fmt: skip
-    return current, kinematics
+    current = ObjectState(obj.mass, obj.inertia, pose.translation, pose.rotation,
+                          np.asarray(state.object_twists[0], dtype=float))  # fmt: skip
+    joints = parent_joints(hand, contacts.links)
+    return current, contact_kinematics(hand, state.q, current, contacts.points, contacts.frames, joints)
 
 
 def hand_part(hand: Hand, state: State, maps: GraspKinematics, acceleration, velocity) -> np.ndarray:

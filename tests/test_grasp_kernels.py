@@ -1,0 +1,131 @@
+"""The grasp kernels of the object-space laws against independent truths: P_dot against central differences of P,
+J_h against the hand's point Jacobians, on the reference hold, random configurations, a moved base and the Allegro.
+
+Tolerances: a central difference of P with step h carries round-off ~ eps |P| / h and truncation h^2 |P'''| / 6;
+with h = 1e-6 s, |P| <= ~100 and eps = 2.2e-16 the round-off is ~2e-8 and the truncation below 1e-10, so the
+analytic P_dot must agree to 50 eps max|P| / h (about 1e-7 here) plus 1e-8 relative to max|P_dot|.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import bhgrasp as bh
+from bhgrasp.experiments.allegro_grasp import allegro_hand
+from bhgrasp.experiments.hold import reference_hold
+from bhgrasp.grasp_dynamics import ObjectState, grasp_kinematics
+
+STEP = 1e-6  # [s] of the central differences
+EPS = np.finfo(float).eps
+
+
+@pytest.fixture(scope="module")
+def held():
+    """The reference three-finger hold: hand, q, box, pose, contacts (object body frame), links."""
+    hold = reference_hold()
+    state = hold.state
+    pose = state.object_poses[0]
+    points_body = (state.contact_points - pose.translation) @ pose.rotation
+    normals_body = state.contact_normals @ pose.rotation
+    links = [a for a, _ in state.contact_bodies]
+    return hold.simulator.scene.hand, state.q, hold.simulator.scene.objects[0], pose, points_body, normals_body, links
+
+
+def random_twist(rng):
+    return np.concatenate((0.05 * rng.normal(size=3), 0.5 * rng.normal(size=3)))  # [m/s], [rad/s]
+
+
+def central_difference(hand, q, obj, points, normals, links, step=STEP):
+    """(P(t + h) - P(t - h)) / 2h, the object advanced at its twist and the joints at q_dot = P x_dot."""
+    q_dot = grasp_kinematics(hand, q, obj, points, normals, links).joint_map @ obj.twist
+    ahead = grasp_kinematics(hand, pin.integrate(hand.model, q, step * q_dot), obj.advanced(step), points, normals,
+                             links)  # fmt: skip
+    behind = grasp_kinematics(hand, pin.integrate(hand.model, q, -step * q_dot), obj.advanced(-step), points, normals,
+                              links)  # fmt: skip
+    return (ahead.joint_map - behind.joint_map) / (2.0 * step)
+
+
+def assert_rate_matches(kinematics, numeric, step=STEP):
+    scale = np.max(np.abs(kinematics.joint_map))
+    tolerance = 50.0 * EPS * scale / step + 1e-8 * np.max(np.abs(numeric))
+    error = np.max(np.abs(kinematics.joint_map_rate - numeric))
+    assert error < tolerance, f"|P_dot - central difference| = {error:.3g} > {tolerance:.3g}"
+
+
+def moved(hand_factory):
+    """A hand whose base is rotated and shifted in the world (the kinematics must carry the placement)."""
+    hand = hand_factory()
+    hand.base_placement = pin.SE3(pin.exp3(np.array([0.3, -0.5, 0.8])), np.array([0.1, -0.2, 0.05]))
+    return hand
+
+
+@pytest.mark.parametrize("fingers", [("F1", "F2", "F3"), ("F1", "F2")])
+@pytest.mark.parametrize("seed", range(3))
+def test_joint_map_rate_is_the_derivative_of_the_joint_map_on_the_hold(held, fingers, seed):
+    """Three contacts: J (9, 8) full column rank; two: J (6, 8) full row rank (the null-space term of d(J^+))."""
+    hand, q, box, pose, points, normals, links = held
+    keep = [i for i, link in enumerate(links) if link.startswith(fingers)]
+    obj = ObjectState(box.mass, box.inertia, pose.translation.copy(), pose.rotation.copy(),
+                      random_twist(np.random.default_rng(seed)))  # fmt: skip
+    args = (hand, q, obj, points[keep], normals[keep], [links[i] for i in keep])
+    assert_rate_matches(grasp_kinematics(*args), central_difference(*args))
+
+
+HANDS = {
+    "barrett": (bh.BarrettHand, None),
+    "barrett-moved": (lambda: moved(bh.BarrettHand), None),
+    # J (9, 8) of rank 7 whose left null vector (F1's plane normal) turns with F1's spread: every term of d(J^+)
+    "barrett-proximal": (bh.BarrettHand, ["F1_proximal_link", "F2_distal_link", "F3_distal_link"]),
+    "allegro": (allegro_hand, None),
+}
+
+
+@pytest.mark.filterwarnings("ignore:URDF .* no rigid body has these inertias")
+@pytest.mark.parametrize("case", HANDS)
+@pytest.mark.parametrize("seed", range(3))
+def test_grasp_kinematics_agree_with_independent_truths_at_random_configurations(case, seed):
+    """Points on the links near their frames (the fingertips by default), any normals, object pose and twist: P_dot
+    against central differences, J_h against the hand's point Jacobians (Pinocchio frame Jacobians), J_h^+ and P
+    against numpy's pinv."""
+    factory, links = HANDS[case]
+    hand = factory()
+    rng = np.random.default_rng(seed)
+    q = hand.random_configuration(rng)
+    links = links or list(hand.fingertip_frames.values())[:3]
+    points = np.array([hand.frame_placement(q, link).translation for link in links]) + 0.01 * rng.normal(size=(3, 3))
+    normals = rng.normal(size=(3, 3))
+    com = points.mean(axis=0) + 0.01 * rng.normal(size=3)
+    rotation = pin.exp3(rng.normal(size=3))
+    obj = ObjectState(0.3, np.diag([1e-4, 2e-4, 3e-4]), com, rotation, random_twist(rng))
+    args = (hand, q, obj, (points - com) @ rotation, normals @ rotation, links)
+    kinematics = grasp_kinematics(*args)
+    assert_rate_matches(kinematics, central_difference(*args))
+    np.testing.assert_allclose(kinematics.hand_jacobian, bh.hand_jacobian(hand, q, points, links, normals),
+                               rtol=0.0, atol=1e-14)  # fmt: skip
+    np.testing.assert_allclose(kinematics.grasp_map, bh.grasp_map(points, normals, com), rtol=0.0, atol=1e-14)
+    pinv = np.linalg.pinv(kinematics.hand_jacobian)
+    np.testing.assert_allclose(kinematics.hand_jacobian_pinv, pinv, rtol=0.0, atol=1e-10 * np.max(np.abs(pinv)))
+    np.testing.assert_allclose(kinematics.joint_map, pinv @ kinematics.grasp_map.T, rtol=0.0,
+                               atol=1e-10 * np.max(np.abs(kinematics.joint_map)))  # fmt: skip
+
+
+def test_central_difference_error_shrinks_with_the_step_as_expected(held):
+    """Down to the round-off floor the error of the central difference falls as h^2: the analytic P_dot is the
+    limit, not merely close to one step's difference."""
+    hand, q, box, pose, points, normals, links = held
+    obj = ObjectState(box.mass, box.inertia, pose.translation.copy(), pose.rotation.copy(), np.array(
+        [0.02, -0.01, 0.03, 2.0, -1.0, 1.5]))  # fmt: skip
+    kinematics = grasp_kinematics(hand, q, obj, points, normals, links)
+    errors = [np.max(np.abs(kinematics.joint_map_rate - central_difference(hand, q, obj, points, normals, links, h)))
+              for h in (1e-2, 5e-3)]  # fmt: skip
+    assert errors[1] < 0.3 * errors[0]  # h^2: a quarter
+    assert errors[1] > 1e3 * np.max(np.abs(kinematics.joint_map)) * EPS / 5e-3  # truncation, not round-off
+
+
+def test_unknown_link_names_are_rejected_with_the_valid_ones(held):
+    hand, q, box, pose, points, normals, links = held
+    obj = ObjectState(box.mass, box.inertia, pose.translation, pose.rotation, np.zeros(6))
+    with pytest.raises(bh.InputError, match="unknown frame 'F9_distal_link'; valid frames: "):
+        grasp_kinematics(hand, q, obj, points, normals, [*links[:-1], "F9_distal_link"])
