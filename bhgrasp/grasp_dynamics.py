@@ -44,7 +44,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_array, as_positive, as_vector, require_name
 from bhgrasp.errors import InputError
-from bhgrasp.grasp import _frames, _grasp_map, _skew_rows, contact_frames
+from bhgrasp.grasp import _frames, contact_frames
 from bhgrasp.hand import Hand
 
 
@@ -156,32 +156,31 @@ def contact_kinematics(
     model, data = hand.model, hand.data
     count, nv = points.shape[0], model.nv
     com, twist = np.asarray(obj.com, dtype=float), np.asarray(obj.twist, dtype=float)
-    masks = _support_masks(hand)[joints][:, None, :]  # (n, 1, nv): the columns that move each contact's body
+    masks = _hand_index(hand).masks[joints][:, None, :]  # (n, 1, nv): the columns that move each contact's body
     placement = hand.base_placement
     moved = not placement.isIdentity(0.0)  # world = placement * (the model's frame)
-    levers = _skew_rows(points)  # skew(p_i), (n, 3, 3)
-    offsets = points - com  # p_i - c [m]
+    offsets = points - com  # r_i = p_i - c [m]
+    levers = _skews(offsets)  # skew(r_i), (n, 3, 3)
+    omega_skew = pin.skew(twist[3:])
+    swept = offsets @ omega_skew.T  # omega x r_i [m/s]
+    sweeps = _skews(swept)  # skew(omega x r_i)
 
+    # J_i = J^W_lin - skew(c) J^W_ang - skew(r_i) J^W_ang (the world Jacobian moved to the COM, then to p_i)
     pin.computeJointJacobians(model, data, q)
     spatial = placement.action @ data.J if moved else data.J.copy()  # J^W (6, nv), world
     angular = spatial[3:]
-    jacobian_world = ((spatial[:3] - levers @ angular) * masks).reshape(3 * count, nv)  # J (3n, nv)
-    pinv_world = np.linalg.pinv(jacobian_world)  # J^+ (nv, 3n)
-    grasp_t = np.zeros((count, 3, 6))  # G_w^T (3n, 6)
-    grasp_t[:, :, :3] = np.eye(3)
-    grasp_t[:, :, 3:] = -_skew_rows(offsets)
-    grasp_t = grasp_t.reshape(3 * count, 6)
-    p_map = pinv_world @ grasp_t  # P (nv, 6)
+    at_com = spatial[:3] - pin.skew(com) @ angular
+    jacobian_world = ((at_com - levers @ angular) * masks).reshape(3 * count, nv)  # J (3n, nv)
+    pinv_world = _pinv(jacobian_world)  # J^+ (nv, 3n)
+    grasp_t = np.concatenate((np.broadcast_to(np.eye(3), (count, 3, 3)), -levers), axis=2).reshape(3 * count, 6)
+    p_map = pinv_world @ grasp_t  # P = J^+ G_w^T (nv, 6)
 
-    omega_skew = pin.skew(twist[3:])
-    swept = offsets @ omega_skew.T  # omega x (p_i - c) [m/s]
+    # J_dot_i = J^W_dot_lin - skew(c) J^W_dot_ang - skew(v) J^W_ang - skew(r_i) J^W_dot_ang - skew(omega x r_i) J^W_ang
     pin.computeJointJacobiansTimeVariation(model, data, q, p_map @ twist)
     rate = placement.action @ data.dJ if moved else data.dJ  # J^W_dot (6, nv) [1/s]
-    point_rates = _skew_rows(twist[:3] + swept)  # skew(p_dot_i)
-    jacobian_rate = ((rate[:3] - levers @ rate[3:] - point_rates @ angular) * masks).reshape(3 * count, nv)
-    grasp_t_rate = np.zeros((count, 3, 6))
-    grasp_t_rate[:, :, 3:] = -_skew_rows(swept)
-    grasp_t_rate = grasp_t_rate.reshape(3 * count, 6)
+    rate_at_com = rate[:3] - pin.skew(com) @ rate[3:] - pin.skew(twist[:3]) @ angular
+    jacobian_rate = ((rate_at_com - levers @ rate[3:] - sweeps @ angular) * masks).reshape(3 * count, nv)
+    grasp_t_rate = np.concatenate((np.zeros((count, 3, 3)), -sweeps), axis=2).reshape(3 * count, 6)
     # P_dot = d(J^+) G_w^T + J^+ G_w_dot^T, d(J^+) by Golub-Pereyra, multiplied out right to left
     rate_t = jacobian_rate.T
     p_dot = (
@@ -191,9 +190,11 @@ def contact_kinematics(
     )
 
     # contact coordinates: J_h = R^T J, J_h^+ = J^+ R, G = G_w R (blockwise)
-    jacobian = np.einsum("nji,njk->nik", frames, jacobian_world.reshape(count, 3, nv)).reshape(3 * count, nv)
-    pinv = np.einsum("vni,nij->vnj", pinv_world.reshape(nv, count, 3), frames).reshape(nv, 3 * count)
-    return GraspKinematics(p_map, p_dot, _grasp_map(points, frames, com), jacobian, pinv)
+    frames_t = frames.transpose(0, 2, 1)
+    jacobian = (frames_t @ jacobian_world.reshape(count, 3, nv)).reshape(3 * count, nv)
+    pinv = (pinv_world.reshape(nv, count, 3).transpose(1, 0, 2) @ frames).transpose(1, 0, 2).reshape(nv, 3 * count)
+    grasp = (grasp_t.reshape(count, 3, 6).transpose(0, 2, 1) @ frames).transpose(1, 0, 2).reshape(6, 3 * count)
+    return GraspKinematics(p_map, p_dot, grasp, jacobian, pinv)
 
 
 def parent_joints(hand: Hand, links: Any) -> list[int]:
@@ -232,8 +233,20 @@ def _hand_index(hand: Hand) -> _HandIndex:
     return index
 
 
-def _support_masks(hand: Hand) -> np.ndarray:
-    return _hand_index(hand).masks
+# skew(x) = x @ _LEVI_CIVITA reshaped (3, 3): skew(x)[i, j] = -eps_ijk x_k
+_LEVI_CIVITA = np.array([pin.skew(axis).ravel() for axis in np.eye(3)])  # (3, 9)
+
+
+def _skews(vectors: np.ndarray) -> np.ndarray:
+    """skew(x_i) for the rows of ``vectors`` (n, 3): (n, 3, 3), in one product."""
+    return (vectors @ _LEVI_CIVITA).reshape(-1, 3, 3)
+
+
+def _pinv(matrix: np.ndarray) -> np.ndarray:
+    """The pseudo-inverse as ``np.linalg.pinv`` (singular values below 1e-15 of the largest dropped), less overhead."""
+    u, singular, vt = np.linalg.svd(matrix, full_matrices=False)
+    inverse = np.divide(1.0, singular, out=np.zeros_like(singular), where=singular > 1e-15 * singular[0])
+    return (vt.T * inverse) @ u.T
 
 
 def grasp_dynamics(

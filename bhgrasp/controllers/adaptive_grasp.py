@@ -61,7 +61,8 @@ def object_regressor(rotation: Any, twist: Any, v_r: Any, a_r: Any, gravity: Any
     inertias = np.einsum("ij,kjl,ml->kim", rotation, _INERTIA_BASIS, rotation)  # R B_k R^T, (6, 3, 3)
     w, alpha = v_r[3:], a_r[3:]
     # column k: I_k alpha + C_k w with C_k = (skew(omega) I_k - I_k skew(omega) - skew(I_k omega)) / 2
-    coriolis = (inertias @ w) @ pin.skew(omega).T - inertias @ np.cross(omega, w) + (inertias @ omega) @ pin.skew(w).T
+    omega_skew = pin.skew(omega)
+    coriolis = (inertias @ w) @ omega_skew.T - inertias @ (omega_skew @ w) + (inertias @ omega) @ pin.skew(w).T
     regressor[3:, 1:] = (inertias @ alpha + 0.5 * coriolis).T
     return regressor
 

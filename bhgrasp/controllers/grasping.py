@@ -177,7 +177,8 @@ class ObjectGraspController(Controller):
         """
         n = len(contacts.fingers)
         gmap = contacts.grasp_map
-        desired = np.tile([0.0, 0.0, self.squeeze], (n, 1))
+        desired = np.zeros((n, 3))
+        desired[:, 2] = self.squeeze
         if self.distribution == "qp":
             if n not in self._qps:
                 self._qps[n] = ContactForceQP(n, self.mu, min_normal_force=self.min_normal_force)
