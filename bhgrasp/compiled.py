@@ -18,6 +18,7 @@ from bhgrasp.contact import ContactMemory, ContactSet, empty_contact_set
 from bhgrasp.errors import CompiledEngineUnavailable
 
 if TYPE_CHECKING:
+    from bhgrasp.actuation import Actuation
     from bhgrasp.sim import Simulator
 
 _INTEGRATORS = {"implicit": 0, "semi-implicit": 1, "rk4": 2}
@@ -45,47 +46,9 @@ class CompiledStep:
     def __init__(self, simulator: Simulator) -> None:
         """Copy the scene (Pinocchio's serialisation), the contact law and the simulator's options into C++."""
         core = core_module()
-        scene, law = simulator.scene, simulator.law
-        settings = core.Settings()
-        settings.dt = simulator.dt
-        settings.integrator = _INTEGRATORS[simulator.integrator]
-        settings.nq_hand, settings.nv_hand = scene.nq_hand, scene.nv_hand
-        settings.lower, settings.upper = scene.hand.lower, scene.hand.upper
-        settings.limit_stiffness, settings.limit_damping = simulator.limit_stiffness, simulator.limit_damping
-        settings.joint_stiffness, settings.joint_damping = scene.joint_stiffness, scene.joint_damping
-        settings.spring_q = [int(i) for i in simulator._spring_q]
-        settings.spring_v = [int(i) for i in simulator._spring_v]
-        spinning = []
-        for angular, axes, moments in simulator._spinning:
-            body = core.Spinning()
-            body.angular, body.axes, body.moments = angular.start, axes, np.array(moments)
-            spinning.append(body)
-        settings.spinning = spinning
-        contact = core.ContactLaw()
-        contact.stiffness, contact.damping = law.stiffness, law.damping
-        contact.tangential_stiffness, contact.tangential_damping = law.k_t, law.c_t
-        contact.hunt_crossley, contact.exponent = law.normal_law == "hunt-crossley", law.exponent
-        contact.tanh_friction, contact.slip_velocity = law.friction_law == "tanh", law.slip_velocity
-        contact.match_radius = simulator.engine.match_radius
-        settings.law = contact
-        pairs, queries = [], []
-        for pair in scene.pairs:
-            item = core.Pair()
-            item.geom_a, item.geom_b, item.joint_a, item.joint_b = pair.geom_a, pair.geom_b, pair.joint_a, pair.joint_b
-            item.friction = pair.friction(law.friction)
-            pairs.append(item)
-            request = scene.geometry_data.collisionRequests[pair.index]
-            patch = scene.geometry_data.contactPatchRequests[pair.index]
-            query = core.Query()
-            query.num_max_contacts = request.num_max_contacts
-            query.security_margin, query.break_distance = request.security_margin, request.break_distance
-            query.max_num_patch = patch.max_num_patch
-            query.num_samples_curved_shapes = patch.getNumSamplesCurvedShapes()
-            query.patch_tolerance = patch.getPatchTolerance()
-            queries.append(query)
-        settings.pairs, settings.queries = pairs, queries
+        scene = simulator.scene
         self._core = core
-        self._engine = core.Engine(scene.model.saveToString(), scene.geometry.saveToString(), settings)
+        self._engine = core.Engine(scene.model.saveToString(), scene.geometry.saveToString(), settings(simulator))
         self._simulator = simulator
         self._drives: dict[bytes, object] = {}
 
@@ -95,21 +58,12 @@ class CompiledStep:
         key = actuation.modes().tobytes()
         drive = self._drives.get(key)
         if drive is None:
-            drive = self._core.Drive()
-            drive.transmission = actuation.transmission()
-            drive.joint_damping = actuation.joint_damping()
-            drive.friction = actuation.friction
-            drive.motor_damping = actuation.joint_damping() - actuation.damping
-            self._drives[key] = drive
+            drive = self._drives[key] = drive_of(actuation)
         return drive
 
     def memory(self, memory: ContactMemory):
         """A :class:`~bhgrasp.contact.ContactMemory` as the C++ engine's."""
-        if memory.native is not None:
-            return memory.native
-        return self._core.Memory(
-            memory.pair.astype(np.int64), memory.local_b, memory.displacement, memory.sliding.astype(bool)
-        )
+        return native_memory(memory)
 
     def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, memory: ContactMemory):
         """One step: (q+, v+, contacts with forces, drive torques [N m], memory, divergence)."""
@@ -117,13 +71,90 @@ class CompiledStep:
         result = self._engine.step(
             q, v, tau_hand, self._drive(), self.memory(memory), simulator.max_speed, simulator.max_penetration
         )
-        memory = result.memory
-        after = ContactMemory(memory.pair, memory.local_b, memory.displacement, memory.sliding, native=memory)
-        return result.q, result.v, contact_set(result.contacts), result.drive, after, result.divergence
+        return (
+            result.q,
+            result.v,
+            contact_set(result.contacts),
+            result.drive,
+            memory_of(result.memory),
+            result.divergence,
+        )
 
     def detect(self, q: np.ndarray, memory: ContactMemory) -> ContactSet:
         """The contacts at ``q`` matched to ``memory`` (no forces)."""
         return contact_set(self._engine.detect(q, self.memory(memory)))
+
+
+def settings(simulator: Simulator):
+    """A simulator's scene sizes, options, contact law and collision queries as the C++ engine's ``Settings``."""
+    core = core_module()
+    scene, law = simulator.scene, simulator.law
+    result = core.Settings()
+    result.dt = simulator.dt
+    result.integrator = _INTEGRATORS[simulator.integrator]
+    result.nq_hand, result.nv_hand = scene.nq_hand, scene.nv_hand
+    result.lower, result.upper = scene.hand.lower, scene.hand.upper
+    result.limit_stiffness, result.limit_damping = simulator.limit_stiffness, simulator.limit_damping
+    result.joint_stiffness, result.joint_damping = scene.joint_stiffness, scene.joint_damping
+    result.spring_q = [int(i) for i in simulator._spring_q]
+    result.spring_v = [int(i) for i in simulator._spring_v]
+    spinning = []
+    for angular, axes, moments in simulator._spinning:
+        body = core.Spinning()
+        body.angular, body.axes, body.moments = angular.start, axes, np.array(moments)
+        spinning.append(body)
+    result.spinning = spinning
+    contact = core.ContactLaw()
+    contact.stiffness, contact.damping = law.stiffness, law.damping
+    contact.tangential_stiffness, contact.tangential_damping = law.k_t, law.c_t
+    contact.hunt_crossley, contact.exponent = law.normal_law == "hunt-crossley", law.exponent
+    contact.tanh_friction, contact.slip_velocity = law.friction_law == "tanh", law.slip_velocity
+    contact.match_radius = simulator.engine.match_radius
+    result.law = contact
+    pairs, queries = [], []
+    for pair in scene.pairs:
+        item = core.Pair()
+        item.geom_a, item.geom_b, item.joint_a, item.joint_b = pair.geom_a, pair.geom_b, pair.joint_a, pair.joint_b
+        item.friction = pair.friction(law.friction)
+        pairs.append(item)
+        request = scene.geometry_data.collisionRequests[pair.index]
+        patch = scene.geometry_data.contactPatchRequests[pair.index]
+        query = core.Query()
+        query.num_max_contacts = request.num_max_contacts
+        query.security_margin, query.break_distance = request.security_margin, request.break_distance
+        query.max_num_patch = patch.max_num_patch
+        query.num_samples_curved_shapes = patch.getNumSamplesCurvedShapes()
+        query.patch_tolerance = patch.getPatchTolerance()
+        queries.append(query)
+    result.pairs, result.queries = pairs, queries
+    return result
+
+
+def drive_of(actuation: Actuation):
+    """An actuation model's transmission and damping in its current mode as the C++ engine's ``Drive``."""
+    drive = core_module().Drive()
+    drive.transmission = actuation.transmission()
+    drive.joint_damping = actuation.joint_damping()
+    drive.friction = actuation.friction
+    drive.motor_damping = actuation.joint_damping() - actuation.damping
+    return drive
+
+
+def native_memory(memory: ContactMemory):
+    """A :class:`~bhgrasp.contact.ContactMemory` as the C++ engine's ``Memory`` (its native copy if it has one)."""
+    if memory.native is not None:
+        return memory.native
+    return core_module().Memory(
+        memory.pair.astype(np.int64), memory.local_b, memory.displacement, memory.sliding.astype(bool)
+    )
+
+
+def memory_of(contacts_memory) -> ContactMemory:
+    """The C++ engine's contact memory as a :class:`~bhgrasp.contact.ContactMemory` (keeping the native one)."""
+    return ContactMemory(
+        contacts_memory.pair, contacts_memory.local_b, contacts_memory.displacement, contacts_memory.sliding,
+        native=contacts_memory,
+    )  # fmt: skip
 
 
 def contact_set(contacts) -> ContactSet:
@@ -136,4 +167,4 @@ def contact_set(contacts) -> ContactSet:
     )  # fmt: skip
 
 
-__all__ = ["CompiledStep", "contact_set", "core_module"]
+__all__ = ["CompiledStep", "contact_set", "core_module", "drive_of", "memory_of", "native_memory", "settings"]

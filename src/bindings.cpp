@@ -6,6 +6,7 @@
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
+#include "batch.hpp"
 #include "engine.hpp"
 
 namespace nb = nanobind;
@@ -126,4 +127,20 @@ NB_MODULE(_core, m) {
       .def("detect", &Engine::detect, "q"_a, "memory"_a)
       .def_prop_ro("nq", &Engine::nq)
       .def_prop_ro("nv", &Engine::nv);
+
+  nb::class_<Batch>(m, "Batch")
+      .def(nb::init<const std::string&, const std::string&, const Settings&, int>(), "model"_a, "geometry"_a,
+           "settings"_a, "size"_a)
+      .def_prop_ro("size", &Batch::size)
+      .def("set_state", &Batch::set_state, "env"_a, "q"_a, "v"_a, "memory"_a)
+      .def("step", &Batch::step, "tau_hand"_a, "drive"_a, "max_speed"_a, "max_penetration"_a, "threads"_a,
+           nb::call_guard<nb::gil_scoped_release>())
+      .def_prop_ro("q", [](const Batch& batch) { return Rows(batch.q()); })
+      .def_prop_ro("v", [](const Batch& batch) { return Rows(batch.v()); })
+      .def("memory", [](const Batch& batch, int env) { return Memory(batch.memory(env)); }, "env"_a)
+      .def("contacts", [](const Batch& batch, int env) { return Contacts(batch.contacts(env)); }, "env"_a)
+      .def("divergence", [](const Batch& batch, int env) { return Divergence(batch.divergence(env)); }, "env"_a)
+      .def("gravity", &Batch::gravity, "threads"_a, nb::call_guard<nb::gil_scoped_release>())
+      .def("frame_jacobians", &Batch::frame_jacobians, "frames"_a, "threads"_a,
+           nb::call_guard<nb::gil_scoped_release>());
 }

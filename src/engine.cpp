@@ -497,6 +497,24 @@ Vector Engine::increment_rate(const Vector& increment, const Vector& v) const {
   return rate;
 }
 
+Vector Engine::gravity(const Vector& q) {
+  return pinocchio::computeGeneralizedGravity(model_, data_, ConstRef(q)).head(settings_.nv_hand);
+}
+
+Matrix Engine::frame_jacobians(const Vector& q, const std::vector<int>& frames) {
+  pinocchio::computeJointJacobians(model_, data_, ConstRef(q));
+  Matrix result(3 * static_cast<Eigen::Index>(frames.size()), settings_.nv_hand);
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    if (frames[f] < 0 || frames[f] >= static_cast<int>(model_.nframes))
+      throw std::invalid_argument("a frame index the model lacks");
+    frame_jacobian_.setZero();
+    pinocchio::getFrameJacobian(model_, data_, static_cast<pinocchio::FrameIndex>(frames[f]),
+                                pinocchio::LOCAL_WORLD_ALIGNED, frame_jacobian_);
+    result.middleRows(3 * static_cast<Eigen::Index>(f), 3) = frame_jacobian_.topLeftCorner(3, settings_.nv_hand);
+  }
+  return result;
+}
+
 Vector Engine::integrate(const Vector& q, const Vector& v) const {
   Vector result(model_.nq);
   pinocchio::integrate(model_, q, v, result);

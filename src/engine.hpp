@@ -137,6 +137,12 @@ class Engine {
   // The contacts at q, matched to memory (runs forward kinematics).
   Contacts detect(const Vector& q, const Memory& memory);
 
+  // Hand-joint gravity torques G(q) [N m], (nv_hand,) (runs its own pass; for batched controllers).
+  Vector gravity(const Vector& q);
+
+  // Translational world-aligned Jacobians of frames at q, rows 3 f .. 3 f + 2 for frame f: (3 n, nv_hand).
+  Matrix frame_jacobians(const Vector& q, const std::vector<int>& frames);
+
   int nq() const { return model_.nq; }
   int nv() const { return model_.nv; }
 

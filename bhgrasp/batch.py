@@ -1,0 +1,176 @@
+"""Batched rollouts: N copies of one simulator's scene stepped together by the compiled engine.
+
+Each environment has its own Pinocchio and coal data and its own contact memory (``src/batch.cpp``); one
+:meth:`BatchSimulator.step` advances every environment with its own inputs, on ``threads`` threads (each environment
+on one thread, with the arithmetic of a single :meth:`~bhgrasp.sim.Simulator.step`: a batch of N gives the bits of N
+separate runs, whatever the thread count).  A controller for a batch is vectorised: it reads the batch's arrays
+(hand ``q``, ``v`` of shape (N, nv_hand), object positions, and the compiled kernels :meth:`gravity_torques` and
+:meth:`fingertip_jacobians`) and returns inputs of shape (N, n_inputs).  An environment whose step diverges is
+frozen and reported in :attr:`diverged` / :meth:`divergence`; the others go on.
+
+The actuation must keep one transmission (:class:`~bhgrasp.actuation.FullyActuated`): the Barrett TorqueSwitch
+changes it per environment, which the batch does not model yet.  Use threads only up to the free cores: a batch
+inside each worker of a process pool already has its core.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from bhgrasp._validation import as_positive
+from bhgrasp.actuation import FullyActuated
+from bhgrasp.compiled import contact_set, core_module, drive_of, memory_of, native_memory, settings
+from bhgrasp.contact import ContactMemory, ContactSet
+from bhgrasp.errors import InputError
+from bhgrasp.sim import Simulator
+from bhgrasp.state import State
+
+_DIVERGED = {1: "joint/object position", 2: "joint/object velocity", 3: "speed", 4: "contact depth"}
+
+
+class BatchSimulator:
+    """N environments of one :class:`~bhgrasp.sim.Simulator`'s scene, stepped together in C++."""
+
+    def __init__(self, simulator: Simulator, states: Sequence[State], threads: int = 1) -> None:
+        """Copy the simulator's scene, law and options once per environment.
+
+        Args:
+            simulator: The scene, contact law, actuation (fully actuated) and options of every environment.
+            states: One start state per environment (states of ``simulator``'s scene, e.g. from
+                :meth:`~bhgrasp.sim.Simulator.initial_state` or a run); they carry the contact memory.
+            threads: Worker threads per step (>= 1).
+
+        Raises:
+            InputError: No states, a state of another scene, states at different times, an actuation whose
+                transmission changes (Barrett), or ``threads`` < 1.
+        """
+        if not isinstance(simulator.actuation, FullyActuated):
+            raise InputError(
+                f"BatchSimulator needs a FullyActuated actuation (one fixed transmission), got "
+                f"{type(simulator.actuation).__name__}; run Barrett hands with Simulator.run"
+            )
+        if isinstance(threads, bool) or not isinstance(threads, int | np.integer) or threads < 1:
+            raise InputError(f"`threads` must be a positive integer, got {threads!r}")
+        states = list(states)
+        if not states:
+            raise InputError("`states` must hold at least one start state (one per environment)")
+        scene = simulator.scene
+        for i, state in enumerate(states):
+            if state.scene_q is None or state.scene_v is None or state.scene_q.shape != (scene.nq,):
+                raise InputError(f"`states[{i}]` is not a state of the simulator's scene (nq = {scene.nq})")
+        times = {state.t for state in states}
+        if len(times) > 1:
+            raise InputError(f"the start states must share one time, got {sorted(times)}")
+        core = core_module()
+        self.simulator = simulator
+        self.threads = int(threads)
+        self.t = states[0].t
+        self._batch = core.Batch(scene.model.saveToString(), scene.geometry.saveToString(), settings(simulator),
+                                 len(states))  # fmt: skip
+        for i, state in enumerate(states):
+            memory = state.contact_memory if state.contact_memory is not None else ContactMemory.empty()
+            self._batch.set_state(i, state.scene_q, state.scene_v, native_memory(memory))
+        self._drive = drive_of(simulator.actuation)
+        tips = simulator.scene.hand.fingertip_frames
+        self._tip_frames = {finger: scene.model.getFrameId(frame) for finger, frame in tips.items()}
+        self._nqh, self._nvh = scene.nq_hand, scene.nv_hand
+
+    @property
+    def size(self) -> int:
+        """Number of environments N."""
+        return self._batch.size
+
+    @property
+    def scene_q(self) -> np.ndarray:
+        """(N, nq) scene configurations."""
+        return self._batch.q
+
+    @property
+    def scene_v(self) -> np.ndarray:
+        """(N, nv) scene velocities."""
+        return self._batch.v
+
+    @property
+    def q(self) -> np.ndarray:
+        """(N, nv_hand) hand joint positions [rad]."""
+        return self._batch.q[:, : self._nqh]
+
+    @property
+    def v(self) -> np.ndarray:
+        """(N, nv_hand) hand joint velocities [rad/s]."""
+        return self._batch.v[:, : self._nvh]
+
+    def object_positions(self, index: int = 0) -> np.ndarray:
+        """(N, 3) world position [m] of object ``index``'s centre of mass (free objects)."""
+        slices = self.simulator.scene.object_q_slice(index)
+        return self._batch.q[:, slices.start : slices.start + 3]
+
+    @property
+    def diverged(self) -> np.ndarray:
+        """(N,) whether each environment's run diverged (it is frozen at its last good state)."""
+        return np.array([self._batch.divergence(i).kind != 0 for i in range(self.size)])
+
+    def divergence(self, env: int) -> str:
+        """Why environment ``env`` diverged ("" if it did not)."""
+        record = self._batch.divergence(self._env(env))
+        if record.kind == 0:
+            return ""
+        where = f" (coordinate {record.index})" if record.index >= 0 else ""
+        return f"{_DIVERGED[record.kind]}{where} = {record.value:.4g}"
+
+    # ------------------------------------------------------------------ kernels for vectorised controllers
+    def gravity_torques(self) -> np.ndarray:
+        """(N, nv_hand) hand gravity torques G(q) [N m] at the current states."""
+        return self._batch.gravity(self.threads)
+
+    def fingertip_jacobians(self, fingers: Sequence[str] | None = None) -> np.ndarray:
+        """(N, n_fingers, 3, nv_hand) translational fingertip Jacobians, world-aligned, at the current states."""
+        fingers = list(self._tip_frames) if fingers is None else list(fingers)
+        unknown = [finger for finger in fingers if finger not in self._tip_frames]
+        if unknown:
+            raise InputError(f"unknown fingers {unknown}; valid fingers: {', '.join(self._tip_frames)}")
+        frames = [int(self._tip_frames[finger]) for finger in fingers]
+        return self._batch.frame_jacobians(frames, self.threads).reshape(self.size, len(frames), 3, self._nvh)
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, u: Any) -> None:
+        """Advance every environment by ``dt`` with inputs ``u`` of shape (N, n_inputs) [N m]."""
+        u = np.asarray(u, dtype=float)
+        shape = (self.size, self.simulator.actuation.n_inputs)
+        if u.shape != shape:
+            raise InputError(f"`u` must have shape {shape} (environments, inputs), got {u.shape}")
+        bad = ~np.isfinite(u).all(axis=1)
+        if bad.any():
+            raise InputError(f"`u` must be finite; NaN/inf in environments {np.flatnonzero(bad).tolist()[:10]}")
+        actuation = self.simulator.actuation
+        torques = np.clip(u, -actuation.hand.effort_limit, actuation.hand.effort_limit) if actuation.saturate else u
+        self._batch.step(torques, self._drive, self.simulator.max_speed, self.simulator.max_penetration, self.threads)
+        self.t = round(self.t / self.simulator.dt + 1) * self.simulator.dt
+
+    def run(self, controller: Callable[[float, BatchSimulator], Any], duration: float) -> BatchSimulator:
+        """Step ``duration`` [s] with ``u = controller(t, batch)`` (shape (N, n_inputs)) at every step."""
+        steps = round(as_positive(duration, "duration") / self.simulator.dt)
+        for _ in range(steps):
+            self.step(controller(self.t, self))
+        return self
+
+    def contacts(self, env: int) -> ContactSet:
+        """The contacts (with forces) of environment ``env``'s last step."""
+        return contact_set(self._batch.contacts(self._env(env)))
+
+    def state(self, env: int) -> State:
+        """Environment ``env`` as a :class:`~bhgrasp.state.State` (built on demand; a start state for a run)."""
+        env = self._env(env)
+        memory = memory_of(self._batch.memory(env))
+        return self.simulator._state(self.t, self._batch.q[env], self._batch.v[env], self.contacts(env), memory)
+
+    def _env(self, env: int) -> int:
+        if isinstance(env, bool) or not isinstance(env, int | np.integer) or not 0 <= env < self.size:
+            raise InputError(f"`env` must be an environment index in [0, {self.size}), got {env!r}")
+        return int(env)
+
+
+__all__ = ["BatchSimulator"]

@@ -1,0 +1,97 @@
+// Batched rollouts: see batch.hpp.
+#include "batch.hpp"
+
+#include <algorithm>
+#include <exception>
+#include <stdexcept>
+#include <thread>
+
+namespace bhgrasp {
+namespace {
+
+// Run body(i) for i in [0, n) on up to `threads` threads, environments split in contiguous blocks; rethrows the
+// first exception a thread raised.
+template <typename Body>
+void parallel_for(int n, int threads, Body body) {
+  threads = std::max(1, std::min(threads, n));
+  if (threads == 1) {
+    for (int i = 0; i < n; ++i) body(i);
+    return;
+  }
+  std::vector<std::thread> pool;
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(threads));
+  for (int t = 0; t < threads; ++t) {
+    pool.emplace_back([&, t] {
+      try {
+        for (int i = t * n / threads; i < (t + 1) * n / threads; ++i) body(i);
+      } catch (...) {
+        errors[static_cast<std::size_t>(t)] = std::current_exception();
+      }
+    });
+  }
+  for (auto& thread : pool) thread.join();
+  for (auto& error : errors)
+    if (error) std::rethrow_exception(error);
+}
+
+}  // namespace
+
+Batch::Batch(const std::string& model, const std::string& geometry, const Settings& settings, int size)
+    : nv_hand_(settings.nv_hand) {
+  if (size < 1) throw std::invalid_argument("a batch needs at least one environment");
+  for (int i = 0; i < size; ++i) engines_.push_back(std::make_unique<Engine>(model, geometry, settings));
+  memories_.resize(static_cast<std::size_t>(size));
+  contacts_.resize(static_cast<std::size_t>(size));
+  divergences_.resize(static_cast<std::size_t>(size));
+  for (auto& memory : memories_) memory = Memory{Indices(0), Points(0, 3), Points(0, 3), Flags(0)};
+  q_ = Rows::Zero(size, engines_[0]->nq());
+  v_ = Rows::Zero(size, engines_[0]->nv());
+}
+
+void Batch::set_state(int env, const Vector& q, const Vector& v, const Memory& memory) {
+  if (env < 0 || env >= size()) throw std::out_of_range("no such environment");
+  if (q.size() != q_.cols() || v.size() != v_.cols()) throw std::invalid_argument("q or v of the wrong size");
+  q_.row(env) = q.transpose();
+  v_.row(env) = v.transpose();
+  memories_[static_cast<std::size_t>(env)] = memory;
+  contacts_[static_cast<std::size_t>(env)] = Contacts{};
+  contacts_[static_cast<std::size_t>(env)].resize(0);
+  divergences_[static_cast<std::size_t>(env)] = Divergence{};
+}
+
+void Batch::step(const Rows& tau_hand, const Drive& drive, double max_speed, double max_penetration, int threads) {
+  if (tau_hand.rows() != size() || tau_hand.cols() != nv_hand_)
+    throw std::invalid_argument("tau_hand must be (environments, nv_hand)");
+  parallel_for(size(), threads, [&](int i) {
+    const auto e = static_cast<std::size_t>(i);
+    if (divergences_[e].kind) return;  // frozen where it diverged
+    StepResult result = engines_[e]->step(q_.row(i).transpose(), v_.row(i).transpose(), tau_hand.row(i).transpose(),
+                                          drive, memories_[e], max_speed, max_penetration);
+    divergences_[e] = result.divergence;
+    if (result.divergence.kind) return;
+    q_.row(i) = result.q.transpose();
+    v_.row(i) = result.v.transpose();
+    memories_[e] = std::move(result.memory);
+    contacts_[e] = std::move(result.contacts);
+  });
+}
+
+Rows Batch::gravity(int threads) {
+  Rows result(size(), nv_hand_);
+  parallel_for(size(), threads, [&](int i) {
+    result.row(i) = engines_[static_cast<std::size_t>(i)]->gravity(q_.row(i).transpose()).transpose();
+  });
+  return result;
+}
+
+Rows Batch::frame_jacobians(const std::vector<int>& frames, int threads) {
+  const auto n = static_cast<Eigen::Index>(frames.size());
+  Rows result(size(), 3 * n * nv_hand_);
+  parallel_for(size(), threads, [&](int i) {
+    const Matrix jacobians = engines_[static_cast<std::size_t>(i)]->frame_jacobians(q_.row(i).transpose(), frames);
+    Eigen::Map<Rows>(result.row(i).data(), 3 * n, nv_hand_) = jacobians;  // (3 n, nv_hand) row-major per env
+  });
+  return result;
+}
+
+}  // namespace bhgrasp

@@ -1,0 +1,53 @@
+// Batched rollouts: N copies of one scene stepped together by the compiled engine (bhgrasp.batch).
+//
+// Each environment owns an Engine (its own Pinocchio and coal data) and its contact memory, so environments never
+// share state; a step runs them on a few threads, each environment on one thread, with the same arithmetic as a
+// single Engine::step (results do not depend on the thread count).  Environments whose step diverges are frozen and
+// reported; the others go on.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine.hpp"
+
+namespace bhgrasp {
+
+using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+class Batch {
+ public:
+  Batch(const std::string& model, const std::string& geometry, const Settings& settings, int size);
+  Batch(const Batch&) = delete;
+  Batch& operator=(const Batch&) = delete;
+
+  int size() const { return static_cast<int>(engines_.size()); }
+
+  // Set environment env's state (scene q, v) and contact memory; clears its divergence.
+  void set_state(int env, const Vector& q, const Vector& v, const Memory& memory);
+
+  // One step of every environment that has not diverged: tau_hand (N, nv_hand) [N m].
+  void step(const Rows& tau_hand, const Drive& drive, double max_speed, double max_penetration, int threads);
+
+  const Rows& q() const { return q_; }  // (N, nq)
+  const Rows& v() const { return v_; }  // (N, nv)
+  const Memory& memory(int env) const { return memories_.at(static_cast<std::size_t>(env)); }
+  const Contacts& contacts(int env) const { return contacts_.at(static_cast<std::size_t>(env)); }
+  const Divergence& divergence(int env) const { return divergences_.at(static_cast<std::size_t>(env)); }
+
+  // Kernels for vectorised controllers at the current states: hand gravity torques (N, nv_hand) [N m] and the
+  // world-aligned translational Jacobians of frames, (N, 3 n_frames * nv_hand) row-major per environment.
+  Rows gravity(int threads);
+  Rows frame_jacobians(const std::vector<int>& frames, int threads);
+
+ private:
+  std::vector<std::unique_ptr<Engine>> engines_;
+  std::vector<Memory> memories_;
+  std::vector<Contacts> contacts_;
+  std::vector<Divergence> divergences_;
+  Rows q_, v_;
+  int nv_hand_ = 0;
+};
+
+}  // namespace bhgrasp
