@@ -20,6 +20,7 @@ import os
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
@@ -29,6 +30,23 @@ from bhgrasp.errors import InputError
 
 Rollout = Callable[[dict[str, Any], int], Mapping[str, Any]]
 RESERVED = ("case", "seed", "status", "error", "wall_time")
+
+
+@dataclass(frozen=True)
+class BatchedRollout:
+    """A rollout that runs many cases in one call (e.g. on a :class:`~bhgrasp.batch.BatchSimulator`).
+
+    Attributes:
+        function: Top-level ``(parameters_list, seeds) -> metrics_list``, one metrics dict per case, in order.
+        size: Cases per call (the executor receives ``ceil(cases / size)`` tasks).
+    """
+
+    function: Callable[[list[dict[str, Any]], list[int]], Sequence[Mapping[str, Any]]]
+    size: int = 64
+
+    def __post_init__(self) -> None:
+        if isinstance(self.size, bool) or not isinstance(self.size, int) or self.size < 1:
+            raise InputError(f"`size` must be a positive integer (cases per call), got {self.size!r}")
 
 
 def grid(**axes: Sequence[Any]) -> list[dict[str, Any]]:
@@ -64,7 +82,7 @@ def case_seeds(n: int, seed: int) -> list[int]:
 
 
 def run_sweep(
-    rollout: Rollout,
+    rollout: Rollout | BatchedRollout,
     design: Sequence[Mapping[str, Any]],
     *,
     seed: int = 0,
@@ -76,7 +94,8 @@ def run_sweep(
     """Run ``rollout`` on every case of ``design``; returns a pandas DataFrame (one row per case, case order).
 
     Args:
-        rollout: Top-level function ``(parameters, seed) -> metrics`` (must pickle for a process pool or Dask).
+        rollout: Top-level function ``(parameters, seed) -> metrics`` (must pickle for a process pool or Dask), or
+            a :class:`BatchedRollout` that runs ``size`` cases per call.
         design: The cases' parameter dicts (:func:`grid`, :func:`random_design`, or any list).
         seed: Sweep seed; case ``i`` gets ``case_seeds(len(design), seed)[i]``.
         log: JSON-lines file that receives each finished case; cases already in it are skipped (resume).
@@ -111,9 +130,15 @@ def run_sweep(
 
 
 def _execute(rollout, cases, seeds, todo, executor, workers):
+    if isinstance(rollout, BatchedRollout):
+        chunks = [todo[k : k + rollout.size] for k in range(0, len(todo), rollout.size)]
+        tasks = [(_run_chunk, rollout.function, chunk, [cases[i] for i in chunk], [seeds[i] for i in chunk])
+                 for chunk in chunks]  # fmt: skip
+    else:
+        tasks = [(_run_case, rollout, i, cases[i], seeds[i]) for i in todo]
     if executor == "serial":
-        for i in todo:
-            yield _run_case(rollout, i, cases[i], seeds[i])
+        for task in tasks:
+            yield from _rows(task[0](*task[1:]))
         return
     owned = executor is None
     if owned:
@@ -121,9 +146,9 @@ def _execute(rollout, cases, seeds, todo, executor, workers):
     elif not isinstance(executor, Executor):
         raise InputError(f"`executor` must be None, 'serial' or a concurrent.futures.Executor, got {executor!r}")
     try:
-        futures: dict[Future, int] = {executor.submit(_run_case, rollout, i, cases[i], seeds[i]): i for i in todo}
+        futures: list[Future] = [executor.submit(*task) for task in tasks]
         for future in as_completed(futures):
-            yield future.result()  # _run_case never raises: failures come back as rows
+            yield from _rows(future.result())  # the runners never raise: failures come back as rows
     finally:
         if owned:
             executor.shutdown(cancel_futures=True)
@@ -145,6 +170,35 @@ def _run_case(rollout: Rollout, index: int, parameters: dict[str, Any], seed: in
             row.update(status="ok", error="", **{k: _plain(v) for k, v in metrics.items()})
     row["wall_time"] = time.perf_counter() - start
     return row
+
+
+def _rows(result: dict[str, Any] | list[dict[str, Any]]) -> list[dict[str, Any]]:
+    return result if isinstance(result, list) else [result]
+
+
+def _run_chunk(function, indices: list[int], parameters: list[dict[str, Any]], seeds: list[int]) -> list[dict]:
+    """Cases of a batched rollout as rows; an exception fails every case of the chunk with its message."""
+    start = time.perf_counter()
+    rows = [{"case": i, "seed": seed, **case} for i, case, seed in zip(indices, parameters, seeds)]
+    try:
+        results = list(function([dict(case) for case in parameters], list(seeds)))
+        if len(results) != len(rows):
+            raise InputError(f"the batched rollout returned {len(results)} results for {len(rows)} cases")
+    except Exception as error:
+        for row in rows:
+            row.update(status="failed", error=f"{type(error).__name__}: {error}")
+    else:
+        for row, case, metrics in zip(rows, parameters, results):
+            metrics = dict(metrics)
+            clash = [name for name in metrics if name in RESERVED or name in case]
+            if clash:
+                row.update(status="failed", error=f"rollout returned reserved or parameter names {clash}")
+            else:
+                row.update(status="ok", error="", **{k: _plain(v) for k, v in metrics.items()})
+    wall = (time.perf_counter() - start) / len(rows)  # the chunk's time, shared
+    for row in rows:
+        row["wall_time"] = wall
+    return rows
 
 
 def _plain(value: Any) -> Any:
@@ -210,4 +264,40 @@ def grasp_rollout(parameters: dict[str, Any], seed: int) -> dict[str, float]:
     }
 
 
-__all__ = ["case_seeds", "grasp_rollout", "grid", "random_design", "run_sweep"]
+def _hold_batch(parameters: list[dict[str, Any]], seeds: list[int]) -> list[dict[str, float]]:
+    """The reference hold (:func:`~bhgrasp.experiments.hold.reference_hold`) for many gains at once."""
+    from bhgrasp.batch import BatchSimulator
+    from bhgrasp.experiments.hold import POSTURE_GAIN, SQUEEZE, reference_hold
+
+    known = {"squeeze", "posture_gain", "duration"}
+    for case in parameters:
+        unknown = sorted(set(case) - known)
+        if unknown:
+            raise InputError(f"hold_rollout has no parameters {unknown}; it takes {sorted(known)}")
+    durations = {float(case.get("duration", 1.0)) for case in parameters}
+    if len(durations) > 1:
+        raise InputError(f"the cases of one batch must share `duration`, got {sorted(durations)}")
+    hold = reference_hold()
+    q0, fingers, forces = hold.state.q, list(SQUEEZE), np.array(list(SQUEEZE.values()))
+    squeeze = np.array([float(case.get("squeeze", 1.0)) for case in parameters])
+    gain = np.array([float(case.get("posture_gain", POSTURE_GAIN)) for case in parameters])
+
+    def controller(t: float, batch: BatchSimulator) -> np.ndarray:
+        tips = np.einsum("nkij,ki->nj", batch.fingertip_jacobians(fingers), forces)
+        return batch.gravity_torques() + gain[:, None] * (q0 - batch.q) + squeeze[:, None] * tips
+
+    batch = BatchSimulator(hold.simulator, [hold.state] * len(parameters)).run(controller, durations.pop())
+    drop = hold.box_height - batch.object_positions()[:, 2]
+    return [
+        {"drop": float(d), "diverged": float(x), "contacts": float(len(batch.contacts(i)))}
+        for i, (d, x) in enumerate(zip(drop, batch.diverged))
+    ]
+
+
+hold_rollout = BatchedRollout(_hold_batch, size=64)
+"""The reference hold as a batched sweep scenario: parameters ``squeeze`` (scale of the squeeze forces, default 1),
+``posture_gain`` [N m/rad] (default 2) and ``duration`` [s] (default 1, shared by a batch); metrics ``drop`` (the
+box's fall [m]), ``diverged`` (0 or 1) and ``contacts`` (contact points at the end)."""
+
+
+__all__ = ["BatchedRollout", "case_seeds", "grasp_rollout", "grid", "hold_rollout", "random_design", "run_sweep"]
