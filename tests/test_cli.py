@@ -117,7 +117,7 @@ def test_tune_runs_cma_es_on_the_impedance_fitness(capsys: pytest.CaptureFixture
 def test_bench_runs_the_benchmark_scripts(capfd: pytest.CaptureFixture) -> None:
     assert main(["bench", "--quick"]) == 0
     out = capfd.readouterr().out
-    names = ("control", "hand", "instructions", "qp", "scaling", "sim", "sweep")
+    names = ("batch", "control", "hand", "instructions", "qp", "scaling", "sim", "sweep")
     assert all(f"== bench_{name}.py" in out for name in names)
 
 

@@ -1,0 +1,75 @@
+"""Batched rollouts of the reference hold: environment-steps per second against the serial compiled engine.
+
+The reference hold (``bhgrasp.experiments.hold``) stepped as N environments of a ``BatchSimulator`` with its law
+written for the batch (compiled gravity and fingertip-Jacobian kernels, NumPy for the rest), at 1 and 2 threads,
+against one environment stepped by ``Simulator.step`` with the scalar law, measured in the same run.  Issue 15's
+target: >= 100 000 environment-steps per second on 2 cores.
+
+Usage: ``python benchmarks/bench_batch.py [--steps 200] [--sizes 16 64 256]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp.batch import BatchSimulator
+from bhgrasp.experiments.hold import POSTURE_GAIN, SQUEEZE, reference_hold
+
+
+def serial_rate(steps: int) -> float:
+    """Environment-steps per second of one environment: Simulator.step with the scalar hold law."""
+    hold = reference_hold()
+    state = hold.state
+    start = time.perf_counter()
+    for _ in range(steps):
+        state, _ = hold.simulator.step(state, hold.controller(state.t, state))
+    return steps / (time.perf_counter() - start)
+
+
+def batch_rate(size: int, threads: int, steps: int) -> tuple[float, float]:
+    """Environment-steps per second of a batch: closed loop (the vectorised law) and step only (inputs held)."""
+    hold = reference_hold()
+    q0, fingers, forces = hold.state.q, list(SQUEEZE), np.array(list(SQUEEZE.values()))
+
+    def controller(t: float, batch: BatchSimulator) -> np.ndarray:
+        tips = np.einsum("nkij,ki->nj", batch.fingertip_jacobians(fingers), forces)
+        return batch.gravity_torques() + POSTURE_GAIN * (q0 - batch.q) + tips
+
+    batch = BatchSimulator(hold.simulator, [hold.state] * size, threads=threads)
+    batch.run(controller, 20 * hold.simulator.dt)  # warm up
+    start = time.perf_counter()
+    for _ in range(steps):
+        batch.step(controller(batch.t, batch))
+    loop = size * steps / (time.perf_counter() - start)
+    u = controller(batch.t, batch)
+    start = time.perf_counter()
+    for _ in range(steps):
+        batch.step(u)
+    assert not batch.diverged.any()
+    return loop, size * steps / (time.perf_counter() - start)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--steps", type=int, default=200, help="steps per measurement")
+    parser.add_argument("--sizes", type=int, nargs="+", default=[16, 64, 256], help="environments per batch")
+    args = parser.parse_args()
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}, "
+          f"pinocchio {pin.__version__}")  # fmt: skip
+    serial = serial_rate(args.steps * 4)
+    print(f"serial Simulator.step + scalar law: {serial:10.0f} env-steps/s")
+    print(f"\n{'environments':>12}{'threads':>9}{'closed loop':>14}{'step only':>12}{'loop / serial':>15}")
+    for size in args.sizes:
+        for threads in (1, 2):
+            loop, step = batch_rate(size, threads, args.steps)
+            print(f"{size:12d}{threads:9d}{loop:14.0f}{step:12.0f}{loop / serial:15.2f}")
+
+
+if __name__ == "__main__":
+    main()
