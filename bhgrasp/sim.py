@@ -19,6 +19,10 @@ step).  A run depends only on its inputs: the :class:`~bhgrasp.state.State` carr
 springs, stick/slip) and the actuation modes, so a step depends only on its state and inputs, never on the steps
 or runs before it.
 
+Two engines run this physics: ``engine="compiled"`` (the default; the step in C++, ``src/engine.cpp``, through
+:mod:`bhgrasp.compiled`) and ``engine="python"`` (the methods below, the readable reference); tests/test_compiled.py
+steps both in lockstep.
+
 Actuation couplings (:class:`~bhgrasp.actuation.BarrettActuation`) enter as a transmission ``T``: the solve is
 done for the driven coordinates ``w`` with ``v_hand = T w``.  Contact forces enter the dynamics as generalised
 forces ``J^T f``, the same as Pinocchio's ``f_ext`` (tests/test_hand.py checks the identity).

@@ -191,3 +191,14 @@ def test_engine_option_is_checked_and_compiled_is_the_default() -> None:
     assert hold.simulator.engine_name == "compiled"
     with pytest.raises(InputError, match="`engine` must be one of"):
         Simulator(hold.simulator.scene, engine="fortran")
+
+
+def test_a_missing_compiled_core_says_how_to_rebuild(monkeypatch: pytest.MonkeyPatch) -> None:
+    import bhgrasp
+
+    hold = reference_hold()
+    monkeypatch.setitem(__import__("sys").modules, "bhgrasp._core", None)  # import of it now fails
+    monkeypatch.delattr(bhgrasp, "_core", raising=False)
+    with pytest.raises(bh.CompiledEngineUnavailable, match=r"pip install -e \.|engine='python'"):
+        Simulator(hold.simulator.scene)
+    assert Simulator(hold.simulator.scene, engine="python").engine_name == "python"  # the reference still runs
