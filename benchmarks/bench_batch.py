@@ -18,8 +18,8 @@ import time
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.batch import BatchSimulator
 from bhgrasp.experiments.hold import POSTURE_GAIN, SQUEEZE, reference_hold
+from bhgrasp.sim.batch import BatchSimulator
 
 
 def serial_rate(steps: int) -> float:

@@ -86,7 +86,7 @@ def grasp_law(state_file: Path):
     from bhgrasp.experiments.box_grasp import BOX_SIZE
     from bhgrasp.hand import BarrettHand
     from bhgrasp.objects import Box
-    from bhgrasp.state import State
+    from bhgrasp.sim.state import State
 
     data = np.load(state_file)
     state = State(float(data["t"]), data["q"], data["v"], (pin.SE3(data["pose"]),), data["twists"], data["points"],

@@ -29,8 +29,8 @@ from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
 from bhgrasp.experiments.allegro_grasp import allegro_box_grasp
 from bhgrasp.experiments.box_grasp import box_grasp
 from bhgrasp.objects import Box, FixedBox, Plane
-from bhgrasp.scene import Scene
 from bhgrasp.sim import Simulator
+from bhgrasp.sim.scene import Scene
 
 PARKED = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))  # [m] the hand far from everything
 CUBE = 0.02  # [m] edge of the support cubes

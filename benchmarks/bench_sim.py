@@ -33,7 +33,7 @@ import bhgrasp as bh
 from bhgrasp.errors import SimulationDiverged
 from bhgrasp.experiments.hold import JOINT_DAMPING, POSTURE_GAIN, SQUEEZE, reference_hold
 from bhgrasp.sim import Simulator
-from bhgrasp.state import State
+from bhgrasp.sim.state import State
 
 
 def run_bhgrasp(duration: float, dt: float, stiffness: float = 1e4, engine: str = "compiled") -> dict:

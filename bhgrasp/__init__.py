@@ -4,8 +4,6 @@ The public API is re-exported here; ``import bhgrasp`` never imports matplotlib 
 """
 
 from bhgrasp import controllers, metrics, trajectories, tuning
-from bhgrasp.actuation import BarrettActuation, FullyActuated
-from bhgrasp.contact import Contact, SpringDamper
 from bhgrasp.errors import (
     BhgraspError,
     CompiledEngineUnavailable,
@@ -22,9 +20,11 @@ from bhgrasp.objects import Box, Capsule, Cylinder, FixedBox, Plane, Sphere, Spr
 from bhgrasp.orientation import rotation_from_zyz, zyz_from_rotation
 from bhgrasp.planar import planar_finger, thesis_impedance_finger, thesis_one_link_finger, thesis_two_link_finger
 from bhgrasp.resources import barrett_urdf_path, example_robot_data_dir, example_robot_data_urdf
-from bhgrasp.scene import Scene
 from bhgrasp.sim import Simulator
-from bhgrasp.state import State, Trajectory
+from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
+from bhgrasp.sim.contact import Contact, SpringDamper
+from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.state import State, Trajectory
 
 __all__ = [
     "BarrettActuation",

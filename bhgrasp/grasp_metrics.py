@@ -1,4 +1,4 @@
-"""Grasp quantities read back from a recorded :class:`~bhgrasp.state.Trajectory`: finger forces and slip events."""
+"""Grasp quantities read back from a recorded :class:`~bhgrasp.sim.state.Trajectory`: finger forces and slip events."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 
 from bhgrasp.hand import Hand
 from bhgrasp.sensing import ContactSensing
-from bhgrasp.state import Trajectory
+from bhgrasp.sim.state import Trajectory
 
 
 def finger_of(hand: Hand, link: str) -> str | None:

@@ -41,7 +41,7 @@ def planar_finger(
         joint_range: Joint limits are [-joint_range, joint_range] [rad]; speed and torque limits are infinite
             (the thesis' planar fingers are idealised).
         tip_radius: Radius [m] of a collision sphere centred on the fingertip (on the last link's frame), so that
-            the finger can touch objects in a :class:`~bhgrasp.scene.Scene`; ``None``: no collision geometry.
+            the finger can touch objects in a :class:`~bhgrasp.sim.scene.Scene`; ``None``: no collision geometry.
         name: Display name.
     """
     lengths = as_vector(lengths, "lengths")

@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from bhgrasp.errors import InputError
-from bhgrasp.state import Trajectory
+from bhgrasp.sim.state import Trajectory
 
 
 def tracking_figure(

@@ -1,6 +1,6 @@
 """What a controller reads from sensed contacts: per-finger contact forces and their joint reaction torques.
 
-A :class:`~bhgrasp.state.State` lists contacts as (body a, body b) with body a a hand link frame, the normal from a
+A :class:`~bhgrasp.sim.state.State` lists contacts as (body a, body b) with body a a hand link frame, the normal from a
 to b and the force on b (the object).  Here contacts are grouped by finger (the finger whose joints move the link)
 and turned into the force the finger exerts on the object, its normal component, and the joint torques J^T F the
 contact forces produce (thesis (4.8), tau_d = J_f^T F_c).
@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bhgrasp.hand import Hand
-from bhgrasp.state import State
+from bhgrasp.sim.state import State
 
 
 @dataclass(frozen=True)

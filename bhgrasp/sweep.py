@@ -34,7 +34,7 @@ RESERVED = ("case", "seed", "status", "error", "wall_time")
 
 @dataclass(frozen=True)
 class BatchedRollout:
-    """A rollout that runs many cases in one call (e.g. on a :class:`~bhgrasp.batch.BatchSimulator`).
+    """A rollout that runs many cases in one call (e.g. on a :class:`~bhgrasp.sim.batch.BatchSimulator`).
 
     Attributes:
         function: Top-level ``(parameters_list, seeds) -> metrics_list``, one metrics dict per case, in order.
@@ -266,8 +266,8 @@ def grasp_rollout(parameters: dict[str, Any], seed: int) -> dict[str, float]:
 
 def _hold_batch(parameters: list[dict[str, Any]], seeds: list[int]) -> list[dict[str, float]]:
     """The reference hold (:func:`~bhgrasp.experiments.hold.reference_hold`) for many gains at once."""
-    from bhgrasp.batch import BatchSimulator
     from bhgrasp.experiments.hold import POSTURE_GAIN, SQUEEZE, reference_hold
+    from bhgrasp.sim.batch import BatchSimulator
 
     known = {"squeeze", "posture_gain", "duration"}
     for case in parameters:

@@ -9,7 +9,7 @@ on 127.0.0.1 and no browser is opened unless asked (``open=True``).  Overlays:
 - the object's desired pose (a translucent ghost) from a grasp controller's logged ``object_error``;
 - fingertip references (small spheres) from a joint controller's logged ``q_d``.
 
-:meth:`SceneViewer.replay` turns a recorded :class:`~bhgrasp.state.Trajectory` into a MeshCat animation decimated to
+:meth:`SceneViewer.replay` turns a recorded :class:`~bhgrasp.sim.state.Trajectory` into a MeshCat animation decimated to
 at most 60 frames per second that loops endlessly (in the live viewer and in the exported page alike);
 :meth:`SceneViewer.save_html` writes the scene and its animation as one HTML file that works offline (meshcat's
 ``static_html``: the JavaScript is inlined).  ``bhgrasp.viz`` is not imported by ``import bhgrasp``.
@@ -33,8 +33,8 @@ from bhgrasp._validation import as_positive
 from bhgrasp.controllers.base import Controller
 from bhgrasp.errors import InputError
 from bhgrasp.objects import Box, Capsule, Cylinder, RigidObject, Sphere
-from bhgrasp.scene import Scene
-from bhgrasp.state import State, Trajectory
+from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.state import State, Trajectory
 
 MAX_FPS = 60.0
 LOOP_FOREVER = float("inf")  # replay repetitions (msgpack float64 inf: JavaScript's Infinity)
@@ -50,7 +50,7 @@ CAMERA_OFFSET = (0.17, -0.24, 0.12)  # [m] camera position relative to its targe
 
 
 class SceneViewer:
-    """A MeshCat view of a :class:`~bhgrasp.scene.Scene` (hand, free objects, environment)."""
+    """A MeshCat view of a :class:`~bhgrasp.sim.scene.Scene` (hand, free objects, environment)."""
 
     def __init__(
         self,

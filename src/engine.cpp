@@ -1,5 +1,6 @@
 // The compiled step: see engine.hpp.  Each function mirrors the Python function of the same name in
-// bhgrasp/sim.py (Simulator) or bhgrasp/contact.py (ContactEngine); the comments there explain the physics.
+// bhgrasp/sim/simulator.py (Simulator), bhgrasp/sim/integrators.py or bhgrasp/sim/contact.py (ContactEngine); the
+// comments there explain the physics.
 #include "engine.hpp"
 
 #include <algorithm>
@@ -26,15 +27,16 @@ namespace {
 
 using ConstRef = Eigen::Ref<const Vector>;
 
-constexpr double kFrictionVelocity = 1e-3;  // [rad/s] regularisation of Coulomb joint friction (sim.py)
+constexpr double kFrictionVelocity = 1e-3;  // [rad/s] regularisation of Coulomb joint friction (sim/simulator.py)
 
-// w x I w in the principal axes, I = diag(moments) (sim.py: _gyroscopic).
+// w x I w in the principal axes, I = diag(moments) (sim/integrators.py: gyroscopic_torque).
 Vector3 gyroscopic(const Vector3& moments, const Vector3& w) {
   const double a = moments[0], b = moments[1], c = moments[2];
   return Vector3((c - b) * w[1] * w[2], (a - c) * w[2] * w[0], (b - a) * w[0] * w[1]);
 }
 
-// The midpoint m of an implicit-midpoint step of torque-free spin, I m + h m x I m = I w (sim.py: _spin_midpoint).
+// The midpoint m of an implicit-midpoint step of torque-free spin, I m + h m x I m = I w
+// (sim/integrators.py: spin_midpoint).
 Vector3 spin_midpoint(const Vector3& moments, const Vector3& w, double h) {
   const double a = moments[0], b = moments[1], c = moments[2];
   const double w0 = w[0], w1 = w[1], w2 = w[2];
@@ -137,7 +139,7 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
   frame_jacobian_ = pinocchio::Data::Matrix6x::Zero(6, model_.nv);
 }
 
-// ------------------------------------------------------------------ detection (contact.py: ContactEngine.detect)
+// ------------------------------------------------------------------ detection (sim/contact.py: ContactEngine.detect)
 Contacts Engine::detect(const Vector& q, const Memory& memory) {
   pinocchio::updateGeometryPlacements(model_, data_, geometry_, geometry_data_, q);
   std::vector<std::int64_t> pairs;
@@ -231,7 +233,8 @@ double Engine::signed_distance(int geom, const Vector3& point) {
     return std::sqrt(excess.cwiseMax(0.0).squaredNorm()) + std::min(excess.maxCoeff(), 0.0);
   }
   if (const auto* plane = dynamic_cast<const coal::Halfspace*>(shape)) return local.dot(plane->n) - plane->d;
-  if (const auto* sphere = dynamic_cast<const coal::Sphere*>(shape)) return std::sqrt(local.squaredNorm()) - sphere->radius;
+  if (const auto* sphere = dynamic_cast<const coal::Sphere*>(shape))
+    return std::sqrt(local.squaredNorm()) - sphere->radius;
   coal::Transform3s probe_placement;
   probe_placement.setTranslation(point);
   coal::DistanceRequest request;
@@ -303,7 +306,7 @@ void Engine::jacobians(const Contacts& contacts, std::vector<Matrix>& result) {
   }
 }
 
-// ------------------------------------------------------------------ force law (contact.py)
+// ------------------------------------------------------------------ force law (sim/contact.py)
 Engine::Parts Engine::linear_parts(const Contacts& contacts) const {
   const ContactLaw& law = settings_.law;
   const double dt = settings_.dt;
@@ -362,7 +365,8 @@ void Engine::start_status(const Contacts& contacts, const Parts& parts, const Po
 }
 
 void Engine::classify(const Contacts& contacts, const Points& forces, const std::vector<int>& status,
-                      const Points& start_velocity, const Points& relative, const Flags& may_stick, std::vector<int>& new_status,
+                      const Points& start_velocity, const Points& relative, const Flags& may_stick,
+                      std::vector<int>& new_status,
                       Points& slide) const {
   const Eigen::Index m = contacts.size();
   new_status.assign(static_cast<std::size_t>(m), 0);
@@ -396,7 +400,7 @@ void Engine::classify(const Contacts& contacts, const Points& forces, const std:
   }
 }
 
-// Explicit forces on body b at relative point velocities; returns end-of-step displacements (contact.py: forces).
+// Explicit forces on body b at relative point velocities; returns end-of-step displacements (sim/contact.py: forces).
 void Engine::contact_forces(Contacts& contacts, const Points& velocity, Points& displacement) const {
   const ContactLaw& law = settings_.law;
   const Eigen::Index m = contacts.size();
@@ -434,7 +438,7 @@ void Engine::contact_forces(Contacts& contacts, const Points& velocity, Points& 
   }
 }
 
-// ------------------------------------------------------------------ joint space (sim.py)
+// ------------------------------------------------------------------ joint space (sim/simulator.py)
 Engine::Passive Engine::passive(const Vector& q, const Vector& v, const Drive& drive) const {
   const int nvh = settings_.nv_hand;
   Passive result{Vector::Zero(model_.nv), settings_.joint_stiffness, settings_.joint_damping};
@@ -541,7 +545,7 @@ StepResult Engine::step(const Vector& q, const Vector& v, const Vector& tau_hand
     if (settings_.integrator == 1) {
       result.v = v + dt * first.acceleration;
       result.q = integrate(q, result.v * dt);
-    } else {  // Runge-Kutta-Munthe-Kaas (sim.py: _explicit)
+    } else {  // Runge-Kutta-Munthe-Kaas (simulator.py: _explicit)
       const Vector& k1 = first.acceleration;
       const Vector v2 = v + dt / 2 * k1;
       const Vector q2 = integrate(q, v * dt / 2);
@@ -563,7 +567,7 @@ StepResult Engine::step(const Vector& q, const Vector& v, const Vector& tau_hand
     result.memory = Memory{result.contacts.pair, result.contacts.local_b, first.displacement,
                            (!result.contacts.sticking.array()).matrix()};
   }
-  // divergence (sim.py: _check)
+  // divergence (simulator.py: _check)
   Divergence& divergence = result.divergence;
   const bool finite_q = result.q.allFinite(), finite_v = result.v.allFinite();
   if (!finite_q || !finite_v) {
@@ -675,7 +679,7 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
   }
   Flags sliding(m);
   for (Eigen::Index i = 0; i < m; ++i) sliding[i] = status[static_cast<std::size_t>(i)] == 2;
-  // drive: M a + bias - contact - passive + implicit terms, less the motor's own damping (sim.py: _drive)
+  // drive: M a + bias - contact - passive + implicit terms, less the motor's own damping (simulator.py: _drive)
   const Vector delivered = (mass * ((v_next - v) / dt) + (bias - contact_torque - joint.torque) +
                             implicit_damping.cwiseProduct(v_next)).head(nvh);
   result.drive = delivered - drive.motor_damping.cwiseProduct(v_next.head(nvh));

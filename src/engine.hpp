@@ -1,7 +1,7 @@
 // The compiled simulation step of bhgrasp: contact detection (coal), the spring-damper + stick-slip contact law,
 // and the implicit, semi-implicit and RK4 integrators of bhgrasp.sim.Simulator, on Pinocchio's C++ API.
 //
-// The Python engine (bhgrasp/sim.py, bhgrasp/contact.py) is the readable reference: every function here mirrors
+// The Python engine (bhgrasp/sim/simulator.py, contact.py) is the readable reference: every function here mirrors
 // one there, named alike, and tests/test_compiled.py steps both in lockstep.  Units SI, world frame; arrays of
 // points are (m, 3) row-major, as NumPy's.
 #pragma once
@@ -169,7 +169,8 @@ class Engine {
   void start_status(const Contacts& contacts, const Parts& parts, const Points& start_velocity,
                     std::vector<int>& status, Points& slide) const;
   void classify(const Contacts& contacts, const Points& forces, const std::vector<int>& status,
-                const Points& start_velocity, const Points& relative, const Flags& may_stick, std::vector<int>& new_status, Points& slide) const;
+                const Points& start_velocity, const Points& relative, const Flags& may_stick,
+                std::vector<int>& new_status, Points& slide) const;
   void contact_forces(Contacts& contacts, const Points& velocity, Points& displacement) const;
   Passive passive(const Vector& q, const Vector& v, const Drive& drive) const;
   Matrix mass_matrix(const Vector& q);

@@ -1,4 +1,4 @@
-"""Batched rollouts (bhgrasp.batch, src/batch.cpp): N environments stepped together equal N separate runs.
+"""Batched rollouts (bhgrasp.sim.batch, src/batch.cpp): N environments stepped together equal N separate runs.
 
 The independent truth is the single-environment compiled step (itself held to the Python reference engine by
 tests/test_compiled.py): a batch must reproduce each environment's separate run bit for bit, whatever the number
@@ -10,12 +10,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bhgrasp.actuation import BarrettActuation
-from bhgrasp.batch import BatchSimulator
 from bhgrasp.errors import InputError
 from bhgrasp.experiments.box_grasp import box_grasp
 from bhgrasp.experiments.hold import POSTURE_GAIN, SQUEEZE, reference_hold
 from bhgrasp.sim import Simulator
+from bhgrasp.sim.actuation import BarrettActuation
+from bhgrasp.sim.batch import BatchSimulator
 
 
 def start_states(hold, n: int):

@@ -23,7 +23,7 @@ import pinocchio as pin
 import pytest
 
 from bhgrasp.cli import main
-from bhgrasp.state import Trajectory
+from bhgrasp.sim.state import Trajectory
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 FLAGS = ["--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",

@@ -16,15 +16,15 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.actuation import BarrettActuation, FullyActuated
-from bhgrasp.contact import SpringDamper
 from bhgrasp.errors import InputError
 from bhgrasp.experiments.allegro_grasp import allegro_box_grasp
 from bhgrasp.experiments.box_grasp import box_grasp
 from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Box, Plane, SpringMounted
-from bhgrasp.scene import Scene
 from bhgrasp.sim import INTEGRATORS, Simulator
+from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
+from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.scene import Scene
 
 G = 9.81
 TOLERANCE = 1e-12

@@ -7,9 +7,9 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.contact import ContactEngine, SpringDamper
 from bhgrasp.objects import Box, Sphere, table
-from bhgrasp.scene import Scene
+from bhgrasp.sim.contact import ContactEngine, SpringDamper
+from bhgrasp.sim.scene import Scene
 
 FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))
 

@@ -7,7 +7,6 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.actuation import BarrettActuation
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp, object_parameters, object_regressor
 from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands, motor_inputs
@@ -16,6 +15,7 @@ from bhgrasp.experiments.grasp_demo import grasp_controller, run_grasp_demo
 from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.grasp_metrics import finger_normal_forces, slip_events
 from bhgrasp.objects import Box
+from bhgrasp.sim.actuation import BarrettActuation
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
 

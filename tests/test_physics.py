@@ -17,12 +17,12 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.actuation import BarrettActuation
-from bhgrasp.contact import SpringDamper
 from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Box, Plane, Sphere
-from bhgrasp.scene import Scene
 from bhgrasp.sim import INTEGRATORS, Simulator
+from bhgrasp.sim.actuation import BarrettActuation
+from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.scene import Scene
 
 G = 9.81
 Z = np.array([0.0, 0.0, 1.0])

@@ -37,7 +37,7 @@ from bhgrasp.controllers.object_space import grasp_maps, pose_gains
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.objects import RigidObject
-from bhgrasp.state import State
+from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 # Body-frame inertia basis matching sigma_o[1:] = (I_xx, I_xy, I_xz, I_yy, I_yz, I_zz).

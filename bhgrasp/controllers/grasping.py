@@ -29,7 +29,7 @@ from bhgrasp.grasp import _grasp_map, contact_frames, hand_jacobian
 from bhgrasp.grasp_forces import ContactForceQP, cone_violations, pseudo_inverse_forces
 from bhgrasp.hand import Hand
 from bhgrasp.sensing import ContactSensing, FingerContact
-from bhgrasp.state import State
+from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 

@@ -24,7 +24,7 @@ from bhgrasp.controllers.base import gain_vector, inertia_gain
 from bhgrasp.controllers.sliding import SlidingSurface
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
-from bhgrasp.state import State
+from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 

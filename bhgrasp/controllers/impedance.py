@@ -38,7 +38,7 @@ from bhgrasp.controllers.workspace import WorkspaceComputedTorque
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.sensing import ContactSensing, FingerContact
-from bhgrasp.state import State
+from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 Sample = tuple[np.ndarray, np.ndarray, np.ndarray]

@@ -31,7 +31,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.grasp_dynamics import GraspKinematics, ObjectState, contact_kinematics, parent_joints
 from bhgrasp.hand import Hand
 from bhgrasp.objects import RigidObject
-from bhgrasp.state import State
+from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 LAWS = ("ctc", "natural", "stiffness")

@@ -21,7 +21,7 @@ from bhgrasp._validation import as_real, as_vector
 from bhgrasp.controllers.base import JointTracking, gain_vector, inertia_gain
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
-from bhgrasp.state import State
+from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 

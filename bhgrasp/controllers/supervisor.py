@@ -25,14 +25,14 @@ from typing import Any
 import numpy as np
 
 from bhgrasp._validation import as_positive, as_vector, require_name
-from bhgrasp.actuation import Actuation
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.joint import ComputedTorque
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.sensing import ContactSensing
-from bhgrasp.state import State
+from bhgrasp.sim.actuation import Actuation
+from bhgrasp.sim.state import State
 from bhgrasp.trajectories import PoseMotion, SmoothStep
 
 APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
@@ -42,7 +42,7 @@ class GraspSupervisor(Controller):
     """Sequence a joint-space approach and an object-space grasp controller.
 
     Logs ``phase``, ``arrived`` (per finger of the hand, 1.0 once it touched), plus the active controller's log
-    (a recorded :class:`~bhgrasp.state.Trajectory` has NaN for the grasp controller's keys during the approach).
+    (a recorded :class:`~bhgrasp.sim.state.Trajectory` has NaN for the grasp controller's keys during the approach).
     """
 
     def __init__(

@@ -23,7 +23,7 @@ from bhgrasp._validation import as_vector
 from bhgrasp.controllers.base import Controller, gain_matrix
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
-from bhgrasp.state import State
+from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 

@@ -22,15 +22,15 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_positive
-from bhgrasp.actuation import FullyActuated
-from bhgrasp.contact import SpringDamper
 from bhgrasp.experiments.box_grasp import FRICTION, JOINT_DAMPING, PEDESTAL, STIFFNESS, BoxGrasp
 from bhgrasp.hand import Hand
 from bhgrasp.ik import ik
 from bhgrasp.objects import Box, FixedBox
 from bhgrasp.resources import example_robot_data_urdf
-from bhgrasp.scene import Scene
 from bhgrasp.sim import Simulator
+from bhgrasp.sim.actuation import FullyActuated
+from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.scene import Scene
 
 ALLEGRO_URDF = "allegro_hand_description/urdf/allegro_right_hand.urdf"
 FINGERTIPS = {"index": "link_3.0_tip", "middle": "link_7.0_tip", "ring": "link_11.0_tip", "thumb": "link_15.0_tip"}

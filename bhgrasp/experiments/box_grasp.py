@@ -15,15 +15,15 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_positive
-from bhgrasp.actuation import Actuation, BarrettActuation, FullyActuated
-from bhgrasp.contact import SpringDamper
 from bhgrasp.errors import InputError
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.ik import ik
 from bhgrasp.objects import Box, FixedBox
-from bhgrasp.scene import Scene
 from bhgrasp.sim import Simulator
-from bhgrasp.state import State
+from bhgrasp.sim.actuation import Actuation, BarrettActuation, FullyActuated
+from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.state import State
 
 BOX_SIZE = (0.06, 0.05, 0.05)  # [m] thesis 5.7 (x along the palm, y between the fingers, z up)
 PAD_RADIUS = 0.010  # [m] fingertip pad of the packaged URDF

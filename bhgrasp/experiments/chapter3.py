@@ -37,9 +37,9 @@ from bhgrasp.controllers import (
 from bhgrasp.controllers.base import Controller
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.planar import thesis_two_link_finger
-from bhgrasp.scene import Scene
 from bhgrasp.sim import Simulator
-from bhgrasp.state import Trajectory
+from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.state import Trajectory
 from bhgrasp.trajectories import Quintic, Reference, Sinusoid, SmoothStep, exponential_approach
 
 DT = 1e-3  # [s] physics and control period

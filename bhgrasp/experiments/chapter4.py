@@ -34,7 +34,6 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp import metrics
-from bhgrasp.contact import SpringDamper
 from bhgrasp.controllers import PDGravity, WorkspaceComputedTorque
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.impedance import (
@@ -49,9 +48,10 @@ from bhgrasp.errors import InputError, SimulationDiverged
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.objects import Box, SpringMounted
 from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
-from bhgrasp.scene import Scene
 from bhgrasp.sim import Simulator
-from bhgrasp.state import Trajectory
+from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.state import Trajectory
 from bhgrasp.trajectories import Constant, Quintic, Reference, SmoothStep, exponential_approach
 
 DT = 1e-3
@@ -361,7 +361,7 @@ def one_link_contact(scale: float = 1.0) -> Case:
 def _reaction_torques(setup: Setup, traj: Trajectory) -> np.ndarray:
     """J^T F of the recorded contacts (thesis (4.8)) per sample [N m], via the sensing module."""
     from bhgrasp.sensing import ContactSensing
-    from bhgrasp.state import State
+    from bhgrasp.sim.state import State
 
     sensing = ContactSensing(setup.hand)
     out = np.zeros((len(traj), setup.hand.nv))

@@ -30,8 +30,8 @@ from bhgrasp.experiments.allegro_grasp import allegro_box_grasp
 from bhgrasp.experiments.box_grasp import STIFFNESS, BoxGrasp, box_grasp
 from bhgrasp.grasp_metrics import finger_normal_forces, slip_events
 from bhgrasp.objects import Box
-from bhgrasp.scene import Scene
-from bhgrasp.state import Trajectory
+from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.state import Trajectory
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

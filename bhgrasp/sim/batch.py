@@ -8,7 +8,7 @@ separate runs, whatever the thread count).  A controller for a batch is vectoris
 :meth:`fingertip_jacobians`) and returns inputs of shape (N, n_inputs).  An environment whose step diverges is
 frozen and reported in :attr:`diverged` / :meth:`divergence`; the others go on.
 
-The actuation must keep one transmission (:class:`~bhgrasp.actuation.FullyActuated`): the Barrett TorqueSwitch
+The actuation must keep one transmission (:class:`~bhgrasp.sim.actuation.FullyActuated`): the Barrett TorqueSwitch
 changes it per environment, which the batch does not model yet.  Use threads only up to the free cores: a batch
 inside each worker of a process pool already has its core.
 """
@@ -21,12 +21,12 @@ from typing import Any
 import numpy as np
 
 from bhgrasp._validation import as_positive
-from bhgrasp.actuation import FullyActuated
-from bhgrasp.compiled import contact_set, core_module, drive_of, memory_of, native_memory, settings
-from bhgrasp.contact import ContactMemory, ContactSet
 from bhgrasp.errors import InputError
-from bhgrasp.sim import Simulator
-from bhgrasp.state import State
+from bhgrasp.sim.actuation import FullyActuated
+from bhgrasp.sim.compiled import contact_set, core_module, drive_of, memory_of, native_memory, settings
+from bhgrasp.sim.contact import ContactMemory, ContactSet
+from bhgrasp.sim.simulator import Simulator
+from bhgrasp.sim.state import State
 
 _DIVERGED = {1: "joint/object position", 2: "joint/object velocity", 3: "speed", 4: "contact depth"}
 
@@ -162,7 +162,7 @@ class BatchSimulator:
         return contact_set(self._batch.contacts(self._env(env)))
 
     def state(self, env: int) -> State:
-        """Environment ``env`` as a :class:`~bhgrasp.state.State` (built on demand; a start state for a run)."""
+        """Environment ``env`` as a :class:`~bhgrasp.sim.state.State` (built on demand; a start state for a run)."""
         env = self._env(env)
         memory = memory_of(self._batch.memory(env))
         return self.simulator._state(self.t, self._batch.q[env], self._batch.v[env], self.contacts(env), memory)

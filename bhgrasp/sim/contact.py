@@ -28,7 +28,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_real
 from bhgrasp.errors import InputError
-from bhgrasp.scene import Scene
+from bhgrasp.sim.scene import Scene
 
 LOCAL_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _IDENTITY3 = np.eye(3)
@@ -128,7 +128,7 @@ class Contact:
 
 @dataclass(frozen=True)
 class ContactMemory:
-    """What a run carries from one step to the next about its contacts (part of :class:`~bhgrasp.state.State`).
+    """What a run carries from one step to the next about its contacts (part of :class:`~bhgrasp.sim.state.State`).
 
     Attributes:
         pair: (m,) collision-pair index of each remembered contact.

@@ -15,15 +15,15 @@ Integrators (``integrator=``):
 Free bodies translate world-aligned (``m dv/dt = f``: linear momentum is conserved to round-off in any collision,
 friction included) and, with the implicit and semi-implicit steps, turn under an implicit-midpoint gyroscopic torque
 that keeps a torque-free body's kinetic energy and ``|I w|`` exactly (the explicit ``w x I w`` gains energy every
-step).  A run depends only on its inputs: the :class:`~bhgrasp.state.State` carries the contact memory (tangential
+step).  A run depends only on its inputs: the :class:`~bhgrasp.sim.state.State` carries the contact memory (tangential
 springs, stick/slip) and the actuation modes, so a step depends only on its state and inputs, never on the steps
 or runs before it.
 
 Two engines run this physics: ``engine="compiled"`` (the default; the step in C++, ``src/engine.cpp``, through
-:mod:`bhgrasp.compiled`) and ``engine="python"`` (the methods below, the readable reference); tests/test_compiled.py
+:mod:`bhgrasp.sim.compiled`) and ``engine="python"`` (the methods below, the readable reference); tests/test_compiled.py
 steps both in lockstep.
 
-Actuation couplings (:class:`~bhgrasp.actuation.BarrettActuation`) enter as a transmission ``T``: the solve is
+Actuation couplings (:class:`~bhgrasp.sim.actuation.BarrettActuation`) enter as a transmission ``T``: the solve is
 done for the driven coordinates ``w`` with ``v_hand = T w``.  Contact forces enter the dynamics as generalised
 forces ``J^T f``, the same as Pinocchio's ``f_ext`` (tests/test_hand.py checks the identity).
 """
@@ -38,14 +38,15 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_vector
-from bhgrasp.actuation import Actuation, FullyActuated
-from bhgrasp.compiled import CompiledStep
-from bhgrasp.contact import ContactEngine, ContactMemory, ContactSet, SpringDamper, empty_contact_set
 from bhgrasp.errors import InputError, SimulationDiverged
 from bhgrasp.objects import RigidObject
-from bhgrasp.recorder import Recorder
-from bhgrasp.scene import Scene
-from bhgrasp.state import State, Trajectory
+from bhgrasp.sim.actuation import Actuation, FullyActuated
+from bhgrasp.sim.compiled import CompiledStep
+from bhgrasp.sim.contact import ContactEngine, ContactMemory, ContactSet, SpringDamper, empty_contact_set
+from bhgrasp.sim.integrators import gyroscopic_torque, spin_midpoint
+from bhgrasp.sim.recorder import Recorder
+from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.state import State, Trajectory
 
 INTEGRATORS = ("implicit", "semi-implicit", "rk4")
 ENGINES = ("compiled", "python")
@@ -61,7 +62,7 @@ class StepInfo:
 
 
 class Simulator:
-    """Fixed-step simulator of a :class:`~bhgrasp.scene.Scene`."""
+    """Fixed-step simulator of a :class:`~bhgrasp.sim.scene.Scene`."""
 
     def __init__(
         self,
@@ -209,9 +210,9 @@ class Simulator:
             w = axes.T @ v[angular]  # in the principal axes
             if moments[0] == moments[1] == moments[2] or not w.any():
                 continue  # a sphere's (or a resting body's) gyroscopic torque is 0
-            explicit = _gyroscopic(moments, w)
-            middle = _spin_midpoint(moments, w, 0.5 * self.dt)
-            bias[angular] += axes @ (_gyroscopic(moments, middle) - explicit)
+            explicit = gyroscopic_torque(moments, w)
+            middle = spin_midpoint(moments, w, 0.5 * self.dt)
+            bias[angular] += axes @ (gyroscopic_torque(moments, middle) - explicit)
 
     def _increment_rate(self, increment: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Rate of the increment ``theta`` in ``q (+) theta`` at velocity ``v``.
@@ -486,39 +487,6 @@ class Simulator:
             state, info = self._advance(state, u, torque)
         recorder.add(state, u, info, getattr(controller, "log", None))
         return recorder.trajectory()
-
-
-def _gyroscopic(moments: tuple[float, float, float], w: np.ndarray) -> np.ndarray:
-    """``w x I w`` [N m] in the principal axes, ``I = diag(moments)``."""
-    a, b, c = moments
-    w0, w1, w2 = w
-    return np.array([(c - b) * w1 * w2, (a - c) * w2 * w0, (b - a) * w0 * w1])
-
-
-def _spin_midpoint(moments: tuple[float, float, float], w: np.ndarray, h: float) -> np.ndarray:
-    """The midpoint ``m`` of an implicit-midpoint step of torque-free spin: ``I m + h m x I m = I w``, ``h = dt/2``.
-
-    Newton from ``m = w`` in the principal axes (``I = diag(moments)``), with the 3x3 solve by Cramer's rule:
-    plain floats, as this runs every step for every free body.  Converges in 2-4 iterations at ``|w| dt < 1``.
-    """
-    a, b, c = moments
-    w0, w1, w2 = (float(x) for x in w)
-    m0, m1, m2 = w0, w1, w2
-    p, q, r = h * (c - b), h * (a - c), h * (b - a)
-    for _ in range(30):
-        f0 = a * (m0 - w0) + p * m1 * m2
-        f1 = b * (m1 - w1) + q * m2 * m0
-        f2 = c * (m2 - w2) + r * m0 * m1
-        j01, j02, j10, j12, j20, j21 = p * m2, p * m1, q * m2, q * m0, r * m1, r * m0
-        c0, c1, c2 = b * c - j12 * j21, j12 * j20 - j10 * c, j10 * j21 - b * j20  # cofactors of row 0
-        det = a * c0 + j01 * c1 + j02 * c2
-        d0 = (f0 * c0 + j01 * (j12 * f2 - f1 * c) + j02 * (f1 * j21 - b * f2)) / det
-        d1 = (a * (f1 * c - j12 * f2) + f0 * c1 + j02 * (j10 * f2 - f1 * j20)) / det
-        d2 = (a * (b * f2 - f1 * j21) + j01 * (f1 * j20 - j10 * f2) + f0 * c2) / det
-        m0, m1, m2 = m0 - d0, m1 - d1, m2 - d2
-        if max(abs(d0), abs(d1), abs(d2)) <= 1e-16 * (1.0 + max(abs(m0), abs(m1), abs(m2))):
-            break
-    return np.array([m0, m1, m2])
 
 
 def _noisy(state: State, noise: tuple[float, float] | None, rng: np.random.Generator) -> State:

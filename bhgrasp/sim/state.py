@@ -34,7 +34,7 @@ class State:
         scene_q: Full scene configuration (hand + objects), for the simulator.
         scene_v: Full scene velocity.
         contact_memory: The simulator's memory of the last step's contacts (tangential spring displacements and
-            stick/slip flags, a :class:`~bhgrasp.contact.ContactMemory`); ``None`` = no contact remembered.  A run
+            stick/slip flags, a :class:`~bhgrasp.sim.contact.ContactMemory`); ``None`` = no contact remembered.  A run
             from this state continues it exactly; ``dataclasses.replace(state, contact_memory=None)`` clears it.
         actuation_modes: The actuation's mode flags (e.g. TorqueSwitch per finger); ``None`` = re-armed.
     """

@@ -14,12 +14,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from bhgrasp.contact import ContactMemory, ContactSet, empty_contact_set
 from bhgrasp.errors import CompiledEngineUnavailable
+from bhgrasp.sim.contact import ContactMemory, ContactSet, empty_contact_set
 
 if TYPE_CHECKING:
-    from bhgrasp.actuation import Actuation
-    from bhgrasp.sim import Simulator
+    from bhgrasp.sim.actuation import Actuation
+    from bhgrasp.sim.simulator import Simulator
 
 _INTEGRATORS = {"implicit": 0, "semi-implicit": 1, "rk4": 2}
 
@@ -62,7 +62,7 @@ class CompiledStep:
         return drive
 
     def memory(self, memory: ContactMemory):
-        """A :class:`~bhgrasp.contact.ContactMemory` as the C++ engine's."""
+        """A :class:`~bhgrasp.sim.contact.ContactMemory` as the C++ engine's."""
         return native_memory(memory)
 
     def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, memory: ContactMemory):
@@ -141,7 +141,7 @@ def drive_of(actuation: Actuation):
 
 
 def native_memory(memory: ContactMemory):
-    """A :class:`~bhgrasp.contact.ContactMemory` as the C++ engine's ``Memory`` (its native copy if it has one)."""
+    """A :class:`~bhgrasp.sim.contact.ContactMemory` as the C++ engine's ``Memory`` (its native copy if it has one)."""
     if memory.native is not None:
         return memory.native
     return core_module().Memory(
@@ -150,7 +150,7 @@ def native_memory(memory: ContactMemory):
 
 
 def memory_of(contacts_memory) -> ContactMemory:
-    """The C++ engine's contact memory as a :class:`~bhgrasp.contact.ContactMemory` (keeping the native one)."""
+    """The C++ engine's contact memory as a :class:`~bhgrasp.sim.contact.ContactMemory` (keeping the native one)."""
     return ContactMemory(
         contacts_memory.pair, contacts_memory.local_b, contacts_memory.displacement, contacts_memory.sliding,
         native=contacts_memory,
@@ -158,7 +158,7 @@ def memory_of(contacts_memory) -> ContactMemory:
 
 
 def contact_set(contacts) -> ContactSet:
-    """The C++ engine's contacts as a :class:`~bhgrasp.contact.ContactSet`."""
+    """The C++ engine's contacts as a :class:`~bhgrasp.sim.contact.ContactSet`."""
     if len(contacts) == 0:
         return empty_contact_set()
     return ContactSet(

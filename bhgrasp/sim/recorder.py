@@ -1,4 +1,4 @@
-"""Recorder: collects a simulation run sample by sample into a :class:`~bhgrasp.state.Trajectory`."""
+"""Recorder: collects a simulation run sample by sample into a :class:`~bhgrasp.sim.state.Trajectory`."""
 
 from __future__ import annotations
 
@@ -7,13 +7,13 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.actuation import Actuation
-from bhgrasp.scene import Scene
-from bhgrasp.state import State, Trajectory
+from bhgrasp.sim.actuation import Actuation
+from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.state import State, Trajectory
 
 
 class Recorder:
-    """Collects a run sample by sample and assembles the :class:`~bhgrasp.state.Trajectory`."""
+    """Collects a run sample by sample and assembles the :class:`~bhgrasp.sim.state.Trajectory`."""
 
     def __init__(self, scene: Scene, actuation: Actuation) -> None:
         """Record ``scene`` driven through ``actuation`` (for its mode flags)."""
