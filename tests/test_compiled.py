@@ -202,3 +202,15 @@ def test_a_missing_compiled_core_says_how_to_rebuild(monkeypatch: pytest.MonkeyP
     with pytest.raises(bh.CompiledEngineUnavailable, match=r"pip install -e \.|engine='python'"):
         Simulator(hold.simulator.scene)
     assert Simulator(hold.simulator.scene, engine="python").engine_name == "python"  # the reference still runs
+
+
+def test_changed_actuation_parameters_reach_the_compiled_step() -> None:
+    """The compiled step caches the actuation's transmission and damping; a changed damping must not be missed."""
+    hold = reference_hold()
+    python, compiled = twin(hold.simulator, "python"), twin(hold.simulator, "compiled")
+    u = hold.controller(hold.state.t, hold.state)
+    compiled.step(hold.state, u)  # caches the drive
+    hold.simulator.actuation.damping = hold.simulator.actuation.damping * 3.0
+    reference, _ = python.step(hold.state, u)
+    other, _ = compiled.step(hold.state, u)
+    np.testing.assert_allclose(other.scene_v, reference.scene_v, rtol=0, atol=TOLERANCE)

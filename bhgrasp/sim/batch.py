@@ -38,7 +38,8 @@ class BatchSimulator:
         """Copy the simulator's scene, law and options once per environment.
 
         Args:
-            simulator: The scene, contact law, actuation (fully actuated) and options of every environment.
+            simulator: The scene, contact law, actuation (fully actuated) and options of every environment, read
+                once here (a later change of the actuation's damping or friction does not reach the batch).
             states: One start state per environment (states of ``simulator``'s scene, e.g. from
                 :meth:`~bhgrasp.sim.Simulator.initial_state` or a run); they carry the contact memory.
             threads: Worker threads per step (>= 1).

@@ -50,12 +50,15 @@ class CompiledStep:
         self._core = core
         self._engine = core.Engine(scene.model.saveToString(), scene.geometry.saveToString(), settings(simulator))
         self._simulator = simulator
-        self._drives: dict[bytes, object] = {}
+        self._drives: dict[tuple, object] = {}
 
     def _drive(self):
-        """The actuation's transmission and damping in its current mode (built once per mode)."""
+        """The actuation's transmission and damping in its current mode and parameters (built once for each)."""
         actuation = self._simulator.actuation
-        key = actuation.modes().tobytes()
+        key = (
+            actuation.modes().tobytes(), actuation.damping.tobytes(), actuation.friction.tobytes(),
+            getattr(actuation, "motor_damping", None), getattr(actuation, "saturate", None),
+        )  # fmt: skip
         drive = self._drives.get(key)
         if drive is None:
             drive = self._drives[key] = drive_of(actuation)
