@@ -33,6 +33,7 @@ import bhgrasp as bh
 from bhgrasp.errors import SimulationDiverged
 from bhgrasp.experiments.hold import JOINT_DAMPING, POSTURE_GAIN, SQUEEZE, reference_hold
 from bhgrasp.sim import Simulator
+from bhgrasp.sim.compiled import native_memory
 from bhgrasp.sim.state import State
 
 
@@ -110,7 +111,7 @@ def compiled_layers(simulator: Simulator, state: State, u: np.ndarray, steps: in
     drive, engine = compiled._drive(), compiled._engine
     start = time.perf_counter()
     for chunk in chunks(steps):
-        q, v, memory = state.scene_q, state.scene_v, compiled.memory(state.contact_memory)
+        q, v, memory = state.scene_q, state.scene_v, native_memory(state.contact_memory)
         for _ in range(chunk):
             result = engine.step(q, v, tau, drive, memory, simulator.max_speed, simulator.max_penetration)
             q, v, memory = result.q, result.v, result.memory

@@ -45,10 +45,8 @@ class CompiledStep:
 
     def __init__(self, simulator: Simulator) -> None:
         """Copy the scene (Pinocchio's serialisation), the contact law and the simulator's options into C++."""
-        core = core_module()
-        scene = simulator.scene
-        self._core = core
-        self._engine = core.Engine(scene.model.saveToString(), scene.geometry.saveToString(), settings(simulator))
+        model, geometry = simulator.scene.model.saveToString(), simulator.scene.geometry.saveToString()
+        self._engine = core_module().Engine(model, geometry, settings(simulator))
         self._simulator = simulator
         self._drives: dict[tuple, object] = {}
 
@@ -64,15 +62,11 @@ class CompiledStep:
             drive = self._drives[key] = drive_of(actuation)
         return drive
 
-    def memory(self, memory: ContactMemory):
-        """A :class:`~bhgrasp.sim.contact.ContactMemory` as the C++ engine's."""
-        return native_memory(memory)
-
     def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, memory: ContactMemory):
         """One step: (q+, v+, contacts with forces, drive torques [N m], memory, divergence)."""
         simulator = self._simulator
         result = self._engine.step(
-            q, v, tau_hand, self._drive(), self.memory(memory), simulator.max_speed, simulator.max_penetration
+            q, v, tau_hand, self._drive(), native_memory(memory), simulator.max_speed, simulator.max_penetration
         )
         return (
             result.q,
@@ -85,7 +79,7 @@ class CompiledStep:
 
     def detect(self, q: np.ndarray, memory: ContactMemory) -> ContactSet:
         """The contacts at ``q`` matched to ``memory`` (no forces)."""
-        return contact_set(self._engine.detect(q, self.memory(memory)))
+        return contact_set(self._engine.detect(q, native_memory(memory)))
 
 
 def settings(simulator: Simulator):
