@@ -8,6 +8,7 @@
 
 #include "batch.hpp"
 #include "engine.hpp"
+#include "recording.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -106,6 +107,7 @@ NB_MODULE(_core, m) {
       .def_ro("sticking", &Contacts::sticking)
       .def_ro("was_sliding", &Contacts::was_sliding)
       .def("__len__", &Contacts::size);
+  m.def("concatenate", &concatenate, "parts"_a, "The contacts of many steps as one Contacts (rows in order).");
 
   nb::class_<Divergence>(m, "Divergence")
       .def_ro("kind", &Divergence::kind)

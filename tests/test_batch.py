@@ -7,6 +7,8 @@ of threads, keep each environment's contact memory to itself, and freeze only th
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -27,7 +29,7 @@ def start_states(hold, n: int):
             state, _ = hold.simulator.step(state, hold.controller(state.t, state) * (1.0 + 0.05 * i))
         states.append(state)
     t = max(state.t for state in states)
-    return [type(state)(**{**state.__dict__, "t": t}) for state in states]
+    return [dataclasses.replace(state, t=t) for state in states]
 
 
 def inputs(hold, states):

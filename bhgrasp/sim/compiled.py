@@ -62,20 +62,19 @@ class CompiledStep:
             drive = self._drives[key] = drive_of(actuation)
         return drive
 
-    def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, memory: ContactMemory):
-        """One step: (q+, v+, contacts with forces, drive torques [N m], memory, divergence)."""
+    def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, memory):
+        """One step from a :class:`~bhgrasp.sim.contact.ContactMemory` or the engine's own ``Memory``.
+
+        Returns (q+, v+, contacts with forces, drive torques [N m], memory, divergence) as the C++ engine made them:
+        its ``Contacts`` and ``Memory`` objects, converted by :func:`contact_set` and :func:`memory_of` when read.
+        """
         simulator = self._simulator
-        result = self._engine.step(
-            q, v, tau_hand, self._drive(), native_memory(memory), simulator.max_speed, simulator.max_penetration
-        )
-        return (
-            result.q,
-            result.v,
-            contact_set(result.contacts),
-            result.drive,
-            memory_of(result.memory),
-            result.divergence,
-        )
+        native = memory.native if isinstance(memory, ContactMemory) else memory
+        if native is None:
+            native = native_memory(memory)
+        result = self._engine.step(q, v, tau_hand, self._drive(), native, simulator.max_speed,
+                                   simulator.max_penetration)  # fmt: skip
+        return result.q, result.v, result.contacts, result.drive, result.memory, result.divergence
 
     def detect(self, q: np.ndarray, memory: ContactMemory) -> ContactSet:
         """The contacts at ``q`` matched to ``memory`` (no forces)."""

@@ -153,6 +153,10 @@ class ContactMemory:
     def __len__(self) -> int:
         return len(self.pair)
 
+    def __reduce__(self) -> tuple:
+        """Copies and pickles keep the arrays; the compiled engine rebuilds its native copy from them."""
+        return type(self), (self.pair, self.local_b, self.displacement, self.sliding)
+
 
 @dataclass
 class ContactSet:

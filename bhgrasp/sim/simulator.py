@@ -30,8 +30,8 @@ forces ``J^T f``, the same as Pinocchio's ``f_ext`` (tests/test_hand.py checks t
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -41,24 +41,73 @@ from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.errors import InputError, SimulationDiverged
 from bhgrasp.objects import RigidObject
 from bhgrasp.sim.actuation import Actuation, FullyActuated
-from bhgrasp.sim.compiled import CompiledStep
+from bhgrasp.sim.compiled import CompiledStep, contact_set, memory_of
 from bhgrasp.sim.contact import ContactEngine, ContactMemory, ContactSet, SpringDamper, empty_contact_set
 from bhgrasp.sim.integrators import gyroscopic_torque, spin_midpoint
 from bhgrasp.sim.recorder import Recorder
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import State, Trajectory
+from bhgrasp.sim.state import SimulatedState, State, Trajectory
 
 INTEGRATORS = ("implicit", "semi-implicit", "rk4")
 ENGINES = ("compiled", "python")
 _FRICTION_VELOCITY = 1e-3  # [rad/s] regularisation of Coulomb joint friction
 
 
-@dataclass
 class StepInfo:
-    """What one step computed, beyond the new state: contacts with their forces and the drive torques."""
+    """What one step computed, beyond the new state: contacts with their forces and the drive torques.
 
-    contacts: ContactSet
-    drive_torques: np.ndarray
+    Attributes:
+        contacts: The step's contacts and forces, a :class:`~bhgrasp.sim.contact.ContactSet` (built when first read).
+        drive_torques: Hand joint torques the drive delivered over the step [N m], (nv_hand,).
+        contact_arrays: The contacts as the engine returned them: a ``ContactSet``, or the compiled engine's
+            ``Contacts``; both carry the arrays ``pair``, ``point``, ``normal``, ``depth``, ``force``, ``sticking``.
+    """
+
+    __slots__ = ("_contacts", "contact_arrays", "drive_torques")
+
+    def __init__(self, contacts: Any, drive_torques: np.ndarray) -> None:
+        self.contact_arrays, self.drive_torques, self._contacts = contacts, drive_torques, None
+
+    @property
+    def contacts(self) -> ContactSet:
+        """The step's contacts as a :class:`~bhgrasp.sim.contact.ContactSet` (built on first read, then kept)."""
+        if self._contacts is None:
+            arrays = self.contact_arrays
+            self._contacts = arrays if isinstance(arrays, ContactSet) else contact_set(arrays)
+        return self._contacts
+
+
+class _StepOutput:
+    """What a step hands to its :class:`~bhgrasp.sim.state.SimulatedState` to build derived fields from.
+
+    ``contacts``: the step's ``ContactSet`` or compiled ``Contacts``; ``memory``: its ``ContactMemory`` or
+    compiled ``Memory``.
+    """
+
+    __slots__ = ("contacts", "memory", "simulator")
+
+    def __init__(self, simulator: Simulator, contacts: Any, memory: Any) -> None:
+        self.simulator, self.contacts, self.memory = simulator, contacts, memory
+
+    def derive(self, name: str, state: State) -> dict[str, Any]:
+        """The derived field ``name`` of ``state`` (and its companions computed on the way)."""
+        simulator = self.simulator
+        if name in ("q", "v"):
+            return {"q": state.scene_q[: simulator.scene.nq_hand].copy(), "v": state.scene_v[: simulator._nvh].copy()}
+        if name in ("object_poses", "object_twists"):
+            poses, twists = simulator._objects(state.scene_q, state.scene_v)
+            return {"object_poses": poses, "object_twists": twists}
+        if name == "contact_memory":
+            memory = self.memory
+            return {"contact_memory": memory if isinstance(memory, ContactMemory) else memory_of(memory)}
+        contacts = self.contacts
+        if not len(contacts):
+            contacts = empty_contact_set()
+        bodies = simulator._pair_bodies
+        return {
+            "contact_points": contacts.point, "contact_normals": contacts.normal, "contact_forces": contacts.force,
+            "contact_bodies": tuple(bodies[k] for k in contacts.pair),
+        }  # fmt: skip
 
 
 class Simulator:
@@ -116,7 +165,6 @@ class Simulator:
         self._lower, self._upper = scene.hand.lower, scene.hand.upper
         self._object_identity = np.eye(scene.nv - self._nvh)
         self._lower_triangle = np.tril_indices(scene.nv, -1)
-        self._object_v = [scene.object_v_slice(i) for i in range(len(scene.objects))]
         self._pair_bodies = [(pair.body_a, pair.body_b) for pair in scene.pairs]
         # free bodies: angular velocity coordinates, principal axes (columns, body frame) and moments [kg m^2]
         self._spinning = []
@@ -142,22 +190,26 @@ class Simulator:
         contacts = self.engine.detect(q) if self._compiled is None else self._compiled.detect(q, memory)
         return self._state(0.0, q, v, contacts, memory)
 
-    def _state(self, t: float, q: np.ndarray, v: np.ndarray, contacts: ContactSet, memory: ContactMemory) -> State:
+    def _state(self, t: float, q: np.ndarray, v: np.ndarray, contacts: Any, memory: Any) -> SimulatedState:
+        """The state at ``t``: ``contacts`` and ``memory`` as the engine made them (converted when first read)."""
+        return SimulatedState.lazy(t, q, v, self.actuation.modes().copy(), _StepOutput(self, contacts, memory))
+
+    def _objects(self, q: np.ndarray, v: np.ndarray) -> tuple[tuple[pin.SE3, ...], np.ndarray]:
+        """Object poses (COM frames, world) and twists (n_objects, 6) (COM velocity, angular velocity; world)."""
         scene = self.scene
         n = len(scene.objects)
         poses = tuple(scene.object_pose(q, i) for i in range(n))
-        twists = np.zeros((n, 6))
-        for i, pose in enumerate(poses):
-            local = v[self._object_v[i]]
-            if len(local) == 6:  # world-aligned linear velocity, body angular velocity
-                twists[i, :3], twists[i, 3:] = local[:3], pose.rotation @ local[3:]
-            else:  # spring-mounted: slides along its direction
-                twists[i, :3] = local[0] * scene.objects[i].direction
-        bodies = tuple(self._pair_bodies[k] for k in contacts.pair)
-        return State(
-            t, q[: scene.nq_hand].copy(), v[: self._nvh].copy(), poses, twists, contacts.point, contacts.normal,
-            contacts.force, bodies, q, v, memory, self.actuation.modes().copy(),
-        )  # fmt: skip
+        return poses, np.array([scene.object_twist(q, v, i) for i in range(n)]).reshape(n, 6)
+
+    def _memory(self, state: State) -> Any:
+        """The contact memory a step from ``state`` starts with, as its engine needs it."""
+        source = getattr(state, "_source", None) if isinstance(state, SimulatedState) else None
+        memory = source.memory if source is not None else state.contact_memory
+        if memory is None:
+            return ContactMemory.empty()
+        if self._compiled is None and not isinstance(memory, ContactMemory):
+            return memory_of(memory)  # a compiled run's state continued by the Python engine
+        return memory
 
     # ------------------------------------------------------------------ one step
     def step(self, state: State, u: Any, disturbance: Any = None) -> tuple[State, StepInfo]:
@@ -166,18 +218,22 @@ class Simulator:
         Raises:
             SimulationDiverged: Non-finite input or state, runaway speed or penetration.
         """
-        return self._advance(state, u, self._disturbance(disturbance, "disturbance"))
+        return self._advance(state, self._input(u, state.t), self._disturbance(disturbance, "disturbance"))
 
-    def _advance(self, state: State, u: Any, disturbance: np.ndarray | None) -> tuple[State, StepInfo]:
-        """:meth:`step` with a disturbance already checked (``None`` or finite joint torques)."""
+    def _input(self, u: Any, t: float) -> np.ndarray:
+        """The control input as a finite float array of shape (n_inputs,)."""
         u = np.asarray(u, dtype=float)
         if u.shape != (self.actuation.n_inputs,):
             raise InputError(f"`u` must have shape ({self.actuation.n_inputs},), got shape {u.shape}")
-        if not np.all(np.isfinite(u)):
-            raise SimulationDiverged(state.t, "control input u", u.tolist(), "the controller returned NaN/inf")
+        if not math.isfinite(u.dot(u)) and not np.isfinite(u).all():  # the dot product: one cheap test per step
+            raise SimulationDiverged(t, "control input u", u.tolist(), "the controller returned NaN/inf")
+        return u
+
+    def _advance(self, state: State, u: np.ndarray, disturbance: np.ndarray | None) -> tuple[State, StepInfo]:
+        """:meth:`step` with the input and disturbance already checked (``None`` or finite joint torques)."""
         q, v = state.scene_q, state.scene_v
         # The step depends only on the state: its contact memory and actuation modes, not the last run's.
-        memory = state.contact_memory if state.contact_memory is not None else ContactMemory.empty()
+        memory = self._memory(state)
         self.actuation.restore(state.actuation_modes, q[: self.scene.nq_hand])
         tau_hand = self.actuation.joint_torques(u)
         if disturbance is not None:
@@ -480,7 +536,7 @@ class Simulator:
         for k in iterator:
             if k % hold == 0:
                 sensed = _noisy(state, sensor_noise, rng)
-                u = np.array(controller(state.t, sensed), dtype=float)
+                u = self._input(np.array(controller(state.t, sensed), dtype=float), state.t)
             if k % record_every == 0:
                 recorder.add(state, u, info, getattr(controller, "log", None))
             torque = self._disturbance(disturbance(state.t), "disturbance(t)") if callable(disturbance) else disturbance

@@ -17,9 +17,12 @@ import pinocchio as pin
 from bhgrasp.errors import InputError
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class State:
     """One instant of a simulation (or of a real hand's sensors).
+
+    A simulator's states are :class:`SimulatedState`: the same fields, those derived from the scene's
+    configuration and the step's contacts built when first read.
 
     Attributes:
         t: Time [s].
@@ -52,6 +55,61 @@ class State:
     scene_v: np.ndarray | None = None
     contact_memory: Any = None
     actuation_modes: np.ndarray | None = None
+
+
+DERIVED_FIELDS = frozenset(
+    ("q", "v", "object_poses", "object_twists", "contact_points", "contact_normals", "contact_forces",
+     "contact_bodies", "contact_memory")
+)  # fmt: skip
+
+
+class SimulatedState(State):
+    """A :class:`State` a simulator stepped to: the fields in :data:`DERIVED_FIELDS` are built when first read.
+
+    A step keeps the scene's ``q``, ``v``, its contacts and contact memory as the engine returned them (the compiled
+    engine's arrays stay in C++ objects); the hand's ``q`` and ``v``, the object poses and twists, the contact arrays
+    and body names and the :class:`~bhgrasp.sim.contact.ContactMemory` are made from them on first access and kept.
+    Reading a field gives the same value as an eagerly built :class:`State` would hold; ``dataclasses.replace``
+    and pickling build every field first.
+    """
+
+    __slots__ = ("_source",)
+
+    def __getattr__(self, name: str) -> Any:
+        """Build a derived field on first access (Python calls this only for a field not set yet)."""
+        if name not in DERIVED_FIELDS:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        try:
+            source = object.__getattribute__(self, "_source")
+        except AttributeError:  # made by dataclasses.replace or unpickled: every field was given
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}") from None
+        for field_name, value in source.derive(name, self).items():
+            object.__setattr__(self, field_name, value)
+        return object.__getattribute__(self, name)
+
+    @classmethod
+    def lazy(cls, t: float, scene_q: np.ndarray, scene_v: np.ndarray, modes: np.ndarray, source: Any) -> SimulatedState:
+        """A state with its time, scene ``q``, ``v`` and actuation modes, the rest built by ``source.derive``.
+
+        ``source.derive(name, state)`` returns a dict of derived fields that includes ``name`` (it may add others
+        it computed on the way, e.g. twists with poses).
+        """
+        state = object.__new__(cls)
+        set_t, set_q, set_v, set_modes, set_source = _SETTERS
+        set_t(state, t)
+        set_q(state, scene_q)
+        set_v(state, scene_v)
+        set_modes(state, modes)
+        set_source(state, source)
+        return state
+
+
+# the slots' own setters (a frozen dataclass refuses attribute assignment; these bypass it, as its __init__ does)
+_SETTERS = tuple(
+    owner.__dict__[name].__set__
+    for owner, name in ((State, "t"), (State, "scene_q"), (State, "scene_v"), (State, "actuation_modes"),
+                        (SimulatedState, "_source"))
+)  # fmt: skip
 
 
 _ARRAYS = (
