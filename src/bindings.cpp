@@ -4,10 +4,12 @@
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
 #include "batch.hpp"
 #include "engine.hpp"
+#include "grasp.hpp"
 #include "recording.hpp"
 
 namespace nb = nanobind;
@@ -15,7 +17,7 @@ using namespace nb::literals;
 
 NB_MODULE(_core, m) {
   using namespace bhgrasp;
-  m.doc() = "bhgrasp's compiled core: the simulation step on Pinocchio's and coal's C++ API.";
+  m.doc() = "bhgrasp's compiled core: the simulation step and the grasp kinematics on Pinocchio's and coal's C++ API.";
   nb::class_<ContactLaw>(m, "ContactLaw")
       .def(nb::init<>())
       .def_rw("stiffness", &ContactLaw::stiffness)
@@ -145,4 +147,23 @@ NB_MODULE(_core, m) {
       .def("gravity", &Batch::gravity, "threads"_a, nb::call_guard<nb::gil_scoped_release>())
       .def("frame_jacobians", &Batch::frame_jacobians, "frames"_a, "threads"_a,
            nb::call_guard<nb::gil_scoped_release>());
+
+  nb::class_<GraspKinematics>(m, "GraspKinematics")
+      .def(nb::init<const std::string&>(), "model"_a)
+      // the maps copied out as writable arrays (the kernel's own are overwritten by its next call), in the order of
+      // bhgrasp.grasp_dynamics.GraspKinematics
+      .def(
+          "compute",
+          [](GraspKinematics& kernel, const Eigen::Matrix3d& base_rotation, const Eigen::Vector3d& base_translation,
+             const GraspKinematics::ConstVector& q, const Eigen::Vector3d& com, const Vector6& twist,
+             const GraspKinematics::ConstRows& points, const GraspKinematics::ConstRows& frames,
+             const std::vector<int>& joints) {
+            const GraspMaps& maps =
+                kernel.compute(base_rotation, base_translation, q, com, twist, points, frames, joints);
+            return std::make_tuple(maps.joint_map, maps.joint_map_rate, maps.grasp_map, maps.hand_jacobian,
+                                   maps.hand_jacobian_pinv);
+          },
+          "base_rotation"_a, "base_translation"_a, "q"_a, "com"_a, "twist"_a, "points"_a, "frames"_a, "joints"_a)
+      .def_prop_ro("nq", &GraspKinematics::nq)
+      .def_prop_ro("nv", &GraspKinematics::nv);
 }
