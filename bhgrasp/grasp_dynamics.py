@@ -31,6 +31,9 @@ derivative is Golub and Pereyra's (SIAM J. Numer. Anal. 10(2), 1973, (4.12)), ex
 constant (J (9, 8) has full column rank for the Barrett hand's three fingertip contacts; with two contacts J (6, nv)
 has full row rank and the third term carries the null-space motion).  P is the same in contact and world
 coordinates (J_h = R^T J and G = G_w R with R = blockdiag(R_i) orthogonal, so J_h^+ G^T = J^+ G_w^T).
+
+:func:`contact_kinematics` runs these formulas compiled (``src/grasp.cpp``); :func:`contact_kinematics_python` is
+their readable twin.
 """
 
 from __future__ import annotations
@@ -145,6 +148,11 @@ def contact_kinematics(
 ) -> GraspKinematics:
     """:func:`grasp_kinematics` from validated world data (the control laws' hot path: nothing is checked).
 
+    Runs the compiled kernel (``src/grasp.cpp``, one per hand, its own Pinocchio data) when ``bhgrasp._core``
+    loads; without it, its Python twin :func:`contact_kinematics_python` (same maths, same results to round-off:
+    ``tests/test_grasp_kernels.py``), silently.  The hand's current :attr:`~bhgrasp.hand.Hand.base_placement` is
+    read on every call; its model must not change after the first.
+
     Args:
         hand: The hand.
         q: Joint positions (nq,) [rad].
@@ -153,6 +161,19 @@ def contact_kinematics(
         frames: (n, 3, 3) contact frames [t1, t2, n] (columns, world), as :func:`~bhgrasp.grasp.contact_frames`.
         joints: n Pinocchio joint ids, the joint whose body carries each contact (:func:`parent_joints`).
     """
+    kernel = _kernel(hand)
+    if kernel is None:
+        return contact_kinematics_python(hand, q, obj, points, frames, joints)
+    placement = hand.base_placement
+    com, twist = np.asarray(obj.com, dtype=float), np.asarray(obj.twist, dtype=float)
+    return GraspKinematics(*kernel.compute(placement.rotation, placement.translation, q, com, twist, points,
+                                           frames.reshape(-1, 3), joints))  # fmt: skip
+
+
+def contact_kinematics_python(
+    hand: Hand, q: np.ndarray, obj: ObjectState, points: np.ndarray, frames: np.ndarray, joints: Any
+) -> GraspKinematics:
+    """:func:`contact_kinematics` in NumPy and Pinocchio's Python API: the readable twin of the compiled kernel."""
     model, data = hand.model, hand.data
     count, nv = points.shape[0], model.nv
     com, twist = np.asarray(obj.com, dtype=float), np.asarray(obj.twist, dtype=float)
@@ -231,6 +252,25 @@ def _hand_index(hand: Hand) -> _HandIndex:
                 masks[joint, start : start + model.joints[ancestor].nv] = 1.0
         index = _INDEX[hand] = _HandIndex(masks, {frame.name: frame.parentJoint for frame in model.frames})
     return index
+
+
+_KERNELS: weakref.WeakKeyDictionary[Hand, Any] = weakref.WeakKeyDictionary()
+
+
+def _kernel(hand: Hand) -> Any:
+    """The hand's compiled ``_core.GraspKinematics``, built on first use; ``None`` if ``bhgrasp._core`` is missing."""
+    try:
+        return _KERNELS[hand]
+    except KeyError:
+        pass
+    try:
+        from bhgrasp import _core
+    except ImportError:
+        kernel = None
+    else:
+        kernel = _core.GraspKinematics(hand.model.saveToString())
+    _KERNELS[hand] = kernel
+    return kernel
 
 
 # skew(x) = x @ _LEVI_CIVITA reshaped (3, 3): skew(x)[i, j] = -eps_ijk x_k
@@ -318,6 +358,7 @@ __all__ = [
     "GraspKinematics",
     "ObjectState",
     "contact_kinematics",
+    "contact_kinematics_python",
     "grasp_dynamics",
     "grasp_kinematics",
     "grasp_mobility",
