@@ -49,6 +49,7 @@ from bhgrasp._validation import as_array, as_positive, as_vector, require_name
 from bhgrasp.errors import InputError
 from bhgrasp.grasp import _frames, contact_frames
 from bhgrasp.hand import Hand
+from bhgrasp.sim.compiled import optional_core
 
 
 @dataclass(frozen=True)
@@ -263,12 +264,8 @@ def _kernel(hand: Hand) -> Any:
         return _KERNELS[hand]
     except KeyError:
         pass
-    try:
-        from bhgrasp import _core
-    except ImportError:
-        kernel = None
-    else:
-        kernel = _core.GraspKinematics(hand.model.saveToString())
+    core = optional_core()
+    kernel = None if core is None else core.GraspKinematics(hand.model.saveToString())
     _KERNELS[hand] = kernel
     return kernel
 

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bhgrasp.hand import Hand
+from bhgrasp.sim.compiled import optional_core
 from bhgrasp.sim.state import State
 
 
@@ -56,13 +57,43 @@ class ContactSensing:
                 if frame.parentJoint in joints:
                     self._finger_of.setdefault(frame.name, finger)
         self._empty = FingerContact(np.zeros(3), 0.0, np.zeros(3), 0)
+        self._finger_index = {link: self.hand.fingers.index(finger) for link, finger in self._finger_of.items()}
 
     def finger_of(self, link: str) -> str | None:
         """The finger a link frame belongs to (``None`` for the palm or a frame of no finger)."""
         return self._finger_of.get(link)
 
     def fingers(self, state: State) -> dict[str, FingerContact]:
-        """Per finger (every finger of the hand), its contacts in ``state``."""
+        """Per finger (every finger of the hand), its contacts in ``state``.
+
+        Sums in the compiled kernel (``src/sensing.cpp``) when ``bhgrasp._core`` loads, otherwise in
+        :meth:`_fingers_python` (the same sums; tests/test_sensing_kernels.py holds them together).
+        """
+        core = optional_core()
+        if core is None:
+            return self._fingers_python(state)
+        bodies = state.contact_bodies
+        index = self._finger_index
+        finger = np.array([index.get(link, -1) for link, _ in bodies], dtype=np.int64)
+        fingers = self.hand.fingers
+        if not len(finger):
+            return dict.fromkeys(fingers, self._empty)
+        sums = core.finger_contacts(finger, len(fingers), state.contact_points, state.contact_normals,
+                                    state.contact_forces)  # fmt: skip
+        force, normal_force, normal, count = sums.force, sums.normal_force, sums.normal, sums.count
+        point, strongest = sums.point, sums.strongest
+        result = {}
+        for f, name in enumerate(fingers):
+            if not count[f]:
+                result[name] = self._empty
+                continue
+            row = int(strongest[f])
+            result[name] = FingerContact(force[f].copy(), float(normal_force[f]), normal[f].copy(), int(count[f]),
+                                         point[f].copy(), bodies[row][0] if row >= 0 else None)  # fmt: skip
+        return result
+
+    def _fingers_python(self, state: State) -> dict[str, FingerContact]:
+        """:meth:`fingers` in NumPy (the readable twin of the compiled sums)."""
         grouped: dict[str, list[int]] = {finger: [] for finger in self.hand.fingers}
         for k, (link, _) in enumerate(state.contact_bodies):
             finger = self._finger_of.get(link)

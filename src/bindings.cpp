@@ -11,6 +11,7 @@
 #include "engine.hpp"
 #include "grasp.hpp"
 #include "recording.hpp"
+#include "sensing.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -109,6 +110,17 @@ NB_MODULE(_core, m) {
       .def_ro("sticking", &Contacts::sticking)
       .def_ro("was_sliding", &Contacts::was_sliding)
       .def("__len__", &Contacts::size);
+  nb::class_<FingerSums>(m, "FingerSums")
+      .def_ro("force", &FingerSums::force)
+      .def_ro("normal_force", &FingerSums::normal_force)
+      .def_ro("normal", &FingerSums::normal)
+      .def_ro("count", &FingerSums::count)
+      .def_ro("point", &FingerSums::point)
+      .def_ro("strongest", &FingerSums::strongest);
+  m.def("finger_contacts", &finger_contacts, "finger"_a, "fingers"_a, "points"_a, "normals"_a, "forces"_a,
+        "Per finger, its sensed contacts summed (bhgrasp.sensing.ContactSensing.fingers).");
+  m.def("object_regressor", &object_regressor, "rotation"_a, "omega"_a, "v_r"_a, "a_r"_a, "gravity"_a,
+        "Y_o (6, 7) of bhgrasp.controllers.adaptive_grasp.object_regressor.");
   m.def("concatenate", &concatenate, "parts"_a, "The contacts of many steps as one Contacts (rows in order).");
 
   nb::class_<Divergence>(m, "Divergence")

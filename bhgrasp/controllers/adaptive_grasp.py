@@ -37,6 +37,7 @@ from bhgrasp.controllers.object_space import grasp_maps, pose_gains
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.objects import RigidObject
+from bhgrasp.sim.compiled import optional_core
 from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
@@ -53,7 +54,21 @@ def object_parameters(mass: float, inertia: Any) -> np.ndarray:
 
 
 def object_regressor(rotation: Any, twist: Any, v_r: Any, a_r: Any, gravity: Any) -> np.ndarray:
-    """Y_o (6, 7) with Y_o sigma_o = M_o a_r + C_o(omega) v_r + N_o at the COM (world; see the module docstring)."""
+    """Y_o (6, 7) with Y_o sigma_o = M_o a_r + C_o(omega) v_r + N_o at the COM (world; see the module docstring).
+
+    Computed by the compiled kernel (``src/sensing.cpp``) when ``bhgrasp._core`` loads, otherwise by
+    :func:`object_regressor_python` (the same sums; tests/test_sensing_kernels.py holds them together).
+    """
+    rotation, omega = np.asarray(rotation, dtype=float), np.asarray(twist, dtype=float)[3:]
+    v_r, a_r = np.asarray(v_r, dtype=float), np.asarray(a_r, dtype=float)
+    core = optional_core()
+    if core is None:
+        return object_regressor_python(rotation, twist, v_r, a_r, gravity)
+    return core.object_regressor(rotation, omega, v_r, a_r, np.asarray(gravity, dtype=float))
+
+
+def object_regressor_python(rotation: Any, twist: Any, v_r: Any, a_r: Any, gravity: Any) -> np.ndarray:
+    """:func:`object_regressor` in NumPy (the readable twin of the compiled kernel)."""
     rotation, omega = np.asarray(rotation, dtype=float), np.asarray(twist, dtype=float)[3:]
     v_r, a_r = np.asarray(v_r, dtype=float), np.asarray(a_r, dtype=float)
     regressor = np.zeros((6, 7))
@@ -196,4 +211,4 @@ class SMCAdaptiveGrasp(ObjectGraspController):
                         mass_estimate=self.object_estimate[:1])  # fmt: skip
 
 
-__all__ = ["SMCAdaptiveGrasp", "object_parameters", "object_regressor"]
+__all__ = ["SMCAdaptiveGrasp", "object_parameters", "object_regressor", "object_regressor_python"]

@@ -24,6 +24,15 @@ if TYPE_CHECKING:
 _INTEGRATORS = {"implicit": 0, "semi-implicit": 1, "rk4": 2}
 
 
+def optional_core():
+    """The compiled extension ``bhgrasp._core``, or ``None`` when it does not load (for kernels with a Python twin)."""
+    try:
+        from bhgrasp import _core
+    except ImportError:
+        return None
+    return _core
+
+
 def core_module():
     """The compiled extension ``bhgrasp._core``.
 
@@ -163,4 +172,6 @@ def contact_set(contacts) -> ContactSet:
     )  # fmt: skip
 
 
-__all__ = ["CompiledStep", "contact_set", "core_module", "drive_of", "memory_of", "native_memory", "settings"]
+__all__ = [
+    "CompiledStep", "contact_set", "core_module", "drive_of", "memory_of", "native_memory", "optional_core", "settings",
+]  # fmt: skip

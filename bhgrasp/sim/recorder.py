@@ -8,6 +8,7 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp.sim.actuation import Actuation
+from bhgrasp.sim.compiled import optional_core
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.state import State, Trajectory
 
@@ -82,7 +83,7 @@ class Recorder:
 
         A compiled run's contacts are joined in C++ (one call instead of six array reads per sample).
         """
-        core = _core()
+        core = optional_core()
         if core is not None and parts and all(isinstance(part, core.Contacts) for part in parts):
             parts = [core.concatenate(parts)]
         arrays = {}
@@ -123,15 +124,6 @@ class Recorder:
             object_names=tuple(scene.object_names),
             pair_bodies=np.array([(p.body_a, p.body_b) for p in scene.pairs], dtype=str).reshape(-1, 2),
         )
-
-
-def _core():
-    """The compiled core, or ``None`` without it (a Python-engine run records the same arrays)."""
-    try:
-        from bhgrasp import _core
-    except ImportError:
-        return None
-    return _core
 
 
 def _rotate(quaternions: np.ndarray, vectors: np.ndarray) -> np.ndarray:

@@ -1,0 +1,88 @@
+#include "sensing.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace bhgrasp {
+
+FingerSums finger_contacts(const Indices& finger, Eigen::Index fingers, const Points& points, const Points& normals,
+                           const Points& forces) {
+  const Eigen::Index m = finger.size();
+  if (points.rows() != m || normals.rows() != m || forces.rows() != m || fingers < 0)
+    throw std::invalid_argument("finger, points, normals and forces must have one row per contact");
+  FingerSums sums;
+  sums.force.setZero(fingers, 3);
+  sums.normal_force.setZero(fingers);
+  sums.normal.setZero(fingers, 3);
+  sums.count.setZero(fingers);
+  sums.point.setZero(fingers, 3);
+  sums.strongest.setConstant(fingers, -1);
+  Vector weight_sum = Vector::Zero(fingers), best = Vector::Constant(fingers, -1.0);
+  Points pressing_normal = Points::Zero(fingers, 3), plain_normal = Points::Zero(fingers, 3);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    const Eigen::Index f = finger[k];
+    if (f < 0) continue;
+    if (f >= fingers) throw std::invalid_argument("a contact's finger index is out of range");
+    const double component = forces.row(k).dot(normals.row(k));  // n . f
+    const double weight = std::max(component, 0.0);
+    sums.force.row(f) += forces.row(k);
+    sums.normal_force[f] += component;
+    sums.count[f] += 1;
+    weight_sum[f] += weight;
+    pressing_normal.row(f) += weight * normals.row(k);
+    plain_normal.row(f) += normals.row(k);
+    sums.point.row(f) += weight * points.row(k);
+    if (weight > best[f]) {  // strict: the first of equal weights, as numpy.argmax
+      best[f] = weight;
+      sums.strongest[f] = k;
+    }
+  }
+  for (Eigen::Index f = 0; f < fingers; ++f) {
+    if (sums.count[f] == 0) continue;
+    const bool pressing = weight_sum[f] > 0.0;
+    const Eigen::RowVector3d mean = pressing ? pressing_normal.row(f) : plain_normal.row(f);
+    const double norm = mean.norm();
+    if (norm > 0.0) sums.normal.row(f) = mean / norm;
+    if (pressing) {
+      sums.point.row(f) /= weight_sum[f];
+    } else {
+      sums.point.row(f).setZero();
+      sums.strongest[f] = -1;
+    }
+  }
+  return sums;
+}
+
+namespace {
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& x) {
+  Eigen::Matrix3d result;
+  result << 0.0, -x.z(), x.y(), x.z(), 0.0, -x.x(), -x.y(), x.x(), 0.0;
+  return result;
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 6, 7, Eigen::RowMajor> object_regressor(const Eigen::Matrix3d& rotation,
+                                                               const Eigen::Vector3d& omega,
+                                                               const Eigen::Matrix<double, 6, 1>& v_r,
+                                                               const Eigen::Matrix<double, 6, 1>& a_r,
+                                                               const Eigen::Vector3d& gravity) {
+  static constexpr int kEntries[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};  // I_xx, I_xy, ... I_zz
+  Eigen::Matrix<double, 6, 7, Eigen::RowMajor> regressor = Eigen::Matrix<double, 6, 7, Eigen::RowMajor>::Zero();
+  regressor.block<3, 1>(0, 0) = a_r.head<3>() - gravity;
+  const Eigen::Vector3d w = v_r.tail<3>(), alpha = a_r.tail<3>();
+  const Eigen::Matrix3d omega_skew = skew(omega), w_skew = skew(w);
+  const Eigen::Vector3d omega_w = omega_skew * w;
+  for (int k = 0; k < 6; ++k) {
+    Eigen::Matrix3d basis = Eigen::Matrix3d::Zero();
+    basis(kEntries[k][0], kEntries[k][1]) = basis(kEntries[k][1], kEntries[k][0]) = 1.0;
+    const Eigen::Matrix3d inertia = rotation * basis * rotation.transpose();  // R B_k R^T
+    // I_k alpha + (omega x I_k w - I_k (omega x w) + w x I_k omega) / 2
+    const Eigen::Vector3d coriolis = omega_skew * (inertia * w) - inertia * omega_w + w_skew * (inertia * omega);
+    regressor.block<3, 1>(3, k + 1) = inertia * alpha + 0.5 * coriolis;
+  }
+  return regressor;
+}
+
+}  // namespace bhgrasp

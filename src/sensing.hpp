@@ -1,0 +1,36 @@
+// What a grasp controller reads from sensed contacts, per finger (bhgrasp/sensing.py: ContactSensing.fingers):
+// the contacts of each finger summed, with the force-weighted normal and point of the pressing ones.
+// The Python twin is ContactSensing._fingers_python; tests/test_sensing_kernels.py holds both to round-off.
+// Units SI, world frame; rows of (m, 3) arrays are contacts, as NumPy's.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "engine.hpp"
+
+namespace bhgrasp {
+
+struct FingerSums {
+  Points force;         // (F, 3) total force the finger exerts on the object [N]
+  Vector normal_force;  // (F,) sum of n . f [N]
+  Points normal;        // (F, 3) force-weighted mean unit normal of the pressing contacts (all contacts' sum
+                        // normalised when none presses; zeros without contacts)
+  Indices count;        // (F,) number of contacts
+  Points point;         // (F, 3) force-weighted mean point of the pressing contacts [m] (zeros when none presses)
+  Indices strongest;    // (F,) row of the contact that presses hardest (the first of equals); -1 when none presses
+};
+
+// `finger[k]`: the finger (0 .. fingers - 1) of contact k, or -1 for a contact of no finger; `points`, `normals`
+// (unit, finger -> object) and `forces` (on the object) (m, 3).  Sizes are checked (std::invalid_argument).
+FingerSums finger_contacts(const Indices& finger, Eigen::Index fingers, const Points& points, const Points& normals,
+                           const Points& forces);
+
+// Y_o (6, 7) of bhgrasp.controllers.adaptive_grasp.object_regressor: Y_o sigma_o = M_o a_r + C_o(omega) v_r + N_o
+// at the COM, world, for sigma_o = (m, I_xx, I_xy, I_xz, I_yy, I_yz, I_zz) (body-frame inertia about the COM).
+Eigen::Matrix<double, 6, 7, Eigen::RowMajor> object_regressor(const Eigen::Matrix3d& rotation,
+                                                               const Eigen::Vector3d& omega,
+                                                               const Eigen::Matrix<double, 6, 1>& v_r,
+                                                               const Eigen::Matrix<double, 6, 1>& a_r,
+                                                               const Eigen::Vector3d& gravity);
+
+}  // namespace bhgrasp
