@@ -44,6 +44,7 @@ import numpy as np
 from bhgrasp._validation import as_array, as_positive, as_real, as_vector
 from bhgrasp.errors import BhgraspError, InputError
 from bhgrasp.hand import Hand
+from bhgrasp.sim.compiled import optional_core
 
 TANGENT_SWITCH = 0.9  # |n . x| above which the tangent t1 is built from the world y-axis instead of the x-axis
 ZERO_NORMAL = 1e-12  # a normal shorter than this is rejected as zero
@@ -66,7 +67,14 @@ def contact_frames(normals: Any) -> np.ndarray:
     Raises:
         InputError: Wrong shape, or a zero or non-finite normal (the message names the contact index).
     """
-    return _frames(_unit_normals(normals))
+    normals = _rows(normals, "normals")
+    core = optional_core()
+    if core is None:
+        return _frames(_unit_normals(normals))
+    frames, zero = core.contact_frames(normals, ZERO_NORMAL, TANGENT_SWITCH)  # src/sensing.cpp, _frames' twin
+    if zero >= 0:
+        _unit_normals(normals)  # raises InputError naming the zero normals
+    return frames.reshape(-1, 3, 3)
 
 
 def _frames(unit: np.ndarray) -> np.ndarray:

@@ -3,6 +3,7 @@
 // boundary serialised: pin.Model.saveToString() / pin.GeometryModel.saveToString().
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
+#include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
@@ -121,6 +122,15 @@ NB_MODULE(_core, m) {
         "Per finger, its sensed contacts summed (bhgrasp.sensing.ContactSensing.fingers).");
   m.def("object_regressor", &object_regressor, "rotation"_a, "omega"_a, "v_r"_a, "a_r"_a, "gravity"_a,
         "Y_o (6, 7) of bhgrasp.controllers.adaptive_grasp.object_regressor.");
+  m.def(
+      "contact_frames",
+      [](const Points& normals, double zero_length, double switch_x) {
+        Eigen::Index zero = -1;
+        Points frames = contact_frames(normals, zero_length, switch_x, zero);
+        return std::make_pair(std::move(frames), zero);
+      },
+      "normals"_a, "zero_length"_a, "switch_x"_a,
+      "Contact frames (3m, 3) of bhgrasp.grasp.contact_frames and the first zero normal's index (-1: none).");
   m.def("concatenate", &concatenate, "parts"_a, "The contacts of many steps as one Contacts (rows in order).");
 
   nb::class_<Divergence>(m, "Divergence")

@@ -1,6 +1,7 @@
 #include "sensing.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace bhgrasp {
@@ -83,6 +84,28 @@ Eigen::Matrix<double, 6, 7, Eigen::RowMajor> object_regressor(const Eigen::Matri
     regressor.block<3, 1>(3, k + 1) = inertia * alpha + 0.5 * coriolis;
   }
   return regressor;
+}
+
+Points contact_frames(const Points& normals, double zero_length, double switch_x, Eigen::Index& zero) {
+  const Eigen::Index m = normals.rows();
+  Points frames(3 * m, 3);
+  zero = -1;
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const Eigen::RowVector3d normal = normals.row(i);
+    const double length = std::sqrt(normal.dot(normal));
+    if (length < zero_length && zero < 0) zero = i;
+    const Eigen::RowVector3d unit = normal / length;
+    const Eigen::RowVector3d axis = std::abs(unit.x()) > switch_x ? Eigen::RowVector3d::UnitY() : Eigen::RowVector3d::UnitX();
+    Eigen::RowVector3d t1 = axis - axis.dot(unit) * unit;
+    t1 /= std::sqrt(t1.dot(t1));
+    auto frame = frames.middleRows<3>(3 * i);
+    frame.col(0) = t1.transpose();
+    frame.col(2) = unit.transpose();
+    frame(0, 1) = unit.y() * t1.z() - unit.z() * t1.y();
+    frame(1, 1) = unit.z() * t1.x() - unit.x() * t1.z();
+    frame(2, 1) = unit.x() * t1.y() - unit.y() * t1.x();
+  }
+  return frames;
 }
 
 }  // namespace bhgrasp

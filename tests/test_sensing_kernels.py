@@ -1,4 +1,4 @@
-"""The compiled sensing and object-regressor kernels (src/sensing.cpp) against their NumPy twins.
+"""The compiled sensing, contact-frame and object-regressor kernels (src/sensing.cpp) against their NumPy twins.
 
 Truths: the twins (bhgrasp.sensing.ContactSensing._fingers_python, adaptive_grasp.object_regressor_python), and
 for the regressor also its defining identity Y_o sigma_o = M_o a_r + C_o(omega) v_r + N_o written out with the
@@ -14,7 +14,9 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.controllers.adaptive_grasp import object_parameters, object_regressor, object_regressor_python
+from bhgrasp.errors import InputError
 from bhgrasp.experiments.hold import reference_hold
+from bhgrasp.grasp import _frames, _unit_normals, contact_frames
 from bhgrasp.sensing import ContactSensing
 from bhgrasp.sim.compiled import optional_core
 
@@ -110,3 +112,21 @@ def test_object_regressor_matches_its_twin_and_its_definition() -> None:
         sigma = object_parameters(rng.uniform(0.1, 1.0), rotation.T @ inertia @ rotation)
         np.testing.assert_allclose(compiled @ sigma, regressor_truth(rotation, twist, v_r, a_r, gravity, sigma),
                                    rtol=0, atol=RELATIVE * scale)  # fmt: skip
+
+
+def test_contact_frames_match_the_numpy_twin() -> None:
+    """Random normals of any length, some across the tangent switch |n_x| = 0.9, the axes themselves."""
+    rng = np.random.default_rng(3)
+    normals = rng.normal(size=(500, 3)) * rng.uniform(1e-3, 1e3, size=(500, 1))
+    normals[:50] = np.c_[np.full(50, 0.9), rng.normal(scale=1e-3, size=(50, 2))]  # at the switch
+    normals[50:56] = np.vstack((np.eye(3), -np.eye(3)))
+    compiled = contact_frames(normals)
+    np.testing.assert_allclose(compiled, _frames(_unit_normals(normals)), rtol=0, atol=RELATIVE)
+    np.testing.assert_allclose(compiled.transpose(0, 2, 1) @ compiled, np.broadcast_to(np.eye(3), (500, 3, 3)),
+                               rtol=0, atol=RELATIVE)  # fmt: skip
+    np.testing.assert_allclose(np.linalg.det(compiled), 1.0, rtol=0, atol=RELATIVE)
+
+
+def test_a_zero_normal_is_named() -> None:
+    with pytest.raises(InputError, match=r"zero normal at contact index \[1\]"):
+        contact_frames([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
