@@ -72,6 +72,7 @@ class Hand:
         self._base_at_origin = True  # skip world <- base products when the base frame is the world frame
         self._lower_triangle = np.tril_indices(model.nv, -1)
         self._gravity_world = np.zeros(3)
+        self._dynamics_kernel: Any = False  # not built yet (_dynamics)
         self.base_placement = base_placement if base_placement is not None else pin.SE3.Identity()
         self.gravity = gravity
 
@@ -229,7 +230,21 @@ class Hand:
         self._update_model_gravity()
 
     def _update_model_gravity(self) -> None:
-        self._model.gravity.linear = self._placement.rotation.T @ self._gravity_world
+        self._model_gravity = self._placement.rotation.T @ self._gravity_world
+        self._model.gravity.linear = self._model_gravity
+
+    def _dynamics(self) -> Any:
+        """The compiled ``_core.HandDynamics`` of this hand's model, built on first use (``None`` without the core).
+
+        It holds a copy of the model: the hand's inertias must not be changed in place afterwards
+        (:meth:`perturbed` makes a new hand); gravity is passed at every call.
+        """
+        if self._dynamics_kernel is False:
+            from bhgrasp.sim.compiled import optional_core  # here: bhgrasp.sim imports this module
+
+            core = optional_core()
+            self._dynamics_kernel = None if core is None else core.HandDynamics(self._model.saveToString())
+        return self._dynamics_kernel
 
     # ------------------------------------------------------------------ configurations
     def neutral(self) -> np.ndarray:
@@ -433,6 +448,13 @@ class Hand:
         C(q, v) v_r = (h(v + v_r) - h(v - v_r)) / 4.  Three RNEA passes, no matrix is formed.
         """
         q, v, v_r, a_r = self._q(q), self._v(v, "v"), self._v(v_r, "v_r"), self._v(a_r, "a_r")
+        kernel = self._dynamics()
+        if kernel is None:
+            return self._slotine_li_torque_python(q, v, v_r, a_r)
+        return kernel.slotine_li_torque(self._model_gravity, q, v, v_r, a_r)
+
+    def _slotine_li_torque_python(self, q: np.ndarray, v: np.ndarray, v_r: np.ndarray, a_r: np.ndarray) -> np.ndarray:
+        """:meth:`slotine_li_torque` through Pinocchio's Python API (the twin of the compiled ``HandDynamics``)."""
         model, data, zero = self._model, self._data, np.zeros(self._model.nv)
         plus = pin.rnea(model, data, q, v + v_r, zero).copy()
         minus = pin.rnea(model, data, q, v - v_r, zero)  # gravity cancels in the difference
@@ -531,6 +553,12 @@ class Hand:
                 f"  finger {finger}: tip {self._fingertips[finger]!r}, joints {', '.join(self.finger_joints(finger))}"
             )
         return "\n".join(lines)
+
+    def __getstate__(self) -> dict:
+        """Copies and pickles rebuild the compiled kernel on first use (it is not picklable)."""
+        state = self.__dict__.copy()
+        state["_dynamics_kernel"] = False
+        return state
 
     def __repr__(self) -> str:
         return f"Hand({self.name!r}, nq={self.nq}, fingers={self.fingers})"

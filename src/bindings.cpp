@@ -9,6 +9,7 @@
 #include <nanobind/stl/vector.h>
 
 #include "batch.hpp"
+#include "dynamics.hpp"
 #include "engine.hpp"
 #include "grasp.hpp"
 #include "recording.hpp"
@@ -169,6 +170,18 @@ NB_MODULE(_core, m) {
       .def("gravity", &Batch::gravity, "threads"_a, nb::call_guard<nb::gil_scoped_release>())
       .def("frame_jacobians", &Batch::frame_jacobians, "frames"_a, "threads"_a,
            nb::call_guard<nb::gil_scoped_release>());
+
+  nb::class_<HandDynamics>(m, "HandDynamics")
+      .def(nb::init<const std::string&>(), "model"_a)
+      .def(
+          "slotine_li_torque",
+          [](HandDynamics& kernel, const Eigen::Vector3d& gravity, const HandDynamics::ConstVector& q,
+             const HandDynamics::ConstVector& v, const HandDynamics::ConstVector& v_r,
+             const HandDynamics::ConstVector& a_r) -> Eigen::VectorXd {
+            return kernel.slotine_li_torque(gravity, q, v, v_r, a_r);  // a copy: the kernel's is overwritten
+          },
+          "gravity"_a, "q"_a, "v"_a, "v_r"_a, "a_r"_a)
+      .def_prop_ro("nv", &HandDynamics::nv);
 
   nb::class_<GraspKinematics>(m, "GraspKinematics")
       .def(nb::init<const std::string&>(), "model"_a)
