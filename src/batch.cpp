@@ -41,6 +41,7 @@ Batch::Batch(const std::string& model, const std::string& geometry, const Settin
   if (size < 1) throw std::invalid_argument("a batch needs at least one environment");
   for (int i = 0; i < size; ++i) engines_.push_back(std::make_unique<Engine>(model, geometry, settings));
   memories_.resize(static_cast<std::size_t>(size));
+  modes_.assign(static_cast<std::size_t>(size), Modes{{0, 0, 0}});
   contacts_.resize(static_cast<std::size_t>(size));
   divergences_.resize(static_cast<std::size_t>(size));
   for (auto& memory : memories_) memory = Memory{Indices(0), Points(0, 3), Points(0, 3), Flags(0)};
@@ -69,6 +70,44 @@ void Batch::step(const Rows& tau_hand, const Drive& drive, double max_speed, dou
                                           drive, memories_[e], max_speed, max_penetration);
     divergences_[e] = result.divergence;
     if (result.divergence.kind) return;
+    q_.row(i) = result.q.transpose();
+    v_.row(i) = result.v.transpose();
+    memories_[e] = std::move(result.memory);
+    contacts_[e] = std::move(result.contacts);
+  });
+}
+
+void Batch::set_barrett(const Barrett& barrett) {
+  if (barrett.nv_hand != nv_hand_ || barrett.damping.size() != nv_hand_ || barrett.friction.size() != nv_hand_ ||
+      barrett.lower.size() != nv_hand_)
+    throw std::invalid_argument("the Barrett model does not fit the scene's hand");
+  barrett_ = barrett;
+  barrett_drives_.clear();
+  for (int code = 0; code < 27; ++code) barrett_drives_.push_back(barrett_drive(barrett_, {{code / 9, code / 3 % 3, code % 3}}));
+}
+
+void Batch::set_modes(int env, const Modes& modes) {
+  if (env < 0 || env >= size()) throw std::out_of_range("no such environment");
+  for (int mode : modes)
+    if (mode < 0 || mode > 2) throw std::invalid_argument("a TorqueSwitch mode is 0, 1 or 2");
+  modes_[static_cast<std::size_t>(env)] = modes;
+}
+
+void Batch::step_barrett(const Rows& u, double max_speed, double max_penetration, int threads) {
+  if (barrett_drives_.empty()) throw std::logic_error("no Barrett model: call set_barrett first");
+  if (u.rows() != size() || u.cols() != 4) throw std::invalid_argument("u must be (environments, 4) motor torques");
+  parallel_for(size(), threads, [&](int i) {
+    const auto e = static_cast<std::size_t>(i);
+    if (divergences_[e].kind) return;  // frozen where it diverged
+    Modes& modes = modes_[e];
+    const MotorInputs inputs = u.row(i).transpose();
+    const Drive& drive = barrett_drives_[static_cast<std::size_t>(9 * modes[0] + 3 * modes[1] + modes[2])];
+    StepResult result = engines_[e]->step(q_.row(i).transpose(), v_.row(i).transpose(),
+                                          barrett_torques(barrett_, modes, inputs), drive, memories_[e], max_speed,
+                                          max_penetration);
+    divergences_[e] = result.divergence;
+    if (result.divergence.kind) return;
+    barrett_update(barrett_, modes, result.q.head(nv_hand_), result.v.head(nv_hand_), inputs, result.drive);
     q_.row(i) = result.q.transpose();
     v_.row(i) = result.v.transpose();
     memories_[e] = std::move(result.memory);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "barrett.hpp"
 #include "engine.hpp"
 
 namespace bhgrasp {
@@ -30,6 +31,13 @@ class Batch {
   // One step of every environment that has not diverged: tau_hand (N, nv_hand) [N m].
   void step(const Rows& tau_hand, const Drive& drive, double max_speed, double max_penetration, int threads);
 
+  // Barrett hands: the model (its 27 mode drives are built here), each environment's TorqueSwitch modes, and one
+  // step from motor inputs u (N, 4) [N m]: torques and drive in each environment's modes, then its mode update.
+  void set_barrett(const Barrett& barrett);
+  void set_modes(int env, const Modes& modes);
+  const Modes& modes(int env) const { return modes_.at(static_cast<std::size_t>(env)); }
+  void step_barrett(const Rows& u, double max_speed, double max_penetration, int threads);
+
   const Rows& q() const { return q_; }  // (N, nq)
   const Rows& v() const { return v_; }  // (N, nv)
   const Memory& memory(int env) const { return memories_.at(static_cast<std::size_t>(env)); }
@@ -48,6 +56,9 @@ class Batch {
   std::vector<Divergence> divergences_;
   Rows q_, v_;
   int nv_hand_ = 0;
+  Barrett barrett_;
+  std::vector<Drive> barrett_drives_;  // by mode code 9 m0 + 3 m1 + m2 (empty: no Barrett model set)
+  std::vector<Modes> modes_;
 };
 
 }  // namespace bhgrasp

@@ -3,6 +3,7 @@
 // boundary serialised: pin.Model.saveToString() / pin.GeometryModel.saveToString().
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
+#include <nanobind/stl/array.h>
 #include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
@@ -155,6 +156,36 @@ NB_MODULE(_core, m) {
       .def_prop_ro("nq", &Engine::nq)
       .def_prop_ro("nv", &Engine::nv);
 
+  nb::class_<Barrett>(m, "Barrett")
+      .def(nb::init<>())
+      .def_rw("nv_hand", &Barrett::nv_hand)
+      .def_rw("spread_first", &Barrett::spread_first)
+      .def_rw("spread_second", &Barrett::spread_second)
+      .def_rw("proximal", &Barrett::proximal)
+      .def_rw("distal", &Barrett::distal)
+      .def_rw("spread_ratio", &Barrett::spread_ratio)
+      .def_rw("proximal_ratio", &Barrett::proximal_ratio)
+      .def_rw("distal_ratio", &Barrett::distal_ratio)
+      .def_rw("distal_alone_ratio", &Barrett::distal_alone_ratio)
+      .def_rw("max_motor_torque", &Barrett::max_motor_torque)
+      .def_rw("breakaway_torque", &Barrett::breakaway_torque)
+      .def_rw("motor_damping", &Barrett::motor_damping)
+      .def_rw("blocked_speed", &Barrett::blocked_speed)
+      .def_rw("saturate", &Barrett::saturate)
+      .def_rw("damping", &Barrett::damping)
+      .def_rw("friction", &Barrett::friction)
+      .def_rw("lower", &Barrett::lower);
+  m.def("barrett_drive", &barrett_drive, "barrett"_a, "modes"_a);
+  m.def("barrett_torques", &barrett_torques, "barrett"_a, "modes"_a, "u"_a);
+  m.def(
+      "barrett_update",
+      [](const Barrett& barrett, Modes modes, const Vector& q_hand, const Vector& v_hand, const MotorInputs& u,
+         const Vector& drive_torques) {
+        barrett_update(barrett, modes, q_hand, v_hand, u, drive_torques);
+        return modes;
+      },
+      "barrett"_a, "modes"_a, "q_hand"_a, "v_hand"_a, "u"_a, "drive_torques"_a);
+
   nb::class_<Batch>(m, "Batch")
       .def(nb::init<const std::string&, const std::string&, const Settings&, int>(), "model"_a, "geometry"_a,
            "settings"_a, "size"_a)
@@ -167,6 +198,11 @@ NB_MODULE(_core, m) {
       .def("memory", [](const Batch& batch, int env) { return Memory(batch.memory(env)); }, "env"_a)
       .def("contacts", [](const Batch& batch, int env) { return Contacts(batch.contacts(env)); }, "env"_a)
       .def("divergence", [](const Batch& batch, int env) { return Divergence(batch.divergence(env)); }, "env"_a)
+      .def("set_barrett", &Batch::set_barrett, "barrett"_a)
+      .def("set_modes", &Batch::set_modes, "env"_a, "modes"_a)
+      .def("modes", &Batch::modes, "env"_a)
+      .def("step_barrett", &Batch::step_barrett, "u"_a, "max_speed"_a, "max_penetration"_a, "threads"_a,
+           nb::call_guard<nb::gil_scoped_release>())
       .def("gravity", &Batch::gravity, "threads"_a, nb::call_guard<nb::gil_scoped_release>())
       .def("frame_jacobians", &Batch::frame_jacobians, "frames"_a, "threads"_a,
            nb::call_guard<nb::gil_scoped_release>());

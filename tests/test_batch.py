@@ -16,7 +16,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.experiments.box_grasp import box_grasp
 from bhgrasp.experiments.hold import POSTURE_GAIN, SQUEEZE, reference_hold
 from bhgrasp.sim import Simulator
-from bhgrasp.sim.actuation import BarrettActuation
+from bhgrasp.sim.actuation import Actuation, BarrettActuation
 from bhgrasp.sim.batch import BatchSimulator
 
 
@@ -118,7 +118,46 @@ def test_batch_errors_name_the_argument() -> None:
         batch.fingertip_jacobians(["F4"])
     with pytest.raises(InputError, match="`env` must be an environment index"):
         batch.state(2)
-    setup = box_grasp(actuation="barrett")
-    barrett = Simulator(setup.simulator.scene, actuation=BarrettActuation(setup.hand))
-    with pytest.raises(InputError, match="needs a FullyActuated actuation"):
-        BatchSimulator(barrett, [barrett.initial_state()])
+
+    class Gripper(Actuation):  # one motor closing every joint: a transmission the batch does not know
+        n_inputs = 1
+
+        def transmission(self):
+            return np.ones((self.hand.nv, 1))
+
+        def joint_torques(self, u):
+            return np.full(self.hand.nv, u[0])
+
+    gripper = Simulator(hold.simulator.scene, actuation=Gripper(hold.hand))
+    with pytest.raises(InputError, match="runs FullyActuated and BarrettActuation hands, got Gripper"):
+        BatchSimulator(gripper, [gripper.initial_state()])
+
+
+@pytest.mark.parametrize(("threads", "saturate"), [(1, False), (2, True)])
+def test_a_batch_of_barrett_hands_switches_like_separate_runs(threads: int, saturate: bool) -> None:
+    """Four motors per environment, TorqueSwitches breaking away while closing on a box, re-opening and re-arming
+    on the way back: every environment's modes, configuration and velocity equal its separate run's, bit for bit."""
+    setup = box_grasp(mass=0.3, actuation="barrett")
+    actuation = BarrettActuation(setup.hand, damping=0.01, friction=0.002, saturate=saturate)
+    simulator = Simulator(setup.simulator.scene, dt=setup.simulator.dt, contact=setup.simulator.law,
+                          actuation=actuation)  # fmt: skip
+    start = simulator.initial_state(setup.q_start)
+    scales = np.array([1.0, 0.8, 1.3])  # 1.3: above the puck limit, clipped when saturating
+    close, opening = np.array([0.02, 0.11, 0.11, 0.11]), np.array([0.0, -0.11, -0.11, -0.11])
+    phases = [(close, 1500), (opening, 1200)]
+    batch = BatchSimulator(simulator, [start] * len(scales), threads=threads)
+    seen = set()
+    for u, steps in phases:
+        for _ in range(steps):
+            batch.step(scales[:, None] * u)
+            seen.update(batch.modes.ravel().tolist())
+    assert seen == {0.0, 1.0, 2.0}  # every TorqueSwitch mode was visited
+    for i, scale in enumerate(scales):
+        state = start
+        for u, steps in phases:
+            for _ in range(steps):
+                state, _ = simulator.step(state, scale * u)
+        np.testing.assert_array_equal(batch.scene_q[i], state.scene_q)
+        np.testing.assert_array_equal(batch.scene_v[i], state.scene_v)
+        np.testing.assert_array_equal(batch.modes[i], state.actuation_modes)
+        np.testing.assert_array_equal(batch.state(i).actuation_modes, state.actuation_modes)

@@ -8,9 +8,11 @@ separate runs, whatever the thread count).  A controller for a batch is vectoris
 :meth:`fingertip_jacobians`) and returns inputs of shape (N, n_inputs).  An environment whose step diverges is
 frozen and reported in :attr:`diverged` / :meth:`divergence`; the others go on.
 
-The actuation must keep one transmission (:class:`~bhgrasp.sim.actuation.FullyActuated`): the Barrett TorqueSwitch
-changes it per environment, which the batch does not model yet.  Use threads only up to the free cores: a batch
-inside each worker of a process pool already has its core.
+Both actuation models run in the batch: :class:`~bhgrasp.sim.actuation.FullyActuated` (one torque per joint) and
+:class:`~bhgrasp.sim.actuation.BarrettActuation` (four motor torques per environment; each environment's
+TorqueSwitch modes switch in C++, ``src/barrett.cpp``, the Python model's twin: a batch reproduces separate
+``Simulator`` runs bit for bit).  Use threads only up to the free cores: a batch inside each worker of a process
+pool already has its core.
 """
 
 from __future__ import annotations
@@ -22,11 +24,11 @@ import numpy as np
 
 from bhgrasp._validation import as_positive
 from bhgrasp.errors import InputError
-from bhgrasp.sim.actuation import FullyActuated
-from bhgrasp.sim.compiled import contact_set, core_module, drive_of, memory_of, native_memory, settings
+from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
+from bhgrasp.sim.compiled import barrett_of, contact_set, core_module, drive_of, memory_of, native_memory, settings
 from bhgrasp.sim.contact import ContactMemory, ContactSet
-from bhgrasp.sim.simulator import Simulator
-from bhgrasp.sim.state import State
+from bhgrasp.sim.simulator import Simulator, _StepOutput
+from bhgrasp.sim.state import SimulatedState, State
 
 _DIVERGED = {1: "joint/object position", 2: "joint/object velocity", 3: "speed", 4: "contact depth"}
 
@@ -48,10 +50,10 @@ class BatchSimulator:
             InputError: No states, a state of another scene, states at different times, an actuation whose
                 transmission changes (Barrett), or ``threads`` < 1.
         """
-        if not isinstance(simulator.actuation, FullyActuated):
+        if not isinstance(simulator.actuation, FullyActuated | BarrettActuation):
             raise InputError(
-                f"BatchSimulator needs a FullyActuated actuation (one fixed transmission), got "
-                f"{type(simulator.actuation).__name__}; run Barrett hands with Simulator.run"
+                "BatchSimulator runs FullyActuated and BarrettActuation hands, got "
+                f"{type(simulator.actuation).__name__}"
             )
         if isinstance(threads, bool) or not isinstance(threads, int | np.integer) or threads < 1:
             raise InputError(f"`threads` must be a positive integer, got {threads!r}")
@@ -74,6 +76,13 @@ class BatchSimulator:
         for i, state in enumerate(states):
             memory = state.contact_memory if state.contact_memory is not None else ContactMemory.empty()
             self._batch.set_state(i, state.scene_q, state.scene_v, native_memory(memory))
+        self._barrett = isinstance(simulator.actuation, BarrettActuation)
+        if self._barrett:
+            self._batch.set_barrett(barrett_of(simulator.actuation))
+            for i, state in enumerate(states):
+                modes = state.actuation_modes
+                armed = modes is None or len(modes) == 0
+                self._batch.set_modes(i, [0, 0, 0] if armed else [int(mode) for mode in modes])
         self._drive = drive_of(simulator.actuation)
         tips = simulator.scene.hand.fingertip_frames
         self._tip_frames = {finger: scene.model.getFrameId(frame) for finger, frame in tips.items()}
@@ -103,6 +112,13 @@ class BatchSimulator:
     def v(self) -> np.ndarray:
         """(N, nv_hand) hand joint velocities [rad/s]."""
         return self._batch.v[:, : self._nvh]
+
+    @property
+    def modes(self) -> np.ndarray:
+        """(N, n_modes) actuation modes per environment (Barrett: TorqueSwitch of F1, F2, F3; full actuation: none)."""
+        if not self._barrett:
+            return np.zeros((self.size, 0))
+        return np.array([self._batch.modes(i) for i in range(self.size)], dtype=float)
 
     def object_positions(self, index: int = 0) -> np.ndarray:
         """(N, 3) world position [m] of object ``index``'s centre of mass (free objects)."""
@@ -146,9 +162,13 @@ class BatchSimulator:
         bad = ~np.isfinite(u).all(axis=1)
         if bad.any():
             raise InputError(f"`u` must be finite; NaN/inf in environments {np.flatnonzero(bad).tolist()[:10]}")
-        actuation = self.simulator.actuation
-        torques = np.clip(u, -actuation.hand.effort_limit, actuation.hand.effort_limit) if actuation.saturate else u
-        self._batch.step(torques, self._drive, self.simulator.max_speed, self.simulator.max_penetration, self.threads)
+        simulator = self.simulator
+        if self._barrett:
+            self._batch.step_barrett(u, simulator.max_speed, simulator.max_penetration, self.threads)
+        else:
+            limit = simulator.actuation.hand.effort_limit
+            torques = np.clip(u, -limit, limit) if simulator.actuation.saturate else u
+            self._batch.step(torques, self._drive, simulator.max_speed, simulator.max_penetration, self.threads)
         self.t = round(self.t / self.simulator.dt + 1) * self.simulator.dt
 
     def run(self, controller: Callable[[float, BatchSimulator], Any], duration: float) -> BatchSimulator:
@@ -166,7 +186,9 @@ class BatchSimulator:
         """Environment ``env`` as a :class:`~bhgrasp.sim.state.State` (built on demand; a start state for a run)."""
         env = self._env(env)
         memory = memory_of(self._batch.memory(env))
-        return self.simulator._state(self.t, self._batch.q[env], self._batch.v[env], self.contacts(env), memory)
+        modes = self.modes[env]
+        return SimulatedState.lazy(self.t, self._batch.q[env], self._batch.v[env], modes,
+                                   _StepOutput(self.simulator, self.contacts(env), memory))  # fmt: skip
 
     def _env(self, env: int) -> int:
         if isinstance(env, bool) or not isinstance(env, int | np.integer) or not 0 <= env < self.size:

@@ -18,7 +18,7 @@ from bhgrasp.errors import CompiledEngineUnavailable
 from bhgrasp.sim.contact import ContactMemory, ContactSet, empty_contact_set
 
 if TYPE_CHECKING:
-    from bhgrasp.sim.actuation import Actuation
+    from bhgrasp.sim.actuation import Actuation, BarrettActuation
     from bhgrasp.sim.simulator import Simulator
 
 _INTEGRATORS = {"implicit": 0, "semi-implicit": 1, "rk4": 2}
@@ -145,6 +145,23 @@ def drive_of(actuation: Actuation):
     return drive
 
 
+def barrett_of(actuation: BarrettActuation):
+    """A Barrett actuation's parameters as the C++ ``Barrett`` of the batch (its modes are per environment)."""
+    from bhgrasp.sim import actuation as model
+
+    barrett = core_module().Barrett()
+    barrett.nv_hand = actuation.hand.nv
+    barrett.spread_first, barrett.spread_second = actuation._spread
+    barrett.proximal, barrett.distal = list(actuation._proximal), list(actuation._distal)
+    barrett.spread_ratio, barrett.proximal_ratio = model.SPREAD_RATIO, model.PROXIMAL_RATIO
+    barrett.distal_ratio, barrett.distal_alone_ratio = model.DISTAL_RATIO, model.DISTAL_ALONE_RATIO
+    barrett.max_motor_torque, barrett.breakaway_torque = model.MAX_MOTOR_TORQUE, actuation.breakaway_torque
+    barrett.motor_damping, barrett.blocked_speed = actuation.motor_damping, actuation.blocked_speed
+    barrett.saturate = actuation.saturate
+    barrett.damping, barrett.friction, barrett.lower = actuation.damping, actuation.friction, actuation._lower
+    return barrett
+
+
 def native_memory(memory: ContactMemory):
     """A :class:`~bhgrasp.sim.contact.ContactMemory` as the C++ engine's ``Memory`` (its native copy if it has one)."""
     if memory.native is not None:
@@ -173,5 +190,6 @@ def contact_set(contacts) -> ContactSet:
 
 
 __all__ = [
-    "CompiledStep", "contact_set", "core_module", "drive_of", "memory_of", "native_memory", "optional_core", "settings",
+    "CompiledStep", "barrett_of", "contact_set", "core_module", "drive_of", "memory_of", "native_memory",
+    "optional_core", "settings",
 ]  # fmt: skip

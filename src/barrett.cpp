@@ -1,0 +1,65 @@
+#include "barrett.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace bhgrasp {
+
+Drive barrett_drive(const Barrett& barrett, const Modes& modes) {
+  Drive drive;
+  drive.transmission = Matrix::Zero(barrett.nv_hand, 4);
+  drive.transmission(barrett.spread_first, 0) = drive.transmission(barrett.spread_second, 0) = 1.0;
+  Vector damping = barrett.damping;
+  damping[barrett.spread_first] += barrett.motor_damping * (barrett.spread_ratio * barrett.spread_ratio);
+  for (int finger = 0; finger < 3; ++finger) {
+    const int proximal = barrett.proximal[finger], distal = barrett.distal[finger];
+    if (modes[finger] == 1) {
+      drive.transmission(distal, finger + 1) = 1.0;
+      damping[distal] += barrett.motor_damping * (barrett.distal_alone_ratio * barrett.distal_alone_ratio);
+    } else {
+      drive.transmission(proximal, finger + 1) = 1.0;
+      if (modes[finger] == 0) drive.transmission(distal, finger + 1) = barrett.proximal_ratio / barrett.distal_ratio;
+      damping[proximal] += barrett.motor_damping * (barrett.proximal_ratio * barrett.proximal_ratio);
+    }
+  }
+  drive.joint_damping = damping;
+  drive.friction = barrett.friction;
+  drive.motor_damping = damping - barrett.damping;
+  return drive;
+}
+
+Vector barrett_torques(const Barrett& barrett, const Modes& modes, const MotorInputs& u) {
+  MotorInputs clipped = u;
+  if (barrett.saturate)
+    for (int k = 0; k < 4; ++k) clipped[k] = std::min(std::max(u[k], -barrett.max_motor_torque), barrett.max_motor_torque);
+  Vector tau = Vector::Zero(barrett.nv_hand);
+  tau[barrett.spread_first] = barrett.spread_ratio * clipped[0];  // the coupled F2 spread shares the column
+  for (int finger = 0; finger < 3; ++finger) {
+    if (modes[finger] == 1)
+      tau[barrett.distal[finger]] = barrett.distal_alone_ratio * clipped[finger + 1];
+    else
+      tau[barrett.proximal[finger]] = barrett.proximal_ratio * clipped[finger + 1];
+  }
+  return tau;
+}
+
+void barrett_update(const Barrett& barrett, Modes& modes, const Vector& q_hand, const Vector& v_hand,
+                    const MotorInputs& u, const Vector& drive_torques) {
+  for (int finger = 0; finger < 3; ++finger) {
+    const double motor = u[finger + 1];
+    const int proximal = barrett.proximal[finger], distal = barrett.distal[finger];
+    const bool proximal_at_stop = q_hand[proximal] <= barrett.lower[proximal] + 1e-4;
+    const bool distal_at_stop = q_hand[distal] <= barrett.lower[distal] + 1e-4;
+    int& mode = modes[static_cast<std::size_t>(finger)];
+    if (mode == 0) {
+      const bool blocked = std::abs(v_hand[proximal]) < barrett.blocked_speed;
+      if (motor > 0.0 && blocked && drive_torques[proximal] > barrett.breakaway_torque) mode = 1;
+    } else if (mode == 1 && motor < 0.0 && distal_at_stop) {
+      mode = 2;
+    } else if (mode == 2 && (proximal_at_stop || motor > 0.0)) {
+      mode = 0;
+    }
+  }
+}
+
+}  // namespace bhgrasp
