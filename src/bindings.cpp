@@ -175,16 +175,6 @@ NB_MODULE(_core, m) {
       .def_rw("damping", &Barrett::damping)
       .def_rw("friction", &Barrett::friction)
       .def_rw("lower", &Barrett::lower);
-  m.def("barrett_drive", &barrett_drive, "barrett"_a, "modes"_a);
-  m.def("barrett_torques", &barrett_torques, "barrett"_a, "modes"_a, "u"_a);
-  m.def(
-      "barrett_update",
-      [](const Barrett& barrett, Modes modes, const Vector& q_hand, const Vector& v_hand, const MotorInputs& u,
-         const Vector& drive_torques) {
-        barrett_update(barrett, modes, q_hand, v_hand, u, drive_torques);
-        return modes;
-      },
-      "barrett"_a, "modes"_a, "q_hand"_a, "v_hand"_a, "u"_a, "drive_torques"_a);
 
   nb::class_<Batch>(m, "Batch")
       .def(nb::init<const std::string&, const std::string&, const Settings&, int>(), "model"_a, "geometry"_a,
