@@ -7,61 +7,75 @@ import functools
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import NoReturn
 
 import numpy as np
 
+from bhgrasp import _arguments as checked
 from bhgrasp.errors import BhgraspError, InputError
 from bhgrasp.experiments.grasp_demo import CONTROLLERS, HANDS
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``bhgrasp`` command."""
-    parser = argparse.ArgumentParser(prog="bhgrasp", description="Barrett hand modelling, simulation and control.")
+    parser = _Parser(prog="bhgrasp", description="Barrett hand modelling, simulation and control.")
     commands = parser.add_subparsers(dest="command", required=True)
+    commands.add_parser = functools.partial(commands.add_parser, formatter_class=_DefaultsHelp)  # defaults in --help
     demo = commands.add_parser(
         "demo",
         help="the main job: grasp a box of unknown mass, lift it 10 mm and turn it 0.1 rad (headless); "
         "prints the pose and force errors, slip events and time, writes a figure and the trajectory",
     )
-    demo.add_argument("--output", type=Path, default=Path("bhgrasp_demo"), help="folder for figure and trajectory")
+    demo.add_argument(
+        "--output", type=checked.output_folder, default=Path("bhgrasp_demo"), help="folder for figure and trajectory"
+    )
     demo.add_argument(
         "--hand", choices=HANDS, default="barrett", help="the Barrett hand, or the Allegro hand of example-robot-data"
     )
     demo.add_argument("--controller", choices=CONTROLLERS, default="smc-adaptive", help="object-space controller")
-    demo.add_argument("--mass", type=float, default=0.6, help="true box mass [kg]")
-    demo.add_argument("--estimate", type=float, default=0.3, help="mass the controller starts from [kg]")
+    demo.add_argument("--mass", type=checked.positive_float, default=0.6, help="true box mass [kg]")
+    demo.add_argument(
+        "--estimate", type=checked.positive_float, default=0.3, help="mass the controller starts from [kg]"
+    )
     demo.add_argument(
         "--distribution", choices=["qp", "pinv"], default="qp", help="contact forces: friction-cone QP or G^+ (5.45)"
     )
-    demo.add_argument("--duration", type=float, default=3.0, help="simulated time [s]")
+    demo.add_argument("--duration", type=checked.positive_float, default=3.0, help="simulated time [s]")
     demo.add_argument(
-        "--html", type=Path, default=None, help="also write the MeshCat replay as one self-contained HTML file"
+        "--html",
+        type=checked.output_file,
+        default=None,
+        help="also write the MeshCat replay as one self-contained HTML file (in an existing folder)",
     )
     demo.add_argument(
         "--viz", action="store_true", help="show the run live in MeshCat (a server on 127.0.0.1; open the printed URL)"
     )
     demo.add_argument(
         "--serve",
-        type=float,
+        type=checked.nonnegative_float,
         default=None,
         help="with --viz: keep the replay served this many seconds (default: until Enter or Ctrl-C)",
     )
     tour = commands.add_parser(
         "tour", help="print the hand model, check IK, plot the workspace, simulate a three-finger hold"
     )
-    tour.add_argument("--output", type=Path, default=Path("bhgrasp_tour"), help="folder for the figure")
-    tour.add_argument("--samples", type=int, default=20_000, help="workspace samples per finger")
-    tour.add_argument("--seed", type=int, default=0, help="random seed of the workspace sampling")
-    tour.add_argument("--hold", type=float, default=1.0, help="simulated duration of the grasp hold [s]")
+    tour.add_argument(
+        "--output", type=checked.output_folder, default=Path("bhgrasp_tour"), help="folder for the figure"
+    )
+    tour.add_argument("--samples", type=checked.positive_int, default=20_000, help="workspace samples per finger")
+    tour.add_argument("--seed", type=checked.seed, default=0, help="random seed of the workspace sampling")
+    tour.add_argument(
+        "--hold", type=checked.positive_float, default=1.0, help="simulated duration of the grasp hold [s]"
+    )
     info = commands.add_parser("info", help="print a hand's joints, limits and link masses")
     info.add_argument("--urdf", type=Path, default=None, help="any hand URDF instead of the packaged Barrett hand")
     tune = commands.add_parser(
         "tune", help="tune F3's force-based impedance (M_I, K_I) with CMA-ES on the fitness (4.49) of thesis chapter 4"
     )
-    tune.add_argument("--generations", type=int, default=10, help="CMA-ES generations")
-    tune.add_argument("--population", type=int, default=8, help="candidates per generation")
-    tune.add_argument("--seed", type=int, default=0, help="CMA-ES seed")
-    tune.add_argument("--force", type=float, default=6.0, help="desired contact force [N]")
+    tune.add_argument("--generations", type=checked.positive_int, default=10, help="CMA-ES generations")
+    tune.add_argument("--population", type=checked.at_least_two, default=8, help="candidates per generation")
+    tune.add_argument("--seed", type=checked.seed, default=0, help="CMA-ES seed")
+    tune.add_argument("--force", type=checked.positive_float, default=6.0, help="desired contact force [N]")
     tune.add_argument("--serial", action="store_true", help="evaluate in this process instead of a process pool")
     sweep = commands.add_parser(
         "sweep", help="run a parameter sweep of the grasp demo from a TOML file (grid or random design, process pool)"
@@ -86,7 +100,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     experiments.add_argument("folder", nargs="?", type=Path, default=None, help="compare: the new run's folder")
     experiments.add_argument(
-        "--output", type=Path, default=Path("docs/results"), help="folder for report, figures and chapterN.json"
+        "--output",
+        type=checked.output_folder,
+        default=Path("docs/results"),
+        help="folder for report, figures and chapterN.json",
     )
     experiments.add_argument(
         "--reference", type=Path, default=Path("docs/results"), help="compare, readme-table: the committed results"
@@ -98,7 +115,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="rewrite this README's results table from the chapterN.json in --output (after a run) or --reference",
     )
     experiments.add_argument(
-        "--scale", type=float, default=1.0, help="multiply every case's duration (e.g. 0.5 for a quick look)"
+        "--scale",
+        type=checked.positive_float,
+        default=1.0,
+        help="multiply every case's duration (e.g. 0.5 for a quick look)",
     )
     experiments.add_argument("--no-figures", action="store_true", help="write the report only")
     args = parser.parse_args(argv)
@@ -107,6 +127,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BhgraspError as error:  # a user mistake or an infeasible request: one line, no traceback
         print(f"bhgrasp: error: {error}", file=sys.stderr)
         return 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse whose errors are one line, status 2.
+
+    E.g. ``bhgrasp demo: error: argument --mass: must be a positive number, got '-1' (see bhgrasp demo --help)``.
+    """
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+class _DefaultsHelp(argparse.ArgumentDefaultsHelpFormatter):
+    """``--help`` lists each option's default, except for flags and options without one."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        if action.default is None or isinstance(action.default, bool):
+            return action.help or ""
+        return super()._get_help_string(action)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -145,8 +184,6 @@ def _tune(args: argparse.Namespace) -> int:
     from bhgrasp import tuning
     from bhgrasp.experiments import chapter4
 
-    if args.generations < 1 or args.population < 2:
-        raise InputError(f"--generations must be >= 1 and --population >= 2, got {args.generations}, {args.population}")
     lower, upper = (np.log10(bound) for bound in chapter4.TUNING_BOUNDS)  # physical bounds, argued in chapter 4
     print(f"tuning log10 (M_I [kg], K_I [N/m]) of F3's impedance for f_d = {args.force:g} N within "
           f"M_I {10**lower[0]:g}-{10**upper[0]:g} kg, K_I {10**lower[1]:g}-{10**upper[1]:g} N/m ...")  # fmt: skip
@@ -298,9 +335,6 @@ def _experiments(chapter: str, output: Path, scale: float, figures: bool) -> int
     import importlib
     import time
 
-    if not (np.isfinite(scale) and scale > 0.0):
-        print(f"bhgrasp: error: --scale must be a positive number, got {scale}", file=sys.stderr)
-        return 2
     number = chapter[2:]
     module = importlib.import_module(f"bhgrasp.experiments.chapter{number}")
     start = time.perf_counter()

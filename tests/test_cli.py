@@ -64,8 +64,10 @@ def test_experiments_ch3_writes_the_report_and_figures(tmp_path: Path, capsys: p
     assert all(f"]({f.name})" in report for f in figures)
 
 
-def test_experiments_rejects_a_bad_scale(tmp_path: Path) -> None:
-    assert main(["experiments", "ch3", "--output", str(tmp_path), "--scale", "-1"]) == 2
+def test_experiments_rejects_a_bad_scale(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    with pytest.raises(SystemExit) as caught:
+        main(["experiments", "ch3", "--output", str(tmp_path), "--scale", "-1"])
+    assert caught.value.code == 2 and "argument --scale: must be a positive number, got '-1'" in capsys.readouterr().err
 
 
 def test_experiments_ch4_writes_the_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
@@ -92,9 +94,59 @@ def test_experiments_ch5_writes_the_report_and_figures(tmp_path: Path, capsys: p
 
 
 def test_demo_reports_a_bad_mass_in_one_line(capsys: pytest.CaptureFixture) -> None:
-    assert main(["demo", "--mass", "-1"]) == 2
+    with pytest.raises(SystemExit) as caught:
+        main(["demo", "--mass", "-1"])
     err = capsys.readouterr().err
-    assert err.startswith("bhgrasp: error:") and "mass" in err and len(err.strip().splitlines()) == 1
+    assert caught.value.code == 2 and len(err.strip().splitlines()) == 1
+    assert err.startswith("bhgrasp demo: error: argument --mass: must be a positive number, got '-1'")
+
+
+BAD_ARGUMENTS = {
+    "tour --samples 0": "argument --samples: must be a positive integer, got '0'",
+    "tour --seed -3": "argument --seed: must be an integer >= 0, got '-3'",
+    "tour --hold nan": "argument --hold: must be a positive number, got 'nan'",
+    "tune --population 1": "argument --population: must be an integer >= 2, got '1'",
+    "tune --generations 2.5": "argument --generations: must be a positive integer, got '2.5'",
+    "demo --duration 0": "argument --duration: must be a positive number, got '0'",
+    "demo --serve -1": "argument --serve: must be a number >= 0, got '-1'",
+    "demo --output /proc/nope": "argument --output: the folder '/proc' of '/proc/nope' is not writable",
+    "demo --output {file}": "argument --output: '{file}' exists and is not a folder",
+    "demo --html /nonexistent/dir/x.html": "argument --html: the folder '/nonexistent/dir' of "
+    "'/nonexistent/dir/x.html' does not exist",
+    "experiments ch3 --output /nonexistent/dir/results": "argument --output: the folder '/nonexistent/dir' of",
+}
+
+
+@pytest.mark.parametrize("command", list(BAD_ARGUMENTS))
+def test_bad_arguments_are_named_by_their_flag_before_anything_runs(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    """Every flag's value is checked by argparse: one line naming the flag, status 2, nothing simulated or made."""
+    file = tmp_path / "notes.txt"
+    file.write_text("not a folder")
+    with pytest.raises(SystemExit) as caught:
+        main(command.format(file=file).split())
+    captured = capsys.readouterr()
+    assert caught.value.code == 2 and captured.out == ""  # nothing ran: the demo prints "simulating ..." first
+    assert BAD_ARGUMENTS[command].format(file=file) in captured.err and len(captured.err.strip().splitlines()) == 1
+    assert not Path("/nonexistent").exists()
+
+
+def test_help_shows_the_defaults(capsys: pytest.CaptureFixture) -> None:
+    with pytest.raises(SystemExit):
+        main(["demo", "--help"])
+    text = " ".join(capsys.readouterr().out.split())  # argparse wraps lines
+    for default in ("(default: bhgrasp_demo)", "(default: 0.6)", "(default: 3.0)", "(default: smc-adaptive)"):
+        assert default in text
+
+
+def test_a_short_demo_says_its_errors_are_not_final(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """--duration 1.5 ends during the motion (0.93-1.93 s): the summary must say so, not print a finished window."""
+    assert main(["demo", "--duration", "1.5", "--output", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "(the run ended at 1.50 s, during the motion)" in out
+    assert "mrad (at the end of the run, not the motion's final error)" in out
+    assert "the run ended before the forces settle at 2.43 s" in out
 
 
 def test_info_prints_joints_limits_and_link_masses(capsys: pytest.CaptureFixture) -> None:
@@ -111,7 +163,9 @@ def test_tune_runs_cma_es_on_the_impedance_fitness(capsys: pytest.CaptureFixture
     assert main(["tune", "--generations", "1", "--population", "3", "--serial"]) == 0
     out = capsys.readouterr().out
     assert "1 generations, 3 simulations" in out and "best M_I = " in out
-    assert main(["tune", "--generations", "0"]) == 2
+    with pytest.raises(SystemExit) as caught:
+        main(["tune", "--generations", "0"])
+    assert caught.value.code == 2
 
 
 def test_bench_runs_the_benchmark_scripts(capfd: pytest.CaptureFixture) -> None:

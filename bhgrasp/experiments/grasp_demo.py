@@ -75,13 +75,20 @@ class GraspDemoResult:
         """A few lines for the terminal."""
         duration = float(self.trajectory.t[-1])
         estimate = "" if self.mass_estimate is None else f", estimated {self.mass_estimate:.3f} kg"
+        motion = f"motion {self.motion_start:.2f}-{self.motion_end:.2f} s"
+        final, window = "final", f"max over fingers from {self.settle_time:.2f} s"
+        if duration < self.motion_end:  # a short run: say what the numbers are
+            stage = "before the motion" if duration < self.motion_start else "during the motion"
+            motion += f" (the run ended at {duration:.2f} s, {stage})"
+            final = "at the end of the run, not the motion's final error"
+        if duration < self.settle_time:
+            window = f"at the last sample: the run ended before the forces settle at {self.settle_time:.2f} s"
         return "\n".join([
             f"grasp demo ({self.scene.hand.name}, {self.controller}): box {self.true_mass:.2f} kg, "
             f"controller told {self.initial_estimate:.2f} kg{estimate}",
-            f"  grasp closed at {self.grasp_time:.3f} s; motion {self.motion_start:.2f}-{self.motion_end:.2f} s",
-            f"  object pose error: {1e3 * self.position_error:.3f} mm, {1e3 * self.rotation_error:.3f} mrad (final)",
-            f"  contact force error: {100 * self.force_error:.2f} % of the commanded normal force "
-            f"(max over fingers from {self.settle_time:.2f} s)",
+            f"  grasp closed at {self.grasp_time:.3f} s; {motion}",
+            f"  object pose error: {1e3 * self.position_error:.3f} mm, {1e3 * self.rotation_error:.3f} mrad ({final})",
+            f"  contact force error: {100 * self.force_error:.2f} % of the commanded normal force ({window})",
             f"  slip events: {self.slip_events} (sliding hand-object contact samples after the grasp closed)",
             f"  commanded forces: min cone margin {self.cone_margin:.3f} N at mu {MU_ASSUMED}, "
             f"{self.infeasible_samples} infeasible samples",

@@ -1,0 +1,107 @@
+"""Argument types of the command line: each checks one flag's value before anything runs.
+
+argparse reports a failed check as ``bhgrasp demo: error: argument --samples: must be a positive integer, got
+'0'`` and exits with status 2, so every mistake is named by its flag and caught before a simulation starts.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import tempfile
+from pathlib import Path
+
+
+def positive_int(text: str) -> int:
+    """An integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
+    return value
+
+
+def at_least_two(text: str) -> int:
+    """An integer >= 2 (e.g. a CMA-ES population)."""
+    value = positive_int(text)
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 2, got {text!r}")
+    return value
+
+
+def seed(text: str) -> int:
+    """A random seed: an integer >= 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 0, got {text!r}")
+    return value
+
+
+def positive_float(text: str) -> float:
+    """A finite number > 0."""
+    value = _number(text, "a positive number")
+    if value <= 0.0:
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}")
+    return value
+
+
+def nonnegative_float(text: str) -> float:
+    """A finite number >= 0."""
+    value = _number(text, "a number >= 0")
+    if value < 0.0:
+        raise argparse.ArgumentTypeError(f"must be a number >= 0, got {text!r}")
+    return value
+
+
+def output_folder(text: str) -> Path:
+    """A folder to write into: an existing writable folder, or a new one inside an existing writable folder."""
+    path = Path(text)
+    if path.exists():
+        if not path.is_dir():
+            raise argparse.ArgumentTypeError(f"{text!r} exists and is not a folder")
+        if not _writable(path):
+            raise argparse.ArgumentTypeError(f"the folder {text!r} is not writable")
+        return path
+    _writable_parent(path, text)
+    return path
+
+
+def output_file(text: str) -> Path:
+    """A file to write, in an existing writable folder (no folders are created for it)."""
+    path = Path(text)
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name, e.g. {str(path / 'replay.html')!r}")
+    _writable_parent(path, text)
+    return path
+
+
+def _writable_parent(path: Path, text: str) -> None:
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise argparse.ArgumentTypeError(f"the folder {str(parent)!r} of {text!r} does not exist")
+    if not _writable(parent):
+        raise argparse.ArgumentTypeError(f"the folder {str(parent)!r} of {text!r} is not writable")
+
+
+def _writable(folder: Path) -> bool:
+    """Whether a file can be created in ``folder`` (tried: permissions miss read-only and virtual file systems)."""
+    try:
+        with tempfile.TemporaryDirectory(dir=folder):
+            return True
+    except OSError:
+        return False
+
+
+def _number(text: str, expected: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be {expected}, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be {expected}, got {text!r}")
+    return value
