@@ -199,40 +199,22 @@ def _tune(args: argparse.Namespace) -> int:
 
 
 def _sweep(config_path: Path) -> int:
-    import tomllib
-
     from bhgrasp import sweep
+    from bhgrasp.sweep_config import load_config
 
-    try:
-        config = tomllib.loads(config_path.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as error:
-        raise InputError(f"cannot read the sweep configuration {str(config_path)!r}: {error}") from error
-    settings = config.get("sweep", {})
-    unknown = set(config) - {"sweep", "grid", "random", "fixed"}
-    if unknown or ("grid" in config) == ("random" in config):
-        raise InputError(f"{config_path}: give [sweep], exactly one of [grid] or [random], and optionally [fixed]; "
-                         f"unknown tables {sorted(unknown)}")  # fmt: skip
-    if "grid" in config:
-        design = sweep.grid(**config["grid"])
-    else:
-        ranges = dict(config["random"])
-        n = ranges.pop("n", None)
-        if n is None:
-            raise InputError(f"{config_path}: [random] needs n = <number of cases>")
-        design = sweep.random_design(n, settings.get("seed", 0), **ranges)
-    fixed = config.get("fixed", {})
-    design = [{**fixed, **case} for case in design]
-    output = Path(settings.get("output", "sweep.csv"))
-    log = Path(settings.get("log", output.with_suffix(".jsonl")))
-    workers = int(settings.get("workers", 0)) or None
-    executor = "serial" if workers == 1 else None
-    print(f"sweep: {len(design)} cases, log {log}, {workers or 'all'} worker(s)")
-    table = sweep.run_sweep(sweep.grasp_rollout, design, seed=settings.get("seed", 0), log=log, executor=executor,
-                            workers=workers, progress=bool(settings.get("progress", True)))  # fmt: skip
-    output.parent.mkdir(parents=True, exist_ok=True)
-    table.to_csv(output, index=False)
-    failed = int((table["status"] != "ok").sum())
-    print(f"wrote {output}: {len(table)} cases, {failed} failed")
+    config = load_config(config_path)  # every key and case checked: nothing runs on a mistake
+    executor = "serial" if config.workers == 1 else None
+    print(f"sweep: {len(config.cases)} cases, log {config.log}, {config.workers or 'all'} worker(s)")
+    table = sweep.run_sweep(sweep.grasp_rollout, config.cases, seed=config.seed, log=config.log, executor=executor,
+                            workers=config.workers, progress=config.progress, check=sweep.check_grasp_case)  # fmt: skip
+    config.output.parent.mkdir(parents=True, exist_ok=True)
+    table.to_csv(config.output, index=False)
+    failed = table[table["status"] != "ok"]
+    print(f"wrote {config.output}: {len(table)} cases, {len(failed)} failed")
+    if len(failed):
+        for error, rows in failed.groupby("error"):
+            print(f"  {len(rows)} case(s) {sorted(rows['case'].tolist())[:10]} failed: {error}", file=sys.stderr)
+        return 1
     return 0
 
 

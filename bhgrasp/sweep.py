@@ -90,6 +90,7 @@ def run_sweep(
     executor: Executor | Literal["serial"] | None = None,
     workers: int | None = None,
     progress: bool = False,
+    check: Callable[[dict[str, Any]], None] | None = None,
 ):
     """Run ``rollout`` on every case of ``design``; returns a pandas DataFrame (one row per case, case order).
 
@@ -103,6 +104,12 @@ def run_sweep(
             (in this process), or any ``concurrent.futures.Executor`` such as a Dask ``Client.get_executor()``.
         workers: Processes of the default pool.
         progress: Show a tqdm progress bar.
+        check: Called with every case's parameters before anything runs (e.g. :func:`check_grasp_case`); an
+            ``InputError`` it raises stops the sweep at once, naming the case.
+
+    Raises:
+        InputError: A case uses a reserved column name or fails ``check``; the log belongs to another sweep (other
+            case count, seeds or parameters).
     """
     import pandas as pd
 
@@ -113,9 +120,14 @@ def run_sweep(
         clash = [name for name in case if name in RESERVED]
         if clash:
             raise InputError(f"case {index} uses reserved column names {clash}; rename the parameters")
+        if check is not None:
+            try:
+                check(dict(case))
+            except InputError as error:
+                raise InputError(f"case {index} ({_describe(case)}): {error}") from error
     seeds = case_seeds(len(cases), seed)
     path = None if log is None else Path(log)
-    rows = _read_log(path, len(cases), seeds) if path is not None else {}
+    rows = _read_log(path, cases, seeds) if path is not None else {}
     todo = [i for i in range(len(cases)) if i not in rows]
     bar = _progress(progress, len(cases), len(rows))
     for row in _execute(rollout, cases, seeds, todo, executor, workers):
@@ -206,8 +218,17 @@ def _plain(value: Any) -> Any:
     return value.item() if isinstance(value, np.generic) else value
 
 
-def _read_log(path: Path, n: int, seeds: list[int]) -> dict[int, dict[str, Any]]:
-    """Rows already in the log, checked against this sweep (same case count and seeds)."""
+def _describe(case: Mapping[str, Any]) -> str:
+    return ", ".join(f"{name}={value!r}" for name, value in case.items())
+
+
+def _read_log(path: Path, cases: list[dict[str, Any]], seeds: list[int]) -> dict[int, dict[str, Any]]:
+    """Rows already in the log, checked against this sweep: the same case count, seeds and every parameter.
+
+    A row is the case it names only if its parameters are this case's (as JSON keeps them): a changed fixed
+    parameter or design never reuses stale rows.
+    """
+    n = len(cases)
     rows: dict[int, dict[str, Any]] = {}
     if not path.exists():
         return rows
@@ -221,6 +242,14 @@ def _read_log(path: Path, n: int, seeds: list[int]) -> dict[int, dict[str, Any]]
             raise InputError(f"{path}:{number} is not a sweep log line ({error})") from error
         if not 0 <= case < n or row.get("seed") != seeds[case]:
             raise InputError(f"{path} belongs to another sweep (case {case}, seed {row.get('seed')}); use a new log")
+        expected = json.loads(json.dumps({name: _plain(value) for name, value in cases[case].items()}))
+        logged = {name: row.get(name) for name in expected}
+        if logged != expected:
+            changed = [name for name in expected if logged[name] != expected[name]]
+            raise InputError(
+                f"{path} belongs to another sweep: its case {case} has {_describe({k: logged[k] for k in changed})}, "
+                f"this sweep's has {_describe({k: expected[k] for k in changed})}; use a new log (or delete it)"
+            )
         rows[case] = row
     return rows
 
@@ -240,6 +269,19 @@ def _progress(enabled: bool, total: int, done: int):
     return tqdm(total=total, initial=done, desc="sweep", unit="case")
 
 
+def check_grasp_case(parameters: dict[str, Any]) -> None:
+    """The checks :func:`grasp_rollout` makes of a case, without running it (for :func:`run_sweep`'s ``check``).
+
+    Raises:
+        InputError: ``seed`` given, or a name that is not a parameter of the grasp demo, or a bad value.
+    """
+    from bhgrasp.experiments.grasp_demo import check_demo_arguments
+
+    if "seed" in parameters:
+        raise InputError("the case seed comes from the sweep; do not give `seed` as a parameter")
+    check_demo_arguments(**parameters)
+
+
 def grasp_rollout(parameters: dict[str, Any], seed: int) -> dict[str, float]:
     """The grasp demo as a sweep scenario; ``parameters`` are keyword arguments of ``run_grasp_demo``.
 
@@ -250,8 +292,7 @@ def grasp_rollout(parameters: dict[str, Any], seed: int) -> dict[str, float]:
     """
     from bhgrasp.experiments.grasp_demo import run_grasp_demo
 
-    if "seed" in parameters:
-        raise InputError("the case seed comes from the sweep; do not give `seed` as a parameter")
+    check_grasp_case(parameters)
     result = run_grasp_demo(**parameters, seed=seed)
     return {
         "position_error": result.position_error,
@@ -300,4 +341,7 @@ hold_rollout = BatchedRollout(_hold_batch, size=64)
 box's fall [m]), ``diverged`` (0 or 1) and ``contacts`` (contact points at the end)."""
 
 
-__all__ = ["BatchedRollout", "case_seeds", "grasp_rollout", "grid", "hold_rollout", "random_design", "run_sweep"]
+__all__ = [
+    "BatchedRollout", "case_seeds", "check_grasp_case", "grasp_rollout", "grid", "hold_rollout", "random_design",
+    "run_sweep",
+]  # fmt: skip

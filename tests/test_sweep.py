@@ -103,7 +103,67 @@ duration = 3.0
     assert (table["slip_events"] == 0).all() and (table["force_error"] < 0.05).all()
     config.write_text("[sweep]\n[grid]\nmass = [0.3]\n[random]\nn = 2\n")
     assert main(["sweep", str(config)]) == 2
-    assert "exactly one of [grid] or [random]" in capsys.readouterr().err
+    assert "give exactly one of [grid] or [random] (got both)" in capsys.readouterr().err
+
+
+BAD_CONFIGS = {
+    '[sweep]\nworkers = "two"\n[grid]\nmass = [0.3]': "[sweep] workers: give an integer >= 0, got 'two'",
+    "[sweep]\nworkrs = 2\n[grid]\nmass = [0.3]": "[sweep] workrs: unknown key; the keys are output, log, workers",
+    "[grid]\nmasss = [0.3]": "[grid] masss: the grasp demo has no parameter 'masss'; it takes mass, estimate",
+    "[grid]\nmass = [-0.3]": "[grid] mass: `mass` must be",
+    "[grid]\nmass = [0.3, -0.3]": "case 1 (mass=-0.3): `mass` must be",
+    '[grid]\nmass = [0.3]\n[fixed]\ncontroller = "pid"': "[fixed] controller: `controller` must be one of",
+    "[grid]\nmass = [0.3]\n[fixed]\nseed = 3": "[fixed] seed: the case seed comes from the sweep",
+    "[grid]\nmass = [0.3]\n[fixed]\nmass = 0.5": "[fixed] mass: also varied in the design",
+    "[random]\nmass = [0.2, 1.0]": "[random] n: give the number of cases, a positive integer, got None",
+    "[random]\nn = 3\nmass = 0.2": "[random] mass: give [low, high], got 0.2",
+    "[grid]\nmass = [0.3]\n[grids]\nx = 1": "unknown table [grids]",
+    "[fixed]\nmass = 0.3": "give exactly one of [grid] or [random] (got neither)",
+}
+
+
+@pytest.mark.parametrize("text", list(BAD_CONFIGS))
+def test_a_sweep_file_mistake_is_named_before_anything_runs(text: str, tmp_path: Path, capsys) -> None:
+    config = tmp_path / "sweep.toml"
+    config.write_text(f'[sweep]\noutput = "{tmp_path / "out.csv"}"\n' + text.replace("[sweep]\n", "", 1))
+    assert main(["sweep", str(config)]) == 2
+    captured = capsys.readouterr()
+    assert BAD_CONFIGS[text] in captured.err and str(config) in captured.err
+    assert captured.out == "" and not (tmp_path / "out.csv").exists() and not (tmp_path / "out.jsonl").exists()
+
+
+def test_the_example_sweep_file_is_valid_and_documents_every_key() -> None:
+    from bhgrasp.experiments.grasp_demo import SWEEPABLE
+    from bhgrasp.sweep_config import SETTINGS, load_config
+
+    path = Path(__file__).resolve().parents[1] / "docs" / "sweep.toml"
+    config = load_config(path)
+    assert len(config.cases) == 6 and config.workers == 2 and config.seed == 7
+    text = path.read_text()
+    for key in (*SETTINGS, *SWEEPABLE, "[random]", "n ="):
+        assert key in text, f"docs/sweep.toml does not mention {key}"
+
+
+def test_a_changed_fixed_parameter_never_reuses_logged_rows(tmp_path: Path) -> None:
+    log = tmp_path / "log.jsonl"
+    design = sweep.grid(speed=[1.0, 2.0])
+    sweep.run_sweep(projectile, [{**case, "angle": 0.3} for case in design], seed=2, log=log, executor="serial")
+    with pytest.raises(bh.InputError, match=r"its case 0 has angle=0.3, this sweep's has angle=0.5; use a new log"):
+        sweep.run_sweep(projectile, [{**case, "angle": 0.5} for case in design], seed=2, log=log, executor="serial")
+    again = sweep.run_sweep(projectile, [{**case, "angle": 0.3} for case in design], seed=2, log=log,
+                            executor="serial")  # fmt: skip
+    assert len(again) == 2 and len(log.read_text().splitlines()) == 2  # the same sweep resumes from its log
+
+
+def test_failed_cases_exit_non_zero_with_a_summary(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """A case that cannot be checked beforehand (too short for the fingers to close) fails at run time."""
+    config = tmp_path / "sweep.toml"
+    config.write_text(f'[sweep]\noutput = "{tmp_path / "out.csv"}"\nworkers = 1\nprogress = false\n'
+                      "[grid]\nmass = [0.3, 0.5]\n[fixed]\nduration = 0.05\n")  # fmt: skip
+    assert main(["sweep", str(config)]) == 1
+    captured = capsys.readouterr()
+    assert "2 cases, 2 failed" in captured.out
+    assert "2 case(s) [0, 1] failed: InputError: the fingers did not close on the box within 0.05 s" in captured.err
 
 
 def test_batched_hold_sweep_agrees_with_serial_runs_and_a_weak_squeeze_drops_the_box():

@@ -117,6 +117,40 @@ def grasp_controller(
     raise InputError(f"`controller` must be one of {CONTROLLERS}, got {name!r}")
 
 
+SWEEPABLE = ("mass", "estimate", "controller", "duration", "offset", "distribution", "approach_gains", "gains",
+             "stiffness", "sensor_noise", "hand")  # fmt: skip
+"""The parameters of :func:`run_grasp_demo` a sweep case may set (the case's seed comes from the sweep)."""
+
+
+def check_demo_arguments(**arguments: Any) -> None:
+    """Check :func:`run_grasp_demo` arguments without running anything (names in :data:`SWEEPABLE`).
+
+    Raises:
+        InputError: An unknown name, or a value of the wrong kind or range; the message names the argument.
+    """
+    unknown = sorted(set(arguments) - set(SWEEPABLE))
+    if unknown:
+        raise InputError(f"the grasp demo has no parameter {unknown[0]!r}; it takes {', '.join(SWEEPABLE)}")
+    for name in ("mass", "estimate", "duration", "stiffness"):
+        if name in arguments:
+            as_positive(arguments[name], name)
+    choices = {"controller": CONTROLLERS, "distribution": ("qp", "pinv"), "hand": HANDS}
+    for name, allowed in choices.items():
+        if name in arguments and arguments[name] not in allowed:
+            raise InputError(f"`{name}` must be one of {allowed}, got {arguments[name]!r}")
+    if "offset" in arguments:
+        as_vector(arguments["offset"], "offset", 6)
+    if "approach_gains" in arguments:
+        gains = as_vector(arguments["approach_gains"], "approach_gains", 2)
+        if (gains <= 0.0).any():
+            raise InputError(f"`approach_gains` (Kp, Kv) must be positive, got {gains.tolist()}")
+    noise = arguments.get("sensor_noise")
+    if noise is not None:
+        sigma = as_vector(noise, "sensor_noise", 2)
+        if (sigma < 0.0).any():
+            raise InputError(f"`sensor_noise` (sigma_q, sigma_v) must be >= 0, got {sigma.tolist()}")
+
+
 def run_grasp_demo(
     mass: float = 0.6,
     estimate: float = 0.3,
@@ -155,13 +189,11 @@ def run_grasp_demo(
             the same; where the scene asks for it (the Allegro) the commands also cancel the joints' viscous
             damping (known to the controller), which dominates its light links' inertia.
     """
-    mass, estimate, duration = (
-        as_positive(mass, "mass"),
-        as_positive(estimate, "estimate"),
-        as_positive(duration, "duration"),
-    )
-    offset = as_vector(offset, "offset", 6)
-    setup = grasp_scene(hand, mass, as_positive(stiffness, "stiffness"))
+    check_demo_arguments(mass=mass, estimate=estimate, controller=controller, duration=duration, offset=offset,
+                         distribution=distribution, approach_gains=approach_gains, stiffness=stiffness,
+                         sensor_noise=sensor_noise, hand=hand)  # fmt: skip
+    mass, estimate, duration, offset = float(mass), float(estimate), float(duration), as_vector(offset, "offset", 6)
+    setup = grasp_scene(hand, mass, float(stiffness))
     nominal_box = Box(size=setup.box.size, mass=estimate)
     grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains)
     kp, kv = approach_gains
