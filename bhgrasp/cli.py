@@ -69,6 +69,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     info = commands.add_parser("info", help="print a hand's joints, limits and link masses")
     info.add_argument("--urdf", type=Path, default=None, help="any hand URDF instead of the packaged Barrett hand")
+    info.add_argument(
+        "--mimic", choices=["refuse", "independent"], default="refuse",
+        help="a URDF with <mimic> couplings: refuse it, or load the coupled joints as independent DOFs",
+    )  # fmt: skip
     tune = commands.add_parser(
         "tune", help="tune F3's force-based impedance (M_I, K_I) with CMA-ES on the fitness (4.49) of thesis chapter 4"
     )
@@ -165,7 +169,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.command == "info":
         from bhgrasp import BarrettHand, Hand
 
-        print((BarrettHand() if args.urdf is None else Hand.from_urdf(args.urdf)).summary())
+        print((BarrettHand() if args.urdf is None else Hand.from_urdf(args.urdf, mimic=args.mimic)).summary())
         return 0
     if args.command == "tune":
         return _tune(args)

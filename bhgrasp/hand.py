@@ -18,7 +18,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_array, as_vector, require_name, require_rotation
 from bhgrasp.errors import InputError, ModelError
-from bhgrasp.resources import barrett_urdf_path, leaf_links, read_urdf
+from bhgrasp.resources import barrett_urdf_path, leaf_links, mimic_joints, read_urdf
 
 BARRETT_FINGERTIPS = {"F1": "F1_tip", "F2": "F2_tip", "F3": "F3_tip"}
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)  # [m/s^2] in world coordinates
@@ -82,14 +82,23 @@ class Hand:
         cls,
         path: str | Path,
         fingertips: Sequence[str] | Mapping[str, str] | None = None,
+        mimic: str = "refuse",
         **kwargs: Any,
     ) -> Hand:
-        """Load any fixed-base hand URDF (no mimic: every joint is an independent DOF).
+        """Load any fixed-base hand URDF.
+
+        Every joint is an independent degree of freedom.  A URDF whose joints carry ``<mimic>`` tags (couplings)
+        is refused unless ``mimic="independent"`` says to load those joints as independent too (their coupling
+        is then up to an actuation model, as :class:`~bhgrasp.sim.actuation.BarrettActuation` does for the
+        BH8-280's).
 
         Args:
             path: URDF file.  It is parsed without DTDs or entities before Pinocchio sees it.
             fingertips: Frame names of the fingertips (finger name = frame name), or a mapping finger name ->
-                frame name; by default the URDF's leaf links.
+                frame name; by default the URDF's leaf links below a moving joint
+                (:func:`~bhgrasp.resources.leaf_links`: a palm pad fixed to the base is not a fingertip).
+            mimic: ``"refuse"`` (default: a ``<mimic>`` tag is a ModelError naming the joints) or
+                ``"independent"`` (load mimic joints as independent joints).
             **kwargs: ``name``, ``base_placement``, ``gravity`` as for :class:`Hand`.
 
         Raises:
@@ -103,7 +112,17 @@ class Hand:
             UserWarning: A link whose principal moments of inertia break the triangle inequality although its
                 diagonal does not (products of inertia no body has, e.g. example-robot-data's Allegro fingertips).
         """
+        if mimic not in ("refuse", "independent"):
+            raise InputError(f"`mimic` must be 'refuse' or 'independent', got {mimic!r}")
         model, root = _build_model(path)
+        coupled = mimic_joints(root)
+        if coupled and mimic == "refuse":
+            pairs = ", ".join(f"{joint} mimics {source}" for joint, source in coupled.items())
+            raise ModelError(
+                f"URDF {str(path)!r} couples joints with <mimic> tags ({pairs}); bhgrasp models every joint as an "
+                "independent DOF: pass mimic='independent' to load them so (an actuation model then couples them), "
+                "or remove the tags (for the Barrett hand use bh.BarrettHand())"
+            )
         if fingertips is None:
             fingertips = leaf_links(root)
             if not fingertips:
@@ -621,7 +640,7 @@ class BarrettHand(Hand):
 
 
 def _build_model(path: str | Path) -> tuple[pin.Model, Any]:
-    """Safely read a URDF and build its Pinocchio model (mimic tags ignored: independent joints)."""
+    """Safely read a URDF and build its Pinocchio model (``<mimic>`` tags not applied: independent joints)."""
     text, root = read_urdf(path)
     _check_inertials(root, path)
     try:

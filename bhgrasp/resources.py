@@ -96,11 +96,37 @@ def read_urdf(path: str | Path) -> tuple[str, Element]:
 
 
 def leaf_links(root: Element) -> list[str]:
-    """Links that are the parent of no joint (the fingertips of a hand), in file order, root link excluded."""
-    parents = {joint.find("parent").get("link") for joint in root.iter("joint") if joint.find("parent") is not None}
-    children = {joint.find("child").get("link") for joint in root.iter("joint") if joint.find("child") is not None}
+    """The fingertips of a hand: links that are the parent of no joint and hang below at least one moving joint.
+
+    In file order.  A leaf fixed rigidly to the base (a palm pad, a camera mount) is not a fingertip.
+    """
+    joints = [
+        joint for joint in root.iter("joint") if joint.find("parent") is not None and joint.find("child") is not None
+    ]
+    parent_joint = {joint.find("child").get("link"): joint for joint in joints}
+    parents = {joint.find("parent").get("link") for joint in joints}
+
+    def moves(link: str) -> bool:
+        seen = set()
+        while link in parent_joint and link not in seen:  # up to the root (a cycle would be a broken URDF)
+            seen.add(link)
+            joint = parent_joint[link]
+            if joint.get("type") != "fixed":
+                return True
+            link = joint.find("parent").get("link")
+        return False
+
     return [
         link.get("name")
         for link in root.iter("link")
-        if link.get("name") not in parents and link.get("name") in children
+        if link.get("name") not in parents and link.get("name") in parent_joint and moves(link.get("name"))
     ]
+
+
+def mimic_joints(root: Element) -> dict[str, str]:
+    """Joint -> the joint it mimics, for every ``<mimic>`` tag of a URDF."""
+    return {
+        joint.get("name"): joint.find("mimic").get("joint")
+        for joint in root.iter("joint")
+        if joint.find("mimic") is not None
+    }

@@ -76,7 +76,28 @@ def test_urdf_without_moving_joints(tmp_path: Path) -> None:
 
 def test_unknown_fingertip_frame() -> None:
     with pytest.raises(bh.InputError, match="unknown frame 'F4_tip'; valid frames: universe, .*F3_tip"):
-        bh.Hand.from_urdf(bh.barrett_urdf_path(), fingertips=["F1_tip", "F4_tip"])
+        bh.Hand.from_urdf(bh.barrett_urdf_path(), fingertips=["F1_tip", "F4_tip"], mimic="independent")
+
+
+def test_mimic_couplings_are_refused_by_name_unless_loaded_as_independent_joints(tmp_path: Path) -> None:
+    """The packaged Barrett URDF documents its couplings with <mimic>: loading it must not silently drop them."""
+    with pytest.raises(bh.ModelError, match=r"F2_spread mimics F1_spread.*pass mimic='independent'"):
+        bh.Hand.from_urdf(bh.barrett_urdf_path())
+    hand = bh.Hand.from_urdf(bh.barrett_urdf_path(), mimic="independent")
+    assert hand.nv == 8 and hand.joint_names == bh.BarrettHand().joint_names
+    with pytest.raises(bh.InputError, match="`mimic` must be 'refuse' or 'independent', got 'apply'"):
+        bh.Hand.from_urdf(bh.barrett_urdf_path(), mimic="apply")
+
+
+def test_default_fingertips_are_the_leaves_below_a_moving_joint(tmp_path: Path) -> None:
+    """The Barrett URDF's palm pad is a leaf fixed to the palm: not a finger.  A sensor fixed on a fingertip is."""
+    assert bh.Hand.from_urdf(bh.barrett_urdf_path(), mimic="independent").fingers == ("F1_tip", "F2_tip", "F3_tip")
+    sensor = (
+        '<link name="F3_sensor"/><joint name="F3_sensor_joint" type="fixed"><parent link="F3_tip"/>'
+        '<child link="F3_sensor"/></joint></robot>'
+    )
+    hand = bh.Hand.from_urdf(write(tmp_path, VALID_URDF.replace("</robot>", sensor)), mimic="independent")
+    assert hand.fingers == ("F1_tip", "F2_tip", "F3_sensor")
 
 
 # ---------------------------------------------------------------------- URDF inertias and encoding
@@ -187,7 +208,7 @@ def test_urdf_point_masses_and_massless_links_stay_legal(tmp_path: Path) -> None
     )
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        hand = bh.Hand.from_urdf(write(tmp_path, legal))
+        hand = bh.Hand.from_urdf(write(tmp_path, legal), mimic="independent")
     assert hand.total_mass == pytest.approx(bh.BarrettHand().total_mass + 0.01)
 
 
@@ -200,7 +221,9 @@ def test_urdf_principal_moments_breaking_the_triangle_inequality_warn(tmp_path: 
         r"link 'F1_knuckle_link': the principal moments of inertia \[2.30064e-06, 3.48527e-06, 7.2659e-06\] "
         r"kg m\^2 break the triangle inequality",
     ):
-        hand = bh.Hand.from_urdf(write(tmp_path, VALID_URDF.replace(KNUCKLE_INERTIA, allegro_tip, 1)))
+        hand = bh.Hand.from_urdf(
+            write(tmp_path, VALID_URDF.replace(KNUCKLE_INERTIA, allegro_tip, 1)), mimic="independent"
+        )
     assert hand.nv == 8
 
 
