@@ -1,6 +1,7 @@
 """Internal-force QP: proxsuite against OSQP and quadprog on the same problems, measured in one run.
 
 proxsuite is persistent and warm-started, OSQP (ADMM) too, quadprog (Goldfarb-Idnani) solves each from scratch.
+``ContactForceQP`` runs compiled (``src/force_qp.cpp``) when ``bhgrasp._core`` loads; its Python twin is timed too.
 Three frictional point contacts on a sphere (8-facet pyramids, f_min = 1 N) must produce a wrench that drifts
 slowly from cycle to cycle, as in a control loop.  Prints microseconds per solve and the ratio to quadprog on
 the same problems (compare ratios, not absolute times).  Usage: ``python benchmarks/bench_qp.py [--cycles N]``.
@@ -78,13 +79,19 @@ def main() -> None:
     t = np.arange(cycles) * 1e-3
     wrenches = np.column_stack((0.3 * np.sin(t), 0.2 * np.cos(t), 9.81 * 0.2 + 0.1 * np.sin(2 * t),
                                 0.002 * np.sin(t), 0.001 * np.cos(t), 0.0005 * np.sin(3 * t)))  # fmt: skip
-    qp = ContactForceQP(3, MU, FACETS, F_MIN)
+    qp = ContactForceQP(3, MU, FACETS, F_MIN)  # compiled (src/force_qp.cpp) when bhgrasp._core loads
     qp.solve(gmap, wrenches[0])  # first solve sets the problem up
     start = time.perf_counter()
     results = [qp.solve(gmap, w) for w in wrenches]
     ours = (time.perf_counter() - start) / cycles * 1e6
-    raw = qp._qp  # the bare proxsuite problem: update the equality right-hand side and solve, no wrapper
-    rows = qp._rows
+    twin = ContactForceQP(3, MU, FACETS, F_MIN, engine="python")
+    twin.solve(gmap, wrenches[0])
+    start = time.perf_counter()
+    for w in wrenches:
+        twin.solve(gmap, w)
+    python = (time.perf_counter() - start) / cycles * 1e6
+    raw = twin._solver._qp  # the bare proxsuite problem: update the equality right-hand side and solve, no wrapper
+    rows = twin._solver._rows
     start = time.perf_counter()
     for w in wrenches:
         raw.update(b=rows * w, update_preconditioner=False)
@@ -106,7 +113,8 @@ def main() -> None:
     osqp_gap = max(float(np.max(np.abs(a - f))) for a, f in zip(osqp_forces, reference))
     iterations = np.mean([r.iterations for r in results])
     print(f"{platform.processor() or platform.machine()}, Python {platform.python_version()}, {cycles} cycles")
-    print(f"proxsuite warm-started: {ours:8.1f} us/solve ({iterations:.1f} iterations on average)")
+    print(f"proxsuite warm-started: {ours:8.1f} us/solve ({iterations:.1f} iterations on average; {qp.engine})")
+    print(f"the same, Python twin:  {python:8.1f} us/solve (engine='python')")
     print(f"proxsuite set up cold:  {cold:8.1f} us/solve")
     print(f"bare proxsuite update(b) + solve: {bare:8.1f} us/solve (no input checks, no result object)")
     print(f"OSQP warm-started:      {osqp_time:8.1f} us/solve (eps 1e-9, polished)")

@@ -31,27 +31,37 @@ the cycles of ``benchmarks/bench_qp.py`` from scratch), the check: the QP from s
 test.  After an infeasible call the next one tries the nearest problem first, so a persistently infeasible
 request costs one warm-started solve per cycle.
 
+This runs compiled (``src/force_qp.cpp``, proxsuite's C++ API, the same problems, settings and steps) when
+``bhgrasp._core`` loads, otherwise in Python (``bhgrasp/_force_qp.py``, the readable twin; ``engine="python"``
+picks it); ``tests/test_force_qp_twin.py`` holds the two in lockstep.
+
 :func:`pseudo_inverse_forces` is the thesis' baseline (5.45), f = G^+ w + (I - G^+ G) f_d: it meets G f = w
 exactly whenever G has full row rank but ignores the cones, so it can command slipping forces.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from bhgrasp._force_qp import (  # noqa: F401  (the constants are part of this module's API)
+    ADMISSIBLE_TOLERANCE,
+    CHECK_ITER,
+    DOUBTFUL_ERROR,
+    DUALITY_GAP_REL,
+    FEASIBLE_RESIDUAL,
+    NEAREST_WEIGHT,
+    PRIMAL_INFEASIBILITY,
+    ContactForceQPPython,
+)
 from bhgrasp._validation import as_array, as_real, as_vector
-from bhgrasp.errors import InputError
-from bhgrasp.grasp import default_torque_scale, friction_pyramid
+from bhgrasp.errors import CompiledEngineUnavailable, InputError
+from bhgrasp.grasp import friction_pyramid
 
-NEAREST_WEIGHT = 1e4  # W of the nearest problem; 1e5 and above: proxsuite no longer converges on thin cones
-PRIMAL_INFEASIBILITY = 1e-6  # proxsuite's eps_primal_inf for the QP (the default 1e-4 flags feasible grasps)
-DOUBTFUL_ERROR = 0.1  # nearest |e| <= this * max(1, |f - f_d|): the QP may be feasible (then |e| = |y| / W)
-DUALITY_GAP_REL = 1e-12  # relative duality-gap tolerance (besides the absolute one, for forces of 100s of N)
-FEASIBLE_RESIDUAL = 1e-6  # |G f - w| <= this * max(1, |w|): the wrench is met
-ADMISSIBLE_TOLERANCE = 1e-7  # [N] pyramid and normal-bound violation still counted as inside
+ENGINES = (None, "compiled", "python")
 
 
 @dataclass(frozen=True)
@@ -90,7 +100,7 @@ class ContactForceQP:
     (from scratch after an infeasible cycle).  A call never takes more than :attr:`iteration_bound` iterations.
     """
 
-    CHECK_ITER = 4  # the check (the QP without the certificate test) may take CHECK_ITER * max_iter outer iterations
+    CHECK_ITER = CHECK_ITER  # the check (the QP without the certificate test) may take CHECK_ITER * max_iter
 
     def __init__(
         self,
@@ -101,6 +111,7 @@ class ContactForceQP:
         tolerance: float = 1e-9,
         max_iter: int = 50,
         max_iter_in: int = 10,
+        engine: str | None = None,
     ) -> None:
         """Set up the problem structure.
 
@@ -114,83 +125,38 @@ class ContactForceQP:
                 ``CHECK_ITER`` times more (feasible problems from scratch: <= 17 outer iterations in 3300 random
                 and control-loop cases, one case 79).
             max_iter_in: Inner (semi-smooth Newton) iterations per outer one, >= 1.
-        """
-        import proxsuite
+            engine: ``None`` (default): the compiled solver of ``bhgrasp._core`` when it loads, else the Python
+                one; ``"compiled"``: the compiled one; ``"python"``: the Python twin.  :attr:`engine` tells which.
 
+        Raises:
+            InputError: A bad argument.
+            CompiledEngineUnavailable: ``engine="compiled"`` but ``bhgrasp._core`` does not load.
+        """
         if int(n_contacts) < 1:
             raise InputError(f"`n_contacts` must be >= 1, got {n_contacts!r}")
         for name, value in (("max_iter", max_iter), ("max_iter_in", max_iter_in)):
             if not isinstance(value, (int, np.integer)) or value < 1:
                 raise InputError(f"`{name}` must be an integer >= 1, got {value!r}")
+        if engine not in ENGINES:
+            raise InputError(f"`engine` must be one of {ENGINES}, got {engine!r}")
         self.n = int(n_contacts)
         self.mu = as_real(mu, "mu")
         self.min_normal_force = as_real(min_normal_force, "min_normal_force")
         self.max_iter, self.max_iter_in = int(max_iter), int(max_iter_in)
         pyramid, _ = friction_pyramid(self.mu, facets)
         self.facets = len(pyramid)
-        size = 3 * self.n
-        rows = self.n * (self.facets + 1)
-        self._C = np.zeros((rows, size))
-        self._lower = np.full(rows, -np.inf)
-        self._upper = np.zeros(rows)
-        for i in range(self.n):
-            block = slice(i * self.facets, (i + 1) * self.facets)
-            self._C[block, 3 * i : 3 * i + 3] = pyramid
-            row = self.n * self.facets + i
-            self._C[row, 3 * i + 2] = 1.0
-            self._lower[row], self._upper[row] = self.min_normal_force, np.inf
-        self._H = np.eye(size)
-        self._proxqp = proxsuite.proxqp
-        tolerance = as_real(tolerance, "tolerance")
-        self._qp = self._make(size, tolerance, PRIMAL_INFEASIBILITY, self.max_iter)
-        # eps_primal_inf < 0: the certificate test never fires
-        self._check = self._make(size, tolerance, -1.0, self.CHECK_ITER * self.max_iter)
-        # the nearest problem in x = (f, e): H = diag(I, W I), [S G, -I] x = S w, the same rows on f
-        self._nearest = self._make(size + 6, tolerance, -1.0, self.max_iter)
-        self._nearest_H = np.diag(np.concatenate((np.ones(size), np.full(6, NEAREST_WEIGHT))))
-        self._nearest_C = np.hstack((self._C, np.zeros((rows, 6))))
-        self._warm: bool | tuple = False  # how the QP starts: from its last result, from (x, y, z), from scratch
-        self._warm_nearest = self._infeasible = False
-        self._grasp_map: np.ndarray | None = None
-        self._rows = np.ones(6)
-        self._A = np.zeros((6, size))
-        self._nearest_A = np.zeros((6, size + 6))
+        args = (self.n, self.mu, pyramid, self.mu * np.cos(np.pi / self.facets), self.min_normal_force,
+                as_real(tolerance, "tolerance"), self.max_iter, self.max_iter_in)  # fmt: skip
+        core = None if engine == "python" else _core(engine == "compiled")
+        self._solver = ContactForceQPPython(*args) if core is None else core.ContactForceQP(*args)
+        self.engine = "python" if core is None else "compiled"
+        self._no_desired = np.zeros(3 * self.n)
+        self._no_desired.flags.writeable = False
 
     @property
     def iteration_bound(self) -> int:
         """Most proxsuite iterations one :meth:`solve` takes: ``(2 + CHECK_ITER) * max_iter * (max_iter_in + 1)``."""
         return (2 + self.CHECK_ITER) * self.max_iter * (self.max_iter_in + 1)
-
-    def _make(self, size: int, tolerance: float, primal_infeasibility: float, max_iter: int):
-        qp = self._proxqp.dense.QP(size, 6, len(self._C))
-        settings = qp.settings
-        settings.eps_abs, settings.eps_rel = tolerance, 0.0
-        settings.check_duality_gap = True  # without the gap test the forces are only within ~3e-7 N of the optimum
-        settings.eps_duality_gap_abs, settings.eps_duality_gap_rel = tolerance, DUALITY_GAP_REL
-        settings.eps_primal_inf = primal_infeasibility
-        settings.verbose = False
-        settings.max_iter, settings.max_iter_in = max_iter, self.max_iter_in
-        return qp
-
-    def _run(self, qp, warm: bool | tuple, problem: tuple) -> tuple[str, int, np.ndarray]:
-        """One bounded solve of ``problem`` = (H, g, A, b, C, l, u): (status, iterations, x).
-
-        ``warm``: True (from the previous result of ``qp``), a primal-dual point (x, y, z), or False (scratch).
-        """
-        guess = self._proxqp.InitialGuess
-        if warm is False:
-            qp.settings.initial_guess = guess.EQUALITY_CONSTRAINED_INITIAL_GUESS
-            qp.init(*problem)
-            qp.solve()
-        else:  # same H, C and bounds; A too, even unchanged: its refactorisation halves the warm iterations
-            explicit = warm is not True
-            qp.settings.initial_guess = guess.WARM_START if explicit else guess.WARM_START_WITH_PREVIOUS_RESULT
-            qp.update(g=problem[1], A=problem[2], b=problem[3], update_preconditioner=False)
-            qp.solve(*warm) if explicit else qp.solve()
-        info = qp.results.info
-        x = qp.results.x.copy()
-        status = info.status.name if np.all(np.isfinite(x)) else "PROXQP_NOT_FINITE"
-        return status, int(info.iter), x
 
     def solve(self, grasp_map: Any, wrench: Any, desired: Any = None) -> ContactForceResult:
         """Contact forces [N] for the object wrench ``wrench`` (6,) [N, N m] closest to ``desired`` ((n, 3) or None).
@@ -201,71 +167,38 @@ class ContactForceQP:
         Raises:
             InputError: Wrong shapes or non-finite inputs.
         """
-        size = 3 * self.n
-        grasp = as_array(grasp_map, "grasp_map", (6, size))
+        grasp = as_array(grasp_map, "grasp_map", (6, 3 * self.n))
         w = as_vector(wrench, "wrench", 6)
-        f_d = np.zeros(size) if desired is None else as_array(desired, "desired", (self.n, 3)).ravel()
-        if self._grasp_map is None or not np.array_equal(grasp, self._grasp_map):
-            self._grasp_map = grasp.copy()  # scale the torque rows so that they weigh like the force rows
-            self._rows = np.concatenate((np.ones(3), np.full(3, 1.0 / default_torque_scale(grasp))))
-            self._A = self._rows[:, None] * grasp
-            self._nearest_A = np.hstack((self._A, -np.eye(6)))
-        b = self._rows * w
-        problem = (self._H, -f_d, self._A, b, self._C, self._lower, self._upper)
-        iterations, nearest, doubtful = 0, None, True
-        if self._infeasible:  # the last call was infeasible: the nearest problem first, it is likely the answer
-            nearest, iterations, doubtful = self._nearest_forces(f_d, b)
-            if not doubtful:
-                return self._result(grasp, w, nearest, "PROXQP_PRIMAL_INFEASIBLE", iterations)
-        status, spent, x = self._run(self._qp, self._warm, problem)
-        iterations += spent
-        warm = solved = status == "PROXQP_SOLVED"
-        if not solved and nearest is None:
-            nearest, spent, doubtful = self._nearest_forces(f_d, b)
-            iterations += spent
-        if not solved and doubtful:  # maybe a fake certificate: the QP from scratch without the test
-            check, spent, x = self._run(self._check, False, problem)
-            iterations += spent
-            solved = check == "PROXQP_SOLVED"
-            if solved:  # the next cycle starts the QP from here, not from its own failed iterate
-                status, warm = check, (x, self._check.results.y.copy(), self._check.results.z.copy())
-        self._warm, self._infeasible = warm if solved else False, not solved
-        return self._result(grasp, w, x if solved else nearest, status, iterations)
+        f_d = self._no_desired if desired is None else as_array(desired, "desired", (self.n, 3)).ravel()
+        solver = self._solver
+        if not solver.holds(grasp):  # scale the torque rows so that they weigh like the force rows
+            solver.set_grasp_map(grasp, _torque_scale(grasp))
+        return ContactForceResult(*solver.solve(w, f_d))
 
-    def _nearest_forces(self, f_d: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, int, bool]:
-        """The nearest problem: admissible forces, iterations, and whether the QP may be feasible after all.
 
-        For a feasible QP the nearest problem's error is |e| = |y| / W (y the multiplier of S G f = S w), small
-        against |f - f_d|: ``doubtful`` is |e| <= DOUBTFUL_ERROR max(1, |f - f_d|).
-        """
-        gradient = np.concatenate((-f_d, np.zeros(6)))
-        problem = (self._nearest_H, gradient, self._nearest_A, b, self._nearest_C, self._lower, self._upper)
-        status, iterations, x = self._run(self._nearest, self._warm_nearest, problem)
-        self._warm_nearest = solved = status == "PROXQP_SOLVED"
-        forces = x[: 3 * self.n] if solved else self._admissible(x[: 3 * self.n])
-        error = float(np.linalg.norm(self._A @ forces - b))
-        return forces, iterations, error <= DOUBTFUL_ERROR * max(1.0, float(np.linalg.norm(forces - f_d)))
+def _core(required: bool) -> Any:
+    """``bhgrasp._core``, or ``None`` when it does not load and is not ``required``."""
+    try:
+        from bhgrasp import _core as core
+    except ImportError as error:
+        if required:
+            raise CompiledEngineUnavailable(
+                f"the compiled QP of bhgrasp._core does not load ({error}); reinstall with `pip install -e .` (it "
+                "needs a C++17 compiler), or pass engine='python'"
+            ) from error
+        return None
+    return core
 
-    def _admissible(self, forces: np.ndarray) -> np.ndarray:
-        """Unconverged ``forces`` moved into the pyramids' inscribed cones and above f_min (NaN -> f_min)."""
-        per_contact = np.where(np.isfinite(forces), forces, 0.0).reshape(self.n, 3)
-        per_contact[:, 2] = np.maximum(per_contact[:, 2], self.min_normal_force)
-        tangential = np.hypot(per_contact[:, 0], per_contact[:, 1])
-        limit = self.mu * np.cos(np.pi / self.facets) * per_contact[:, 2]
-        per_contact[:, :2] *= np.where(tangential > limit, limit / np.maximum(tangential, 1e-300), 1.0)[:, None]
-        return per_contact.ravel()
 
-    def _result(self, grasp, w, forces, status, iterations) -> ContactForceResult:
-        per_contact = forces.reshape(self.n, 3)
-        error = grasp @ forces - w
-        residual = float(np.sqrt(error @ error))
-        tangential = np.sqrt(per_contact[:, 0] ** 2 + per_contact[:, 1] ** 2)
-        cone = float(np.max(tangential - self.mu * per_contact[:, 2]))
-        margin = float(np.min(per_contact[:, 2]) - self.min_normal_force)
-        pyramid = float(np.max(self._C[: self.n * self.facets] @ forces))
-        admissible = pyramid <= ADMISSIBLE_TOLERANCE and margin >= -ADMISSIBLE_TOLERANCE
-        feasible = admissible and residual <= FEASIBLE_RESIDUAL * max(1.0, float(np.linalg.norm(w)))
-        return ContactForceResult(per_contact, bool(feasible), residual, cone, margin, status, iterations, error)
+def _torque_scale(grasp: np.ndarray) -> float:
+    """:func:`~bhgrasp.grasp.default_torque_scale` [m] of a validated G, without its input checks.
+
+    The same NumPy operations, so the same bits (``tests/test_force_qp_twin.py``), in a third of the time: a moving
+    grasp changes its map every cycle.
+    """
+    blocks = grasp[3:].reshape(3, -1, 3)
+    lever = math.sqrt(np.add.reduce(blocks * blocks, axis=(0, 2)).max()) / math.sqrt(2.0)
+    return lever if lever > 0.0 else 1.0
 
 
 def internal_forces(

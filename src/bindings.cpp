@@ -12,6 +12,7 @@
 #include "batch.hpp"
 #include "dynamics.hpp"
 #include "engine.hpp"
+#include "force_qp.hpp"
 #include "grasp.hpp"
 #include "recording.hpp"
 #include "sensing.hpp"
@@ -21,7 +22,9 @@ using namespace nb::literals;
 
 NB_MODULE(_core, m) {
   using namespace bhgrasp;
-  m.doc() = "bhgrasp's compiled core: the simulation step and the grasp kinematics on Pinocchio's and coal's C++ API.";
+  m.doc() =
+      "bhgrasp's compiled core: the simulation step and the grasp kinematics on Pinocchio's and coal's C++ API, the "
+      "internal-force QP on proxsuite's.";
   nb::class_<ContactLaw>(m, "ContactLaw")
       .def(nb::init<>())
       .def_rw("stiffness", &ContactLaw::stiffness)
@@ -227,4 +230,29 @@ NB_MODULE(_core, m) {
           "base_rotation"_a, "base_translation"_a, "q"_a, "com"_a, "twist"_a, "points"_a, "frames"_a, "joints"_a)
       .def_prop_ro("nq", &GraspKinematics::nq)
       .def_prop_ro("nv", &GraspKinematics::nv);
+
+  nb::class_<ContactForceQP> force_qp(m, "ContactForceQP");
+  force_qp
+      .def(nb::init<int, double, const ContactForceQP::ConstRows&, double, double, double, int, int>(),
+           "n_contacts"_a, "mu"_a, "pyramid"_a, "inscribed"_a, "min_normal_force"_a, "tolerance"_a, "max_iter"_a,
+           "max_iter_in"_a)
+      .def("holds", &ContactForceQP::holds, "grasp"_a)
+      .def("set_grasp_map", &ContactForceQP::set_grasp_map, "grasp"_a, "torque_scale"_a)
+      // the fields of bhgrasp.grasp_forces.ContactForceResult in order, arrays copied out
+      .def(
+          "solve",
+          [](ContactForceQP& qp, const Vector6& wrench, const ContactForceQP::ConstVector& desired) {
+            const ForceResult& r = qp.solve(wrench, desired);
+            return std::make_tuple(r.forces, r.feasible, r.wrench_residual, r.cone_violation, r.normal_margin,
+                                   std::string(r.status), r.iterations, r.wrench_error);
+          },
+          "wrench"_a, "desired"_a)
+      .def_prop_ro("n_contacts", &ContactForceQP::n_contacts);
+  force_qp.attr("NEAREST_WEIGHT") = ForceQPConstants::nearest_weight;
+  force_qp.attr("PRIMAL_INFEASIBILITY") = ForceQPConstants::primal_infeasibility;
+  force_qp.attr("DOUBTFUL_ERROR") = ForceQPConstants::doubtful_error;
+  force_qp.attr("DUALITY_GAP_REL") = ForceQPConstants::duality_gap_rel;
+  force_qp.attr("FEASIBLE_RESIDUAL") = ForceQPConstants::feasible_residual;
+  force_qp.attr("ADMISSIBLE_TOLERANCE") = ForceQPConstants::admissible_tolerance;
+  force_qp.attr("CHECK_ITER") = ForceQPConstants::check_iter;
 }
