@@ -1,14 +1,16 @@
 """The packaged URDF tested like code (mujoco_menagerie style): names, limits, masses, inertias, simulation.
 
-The truths here are Barrett's published tables (shared/reference/barrett_public_data.md), read independently of
+The truths here are Barrett's published tables (sources in urdf/README.md), read independently of
 Pinocchio from the XML itself, and two other URDF consumers (yourdfpy, MuJoCo).
 """
 
 from __future__ import annotations
 
 import logging
+import re
 import warnings
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -147,3 +149,16 @@ def test_one_second_of_aba_under_random_torques_stays_finite(barrett: bh.Hand) -
         v = v + dt * barrett.forward_dynamics(q, v, tau)
         q = q + dt * v
     assert np.all(np.isfinite(q)) and np.all(np.isfinite(v))
+
+
+def test_the_provenance_cites_only_public_sources_it_lists() -> None:
+    """urdf/README.md names no file outside the repository as if it were in it; every source key it or the URDF's
+    comments use (the keys of the collected public data) is listed with its public location."""
+    folder = Path(__file__).resolve().parents[1] / "urdf"
+    readme, urdf = (folder / "README.md").read_text(), (folder / "barrett_hand.urdf").read_text()
+    assert "shared/" not in readme
+    listed = set(re.findall(r"^\| ([A-Z][A-Za-z0-9-]+) \|", readme.split("## Sources", 1)[1], flags=re.MULTILINE))
+    known = {"WIKI-MASS", "WIKI-KIN", "WIKI-SAFE", "MAN-262", "MAN-BH8", "LIBB", "HERB", "JHU", "SWX", "ROB",
+             "ROB-old", "RISE", "BRP", "GRASPIT", "ORAVE", "AIKIDO", "BLAYER"}  # fmt: skip
+    used = {key for key in known if re.search(rf"(?<![A-Za-z-]){re.escape(key)}(?![A-Za-z-])", readme + urdf)}
+    assert used and used <= listed, f"source keys used but not listed: {sorted(used - listed)}"
