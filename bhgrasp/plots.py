@@ -1,20 +1,32 @@
 """Matplotlib figures of runs: joint tracking, errors and torques, contact forces, object pose errors, cone margins.
 
-Figures are built with :class:`matplotlib.figure.Figure` (no pyplot state, no backend change): they work headless,
-display in notebooks and save with ``figure.savefig``.
+Figures are :class:`Figure`, a :class:`matplotlib.figure.Figure` that renders itself as a PNG for Jupyter (no pyplot
+state, no backend change): they work headless, show in any notebook with ``display(figure)`` or as a cell's last
+value without ``%matplotlib inline``, and save with ``figure.savefig``.
 """
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import matplotlib.figure
 import numpy as np
-from matplotlib.figure import Figure
 
 from bhgrasp.errors import InputError
 from bhgrasp.sim.state import Trajectory
+
+
+class Figure(matplotlib.figure.Figure):
+    """A matplotlib figure that Jupyter shows as a PNG by itself (``_repr_png_``), whatever the backend."""
+
+    def _repr_png_(self) -> bytes:
+        """The figure as PNG bytes at 100 dpi (what IPython's display calls)."""
+        buffer = io.BytesIO()
+        self.savefig(buffer, format="png", dpi=100)
+        return buffer.getvalue()
 
 
 def tracking_figure(
@@ -221,6 +233,6 @@ def cone_margin_figure(runs: dict[str, Trajectory], title: str = "") -> Figure:
 
 
 __all__ = [
-    "cone_margin_figure", "force_figure", "grasp_figure", "log_figure", "object_error_figure", "save_case_figures",
-    "save_force_figure", "tracking_figure",
+    "Figure", "cone_margin_figure", "force_figure", "grasp_figure", "log_figure", "object_error_figure",
+    "save_case_figures", "save_force_figure", "tracking_figure",
 ]  # fmt: skip

@@ -34,7 +34,7 @@ from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.state import Trajectory
 
 if TYPE_CHECKING:
-    from matplotlib.figure import Figure
+    from bhgrasp.plots import Figure
 
 CONTROLLERS = ("smc-adaptive", "ctc", "natural", "stiffness", "pd")
 HANDS = ("barrett", "allegro")
