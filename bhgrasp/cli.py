@@ -30,7 +30,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--output", type=checked.output_folder, default=Path("bhgrasp_demo"), help="folder for figure and trajectory"
     )
     demo.add_argument(
-        "--hand", choices=HANDS, default="barrett", help="the Barrett hand, or the Allegro hand of example-robot-data"
+        "--hand",
+        choices=HANDS,
+        default="barrett",
+        help="the Barrett hand, or the Allegro hand of example-robot-data (the `hands` extra)",
     )
     demo.add_argument("--controller", choices=CONTROLLERS, default="smc-adaptive", help="object-space controller")
     demo.add_argument("--mass", type=checked.positive_float, default=0.6, help="true box mass [kg]")

@@ -43,7 +43,10 @@ def example_robot_data_dir() -> Path:
         robots = prefix / _ERD_SUBDIR
         if robots.is_dir():
             return robots
-    raise ModelError("example-robot-data is not installed (`pip install example-robot-data`)")
+    raise ModelError(
+        "example-robot-data is not installed: it holds the other hands (e.g. the Allegro) and is an optional extra "
+        "of bhgrasp (414 MB); `pip install 'bhgrasp[hands]'` or `pip install example-robot-data`"
+    )
 
 
 def example_robot_data_urdf(relative_path: str) -> Path:

@@ -406,3 +406,19 @@ def test_hand_base_placement_whose_rotation_is_not_a_rotation() -> None:
     with pytest.raises(bh.InputError, match=r"det R = -1"):
         hand.base_placement = pin.SE3(np.diag([1.0, 1.0, -1.0]), np.zeros(3))
     assert hand.base_placement.isIdentity()  # refused: nothing changed
+
+
+def test_the_other_hands_are_an_optional_extra_named_when_missing(monkeypatch: pytest.MonkeyPatch) -> None:
+    """example-robot-data (414 MB) is the `hands` extra: without it, asking for the Allegro names the extra."""
+    import sys
+
+    from bhgrasp import resources
+
+    monkeypatch.setattr(sys, "path", [])
+    monkeypatch.setattr(sys, "prefix", "/nonexistent")
+    monkeypatch.setattr(sys, "base_prefix", "/nonexistent")
+    with pytest.raises(bh.ModelError, match=r"optional extra of bhgrasp .*pip install 'bhgrasp\[hands\]'"):
+        resources.example_robot_data_urdf("allegro_hand_description/urdf/allegro_right_hand.urdf")
+    pyproject = (Path(__file__).resolve().parents[1] / "pyproject.toml").read_text()
+    core = pyproject.split("dependencies = [", 1)[1].split("]", 1)[0]
+    assert "example-robot-data" not in core and 'hands = ["example-robot-data' in pyproject
