@@ -198,6 +198,7 @@ def _tune(args: argparse.Namespace) -> int:
         functools.partial(chapter4.impedance_fitness, force=args.force), x0=[-1.0, 1.5], sigma0=0.5,
         seed=args.seed, max_generations=args.generations, population=args.population, bounds=(lower, upper),
         tol_fun=chapter4.TUNING_TOL_FUN, tol_x=chapter4.TUNING_TOL_X, executor="serial" if args.serial else None,
+        progress=sys.stderr.isatty(),  # a bar over generations on a terminal; logs stay clean
     )  # fmt: skip
     mass, stiffness = 10.0**result.best
     print(f"best M_I = {mass:.4g} kg, K_I = {stiffness:.4g} N/m: mean force error {result.best_fitness:.4f} N")
@@ -327,7 +328,7 @@ def _experiments(chapter: str, output: Path, scale: float, figures: bool) -> int
     number = chapter[2:]
     module = importlib.import_module(f"bhgrasp.experiments.chapter{number}")
     start = time.perf_counter()
-    cases = getattr(module, f"run_chapter{number}")(output, scale=scale, figures=figures)
+    cases = getattr(module, f"run_chapter{number}")(output, scale=scale, figures=figures, progress=sys.stderr.isatty())
     runs = sum(len(getattr(case, "runs", ())) for case in cases)
     counted = f", {runs} runs" if runs else ""
     print(f"{chapter}: {len(cases)} cases{counted} in {time.perf_counter() - start:.1f} s")

@@ -199,3 +199,18 @@ def test_cli_starts_without_matplotlib_or_meshcat() -> None:
     """`bhgrasp info` / `--help` must stay quick: plotting and 3D libraries load only when a command draws."""
     code = "import sys, bhgrasp.cli; print('matplotlib' in sys.modules, 'meshcat' in sys.modules)"
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.split() == ["False"] * 2
+
+
+def test_long_commands_show_progress_on_a_terminal(tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch) -> None:
+    """experiments and tune draw tqdm bars on stderr when it is a terminal (and stay quiet in logs)."""
+    import sys
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert main(["experiments", "ch3", "--output", str(tmp_path), "--scale", "0.05", "--no-figures"]) == 0  # 0.1 s
+    err = capsys.readouterr().err
+    assert "ch3: 100%" in err and "4/4 [" in err
+    assert main(["tune", "--generations", "1", "--population", "3", "--serial"]) == 0
+    assert "100%" in capsys.readouterr().err
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: False)
+    assert main(["experiments", "ch3", "--output", str(tmp_path), "--scale", "0.05", "--no-figures"]) == 0
+    assert "ch3: " not in capsys.readouterr().err  # a log (CI) gets no bar

@@ -35,6 +35,7 @@ from bhgrasp.controllers import (
     sliding_gains,
 )
 from bhgrasp.controllers.base import Controller
+from bhgrasp.experiments import case_progress
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.planar import thesis_two_link_finger
 from bhgrasp.sim import Simulator
@@ -182,7 +183,8 @@ def ctc_steps(scale: float = 1.0) -> Case:
     travel = np.linalg.norm(goal - start, axis=1)
     late = tip.t >= 0.5
     for i, finger in enumerate(hand.fingers):
-        overall, after = 100 * x_error[:, i].max() / travel[i], 100 * x_error[late, i].max() / travel[i]
+        overall = 100 * x_error[:, i].max() / travel[i]
+        after = 100 * x_error[late, i].max() / travel[i] if late.any() else float("nan")  # a run shorter than 0.5 s
         case.table.append(["fingertip CTC", f"{finger} tip", "-", "-", "-", f"{overall:.3f} ({after:.3f} after 0.5 s)"])
         case.values[f"fingertip/{finger}/max_error_pct_of_travel"] = overall
         case.values[f"fingertip/{finger}/max_error_after_0.5s_pct_of_travel"] = after
@@ -320,11 +322,14 @@ def f3_hosm(scale: float = 1.0) -> Case:
 CASES = {"ctc": ctc_steps, "planar": planar_sinusoid, "barrett": barrett_smc_asmc, "f3": f3_hosm}
 
 
-def run_chapter3(output: Path, scale: float = 1.0, figures: bool = True) -> list[Case]:
-    """Run every case (durations x ``scale``), write ``chapter3.md`` and its figures into ``output``."""
+def run_chapter3(output: Path, scale: float = 1.0, figures: bool = True, progress: bool = False) -> list[Case]:
+    """Run every case (durations x ``scale``), write ``chapter3.md`` and its figures into ``output``.
+
+    ``progress``: a bar over the cases on stderr.
+    """
     output = Path(output)
     output.mkdir(parents=True, exist_ok=True)
-    cases = [make(scale) for make in CASES.values()]
+    cases = [make(scale) for make in case_progress(CASES.values(), len(CASES), "ch3", progress)]
     figure_names = {}
     if figures:
         from bhgrasp import plots

@@ -45,6 +45,7 @@ from bhgrasp.controllers.impedance import (
 )
 from bhgrasp.controllers.workspace import workspace_dynamics
 from bhgrasp.errors import InputError, SimulationDiverged
+from bhgrasp.experiments import case_progress
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.objects import Box, SpringMounted
 from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
@@ -836,11 +837,19 @@ CASES: dict[str, Callable[..., Case]] = {
 }  # fmt: skip
 
 
-def run_chapter4(output: Path, scale: float = 1.0, figures: bool = True, executor: Any = None) -> list[Case]:
-    """Run every case (durations x ``scale``), write ``chapter4.md`` and figures into ``output``."""
+def run_chapter4(
+    output: Path, scale: float = 1.0, figures: bool = True, executor: Any = None, progress: bool = False
+) -> list[Case]:
+    """Run every case (durations x ``scale``), write ``chapter4.md`` and figures into ``output``.
+
+    ``progress``: a bar over the cases on stderr.
+    """
     output = Path(output)
     output.mkdir(parents=True, exist_ok=True)
-    cases = [make(scale, executor) if key == "tuning" else make(scale) for key, make in CASES.items()]
+    cases = [
+        make(scale, executor) if key == "tuning" else make(scale)
+        for key, make in case_progress(CASES.items(), len(CASES), "ch4", progress)
+    ]
     names: dict[str, str] = {}
     if figures:
         from bhgrasp import plots

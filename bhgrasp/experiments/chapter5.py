@@ -17,6 +17,7 @@ import numpy as np
 
 from bhgrasp import metrics
 from bhgrasp.errors import InputError
+from bhgrasp.experiments import case_progress
 from bhgrasp.experiments.box_grasp import CONTACT_HEIGHT, STIFFNESS
 from bhgrasp.experiments.grasp_demo import MU_ASSUMED, OFFSET, SQUEEZE, GraspDemoResult, run_grasp_demo
 from bhgrasp.grasp_metrics import finger_normal_forces
@@ -305,13 +306,16 @@ CASES: dict[str, Callable[[float], Case]] = {
 }  # fmt: skip
 
 
-def run_chapter5(output: Path, scale: float = 1.0, figures: bool = True) -> list[Case]:
-    """Run every case (durations x ``scale``), write ``chapter5.md`` and figures into ``output``."""
+def run_chapter5(output: Path, scale: float = 1.0, figures: bool = True, progress: bool = False) -> list[Case]:
+    """Run every case (durations x ``scale``), write ``chapter5.md`` and figures into ``output``.
+
+    ``progress``: a bar over the cases on stderr.
+    """
     if not (np.isfinite(scale) and scale > 0.0):
         raise InputError(f"`scale` must be a positive number, got {scale}")
     output = Path(output)
     output.mkdir(parents=True, exist_ok=True)
-    cases = [make(scale) for make in CASES.values()]
+    cases = [make(scale) for make in case_progress(CASES.values(), len(CASES), "ch5", progress)]
     written: dict[str, list[str]] = {}
     if figures:
         for case in cases:
