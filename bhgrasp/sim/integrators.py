@@ -3,7 +3,7 @@
 A free body turns under ``I w_dot + w x I w = tau`` (body frame).  The explicit ``w x I w`` gains energy at every
 step; :func:`spin_midpoint` solves the implicit-midpoint step of torque-free spin, which keeps the kinetic energy and
 ``|I w|`` exactly at any step.  The Simulator's implicit and semi-implicit steps use the torque at that midpoint
-(``src/engine.cpp`` mirrors both functions).
+(``src/integrators.cpp`` mirrors both functions).
 """
 
 from __future__ import annotations

@@ -1,0 +1,187 @@
+// Contact detection and matching: see engine.hpp.  Each function mirrors the Python function of the same name in
+// bhgrasp/sim/contact.py (ContactEngine); the comments there explain the geometry.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <coal/collision.h>
+#include <coal/contact_patch.h>
+#include <coal/distance.h>
+#include <coal/shape/geometric_shapes.h>
+#include <pinocchio/algorithm/frames.hpp>
+#include <pinocchio/algorithm/geometry.hpp>
+#include <pinocchio/collision/coal-pinocchio-conversions.hpp>
+
+#include "engine.hpp"
+#include "kernels.hpp"
+
+namespace bhgrasp {
+
+// ------------------------------------------------------------------ detection (sim/contact.py: ContactEngine.detect)
+Contacts Engine::detect(const Vector& q, const Memory& memory) {
+  pinocchio::updateGeometryPlacements(model_, data_, geometry_, geometry_data_, q);
+  std::vector<std::int64_t> pairs;
+  std::vector<Vector3> points, normals;
+  std::vector<double> depths, weights;
+  Points patch_points;
+  std::vector<double> patch_depths;
+  for (std::size_t k = 0; k < settings_.pairs.size(); ++k) {
+    const Pair& pair = settings_.pairs[k];
+    const auto& shape_a = geometry_.geometryObjects[pair.geom_a].geometry;
+    const auto& shape_b = geometry_.geometryObjects[pair.geom_b].geometry;
+    const pinocchio::SE3 &placement_a = geometry_data_.oMg[pair.geom_a], &placement_b = geometry_data_.oMg[pair.geom_b];
+    const double reach = bound_radius_[pair.geom_a] + bound_radius_[pair.geom_b];
+    if (std::isfinite(reach) &&  // broad phase: bounding spheres apart, no contact (the narrow phase would agree)
+        (placement_a.act(bound_centre_[pair.geom_a]) - placement_b.act(bound_centre_[pair.geom_b])).norm() >
+            reach + requests_[k].security_margin + 1e-9)
+      continue;
+    const coal::Transform3s transform_a = pinocchio::toCoalTransform3s(placement_a);
+    const coal::Transform3s transform_b = pinocchio::toCoalTransform3s(placement_b);
+    coal::CollisionResult& result = results_[k];
+    result.clear();
+    if (!coal::collide(shape_a.get(), transform_a, shape_b.get(), transform_b, requests_[k], result))
+      continue;
+    coal::ContactPatchResult& patches = patch_results_[k];
+    coal::computeContactPatch(shape_a.get(), transform_a, shape_b.get(), transform_b, result,
+                              patch_requests_[k], patches);
+    for (std::size_t p = 0; p < patches.numContactPatches(); ++p) {
+      const coal::ContactPatch& patch = patches.getContactPatch(p);
+      const auto size = static_cast<Eigen::Index>(patch.size());
+      const Vector3 normal = patch.getNormal();
+      patch_points.resize(size, 3);
+      for (Eigen::Index i = 0; i < size; ++i) patch_points.row(i) = patch.getPoint(static_cast<std::size_t>(i));
+      patch_depths.clear();
+      if (size == 1)
+        patch_depths.push_back(-patch.penetration_depth);
+      else
+        point_depths(static_cast<int>(k), patch_points, normal, patch_depths);
+      for (Eigen::Index i = 0; i < size; ++i) {
+        pairs.push_back(static_cast<std::int64_t>(k));
+        points.push_back(row(patch_points, i));
+        normals.push_back(normal);
+        depths.push_back(patch_depths[static_cast<std::size_t>(i)]);
+        weights.push_back(1.0 / static_cast<double>(size));
+      }
+    }
+  }
+  Eigen::Index m = 0;
+  for (double depth : depths) m += depth > 0.0;
+  Contacts contacts;
+  contacts.resize(m);
+  Eigen::Index i = 0;
+  for (std::size_t j = 0; j < depths.size(); ++j) {
+    if (!(depths[j] > 0.0)) continue;
+    const Pair& pair = settings_.pairs[static_cast<std::size_t>(pairs[j])];
+    contacts.pair[i] = pairs[j];
+    contacts.point.row(i) = points[j];
+    contacts.normal.row(i) = normals[j];
+    contacts.depth[i] = depths[j];
+    contacts.friction[i] = pair.friction;
+    contacts.weight[i] = weights[j];
+    const pinocchio::SE3& placement = data_.oMi[static_cast<std::size_t>(pair.joint_b)];
+    contacts.local_b.row(i) = placement.actInv(points[j]);
+    ++i;
+  }
+  recall(contacts, memory);
+  return contacts;
+}
+
+void Engine::point_depths(int k, const Points& points, const Vector3& normal, std::vector<double>& depths) {
+  const Pair& pair = settings_.pairs[static_cast<std::size_t>(k)];
+  const Eigen::Index n = points.rows();
+  const Eigen::RowVector3d centroid = points.colwise().sum() / static_cast<double>(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Vector3 inward = (centroid - points.row(i)).transpose();
+    inward -= inward.dot(normal) * normal;
+    const double length = std::sqrt(inward.squaredNorm());
+    const Vector3 offset = inward * (std::min(1e-3, 0.125 * length) / std::max(length, 1e-300));
+    const Vector3 near_point = row(points, i) + offset, far_point = row(points, i) + 2 * offset;
+    const double near = -(signed_distance(pair.geom_a, near_point) + signed_distance(pair.geom_b, near_point));
+    const double far = -(signed_distance(pair.geom_a, far_point) + signed_distance(pair.geom_b, far_point));
+    depths.push_back(2 * near - far);
+  }
+}
+
+double Engine::signed_distance(int geom, const Vector3& point) {
+  const pinocchio::SE3& placement = geometry_data_.oMg[static_cast<std::size_t>(geom)];
+  const coal::CollisionGeometry* shape = geometry_.geometryObjects[static_cast<std::size_t>(geom)].geometry.get();
+  const Vector3 local = placement.rotation().transpose() * (point - placement.translation());
+  if (const auto* box = dynamic_cast<const coal::Box*>(shape)) {
+    const Vector3 excess = local.cwiseAbs() - box->halfSide;
+    return std::sqrt(excess.cwiseMax(0.0).squaredNorm()) + std::min(excess.maxCoeff(), 0.0);
+  }
+  if (const auto* plane = dynamic_cast<const coal::Halfspace*>(shape)) return local.dot(plane->n) - plane->d;
+  if (const auto* sphere = dynamic_cast<const coal::Sphere*>(shape))
+    return std::sqrt(local.squaredNorm()) - sphere->radius;
+  coal::Transform3s probe_placement;
+  probe_placement.setTranslation(point);
+  coal::DistanceRequest request;
+  coal::DistanceResult result;
+  return coal::distance(probe_.get(), probe_placement, shape, pinocchio::toCoalTransform3s(placement), request, result);
+}
+
+void Engine::recall(Contacts& contacts, const Memory& memory) const {
+  const Eigen::Index m = contacts.size(), old = memory.pair.size();
+  contacts.displacement.setZero(m, 3);
+  contacts.was_sliding.setZero(m);
+  if (old == 0) return;
+  const double radius2 = settings_.law.match_radius * settings_.law.match_radius;
+  for (Eigen::Index i = 0; i < m; ++i) {
+    Eigen::Index nearest = 0;
+    double best = std::numeric_limits<double>::infinity();
+    bool any_same = false;
+    for (Eigen::Index j = 0; j < old; ++j) {
+      if (memory.pair[j] != contacts.pair[i]) continue;
+      any_same = true;
+      const double distance = (contacts.local_b.row(i) - memory.local_b.row(j)).squaredNorm();
+      if (distance < best) best = distance, nearest = j;  // the first of equals, as argmin
+    }
+    Vector3 u = row(memory.displacement, nearest);
+    bool sliding = false;
+    if (best <= radius2) {
+      sliding = memory.sliding[nearest];
+    } else if (any_same) {  // a point not reported last step inherits its pair's mean displacement
+      Vector3 sum = Vector3::Zero();
+      int count = 0;
+      for (Eigen::Index j = 0; j < old; ++j) {
+        if (memory.pair[j] != contacts.pair[i]) continue;
+        sum += row(memory.displacement, j);
+        sliding = sliding || memory.sliding[j];
+        ++count;
+      }
+      u = sum / static_cast<double>(count);
+    } else {
+      u.setZero();
+    }
+    const Vector3 normal = row(contacts.normal, i);
+    const Vector3 projected = tangential(u, normal);  // onto the new tangent plane, keeping its length
+    const double length = std::sqrt(u.squaredNorm()), new_length = std::sqrt(projected.squaredNorm());
+    contacts.displacement.row(i) = projected * (length / std::max(new_length, 1e-300));
+    contacts.was_sliding[i] = sliding;
+  }
+}
+
+// Relative point Jacobians J_b(p) - J_a(p), world-aligned, (3, nv) each; needs computeJointJacobians at q.
+void Engine::jacobians(const Contacts& contacts, std::vector<Matrix>& result) {
+  result.assign(static_cast<std::size_t>(contacts.size()), Matrix::Zero(3, model_.nv));
+  for (Eigen::Index i = 0; i < contacts.size(); ++i) {
+    const Pair& pair = settings_.pairs[static_cast<std::size_t>(contacts.pair[i])];
+    Matrix& jacobian = result[static_cast<std::size_t>(i)];
+    if (pair.joint_b) {
+      const pinocchio::SE3 placement(Matrix3::Identity(), row(contacts.local_b, i));
+      frame_jacobian_.setZero();
+      pinocchio::getFrameJacobian(model_, data_, static_cast<pinocchio::JointIndex>(pair.joint_b), placement,
+                                  pinocchio::LOCAL_WORLD_ALIGNED, frame_jacobian_);
+      jacobian = frame_jacobian_.topRows<3>();
+    }
+    if (pair.joint_a) {
+      const auto joint = static_cast<pinocchio::JointIndex>(pair.joint_a);
+      const pinocchio::SE3 placement(Matrix3::Identity(), data_.oMi[joint].actInv(row(contacts.point, i)));
+      frame_jacobian_.setZero();
+      pinocchio::getFrameJacobian(model_, data_, joint, placement, pinocchio::LOCAL_WORLD_ALIGNED, frame_jacobian_);
+      jacobian -= frame_jacobian_.topRows<3>();
+    }
+  }
+}
+
+}  // namespace bhgrasp
