@@ -10,13 +10,14 @@
 namespace bhgrasp {
 
 // ------------------------------------------------------------------ force law (sim/contact.py)
-Engine::Parts Engine::linear_parts(const Contacts& contacts) const {
+// The work arrays the implicit step passes here (parts, status, slide) hold at least m rows or entries (they only
+// grow, engine.hpp: Work); these functions read and write their first m.
+void Engine::linear_parts(const Contacts& contacts, Parts& parts) const {
   const ContactLaw& law = settings_.law;
   const double dt = settings_.dt;
   const Eigen::Index m = contacts.size();
-  Parts parts;
-  parts.f0.resize(m, 3);
-  parts.f0_stick.resize(m, 3);
+  reserve_rows(parts.f0, m);
+  reserve_rows(parts.f0_stick, m);
   parts.gains.resize(static_cast<std::size_t>(m));
   parts.gains_stick.resize(static_cast<std::size_t>(m));
   for (Eigen::Index i = 0; i < m; ++i) {
@@ -44,14 +45,13 @@ Engine::Parts Engine::linear_parts(const Contacts& contacts) const {
       parts.gains_stick[s] = parts.gains[s];
     }
   }
-  return parts;
 }
 
 void Engine::start_status(const Contacts& contacts, const Parts& parts, const Points& start_velocity,
                           std::vector<int>& status, Points& slide) const {
   const Eigen::Index m = contacts.size();
   status.assign(static_cast<std::size_t>(m), 1);
-  slide.setZero(m, 3);
+  slide.topRows(m).setZero();
   if (settings_.law.tanh_friction || !contacts.was_sliding.any()) return;
   for (Eigen::Index i = 0; i < m; ++i) {
     if (!contacts.was_sliding[i]) continue;
@@ -73,7 +73,7 @@ void Engine::classify(const Contacts& contacts, const Points& forces, const std:
                       Points& slide) const {
   const Eigen::Index m = contacts.size();
   new_status.assign(static_cast<std::size_t>(m), 0);
-  slide.setZero(m, 3);
+  slide.topRows(m).setZero();
   for (Eigen::Index i = 0; i < m; ++i) {
     const auto s = static_cast<std::size_t>(i);
     const Vector3 normal = row(contacts.normal, i), force = row(forces, i);

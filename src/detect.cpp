@@ -16,15 +16,31 @@
 #include "kernels.hpp"
 
 namespace bhgrasp {
+namespace {
+
+// Point i of a contact patch in the world frame: coal's ContactPatch::getPoint, with the same arithmetic, without its
+// COAL_ASSERT, which in a release build of coal still constructs a std::logic_error (its message on the heap) per call.
+Vector3 patch_point(const coal::ContactPatch& patch, std::size_t i) {
+  coal::Vec3s point(0, 0, 0);
+  point.head<2>() = patch.points()[i];
+  point = patch.tf.transform(point);
+  return point;
+}
+
+}  // namespace
 
 // ------------------------------------------------------------------ detection (sim/contact.py: ContactEngine.detect)
 Contacts Engine::detect(const Vector& q, const Memory& memory) {
   pinocchio::updateGeometryPlacements(model_, data_, geometry_, geometry_data_, q);
-  std::vector<std::int64_t> pairs;
-  std::vector<Vector3> points, normals;
-  std::vector<double> depths, weights;
-  Points patch_points;
-  std::vector<double> patch_depths;
+  // the candidate points, in work arrays (no allocation once they are large enough)
+  std::vector<std::int64_t>& pairs = work_.pair;
+  std::vector<Vector3> &points = work_.point, &normals = work_.normal;
+  std::vector<double> &depths = work_.depth, &weights = work_.weight, &patch_depths = work_.patch_depths;
+  pairs.clear();
+  points.clear();
+  normals.clear();
+  depths.clear();
+  weights.clear();
   for (std::size_t k = 0; k < settings_.pairs.size(); ++k) {
     const Pair& pair = settings_.pairs[k];
     const auto& shape_a = geometry_.geometryObjects[pair.geom_a].geometry;
@@ -48,8 +64,11 @@ Contacts Engine::detect(const Vector& q, const Memory& memory) {
       const coal::ContactPatch& patch = patches.getContactPatch(p);
       const auto size = static_cast<Eigen::Index>(patch.size());
       const Vector3 normal = patch.getNormal();
-      patch_points.resize(size, 3);
-      for (Eigen::Index i = 0; i < size; ++i) patch_points.row(i) = patch.getPoint(static_cast<std::size_t>(i));
+      const auto patch_size = static_cast<std::size_t>(size);
+      if (work_.patch_points.size() <= patch_size) work_.patch_points.resize(patch_size + 1);
+      Points& patch_points = work_.patch_points[patch_size];
+      patch_points.resize(size, 3);  // allocates once per patch size
+      for (Eigen::Index i = 0; i < size; ++i) patch_points.row(i) = patch_point(patch, static_cast<std::size_t>(i));
       patch_depths.clear();
       if (size == 1)
         patch_depths.push_back(-patch.penetration_depth);
@@ -161,9 +180,11 @@ void Engine::recall(Contacts& contacts, const Memory& memory) const {
   }
 }
 
-// Relative point Jacobians J_b(p) - J_a(p), world-aligned, (3, nv) each; needs computeJointJacobians at q.
+// Relative point Jacobians J_b(p) - J_a(p), world-aligned, (3, nv) each, in the first m entries of result (a work
+// array that only grows); needs computeJointJacobians at q.
 void Engine::jacobians(const Contacts& contacts, std::vector<Matrix>& result) {
-  result.assign(static_cast<std::size_t>(contacts.size()), Matrix::Zero(3, model_.nv));
+  if (result.size() < static_cast<std::size_t>(contacts.size()))
+    result.resize(static_cast<std::size_t>(contacts.size()), Matrix(3, model_.nv));
   for (Eigen::Index i = 0; i < contacts.size(); ++i) {
     const Pair& pair = settings_.pairs[static_cast<std::size_t>(contacts.pair[i])];
     Matrix& jacobian = result[static_cast<std::size_t>(i)];
@@ -173,6 +194,8 @@ void Engine::jacobians(const Contacts& contacts, std::vector<Matrix>& result) {
       pinocchio::getFrameJacobian(model_, data_, static_cast<pinocchio::JointIndex>(pair.joint_b), placement,
                                   pinocchio::LOCAL_WORLD_ALIGNED, frame_jacobian_);
       jacobian = frame_jacobian_.topRows<3>();
+    } else {
+      jacobian.setZero();
     }
     if (pair.joint_a) {
       const auto joint = static_cast<pinocchio::JointIndex>(pair.joint_a);

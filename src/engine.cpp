@@ -28,20 +28,6 @@ constexpr double kFrictionVelocity = 1e-3;  // [rad/s] regularisation of Coulomb
 
 }  // namespace
 
-// Solve (T^T A T) w = T^T b and return T w (A symmetric positive definite, T of full column rank).
-Vector reduced_solve(const Matrix& transmission, const Matrix& matrix, const Vector& rhs) {
-  if (transmission.rows() == transmission.cols() && transmission.isIdentity(0.0)) {  // every coordinate driven
-    Eigen::LLT<Matrix> cholesky(matrix);
-    if (cholesky.info() == Eigen::Success) return cholesky.solve(rhs);
-    return matrix.partialPivLu().solve(rhs);
-  }
-  const Matrix reduced = transmission.transpose() * matrix * transmission;
-  const Vector right = transmission.transpose() * rhs;
-  Eigen::LLT<Matrix> cholesky(reduced);
-  if (cholesky.info() == Eigen::Success) return transmission * cholesky.solve(right);
-  return transmission * reduced.partialPivLu().solve(right);
-}
-
 void Contacts::resize(Eigen::Index m) {
   pair.resize(m);
   point.resize(m, 3);
@@ -98,11 +84,12 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
   frame_jacobian_ = pinocchio::Data::Matrix6x::Zero(6, model_.nv);
 }
 
-
 // ------------------------------------------------------------------ joint space (sim/simulator.py)
-Engine::Passive Engine::passive(const Vector& q, const Vector& v, const Drive& drive) const {
+void Engine::passive(const Vector& q, const Vector& v, const Drive& drive, Passive& result) const {
   const int nvh = settings_.nv_hand;
-  Passive result{Vector::Zero(model_.nv), settings_.joint_stiffness, settings_.joint_damping};
+  result.torque.setZero(model_.nv);
+  result.stiffness = settings_.joint_stiffness;
+  result.damping = settings_.joint_damping;
   for (std::size_t i = 0; i < settings_.spring_v.size(); ++i)
     result.torque[settings_.spring_v[i]] =
         -settings_.joint_stiffness[settings_.spring_v[i]] * q[settings_.spring_q[i]];
@@ -122,23 +109,45 @@ Engine::Passive Engine::passive(const Vector& q, const Vector& v, const Drive& d
     result.stiffness[j] += settings_.limit_stiffness;
     result.damping[j] += settings_.limit_damping;
   }
-  return result;
 }
 
-Matrix Engine::mass_matrix(const Vector& q) {
+void Engine::mass_matrix(const Vector& q, Matrix& mass) {
   pinocchio::crba(model_, data_, ConstRef(q));
-  Matrix mass = data_.M;
+  mass = data_.M;
   mass.triangularView<Eigen::StrictlyLower>() = mass.transpose();
-  return mass;
 }
 
-Matrix Engine::transmission(const Drive& drive) const {
+void Engine::transmission(const Drive& drive, Matrix& full) const {
   const Eigen::Index rows = drive.transmission.rows(), cols = drive.transmission.cols();
   const Eigen::Index objects = identity_objects_.rows();
-  Matrix full = Matrix::Zero(model_.nv, cols + objects);
+  full.setZero(model_.nv, cols + objects);
   full.topLeftCorner(rows, cols) = drive.transmission;
   full.bottomRightCorner(objects, objects) = identity_objects_;
-  return full;
+}
+
+// Solve (T^T A T) w = T^T b and set solution = T w (A symmetric positive definite, T of full column rank).  The
+// products that an expression would evaluate into temporaries go to work arrays, with the same arithmetic.
+void Engine::reduced_solve(const Matrix& transmission, const Matrix& matrix, const Vector& rhs, Vector& solution) {
+  Work& work = work_;
+  if (transmission.rows() == transmission.cols() && transmission.isIdentity(0.0)) {  // every coordinate driven
+    work.cholesky.compute(matrix);
+    if (work.cholesky.info() == Eigen::Success) {
+      solution = work.cholesky.solve(rhs);
+    } else {
+      solution = matrix.partialPivLu().solve(rhs);
+    }
+    return;
+  }
+  work.half.noalias() = transmission.transpose() * matrix;
+  work.reduced.noalias() = work.half * transmission;  // T^T A T
+  work.right.noalias() = transmission.transpose() * rhs;
+  work.cholesky.compute(work.reduced);
+  if (work.cholesky.info() == Eigen::Success) {
+    work.reduced_solution = work.cholesky.solve(work.right);
+    solution.noalias() = transmission * work.reduced_solution;
+  } else {
+    solution = transmission * work.reduced.partialPivLu().solve(work.right);
+  }
 }
 
 Vector Engine::gravity(const Vector& q) {
@@ -167,14 +176,16 @@ StepResult Engine::step(const Vector& q, const Vector& v, const Vector& tau_hand
   if (drive.transmission.rows() != settings_.nv_hand || drive.joint_damping.size() != settings_.nv_hand ||
       drive.friction.size() != settings_.nv_hand || drive.motor_damping.size() != settings_.nv_hand)
     throw std::invalid_argument("the drive's transmission, damping or friction has the wrong size");
-  Vector tau = Vector::Zero(model_.nv);
+  Vector& tau = work_.tau;
+  tau.setZero(model_.nv);
   tau.head(settings_.nv_hand) = tau_hand;
   StepResult result;
   const double dt = settings_.dt;
   if (settings_.integrator == 0) {
     implicit_step(q, v, tau, drive, memory, result);
   } else {
-    const Matrix full = transmission(drive);
+    transmission(drive, work_.transmission);
+    const Matrix& full = work_.transmission;
     Acceleration first = acceleration(q, v, tau, full, drive, memory, settings_.integrator == 1);
     if (settings_.integrator == 1) {
       result.v = v + dt * first.acceleration;
@@ -222,12 +233,13 @@ Engine::Acceleration Engine::acceleration(const Vector& q, const Vector& v, cons
   Acceleration result;
   result.contacts = detect(q, memory);
   pinocchio::computeJointJacobians(model_, data_, ConstRef(q));
-  const Passive joint = passive(q, v, drive);
+  passive(q, v, drive, work_.passive);
+  const Passive& joint = work_.passive;
   const Vector total = tau + joint.torque - joint.damping.cwiseProduct(v);
   const Eigen::Index m = result.contacts.size();
   Vector generalized = Vector::Zero(model_.nv);
   if (m) {
-    std::vector<Matrix> jacobian;
+    std::vector<Matrix>& jacobian = work_.jacobian;
     jacobians(result.contacts, jacobian);
     Points relative(m, 3);
     for (Eigen::Index i = 0; i < m; ++i) relative.row(i) = jacobian[static_cast<std::size_t>(i)] * v;
@@ -237,10 +249,11 @@ Engine::Acceleration Engine::acceleration(const Vector& q, const Vector& v, cons
   } else {
     result.displacement.setZero(0, 3);
   }
-  const Matrix mass = mass_matrix(q);
+  mass_matrix(q, work_.mass);
+  const Matrix& mass = work_.mass;
   Vector bias = pinocchio::nonLinearEffects(model_, data_, ConstRef(q), ConstRef(v));
   if (gyroscopic) implicit_gyroscopic(v, bias);
-  result.acceleration = reduced_solve(transmission, mass, total + generalized - bias);
+  reduced_solve(transmission, mass, total + generalized - bias, result.acceleration);
   const int nvh = settings_.nv_hand;
   result.drive = (mass * result.acceleration + bias - generalized - joint.torque + joint.damping.cwiseProduct(v))
                      .head(nvh);

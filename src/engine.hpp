@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 #include <coal/collision_data.h>
@@ -161,20 +162,51 @@ class Engine {
     Vector drive;
   };
 
+  // Work arrays, kept from step to step so that a step allocates only the arrays it returns.  Each is sized by the
+  // first step that uses it; arrays with a row or an entry per contact only grow and hold at least as many as the step
+  // has contacts (the rest are stale).  No value is carried from one step to the next.
+  struct Work {
+    // detect: the candidate points before the depth test; one patch's points, one array per patch size (so that
+    // point_depths' centroid sums exactly the patch's points) and depths
+    std::vector<std::int64_t> pair;
+    std::vector<Vector3> point, normal;
+    std::vector<double> depth, weight, patch_depths;
+    std::vector<Points> patch_points;
+    // joint space (implicit_step, step)
+    Vector tau, bias, implicit_damping, rhs, rhs_c, v_next, contact_torque, product, acceleration, delivered;
+    Vector increment;
+    Matrix mass, matrix, matrix_c, transmission;
+    Passive passive;
+    // contacts (implicit_step): relative point Jacobians, one contact's J v and D J, the active set
+    std::vector<Matrix> jacobian;
+    Vector velocity;
+    Eigen::Matrix<double, 3, Eigen::Dynamic> gain_jacobian;
+    Parts parts;
+    Points start_velocity, relative, forces, slide, new_slide, f0;
+    std::vector<Matrix3> gains;
+    std::vector<int> status, new_status;
+    Flags may_stick;
+    // reduced_solve
+    Eigen::LLT<Matrix> cholesky;
+    Matrix half, reduced;
+    Vector right, reduced_solution;
+  };
+
   void point_depths(int pair, const Points& points, const Vector3& normal, std::vector<double>& depths);
   double signed_distance(int geom, const Vector3& point);
   void recall(Contacts& contacts, const Memory& memory) const;
   void jacobians(const Contacts& contacts, std::vector<Matrix>& result);
-  Parts linear_parts(const Contacts& contacts) const;
+  void linear_parts(const Contacts& contacts, Parts& parts) const;
   void start_status(const Contacts& contacts, const Parts& parts, const Points& start_velocity,
                     std::vector<int>& status, Points& slide) const;
   void classify(const Contacts& contacts, const Points& forces, const std::vector<int>& status,
                 const Points& start_velocity, const Points& relative, const Flags& may_stick,
                 std::vector<int>& new_status, Points& slide) const;
   void contact_forces(Contacts& contacts, const Points& velocity, Points& displacement) const;
-  Passive passive(const Vector& q, const Vector& v, const Drive& drive) const;
-  Matrix mass_matrix(const Vector& q);
-  Matrix transmission(const Drive& drive) const;
+  void passive(const Vector& q, const Vector& v, const Drive& drive, Passive& result) const;
+  void mass_matrix(const Vector& q, Matrix& mass);
+  void transmission(const Drive& drive, Matrix& full) const;
+  void reduced_solve(const Matrix& transmission, const Matrix& matrix, const Vector& rhs, Vector& solution);
   void implicit_gyroscopic(const Vector& v, Vector& bias) const;
   Vector increment_rate(const Vector& increment, const Vector& v) const;
   void implicit_step(const Vector& q, const Vector& v, const Vector& tau, const Drive& drive, const Memory& memory,
@@ -197,6 +229,7 @@ class Engine {
   std::vector<double> bound_radius_;  // per geometry: radius [m] of a sphere about bound_centre_ holding the shape
   std::vector<Vector3> bound_centre_; // in the geometry's frame; radius inf: unbounded (half-spaces)
   pinocchio::Data::Matrix6x frame_jacobian_;
+  Work work_;
 };
 
 }  // namespace bhgrasp

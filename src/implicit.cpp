@@ -15,40 +15,62 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
                            const Memory& memory, StepResult& result) {
   const double dt = settings_.dt;
   const int nv = model_.nv, nvh = settings_.nv_hand;
+  // Every array but the result's lives in work_ (no allocation once sized); where an expression would evaluate a
+  // product into a temporary, the product goes to a work array first, with the same arithmetic.
+  Work& work = work_;
   Contacts contacts = detect(q, memory);
   pinocchio::computeJointJacobians(model_, data_, ConstRef(q));
-  const Matrix mass = mass_matrix(q);
-  Vector bias = pinocchio::nonLinearEffects(model_, data_, ConstRef(q), ConstRef(v));
+  mass_matrix(q, work.mass);
+  const Matrix& mass = work.mass;
+  Vector& bias = work.bias;
+  bias = pinocchio::nonLinearEffects(model_, data_, ConstRef(q), ConstRef(v));
   implicit_gyroscopic(v, bias);
-  const Passive joint = passive(q, v, drive);
-  const Vector implicit_damping = dt * joint.stiffness + joint.damping;
-  Matrix matrix = mass;
+  passive(q, v, drive, work.passive);
+  const Passive& joint = work.passive;
+  Vector& implicit_damping = work.implicit_damping;
+  implicit_damping = dt * joint.stiffness + joint.damping;
+  Matrix& matrix = work.matrix;
+  matrix = mass;
   matrix.diagonal() += dt * implicit_damping;
-  const Vector rhs = mass * v + dt * (tau - bias + joint.torque);
-  const Matrix full = transmission(drive);
+  work.product.noalias() = mass * v;
+  Vector& rhs = work.rhs;
+  rhs = work.product + dt * (tau - bias + joint.torque);
+  transmission(drive, work.transmission);
+  const Matrix& full = work.transmission;
   const Eigen::Index m = contacts.size();
-  Vector v_next;
-  Vector contact_torque = Vector::Zero(nv);
-  Points displacement = Points::Zero(m, 3);
-  std::vector<int> status;
+  Vector& v_next = work.v_next;
+  Vector& contact_torque = work.contact_torque;
+  contact_torque.setZero(nv);
+  Points& displacement = result.memory.displacement;
+  displacement.setZero(m, 3);
+  std::vector<int>& status = work.status;  // its first m entries
   if (m == 0) {
-    v_next = reduced_solve(full, matrix, rhs);
+    reduced_solve(full, matrix, rhs, v_next);
   } else {
-    std::vector<Matrix> jacobian;
+    std::vector<Matrix>& jacobian = work.jacobian;
     jacobians(contacts, jacobian);
-    Points start_velocity(m, 3), relative(m, 3), forces(m, 3), slide, new_slide;
-    for (Eigen::Index i = 0; i < m; ++i) start_velocity.row(i) = jacobian[static_cast<std::size_t>(i)] * v;
-    const Parts parts = linear_parts(contacts);
+    Points &start_velocity = work.start_velocity, &relative = work.relative, &forces = work.forces;
+    Points &slide = work.slide, &new_slide = work.new_slide, &f0 = work.f0;
+    for (Points* array : {&start_velocity, &relative, &forces, &slide, &new_slide, &f0}) reserve_rows(*array, m);
+    for (Eigen::Index i = 0; i < m; ++i) {
+      work.velocity.noalias() = jacobian[static_cast<std::size_t>(i)] * v;
+      start_velocity.row(i) = work.velocity;
+    }
+    linear_parts(contacts, work.parts);
+    const Parts& parts = work.parts;
     start_status(contacts, parts, start_velocity, status, slide);
-    Flags may_stick(m);
+    Flags& may_stick = work.may_stick;
+    reserve_rows(may_stick, m);
     for (Eigen::Index i = 0; i < m; ++i) may_stick[i] = status[static_cast<std::size_t>(i)] == 2;
-    std::vector<int> new_status;
-    Points f0(m, 3);
-    std::vector<Matrix3> gains(static_cast<std::size_t>(m));
+    std::vector<int>& new_status = work.new_status;
+    std::vector<Matrix3>& gains = work.gains;
+    gains.resize(static_cast<std::size_t>(m));
     for (int pass = 0; pass < 8; ++pass) {
       // linearise: f(v+) = f0 - D J v+ in each contact's status
-      Matrix matrix_c = matrix;
-      Vector rhs_c = rhs;
+      Matrix& matrix_c = work.matrix_c;
+      matrix_c = matrix;
+      Vector& rhs_c = work.rhs_c;
+      rhs_c = rhs;
       for (Eigen::Index i = 0; i < m; ++i) {
         const auto s = static_cast<std::size_t>(i);
         if (status[s] == 1) {
@@ -62,13 +84,15 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
           gains[s].setZero();
         }
         const Matrix& jac = jacobian[s];
-        matrix_c.noalias() += dt * (jac.transpose() * (gains[s] * jac));
+        work.gain_jacobian.noalias() = gains[s] * jac;
+        matrix_c.noalias() += dt * (jac.transpose() * work.gain_jacobian);
         rhs_c.noalias() += dt * (jac.transpose() * row(f0, i));
       }
-      v_next = reduced_solve(full, matrix_c, rhs_c);
+      reduced_solve(full, matrix_c, rhs_c, v_next);
       for (Eigen::Index i = 0; i < m; ++i) {
         const auto s = static_cast<std::size_t>(i);
-        relative.row(i) = jacobian[s] * v_next;
+        work.velocity.noalias() = jacobian[s] * v_next;
+        relative.row(i) = work.velocity;
         forces.row(i) = row(f0, i) - gains[s] * row(relative, i);
       }
       classify(contacts, forces, status, start_velocity, relative, may_stick, new_status, new_slide);
@@ -82,7 +106,7 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
       if (same && (!any_sliding || change < 1e-12)) break;
       for (Eigen::Index i = 0; i < m; ++i) may_stick[i] = may_stick[i] && new_status[static_cast<std::size_t>(i)] == 2;
       status = new_status;
-      slide = new_slide;
+      slide.topRows(m) = new_slide.topRows(m);
     }
     // end_displacement: integrated while sticking, on the cone edge when sliding, 0 when off
     for (Eigen::Index i = 0; i < m; ++i) {
@@ -100,21 +124,26 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
         displacement.row(i) = contacts.displacement.row(i) + dt * tangential(row(relative, i), normal).transpose();
       }
     }
-    contacts.force = forces;
+    contacts.force = forces.topRows(m);
     for (Eigen::Index i = 0; i < m; ++i) {
       contacts.sticking[i] = status[static_cast<std::size_t>(i)] == 1;
       contact_torque.noalias() += jacobian[static_cast<std::size_t>(i)].transpose() * row(forces, i);
     }
   }
-  Flags sliding(m);
+  Flags& sliding = result.memory.sliding;
+  sliding.resize(m);
   for (Eigen::Index i = 0; i < m; ++i) sliding[i] = status[static_cast<std::size_t>(i)] == 2;
   // drive: M a + bias - contact - passive + implicit terms, less the motor's own damping (simulator.py: _drive)
-  const Vector delivered = (mass * ((v_next - v) / dt) + (bias - contact_torque - joint.torque) +
-                            implicit_damping.cwiseProduct(v_next)).head(nvh);
+  work.acceleration = (v_next - v) / dt;
+  work.product.noalias() = mass * work.acceleration;
+  Vector& delivered = work.delivered;
+  delivered = (work.product + (bias - contact_torque - joint.torque) + implicit_damping.cwiseProduct(v_next)).head(nvh);
   result.drive = delivered - drive.motor_damping.cwiseProduct(v_next.head(nvh));
-  result.q = integrate(q, v_next * dt);
+  work.increment = v_next * dt;
+  result.q = integrate(q, work.increment);
   result.v = v_next;
-  result.memory = Memory{contacts.pair, contacts.local_b, displacement, sliding};
+  result.memory.pair = contacts.pair;
+  result.memory.local_b = contacts.local_b;
   result.contacts = std::move(contacts);
 }
 

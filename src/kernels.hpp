@@ -1,5 +1,5 @@
-// Small helpers shared by the compiled step's source files (engine.cpp, detect.cpp, contact_law.cpp, implicit.cpp,
-// integrators.cpp); not part of the module's interface.
+// Small helpers shared by the compiled step's source files (engine.cpp, detect.cpp, contact_law.cpp, implicit.cpp);
+// not part of the module's interface.
 #pragma once
 
 #include "engine.hpp"
@@ -14,7 +14,11 @@ inline Vector3 row(const Points& points, Eigen::Index i) { return points.row(i).
 // The tangential part of a vector at normal n.
 inline Vector3 tangential(const Vector3& x, const Vector3& n) { return x - x.dot(n) * n; }
 
-// Solve (T^T A T) w = T^T b and return T w (A symmetric positive definite, T of full column rank); in engine.cpp.
-Vector reduced_solve(const Matrix& transmission, const Matrix& matrix, const Vector& rhs);
+// Grow a work array to at least `rows` rows, never shrinking it: a scene allocates it again only when it reaches more
+// contacts than ever before.  Its values are not kept.
+template <typename Array>
+void reserve_rows(Array& array, Eigen::Index rows) {
+  if (array.rows() < rows) array.resize(rows, array.cols());
+}
 
 }  // namespace bhgrasp
