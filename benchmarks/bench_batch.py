@@ -1,9 +1,10 @@
-"""Batched rollouts of the reference hold: environment-steps per second against the serial compiled engine.
+"""Batched rollouts: environment-steps per second against the serial compiled engine, measured in the same run.
 
 The reference hold (``bhgrasp.experiments.hold``) stepped as N environments of a ``BatchSimulator`` with its law
 written for the batch (compiled gravity and fingertip-Jacobian kernels, NumPy for the rest), at 1 and 2 threads,
 against one environment stepped by ``Simulator.step`` with the scalar law, measured in the same run.  Issue 15's
-target: >= 100 000 environment-steps per second on 2 cores.
+target: >= 100 000 environment-steps per second on 2 cores.  Then Barrett hands (four motor torques each) closing
+on a box, whose TorqueSwitches break away in the batch's C++, against one hand stepped by ``Simulator.step``.
 
 Usage: ``python benchmarks/bench_batch.py [--steps 200] [--sizes 16 64 256]``.
 """
@@ -55,6 +56,32 @@ def batch_rate(size: int, threads: int, steps: int) -> tuple[float, float]:
     return loop, size * steps / (time.perf_counter() - start)
 
 
+def barrett_rate(size: int, threads: int, steps: int) -> tuple[float, float]:
+    """Environment-steps per second of Barrett hands closing on the chapter-5 box, batch and serial.
+
+    Four motor torques per hand, the TorqueSwitches breaking away in the batch's C++; the serial rate is one hand
+    stepped by ``Simulator.step`` (its Python actuation model).
+    """
+    from bhgrasp.experiments.box_grasp import box_grasp
+    from bhgrasp.sim import Simulator
+    from bhgrasp.sim.actuation import BarrettActuation
+
+    setup = box_grasp(mass=0.3, actuation="barrett")
+    simulator = Simulator(setup.simulator.scene, dt=setup.simulator.dt, contact=setup.simulator.law,
+                          actuation=BarrettActuation(setup.hand))  # fmt: skip
+    start_state = simulator.initial_state(setup.q_start)
+    u = np.array([0.02, 0.11, 0.11, 0.11]) * np.linspace(0.8, 1.2, size)[:, None]
+    batch = BatchSimulator(simulator, [start_state] * size, threads=threads)
+    start = time.perf_counter()
+    for _ in range(steps):
+        batch.step(u)
+    rate = size * steps / (time.perf_counter() - start)
+    state, start = start_state, time.perf_counter()
+    for _ in range(steps):
+        state, _ = simulator.step(state, u[0])
+    return rate, steps / (time.perf_counter() - start)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--steps", type=int, default=200, help="steps per measurement")
@@ -69,6 +96,12 @@ def main() -> None:
         for threads in (1, 2):
             loop, step = batch_rate(size, threads, args.steps)
             print(f"{size:12d}{threads:9d}{loop:14.0f}{step:12.0f}{loop / serial:15.2f}")
+    print("\nBarrett hands closing on a box (4 motor inputs, TorqueSwitch in C++), inputs held:")
+    print(f"{'environments':>12}{'threads':>9}{'batch':>14}{'serial':>12}{'batch / serial':>16}")
+    for size in args.sizes:
+        for threads in (1, 2):
+            rate, one = barrett_rate(size, threads, args.steps)
+            print(f"{size:12d}{threads:9d}{rate:14.0f}{one:12.0f}{rate / one:16.2f}")
 
 
 if __name__ == "__main__":
