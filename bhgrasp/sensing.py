@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bhgrasp._validation import as_array, as_vector
 from bhgrasp.hand import Hand
 from bhgrasp.sim.compiled import optional_core
 from bhgrasp.sim.state import State
@@ -58,6 +59,9 @@ class ContactSensing:
                     self._finger_of.setdefault(frame.name, finger)
         self._empty = FingerContact(np.zeros(3), 0.0, np.zeros(3), 0)
         self._finger_index = {link: self.hand.fingers.index(finger) for link, finger in self._finger_of.items()}
+        self._joint_of: dict[str, int] = {}  # frame name -> its parent joint (the first frame of a name, as getFrameId)
+        for frame in model.frames:
+            self._joint_of.setdefault(frame.name, frame.parentJoint)
 
     def finger_of(self, link: str) -> str | None:
         """The finger a link frame belongs to (``None`` for the palm or a frame of no finger)."""
@@ -120,8 +124,29 @@ class ContactSensing:
         """Joint torques the contact forces exert on the hand, sum of J_p^T F_on_hand over contacts [N m], (nv,).
 
         J_p is the translational Jacobian of the contact point on its link; F_on_hand = -(force on the object).
-        The hand's dynamics read M q_dd + C q_d + G = tau + this.
+        The hand's dynamics read M q_dd + C q_d + G = tau + this.  Summed in the compiled kernel
+        (``src/dynamics.cpp``) when ``bhgrasp._core`` loads, otherwise in :meth:`_reaction_torques_python` (equal to
+        round-off: tests/test_sensing_kernels.py).
         """
+        hand = self.hand
+        joint_of = self._joint_of
+        rows = [k for k, (link, _) in enumerate(state.contact_bodies) if link in joint_of]
+        if not rows:
+            return np.zeros(hand.nv)
+        kernel = hand._dynamics()
+        if kernel is None:
+            return self._reaction_torques_python(state)
+        q = as_vector(state.q, "state.q", hand.nq)
+        placement = hand.base_placement
+        joints = [joint_of[state.contact_bodies[k][0]] for k in rows]
+        points = state.contact_points[rows]
+        if not np.isfinite(points).all():
+            as_array(points, "points", (len(rows), 3))  # raises, as Hand.point_jacobians does
+        return kernel.contact_torques(placement.rotation, placement.translation, q, joints, points,
+                                      state.contact_forces[rows])  # fmt: skip
+
+    def _reaction_torques_python(self, state: State) -> np.ndarray:
+        """:meth:`reaction_torques` through :meth:`~bhgrasp.hand.Hand.point_jacobians` (the compiled sum's twin)."""
         hand = self.hand
         rows = [k for k, (link, _) in enumerate(state.contact_bodies)
                 if link in self._finger_of or hand.model.existFrame(link)]  # fmt: skip

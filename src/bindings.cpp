@@ -16,6 +16,7 @@
 #include "grasp.hpp"
 #include "recording.hpp"
 #include "sensing.hpp"
+#include "workspace.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -210,7 +211,31 @@ NB_MODULE(_core, m) {
             return kernel.slotine_li_torque(gravity, q, v, v_r, a_r);  // a copy: the kernel's is overwritten
           },
           "gravity"_a, "q"_a, "v"_a, "v_r"_a, "a_r"_a)
+      .def(
+          "contact_torques",
+          [](HandDynamics& kernel, const Eigen::Matrix3d& base_rotation, const Eigen::Vector3d& base_translation,
+             const HandDynamics::ConstVector& q, const std::vector<int>& joints, const HandDynamics::ConstRows& points,
+             const HandDynamics::ConstRows& forces) -> Eigen::VectorXd {
+            return kernel.contact_torques(base_rotation, base_translation, q, joints, points, forces);  // a copy
+          },
+          "base_rotation"_a, "base_translation"_a, "q"_a, "joints"_a, "points"_a, "forces"_a)
       .def_prop_ro("nv", &HandDynamics::nv);
+
+  nb::class_<FingerDynamics>(m, "FingerDynamics")
+      .def(nb::init<const std::string&, const std::vector<int>&, const std::vector<std::vector<int>>&>(), "model"_a,
+           "frames"_a, "indices"_a)
+      // copies out as writable arrays in NumPy's layout (the kernel's own are overwritten by its next call), in the
+      // order of bhgrasp.controllers.workspace._finger_terms_python
+      .def(
+          "compute",
+          [](FingerDynamics& kernel, int finger, const Eigen::Vector3d& gravity, const FingerDynamics::ConstVector& q,
+             const FingerDynamics::ConstVector& v) {
+            const FingerTerms& terms = kernel.compute(finger, gravity, q, v);
+            return std::make_tuple(terms.positions, terms.jacobian, terms.mass, terms.gravity, terms.velocity,
+                                   terms.bias);
+          },
+          "finger"_a, "gravity"_a, "q"_a, "v"_a)
+      .def_prop_ro("nv", &FingerDynamics::nv);
 
   nb::class_<GraspKinematics>(m, "GraspKinematics")
       .def(nb::init<const std::string&>(), "model"_a)

@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include <pinocchio/algorithm/frames.hpp>
+#include <pinocchio/algorithm/jacobian.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/serialization.hpp>
 
@@ -15,6 +17,8 @@ HandDynamics::HandDynamics(const std::string& model) {
   difference_.resize(model_.nv);
   plus_.resize(model_.nv);
   result_.resize(model_.nv);
+  jacobian_.resize(6, model_.nv);
+  linear_.resize(3, model_.nv);
 }
 
 const Eigen::VectorXd& HandDynamics::slotine_li_torque(const Eigen::Vector3d& gravity, const ConstVector& q,
@@ -31,6 +35,34 @@ const Eigen::VectorXd& HandDynamics::slotine_li_torque(const Eigen::Vector3d& gr
   result_ = plus_ - minus;  // gravity cancels in the difference
   result_ *= 0.25;
   result_ += pinocchio::rnea(model_, data_, Ref(q), Ref(zero_), Ref(a_r));  // (as NumPy: rnea + 0.25 (plus - minus))
+  return result_;
+}
+
+const Eigen::VectorXd& HandDynamics::contact_torques(const Eigen::Matrix3d& base_rotation,
+                                                     const Eigen::Vector3d& base_translation, const ConstVector& q,
+                                                     const std::vector<int>& joints, const ConstRows& points,
+                                                     const ConstRows& forces) {
+  const Eigen::Index count = points.rows();
+  if (q.size() != model_.nq || forces.rows() != count || static_cast<Eigen::Index>(joints.size()) != count)
+    throw std::invalid_argument("contact_torques: q of size nq, points and forces (n, 3) and n joints are needed");
+  for (int joint : joints)
+    if (joint < 0 || joint >= model_.njoints) throw std::invalid_argument("a contact names a joint the model lacks");
+  const bool moved = !(base_rotation.isIdentity(0.0) && base_translation.isZero(0.0));  // (Hand._base_at_origin)
+  pinocchio::computeJointJacobians(model_, data_, q);  // places the joints too
+  result_.setZero();
+  for (Eigen::Index i = 0; i < count; ++i) {  // Hand.point_jacobians, then the sum of J_i^T f_i
+    const auto joint = static_cast<pinocchio::JointIndex>(joints[static_cast<std::size_t>(i)]);
+    Eigen::Vector3d point = points.row(i).transpose();
+    if (moved) point = base_rotation.transpose() * (point - base_translation);  // the point in the model frame
+    const pinocchio::SE3 on_joint(Eigen::Matrix3d::Identity(), data_.oMi[joint].actInv(point));
+    jacobian_.setZero();
+    pinocchio::getFrameJacobian(model_, data_, joint, on_joint, pinocchio::LOCAL_WORLD_ALIGNED, jacobian_);
+    if (moved)
+      linear_.noalias() = base_rotation * jacobian_.topRows<3>();
+    else
+      linear_ = jacobian_.topRows<3>();
+    result_.noalias() -= linear_.transpose() * forces.row(i).transpose();
+  }
   return result_;
 }
 

@@ -1,9 +1,11 @@
 // A hand's inverse dynamics for its control laws, on Pinocchio's C++ API (bhgrasp/hand.py: Hand).
-// The Python twin is Hand.slotine_li_torque's NumPy path; tests/test_hand_kernels.py holds both to the bit.
+// The Python twins are Hand.slotine_li_torque's NumPy path (tests/test_hand_kernels.py holds both to the bit) and
+// ContactSensing._reaction_torques_python in bhgrasp/sensing.py (to round-off, tests/test_sensing_kernels.py).
 // Units SI; joint space of the hand's model.
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -14,6 +16,7 @@ namespace bhgrasp {
 class HandDynamics {
  public:
   using ConstVector = Eigen::Ref<const Eigen::VectorXd>;
+  using ConstRows = Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>;
 
   // `model`: Pinocchio's text serialisation of the hand (Model.saveToString); its inertias are not changed afterwards.
   explicit HandDynamics(const std::string& model);
@@ -24,6 +27,15 @@ class HandDynamics {
   const Eigen::VectorXd& slotine_li_torque(const Eigen::Vector3d& gravity, const ConstVector& q, const ConstVector& v,
                                            const ConstVector& v_r, const ConstVector& a_r);
 
+  // -sum_i J_i^T f_i [N m]: the joint torques on the hand of contact forces f_i [N, world] on the object at points
+  // p_i [m, world] (rows of `points`, `forces`) fixed on the bodies of joints `joints[i]`, J_i the points'
+  // translational Jacobians (world-aligned) at q, for a hand whose model frame sits at (base_rotation,
+  // base_translation) in the world.  The result lives in this object until the next call.  Sizes and joint ids are
+  // checked (std::invalid_argument).
+  const Eigen::VectorXd& contact_torques(const Eigen::Matrix3d& base_rotation, const Eigen::Vector3d& base_translation,
+                                         const ConstVector& q, const std::vector<int>& joints, const ConstRows& points,
+                                         const ConstRows& forces);
+
   int nq() const { return model_.nq; }
   int nv() const { return model_.nv; }
 
@@ -31,6 +43,8 @@ class HandDynamics {
   pinocchio::Model model_;
   pinocchio::Data data_;
   Eigen::VectorXd zero_, sum_, difference_, plus_, result_;  // work buffers, (nv,)
+  pinocchio::Data::Matrix6x jacobian_;                        // (6, nv)
+  Eigen::Matrix<double, 3, Eigen::Dynamic> linear_;           // (3, nv): a point's translational rows, world
 };
 
 }  // namespace bhgrasp

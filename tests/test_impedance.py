@@ -44,6 +44,21 @@ def test_tustin_filter_matches_scipy_bilinear(mass, damping, stiffness, period):
     np.testing.assert_allclose(produced, expected, rtol=0, atol=1e-12 * max(1.0, np.abs(expected).max()))
 
 
+def test_tustin_filter_uses_changed_parameters_from_the_next_sample():
+    """The filter caches its coefficients; a changed M_I, B_I, K_I or T takes effect as if they were recomputed."""
+    tustin = TustinImpedanceFilter(0.5, 3.0, 40.0, 1e-3, size=1)
+    forces = np.random.default_rng(2).normal(size=40)
+    history = [0.0, 0.0, 0.0, 0.0]  # E(n-1), E(n-2) and F(n-1), F(n-2)
+    for n, force in enumerate(forces):
+        if n == 20:
+            tustin.stiffness, tustin.damping = 80.0, 5.0
+        numerator, denominator = tustin.coefficients()
+        expected = (numerator[0] * force + numerator[1] * history[2] + numerator[2] * history[3]
+                    - denominator[1] * history[0] - denominator[2] * history[1])  # fmt: skip
+        assert tustin.step([force], 1e-3)[0][0] == expected
+        history = [expected, history[0], force, history[2]]
+
+
 def test_continuous_filter_follows_the_second_order_step_response():
     """M x'' + B x' + K x = F from rest: x(t) = F/K (1 - e^{-z w t}(cos w_d t + z/sqrt(1-z^2) sin w_d t))."""
     m, b, k, force, dt = 0.5, 3.0, 40.0, 2.0, 1e-4

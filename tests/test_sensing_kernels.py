@@ -8,6 +8,8 @@ world inertia.  The kernels sum in another order than NumPy's einsum and BLAS, s
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -74,6 +76,31 @@ def test_finger_sums_match_along_a_held_grasp() -> None:
         state, _ = hold.simulator.step(state, hold.controller(state.t, state))
         assert_same_fingers(sensing, state)
     assert all(contact.touching for contact in sensing.fingers(state).values())
+
+
+@pytest.mark.parametrize("moved", [False, True])
+def test_reaction_torques_match_the_numpy_twin(moved: bool) -> None:
+    hand = bh.BarrettHand()
+    if moved:
+        hand.base_placement = pin.SE3(pin.exp3(np.array([0.4, -1.2, 0.3])), np.array([0.1, 0.0, 0.2]))
+    sensing = ContactSensing(hand)
+    rng = np.random.default_rng(7)
+    for m in (1, 2, 3, 5, 9):
+        for _ in range(20):
+            state = random_state(rng, hand, m)
+            state = replace(state, q=hand.random_configuration(rng))
+            expected = sensing._reaction_torques_python(state)
+            scale = max(1.0, float(np.abs(expected).max()))
+            np.testing.assert_allclose(sensing.reaction_torques(state), expected, rtol=0, atol=RELATIVE * scale)
+    assert not np.any(sensing.reaction_torques(random_state(rng, hand, 0)))
+
+
+def test_reaction_torques_refuse_a_non_finite_point() -> None:
+    hand = bh.BarrettHand()
+    state = random_state(np.random.default_rng(8), hand, 2)
+    state.contact_points[1, 2] = np.nan
+    with pytest.raises(InputError, match="points"):
+        ContactSensing(hand).reaction_torques(state)
 
 
 def test_a_finger_that_only_pulls_has_no_strongest_link() -> None:

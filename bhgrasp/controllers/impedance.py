@@ -34,7 +34,7 @@ import numpy as np
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter, critical_damping
-from bhgrasp.controllers.workspace import WorkspaceComputedTorque
+from bhgrasp.controllers.workspace import WorkspaceComputedTorque, _finger_terms
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.sensing import ContactSensing, FingerContact
@@ -186,6 +186,7 @@ class ForceImpedance(ImpedanceLaw):
             self.force = as_real(force, "force")
         self.surface = float(self.normal @ as_vector(surface, "surface", 3))
         self.environment_stiffness = k_e
+        self._projector = (self.normal, np.eye(3) - np.outer(self.normal, self.normal))
 
     def target(self) -> float:
         """Normal coordinate [m] of the reference, (4.26)/(4.30): x_e + f_d / k_e."""
@@ -202,7 +203,9 @@ class ForceImpedance(ImpedanceLaw):
             if self.force < 0.0:
                 raise InputError(f"desired force must be >= 0 [N], got {self.force} at t = {t} s")
         position, velocity, acceleration = self.reference(t)
-        projector = np.eye(3) - np.outer(n, n)
+        if self._projector[0] is not n:  # I - n n^T, rebuilt when `normal` is replaced
+            self._projector = (n, np.eye(3) - np.outer(n, n))
+        projector = self._projector[1]
         desired = (projector @ position + self.target() * n, projector @ velocity, projector @ acceleration)
         measured = float(n @ contact.force) if contact.touching else 0.0
         error = (measured - self.force) if contact.touching else 0.0  # the filter acts only in contact (thesis)
@@ -308,7 +311,7 @@ class ImpedanceController(Controller):
     """Impedance outer loops for one or several fingers around an inner fingertip computed-torque loop.
 
     Logged per finger ``<finger>/force`` (normal or full force), ``<finger>/x_c``, ``<finger>/delta_x`` and the
-    adaptive estimates; plus ``reaction_torque`` = J^T F of the sensed contacts (thesis (4.8)).
+    adaptive estimates; plus ``reaction_torque`` = J^T F of the sensed contacts (thesis (4.8)) unless turned off.
     """
 
     def __init__(
@@ -318,6 +321,7 @@ class ImpedanceController(Controller):
         kp: Any = 430.0,
         kv: Any = 175.0,
         feedforward: bool = True,
+        log_reaction_torque: bool = True,
     ) -> None:
         """Set up the loops.
 
@@ -326,6 +330,8 @@ class ImpedanceController(Controller):
             laws: Finger -> impedance law.
             kp, kv: Inner fingertip computed-torque gains [1/s^2], [1/s] (thesis F3: 430, 175).
             feedforward: Add J^T (desired contact force) while a finger touches (see the module notes).
+            log_reaction_torque: Log ``reaction_torque`` (a point Jacobian per contact and step); off for runs that
+                read only the forces, e.g. the evaluations of a tuning.
         """
         super().__init__()
         if not laws:
@@ -337,8 +343,10 @@ class ImpedanceController(Controller):
         self.laws = dict(laws)
         self._commands = {finger: _Commanded() for finger in self.laws}
         self.inner = WorkspaceComputedTorque(nominal, self._commands, kp=kp, kv=kv)
+        self._numbers = {finger: nominal.fingers.index(finger) for finger in self.laws}
         self.sensing = ContactSensing(nominal)
         self.feedforward = bool(feedforward)
+        self.log_reaction_torque = bool(log_reaction_torque)
         self._time: float | None = None
 
     def reset(self, state: State) -> None:
@@ -357,22 +365,27 @@ class ImpedanceController(Controller):
             raise InputError(f"time went backwards: t = {t} after {self._time}; call reset() to restart")
         self._time = t
         hand = self.nominal
-        q = as_vector(state.q, "state.q", hand.nq)
-        tips = hand.fingertip_positions(q)
+        q, v = as_vector(state.q, "state.q", hand.nq), as_vector(state.v, "state.v", hand.nv)
+        terms = {finger: _finger_terms(hand, q, v, finger, number) for finger, number in self._numbers.items()}
         contacts = self.sensing.fingers(state)
         extra = np.zeros(hand.nv)
         for finger, law in self.laws.items():
-            sample = law.command(t, tips[hand.fingers.index(finger)], contacts[finger], dt)
+            contact = contacts[finger]
+            positions, jacobian = terms[finger][:2]  # every fingertip [m], the finger's tip Jacobian (world)
+            sample = law.command(t, positions[self._numbers[finger]], contact, dt)
             self._commands[finger].sample = sample
             if self.feedforward:
-                extra += hand.fingertip_jacobian(q, finger).T @ law.feedforward(contacts[finger])
+                force = np.asarray(law.feedforward(contact))
+                if force.any():  # (J^T 0 adds nothing)
+                    extra += jacobian.T @ force
             self.log[f"{finger}/x_c"] = sample[0]
             for key, value in law.log.items():
                 self.log[f"{finger}/{key}"] = np.array(value, dtype=float)
-        tau = self.inner(t, state) + extra
-        self.log["reaction_torque"] = (
-            self.sensing.reaction_torques(state) if state.contact_bodies else np.zeros(hand.nv)
-        )
+        tau = self.inner._control(t, state, q, v, terms) + extra
+        if self.log_reaction_torque:
+            self.log["reaction_torque"] = (
+                self.sensing.reaction_torques(state) if state.contact_bodies else np.zeros(hand.nv)
+            )
         return tau
 
 

@@ -89,6 +89,15 @@ class TustinImpedanceFilter:
         """Zero input and output history."""
         self._inputs = np.zeros((2, self.size))  # F(n-1), F(n-2)
         self._outputs = np.zeros((3, self.size))  # E(n-1), E(n-2), E(n-3)
+        self._cached: tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]] | None = None
+
+    def _coefficients(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """:meth:`coefficients` as floats, recomputed only when M_I, B_I, K_I or T changed."""
+        key = (self.mass, self.damping, self.stiffness, self.period)
+        if self._cached is None or self._cached[0] != key:
+            numerator, denominator = self.coefficients()
+            self._cached = (key, tuple(map(float, numerator)), tuple(map(float, denominator)))
+        return self._cached[1], self._cached[2]
 
     def step(self, force: Any, dt: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Next sample E(n) for input F(n) [N], as (dx, dx_dot, dx_ddot) with backward-difference rates.
@@ -100,13 +109,17 @@ class TustinImpedanceFilter:
             if float(dt) == 0.0:  # the first call after a reset: no time has passed, nothing to advance
                 return self._state()
             raise InputError(f"TustinImpedanceFilter runs at period T = {self.period} s, called with dt = {dt}")
-        numerator, denominator = self.coefficients()
+        numerator, denominator = self._coefficients()
+        inputs, outputs = self._inputs, self._outputs
         output = (
-            numerator[0] * force + numerator[1] * self._inputs[0] + numerator[2] * self._inputs[1]
-            - denominator[1] * self._outputs[0] - denominator[2] * self._outputs[1]
+            numerator[0] * force + numerator[1] * inputs[0] + numerator[2] * inputs[1]
+            - denominator[1] * outputs[0] - denominator[2] * outputs[1]
         )  # fmt: skip
-        self._inputs = np.stack((force, self._inputs[0]))
-        self._outputs = np.stack((output, self._outputs[0], self._outputs[1]))
+        inputs[1] = inputs[0]  # shift the histories in place
+        inputs[0] = force
+        outputs[2] = outputs[1]
+        outputs[1] = outputs[0]
+        outputs[0] = output
         return self._state()
 
     def _state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -9,20 +9,28 @@ which gives the Cartesian error dynamics e_x_dd + Kv e_x_dot + Kp e_x = 0 under 
 fewer joints than 3 (the Barrett F3: proximal and distal only) moves its tip in a plane; its task is then the
 tip position within the column space of J (an orthonormal basis B, J_t = B^T J), and the reference must lie in
 that plane.  Joints outside the controlled fingers are held by joint-space computed torque.
+
+The joint-space terms (tip positions, J, M_f, G_f, C q_dot, J_dot q_dot) come from one call of a compiled kernel
+(``src/workspace.cpp``) equal to the bit to the hand's methods; the small linear algebra that turns them into M_x,
+C_x, G_x and torques stays in NumPy (LAPACK's SVD and inverse, BLAS products), so that the controllers compute
+exactly what they computed without the kernel: CMA-ES tuning ranks candidates by the last bits of their fitness.
 """
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from bhgrasp._validation import as_vector
 from bhgrasp.controllers.base import Controller, gain_matrix
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
+from bhgrasp.sim.compiled import optional_core
 from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
@@ -54,7 +62,21 @@ def workspace_dynamics(hand: Hand, q: Any, v: Any, finger: str) -> WorkspaceDyna
     """
     q, v = as_vector(q, "q", hand.nq), as_vector(v, "v", hand.nv)
     index = hand.finger_indices(finger)
-    jacobian = hand.fingertip_jacobian(q, finger)[:, index]
+    return WorkspaceDynamics(*_workspace_dynamics(hand, q, v, finger, index, hand.fingers.index(finger))[:5])
+
+
+def _workspace_dynamics(
+    hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, index: np.ndarray, number: int, terms: Terms | None = None
+) -> tuple[np.ndarray, ...]:
+    """:func:`workspace_dynamics`'s fields, then the fingertip position [m], for validated ``q``, ``v``.
+
+    ``index`` are the finger's joint indices, ``number`` its place in ``hand.fingers`` and ``terms`` its
+    :func:`_finger_terms` at (q, v) if the caller has them.
+    """
+    if terms is None:
+        terms = _finger_terms(hand, q, v, finger, number)
+    positions, jacobian, mass_f, gravity_f, velocity_f, bias = terms
+    jacobian = jacobian[:, index]
     u, singular, _ = np.linalg.svd(jacobian)
     rank = min(3, len(index))
     if singular[rank - 1] < 1e-6 * max(singular[0], 1e-12):
@@ -62,14 +84,73 @@ def workspace_dynamics(hand: Hand, q: Any, v: Any, finger: str) -> WorkspaceDyna
     basis = u[:, :rank]
     task_jacobian = basis.T @ jacobian
     inverse = np.linalg.inv(task_jacobian)
-    mass_f = hand.mass_matrix(q)[np.ix_(index, index)]
     mass_x = inverse.T @ mass_f @ inverse
-    gravity = hand.gravity_torques(q)
-    gravity_f = gravity[index]
-    velocity_f = (hand.nonlinear_effects(q, v) - gravity)[index]
-    bias = basis.T @ hand.fingertip_bias_acceleration(q, v, finger)
+    bias = basis.T @ bias
     coriolis_x = inverse.T @ velocity_f - mass_x @ bias
-    return WorkspaceDynamics(basis, task_jacobian, 0.5 * (mass_x + mass_x.T), coriolis_x, inverse.T @ gravity_f)
+    return basis, task_jacobian, 0.5 * (mass_x + mass_x.T), coriolis_x, inverse.T @ gravity_f, positions[number]
+
+
+Terms = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+def _finger_terms(hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, number: int) -> Terms:
+    """The joint-space terms of ``finger`` (``hand.fingers[number]``) that (2.35)-(2.37) transform, world frame.
+
+    (every fingertip position (n_fingers, 3) [m], the finger's fingertip Jacobian J (3, nv), M_f (n_f, n_f)
+    [kg m^2], G_f (n_f,) [N m], C_f q_dot (n_f,) [N m], J_dot q_dot (3,) [m/s^2]), as the hand's methods give them.
+    From the compiled kernel (``src/workspace.cpp``, one per hand, its own Pinocchio data) when ``bhgrasp._core``
+    loads, otherwise from :func:`_finger_terms_python`: equal to the bit (tests/test_workspace_kernels.py).  The
+    hand's base placement and gravity are read at every call.
+    """
+    kernel = _kernel(hand)
+    if kernel is None:
+        return _finger_terms_python(hand, q, v, finger, number)
+    positions, jacobian, mass_f, gravity_f, velocity_f, bias = kernel.compute(number, hand.model.gravity.linear, q, v)
+    placement = hand.base_placement
+    if not placement.isIdentity(0.0):  # to the world frame, with the hand's own products
+        rotation = placement.rotation
+        positions = positions @ rotation.T + placement.translation
+        jacobian = rotation @ jacobian
+        bias = rotation @ bias
+    return positions, jacobian, mass_f, gravity_f, velocity_f, bias
+
+
+def _finger_terms_python(hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, number: int) -> Terms:
+    """:func:`_finger_terms` through the hand's methods (Pinocchio's Python API): the compiled kernel's twin."""
+    index = hand.finger_indices(finger)
+    gravity = hand.gravity_torques(q)
+    return (
+        hand.fingertip_positions(q),
+        hand.fingertip_jacobian(q, finger),
+        hand.mass_matrix(q)[np.ix_(index, index)],
+        gravity[index],
+        (hand.nonlinear_effects(q, v) - gravity)[index],
+        hand.fingertip_bias_acceleration(q, v, finger),
+    )
+
+
+_KERNELS: weakref.WeakKeyDictionary[Hand, Any] = weakref.WeakKeyDictionary()
+
+
+def _kernel(hand: Hand) -> Any:
+    """The hand's compiled ``_core.FingerDynamics``, built on first use; ``None`` if ``bhgrasp._core`` is missing.
+
+    It holds a copy of the hand's model (the hand's inertias must not change in place afterwards); gravity is passed at
+    every call.
+    """
+    try:
+        return _KERNELS[hand]
+    except KeyError:
+        pass
+    core = optional_core()
+    kernel = None
+    if core is not None:
+        model = hand.model
+        frames = [model.getFrameId(frame) for frame in hand.fingertip_frames.values()]
+        kernel = core.FingerDynamics(model.saveToString(), frames,
+                                     [hand.finger_indices(finger).tolist() for finger in hand.fingers])  # fmt: skip
+    _KERNELS[hand] = kernel
+    return kernel
 
 
 class WorkspaceComputedTorque(Controller):
@@ -117,6 +198,8 @@ class WorkspaceComputedTorque(Controller):
         self._joint_kv = float(np.trace(self.kv)) / 3.0
         self.q_rest = None if q_rest is None else as_vector(q_rest, "q_rest", nominal.nq)
         self._hold = self.q_rest
+        self._fingers = [(finger, reference, nominal.finger_indices(finger), nominal.fingers.index(finger))
+                         for finger, reference in self.references.items()]  # fmt: skip
 
     def reset(self, state: State) -> None:
         """Hold uncontrolled joints at ``q_rest`` or at the state's configuration."""
@@ -127,30 +210,39 @@ class WorkspaceComputedTorque(Controller):
         """Joint torques [N m] for the fingertip references at time ``t`` [s]."""
         hand = self.nominal
         q, v = as_vector(state.q, "state.q", hand.nq), as_vector(state.v, "state.v", hand.nv)
+        return self._control(t, state, q, v)
+
+    def _control(
+        self, t: float, state: State, q: np.ndarray, v: np.ndarray, terms: Mapping[str, Terms] | None = None
+    ) -> np.ndarray:
+        """:meth:`__call__` for the state's validated ``q`` and ``v`` (an outer loop that checked them calls this).
+
+        ``terms``: the controlled fingers' :func:`_finger_terms` at (q, v), if the caller has them.
+        """
+        hand = self.nominal
         if self._hold is None:
             self.reset(state)
         tau = np.zeros(hand.nv)
-        positions = hand.fingertip_positions(q)
         targets, errors = [], []
-        for finger, reference in self.references.items():
-            index = hand.finger_indices(finger)
+        for finger, reference, index, number in self._fingers:
             x_d, xd_d, xdd_d = reference(t)
-            dyn = workspace_dynamics(hand, q, v, finger)
-            basis = dyn.basis
-            error = positions[hand.fingers.index(finger)] - x_d
-            error_dot = dyn.jacobian @ v[index] - basis.T @ xd_d  # task coordinates: J_t q_dot_f = B^T x_dot
+            given = None if terms is None else terms[finger]
+            basis, jacobian, mass, coriolis, gravity, position = _workspace_dynamics(hand, q, v, finger, index,
+                                                                                     number, given)  # fmt: skip
+            error = position - x_d
+            error_dot = jacobian @ v[index] - basis.T @ xd_d  # task coordinates: J_t q_dot_f = B^T x_dot
             kp, kv = basis.T @ self.kp @ basis, basis.T @ self.kv @ basis
             command = basis.T @ xdd_d - kv @ error_dot - kp @ (basis.T @ error)
-            tau[index] = dyn.jacobian.T @ (dyn.mass @ command + dyn.coriolis + dyn.gravity)
+            tau[index] = jacobian.T @ (mass @ command + coriolis + gravity)
             targets.append(x_d)
             errors.append(error)
         if len(self._other):
             other = self._other
             acceleration = np.zeros(hand.nv)  # fingers are separate chains: M has no finger-to-finger blocks
             acceleration[other] = -self._joint_kv * v[other] - self._joint_kp * (q - self._hold)[other]
-            tau[other] = hand.inverse_dynamics(q, v, acceleration)[other]
+            tau[other] = pin.rnea(hand.model, hand.data, q, v, acceleration)[other]  # hand.inverse_dynamics, unchecked
         self.log["x_d"], self.log["x_error"] = np.concatenate(targets), np.concatenate(errors)
-        if not np.all(np.isfinite(tau)):
+        if not np.isfinite(tau).all():
             raise InputError(f"WorkspaceComputedTorque produced non-finite torques {tau} at t = {t} s")
         return tau
 

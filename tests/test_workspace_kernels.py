@@ -1,0 +1,186 @@
+"""The compiled finger terms (src/workspace.cpp: FingerDynamics) against their Python twin.
+
+Truths: the twin (bhgrasp.controllers.workspace._finger_terms_python: the hand's methods, Pinocchio's Python API),
+equal to the bit, so that the workspace dynamics and the fingertip computed torque built on them, whose small linear
+algebra stays in NumPy, give the same torques with and without the compiled core; and the identities the workspace
+dynamics must satisfy: M_x = (J_t M_f^-1 J_t^T)^-1 for the square task Jacobian, B orthonormal with J_f = B J_t
+(to 1e-12 relative, on configurations with cond(J_t) < 100; tests/test_controllers.py checks the RNEA identity).
+"""
+
+from __future__ import annotations
+
+import copy
+import pickle
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import bhgrasp as bh
+from bhgrasp.controllers import WorkspaceComputedTorque, workspace_dynamics
+from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
+from bhgrasp.controllers.workspace import _finger_terms, _finger_terms_python, _kernel
+from bhgrasp.errors import InputError
+from bhgrasp.experiments import chapter4
+from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
+from bhgrasp.sim.compiled import optional_core
+from bhgrasp.trajectories import Constant
+
+RELATIVE = 1e-12
+MAX_CONDITION = 100.0
+FIELDS = ("basis", "jacobian", "mass", "coriolis", "gravity")
+
+pytestmark = pytest.mark.skipif(optional_core() is None, reason="bhgrasp._core is not built")
+
+
+def hands():
+    yield bh.BarrettHand()
+    yield bh.BarrettHand().perturbed(0.7, payload=("F1_tip", 0.05))
+    tilted = bh.BarrettHand()
+    tilted.base_placement = pin.SE3(pin.exp3(np.array([0.4, -1.2, 0.3])), np.array([0.1, 0.0, 0.2]))
+    yield tilted  # model frame turned and moved: positions, Jacobians, bias accelerations and gravity change frame
+    yield thesis_impedance_finger()  # two joints: the tip moves in a plane
+    yield thesis_one_link_finger()  # one joint: along a line
+
+
+HANDS = list(hands())
+IDS = ["barrett", "perturbed", "tilted", "planar", "one-link"]
+
+
+def no_kernel(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("bhgrasp.controllers.workspace._kernel", lambda hand: None)
+
+
+@pytest.mark.parametrize("hand", HANDS, ids=IDS)
+def test_finger_terms_are_the_python_twin_to_the_bit(hand: bh.Hand) -> None:
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        q, v = hand.random_configuration(rng), rng.normal(size=hand.nv)
+        for number, finger in enumerate(hand.fingers):
+            compiled = _finger_terms(hand, q, v, finger, number)
+            python = _finger_terms_python(hand, q, v, finger, number)
+            for got, expected in zip(compiled, python, strict=True):
+                assert got.shape == expected.shape
+                np.testing.assert_array_equal(got, expected)
+
+
+def well_conditioned(hand: bh.Hand, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, str]:
+    while True:
+        q = hand.random_configuration(rng)
+        finger = hand.fingers[rng.integers(len(hand.fingers))]
+        singular = np.linalg.svd(hand.fingertip_jacobian(q, finger)[:, hand.finger_indices(finger)], compute_uv=False)
+        if singular[-1] > singular[0] / MAX_CONDITION:
+            return q, rng.normal(size=hand.nv), finger
+
+
+def assert_close(got: np.ndarray, expected: np.ndarray, what: str) -> None:
+    scale = max(1.0, float(np.abs(expected).max(initial=0.0)))
+    np.testing.assert_allclose(got, expected, rtol=0, atol=RELATIVE * scale, err_msg=what)
+
+
+@pytest.mark.parametrize("hand", HANDS, ids=IDS)
+def test_the_workspace_mass_is_the_inverse_of_the_projected_inverse_mass(hand: bh.Hand) -> None:
+    """M_x = J_t^-T M_f J_t^-1 = (J_t M_f^-1 J_t^T)^-1 (square J_t); B is orthonormal and J_f = B J_t."""
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        q, v, finger = well_conditioned(hand, rng)
+        index = hand.finger_indices(finger)
+        dyn = workspace_dynamics(hand, q, v, finger)
+        mass_f = hand.mass_matrix(q)[np.ix_(index, index)]
+        assert_close(dyn.mass, np.linalg.inv(dyn.jacobian @ np.linalg.solve(mass_f, dyn.jacobian.T)), "M_x")
+        assert_close(dyn.basis.T @ dyn.basis, np.eye(len(index)), "B^T B")
+        assert_close(dyn.basis @ dyn.jacobian, hand.fingertip_jacobian(q, finger)[:, index], "B J_t")
+
+
+@pytest.mark.parametrize("hand", HANDS, ids=IDS)
+def test_workspace_dynamics_with_and_without_the_kernel_are_equal_to_the_bit(
+    hand: bh.Hand, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    rng = np.random.default_rng(2)
+    cases = [well_conditioned(hand, rng) for _ in range(50)]
+    compiled = [workspace_dynamics(hand, *case) for case in cases]
+    no_kernel(monkeypatch)
+    for case, got in zip(cases, compiled, strict=True):
+        expected = workspace_dynamics(hand, *case)
+        for name in FIELDS:
+            np.testing.assert_array_equal(getattr(got, name), getattr(expected, name), err_msg=name)
+
+
+def test_the_controller_gives_the_same_torques_without_the_kernel(monkeypatch: pytest.MonkeyPatch) -> None:
+    hand = bh.BarrettHand()
+    q = hand.configuration(F1_proximal=0.6, F1_distal=0.5, F3_proximal=0.4, F3_distal=0.8)
+    tips = hand.fingertip_positions(q)
+    controller = WorkspaceComputedTorque(hand, {"F1": Constant(tips[0] + 0.01), "F3": Constant(tips[2])})
+    states = [bh.State(0.01 * k, q + 0.02 * k, np.linspace(-0.5, 0.5, hand.nv) * k) for k in range(5)]
+    controller.reset(states[0])
+    compiled = [(controller(s.t, s), dict(controller.log)) for s in states]
+    no_kernel(monkeypatch)
+    controller.reset(states[0])
+    for state, (tau, log) in zip(states, compiled, strict=True):
+        np.testing.assert_array_equal(controller(state.t, state), tau)
+        for key, value in controller.log.items():
+            np.testing.assert_array_equal(log[key], value, err_msg=key)
+
+
+def test_the_impedance_controller_gives_the_same_torques_without_the_kernel(monkeypatch: pytest.MonkeyPatch) -> None:
+    setup = chapter4._cached_f3_setup(chapter4.TUNING_SPRING)
+    runs = []
+    for patch in (False, True):
+        if patch:
+            no_kernel(monkeypatch)
+        law = ForceImpedance(Constant(setup.tip0), setup.normal, 6.0, setup.surface_point(), setup.k_e, mass=0.01,
+                             stiffness=100.0, period=chapter4.DT)  # fmt: skip
+        controller = ImpedanceController(setup.hand, {"F3": law}, *chapter4.F3_GAINS)
+        runs.append(chapter4.run(setup, controller, 0.5))  # contact at ~0.36 s
+    np.testing.assert_array_equal(runs[0].q, runs[1].q)
+    np.testing.assert_array_equal(runs[0].tau, runs[1].tau)
+    for key, values in runs[0].log.items():
+        np.testing.assert_array_equal(values, runs[1].log[key], err_msg=key)
+    assert runs[0].contact_count().max() > 0
+
+
+@pytest.mark.parametrize("with_kernel", [True, False])
+def test_a_stretched_finger_is_refused(with_kernel: bool, monkeypatch: pytest.MonkeyPatch) -> None:
+    hand = thesis_impedance_finger()
+    if not with_kernel:
+        no_kernel(monkeypatch)
+    q = np.array([0.3, 0.0])  # the two links in line: J_f of rank 1
+    with pytest.raises(InputError, match=r"finger 'tip' is at a singular configuration q = \[0\.3 0\. \] \(J has rank"):
+        workspace_dynamics(hand, q, np.zeros(hand.nv), "tip")
+    controller = WorkspaceComputedTorque(hand, {"tip": Constant(hand.fingertip_positions(q)[0])})
+    with pytest.raises(InputError, match="singular configuration"):
+        controller(0.0, bh.State(0.0, q, np.zeros(hand.nv)))
+
+
+def test_base_placement_and_gravity_changes_reach_the_kernel() -> None:
+    hand = bh.BarrettHand()
+    rng = np.random.default_rng(3)
+    q, v, finger = well_conditioned(hand, rng)
+    number = hand.fingers.index(finger)
+    before = _finger_terms(hand, q, v, finger, number)  # builds the kernel
+    hand.base_placement = pin.SE3(pin.exp3(np.array([0.0, 0.7, 0.0])), np.array([0.0, 0.3, 0.0]))
+    hand.gravity = (0.0, 9.81, 0.0)
+    after = _finger_terms(hand, q, v, finger, number)
+    for got, expected in zip(after, _finger_terms_python(hand, q, v, finger, number), strict=True):
+        np.testing.assert_array_equal(got, expected)
+    assert not np.array_equal(after[0], before[0]) and not np.array_equal(after[3], before[3])
+
+
+def test_copies_and_pickles_of_a_hand_get_their_own_kernel() -> None:
+    hand = bh.BarrettHand()
+    q, v = hand.configuration(F2_proximal=0.5, F2_distal=0.7), np.full(hand.nv, 0.3)
+    expected = workspace_dynamics(hand, q, v, "F2")
+    for other in (copy.deepcopy(hand), pickle.loads(pickle.dumps(hand))):
+        got = workspace_dynamics(other, q, v, "F2")
+        assert _kernel(other) is not _kernel(hand)
+        for name in FIELDS:
+            np.testing.assert_array_equal(getattr(got, name), getattr(expected, name))
+
+
+def test_the_kernel_checks_sizes() -> None:
+    hand = bh.BarrettHand()
+    kernel = _kernel(hand)
+    gravity, q = hand.model.gravity.linear, hand.neutral()
+    for finger, q_, v in ((3, q, q), (-1, q, q), (0, q[:5], q), (0, q, q[:5])):
+        with pytest.raises(ValueError, match="a finger number 0 .. fingers - 1, q of size nq, v of size nv"):
+            kernel.compute(finger, gravity, q_, v)
