@@ -284,6 +284,19 @@ def test_tuned_impedance_beats_its_start_on_a_held_out_force_and_is_reproducible
     assert tuned.settling < untuned.settling and tuned.overshoot <= untuned.overshoot
 
 
+@pytest.mark.parametrize(("params", "force"), [((0.01, 100.0), 6.0), ((0.005, 4.7561), 4.0), ((0.0011, 3.1387), 6.0),
+                                               ((1e-4, 1.0), 8.0), ((0.1, 500.0), 6.0)])  # fmt: skip
+def test_fitness_runs_continue_the_shared_approach_to_the_bit(params, force):
+    """_discrete_fim continues the approach that every (M_I, K_I) shares; the run from the start is the same."""
+    t, measured = chapter4._discrete_fim(*params, force, chapter4.TUNING_SPRING, 1.0)
+    start, _, _ = chapter4._approach(chapter4.TUNING_SPRING, force, 1.0)
+    assert 0.1 < start.t < 0.9  # the runs share ~a third of their samples
+    setup = chapter4._cached_f3_setup(chapter4.TUNING_SPRING)
+    traj = chapter4.run(setup, chapter4._discrete_fim_controller(setup, *params, force), 1.0)
+    np.testing.assert_array_equal(t, traj.t)
+    np.testing.assert_array_equal(measured, chapter4.normal_force(setup, traj))
+
+
 def test_bad_impedance_inputs_raise_clear_errors():
     ref = Constant(np.zeros(3))
     normal = np.array([1.0, 0.0, 0.0])

@@ -49,6 +49,7 @@ from bhgrasp.experiments import case_progress
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.objects import Box, SpringMounted
 from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
+from bhgrasp.sensing import ContactSensing
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.contact import SpringDamper
 from bhgrasp.sim.scene import Scene
@@ -361,7 +362,6 @@ def one_link_contact(scale: float = 1.0) -> Case:
 
 def _reaction_torques(setup: Setup, traj: Trajectory) -> np.ndarray:
     """J^T F of the recorded contacts (thesis (4.8)) per sample [N m], via the sensing module."""
-    from bhgrasp.sensing import ContactSensing
     from bhgrasp.sim.state import State
 
     sensing = ContactSensing(setup.hand)
@@ -628,12 +628,62 @@ def impedance_fitness(
 def _discrete_fim(
     mass: float, stiffness: float, force: float, spring: float, duration: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """F3 pressing the object under FIM with the Tustin filter: times [s] and normal force [N] of the run."""
+    """F3 pressing the object under FIM with the Tustin filter: times [s] and normal force [N] of the run.
+
+    The run continues the shared approach (:func:`_approach`) from its last sample before the controller first senses
+    contact: it is the run from the start, to the bit (tests/test_impedance.py), with the approach simulated once.
+    """
     setup = _cached_f3_setup(spring)
+    controller = _discrete_fim_controller(setup, mass, stiffness, force)
+    approach = _approach(spring, force, duration)
+    if approach is None:
+        traj = run(setup, controller, duration)
+        return traj.t, normal_force(setup, traj)
+    start, t_before, force_before = approach
+    controller.inner.q_rest = setup.q0  # the joints outside F3 held where a run from the start holds them
+    controller.reset(start)
+    # as a plain callable: the simulator records none of the controller's internals (only forces are read)
+    traj = setup.simulator.run(controller.__call__, duration - start.t, state=start, progress=False)
+    return np.concatenate((t_before, traj.t[1:])), np.concatenate((force_before, normal_force(setup, traj)[1:]))
+
+
+def _discrete_fim_controller(setup: Setup, mass: float, stiffness: float, force: float) -> ImpedanceController:
     law = ForceImpedance(Constant(setup.tip0), setup.normal, force, setup.surface_point(), setup.k_e,
                          mass=mass, stiffness=stiffness, period=DT)  # fmt: skip
-    traj = run(setup, ImpedanceController(setup.hand, {"F3": law}, *F3_GAINS), duration)
-    return traj.t, normal_force(setup, traj)
+    return ImpedanceController(setup.hand, {"F3": law}, *F3_GAINS, log_reaction_torque=False)  # forces only
+
+
+@functools.lru_cache(maxsize=8)
+def _approach(spring: float, force: float, duration: float) -> tuple[Any, np.ndarray, np.ndarray] | None:
+    """The part that every :func:`_discrete_fim` run at (spring, force, duration) shares, whatever M_I and K_I.
+
+    Until the controller senses contact no force error reaches the impedance filter, whose output stays zero (it
+    starts at rest), so the commanded trajectory, and with it every torque and state, does not depend on the filter's
+    M_I, B_I, K_I.  Returns the state S at the last sample before the controller first senses contact, with the
+    times [s] and normal forces [N] of the samples up to S (inclusive); ``None`` if the run never touches, touches at
+    once or records contacts (without force) before.  A run continued from S (the controller reset there: filter at
+    rest, first step dt = 0, as the filter saw only zeros; the other joints held at q0) is the run from the start.
+    """
+    setup = _cached_f3_setup(spring)
+    sim = setup.simulator
+    controller = _discrete_fim_controller(setup, 0.01, 100.0, force)  # any M_I, K_I: the filter only sees zeros
+    sensing = ContactSensing(setup.hand)
+    state = sim.initial_state(setup.q0)
+    controller.reset(state)
+    last = None
+    for _ in range(round(duration / sim.dt)):  # sim.run's loop, stopped where the runs part
+        if sensing.fingers(state)[setup.finger].touching:
+            break
+        last = state
+        state, _ = sim.step(state, controller(state.t, state))
+    else:
+        return None
+    if last is None or last.t <= 0.0:
+        return None
+    before = run(setup, _discrete_fim_controller(setup, 0.01, 100.0, force), last.t)  # samples up to `last`
+    if before.contact_offsets[-1]:  # contacts before: later samples' rows would sit elsewhere than in a full run's
+        return None
+    return last, before.t, normal_force(setup, before)
 
 
 @functools.lru_cache(maxsize=4)
@@ -681,6 +731,14 @@ def _submit_all(executor: Any, calls: list[tuple[Callable[..., Any], tuple[Any, 
     return [future.result() for future in futures]
 
 
+def _workers(executor: Any) -> str:
+    """Who evaluates on ``executor``, for the report."""
+    if executor == "serial":
+        return "this process"
+    workers = getattr(executor, "_max_workers", None)  # concurrent.futures' pools
+    return "the given executor" if workers is None else f"{workers} worker(s)"
+
+
 def _pair(values: Any, spec: str = ".4g") -> str:
     return "[" + ", ".join(format(float(v), spec) for v in values) + "]"
 
@@ -695,9 +753,11 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
     Every run searches (log10 M_I, log10 K_I) inside :data:`TUNING_BOUNDS` and stops on cma's criteria
     (``tolfun`` :data:`TUNING_TOL_FUN`, ``tolx`` :data:`TUNING_TOL_X` and cma's defaults) or the safety cap of
     :func:`tuning_plan`; the found optima are then held out at F_d = 4, 6, 8 N.  ``executor`` (default: one process
-    pool for all runs; ``"serial"``; or any Executor) evaluates the candidates; results do not depend on it.
+    pool for all runs; ``"serial"``; or any Executor) evaluates the candidates; results do not depend on it.  Unless
+    serial, the runs go side by side (one thread each, all feeding the executor), so that no worker waits for the
+    slowest candidate of a generation.
     """
-    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
     from bhgrasp.tuning import cma_es
 
@@ -710,15 +770,24 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
     pool = ProcessPoolExecutor(max_workers=min(6, os.cpu_count() or 1)) if executor is None else None
     runner = pool if executor is None else executor
     clock = time.perf_counter()
+
+    def search(start: tuple[float, float], seed: int) -> tuple[Any, ...]:
+        began = time.perf_counter()
+        x0 = np.clip(np.log10(start), lower, upper)
+        result = cma_es(impedance_fitness, x0, TUNING_SIGMA, seed=seed, max_generations=100_000,
+                        bounds=(lower, upper), executor=runner, tol_fun=TUNING_TOL_FUN, tol_x=TUNING_TOL_X,
+                        max_evaluations=cap)  # fmt: skip
+        return start, 10.0**x0, seed, result, time.perf_counter() - began
+
     try:
-        runs = []
-        for start, seed in pairs:
-            began = time.perf_counter()
-            x0 = np.clip(np.log10(start), lower, upper)
-            result = cma_es(impedance_fitness, x0, TUNING_SIGMA, seed=seed, max_generations=100_000,
-                            bounds=(lower, upper), executor=runner, tol_fun=TUNING_TOL_FUN, tol_x=TUNING_TOL_X,
-                            max_evaluations=cap)  # fmt: skip
-            runs.append((start, 10.0**x0, seed, result, time.perf_counter() - began))
+        if runner == "serial":
+            runs = [search(start, seed) for start, seed in pairs]
+        else:
+            threads = ThreadPoolExecutor(max_workers=len(pairs))
+            try:
+                runs = list(threads.map(search, *zip(*pairs)))
+            finally:  # on an error, shutting the pool down below ends the other searches
+                threads.shutdown(wait=False, cancel_futures=True)
         searched = time.perf_counter() - clock
         best = {start: min((r for r in runs if r[0] == start), key=lambda r: r[3].best_fitness) for start in starts}
         thesis = {(0.5, 0.5): (0.0050, 4.7561), (5.0, 5.0): (0.0011, 3.1387)}
@@ -817,8 +886,8 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
         f" optimum from [5, 5] lies beyond our finger's stability edge (fitness {at_thesis[(5.0, 5.0)]:.2f} N)."
         f"  Wall time: {searched:.0f} s for the {len(runs)} search(es)"
         f" ({sum(r[3].evaluations for r in runs)} simulations of {TUNING_DURATION:g} s;"
-        f" {', '.join(f'{r[4]:.0f}' for r in runs)} s each), {wall:.0f} s with the held-out runs, on"
-        f" {min(6, os.cpu_count() or 1) if executor is None else 'the given executor'} worker(s).",
+        f" {', '.join(f'{r[4]:.0f}' for r in runs)} s each{'' if runner == 'serial' else ', side by side'}),"
+        f" {wall:.0f} s with the held-out runs, on {_workers(runner)}.",
     ]
     return case
 
@@ -846,10 +915,7 @@ def run_chapter4(
     """
     output = Path(output)
     output.mkdir(parents=True, exist_ok=True)
-    cases = [
-        make(scale, executor) if key == "tuning" else make(scale)
-        for key, make in case_progress(CASES.items(), len(CASES), "ch4", progress)
-    ]
+    cases = _run_cases(scale, executor, progress)
     names: dict[str, str] = {}
     if figures:
         from bhgrasp import plots
@@ -858,6 +924,31 @@ def run_chapter4(
             names[case.key] = plots.save_force_figure(case, output / f"chapter4_{case.key}.png").name
     write_report(cases, output / "chapter4.md", names, scale)
     return cases
+
+
+def _run_cases(scale: float, executor: Any, progress: bool = False) -> list[Case]:
+    """Every case of :data:`CASES`, in order, the others evaluated on the tuning's executor while it tunes.
+
+    ``executor``: ``None`` for one process pool of ``min(6, cpu_count)`` workers, ``"serial"`` for all here, one after
+    another, or any Executor (as :func:`tuning`'s).  Results do not depend on it.  ``progress``: a bar over the
+    cases (collected in order; the tuning, the longest, comes first).
+    """
+    from concurrent.futures import ProcessPoolExecutor
+
+    if executor == "serial":
+        return [
+            make(scale, executor) if key == "tuning" else make(scale)
+            for key, make in case_progress(CASES.items(), len(CASES), "ch4", progress)
+        ]
+    pool = ProcessPoolExecutor(max_workers=min(6, os.cpu_count() or 1)) if executor is None else None
+    runner = pool if executor is None else executor
+    try:
+        others = {key: runner.submit(make, scale) for key, make in CASES.items() if key != "tuning"}
+        keys = case_progress(CASES, len(CASES), "ch4", progress)
+        return [tuning(scale, runner) if key == "tuning" else others[key].result() for key in keys]
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _markdown_table(header: list[str], rows: list[list[str]]) -> list[str]:
