@@ -931,7 +931,7 @@ def _run_cases(scale: float, executor: Any, progress: bool = False) -> list[Case
 
     ``executor``: ``None`` for one process pool of ``min(6, cpu_count)`` workers, ``"serial"`` for all here, one after
     another, or any Executor (as :func:`tuning`'s).  Results do not depend on it.  ``progress``: a bar over the
-    cases (collected in order; the tuning, the longest, comes first).
+    cases (the tuning, the longest, counted first).
     """
     from concurrent.futures import ProcessPoolExecutor
 
@@ -944,8 +944,11 @@ def _run_cases(scale: float, executor: Any, progress: bool = False) -> list[Case
     runner = pool if executor is None else executor
     try:
         others = {key: runner.submit(make, scale) for key, make in CASES.items() if key != "tuning"}
-        keys = case_progress(CASES, len(CASES), "ch4", progress)
-        return [tuning(scale, runner) if key == "tuning" else others[key].result() for key in keys]
+        order = [key for key in CASES if key == "tuning"] + list(others)  # tune while the others run
+        done = {}
+        for key in case_progress(order, len(order), "ch4", progress):
+            done[key] = tuning(scale, runner) if key == "tuning" else others[key].result()
+        return [done[key] for key in CASES]
     finally:
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
