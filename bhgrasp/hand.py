@@ -120,7 +120,8 @@ class Hand:
             pairs = ", ".join(f"{joint} mimics {source}" for joint, source in coupled.items())
             raise ModelError(
                 f"URDF {str(path)!r} couples joints with <mimic> tags ({pairs}); bhgrasp models every joint as an "
-                "independent DOF: pass mimic='independent' to load them so (an actuation model then couples them), "
+                "independent DOF: pass mimic='independent' (`bhgrasp info --mimic independent`) to load them so (an "
+                "actuation model then couples them), "
                 "or remove the tags (for the Barrett hand use bh.BarrettHand())"
             )
         if fingertips is None:
