@@ -12,6 +12,9 @@ Evaluation runs in a :class:`~concurrent.futures.ProcessPoolExecutor` created fo
 sampling uses a generator private to the run, so the same seed and objective give a bitwise identical
 :class:`TuningResult` whatever the executor.
 
+A :class:`BatchedObjective` evaluates many candidates per call (e.g. one :class:`~bhgrasp.sim.batch.BatchSimulator`
+per call, one task of the executor each); since a batch gives the bits of separate runs, the result is the same.
+
 A candidate whose evaluation raises, or returns NaN/inf or a non-number, is recorded (``failures``, fitness
 ``inf`` in the history) and handed to CMA-ES with a finite penalty; if a whole generation fails, or the executor
 itself breaks, :class:`TuningError` is raised carrying the result so far.  (A Dask task that kills its workers
@@ -40,6 +43,29 @@ Objective = Callable[[np.ndarray], float]
 EXECUTOR_FAILURES = (BrokenExecutor, CancelledError, asyncio.CancelledError)  # a future lost to its executor
 PENALTY_FACTOR = 10.0  # a failed candidate counts as PENALTY_FACTOR x the worst finite fitness seen so far
 PENALTY_WITHOUT_FITNESS = 1e6  # ... or this, when no finite positive fitness has been seen yet
+
+
+@dataclass(frozen=True)
+class BatchedObjective:
+    """An objective that evaluates many candidates in one call (e.g. on a :class:`~bhgrasp.sim.batch.BatchSimulator`).
+
+    Attributes:
+        function: Top-level ``(candidates) -> fitness values``: a list of (n,) arrays in, one finite fitness per
+            candidate out, in order (picklable for a process pool).
+        size: Candidates per call; a generation is cut into ``ceil(population / size)`` calls, each one task of
+            the executor.  A call that raises fails all its candidates; a non-finite value fails its own.
+    """
+
+    function: Callable[[list[np.ndarray]], Any]
+    size: int = 64
+
+    def __post_init__(self) -> None:
+        if isinstance(self.size, bool) or not isinstance(self.size, int) or self.size < 1:
+            raise InputError(f"`size` must be a positive integer (candidates per call), got {self.size!r}")
+
+    def __call__(self, x: np.ndarray) -> float:
+        """One candidate alone (a batch of one)."""
+        return self.function([x])[0]
 
 
 @dataclass(frozen=True)
@@ -264,7 +290,9 @@ class _Run:
     def _generation(self, generation: int, executor: Executor | None) -> str:
         """Ask, evaluate and tell one generation; return why to stop, or ``""`` to go on."""
         candidates = self.strategy.ask()
-        if executor is None:
+        if isinstance(self.objective, BatchedObjective):
+            outcomes, broken = _evaluate_batches(executor, self.objective, candidates)
+        elif executor is None:
             outcomes, broken = [_evaluate(self.objective, i, x) for i, x in enumerate(candidates)], None
         else:
             outcomes, broken = _evaluate_with(executor, self.objective, candidates)
@@ -331,6 +359,49 @@ def _evaluate_with(
             outcomes.append(_Outcome(index, fitness=_as_fitness(value)))
         except Exception as error:
             outcomes.append(_Outcome(index, error=error))
+    return outcomes, broken
+
+
+def _evaluate_chunk(function: Callable, indices: list[int], xs: list[np.ndarray]) -> list[_Outcome]:
+    """Candidates ``indices`` (values ``xs``) of a batched objective, as outcomes; runs in a worker or here."""
+    try:
+        values = list(function(xs))
+        if len(values) != len(xs):
+            raise ValueError(f"the batched objective returned {len(values)} values for {len(xs)} candidates")
+    except Exception as error:
+        return [_Outcome(index, error=error) for index in indices]
+    outcomes = []
+    for index, value in zip(indices, values):
+        try:
+            outcomes.append(_Outcome(index, fitness=_as_fitness(value)))
+        except Exception as error:
+            outcomes.append(_Outcome(index, error=error))
+    return outcomes
+
+
+def _evaluate_batches(
+    executor: Executor | None, objective: BatchedObjective, candidates: list[np.ndarray]
+) -> tuple[list[_Outcome], BaseException | None]:
+    """A generation in calls of ``objective.size`` candidates, here or one task per call; outcomes in order."""
+    chunks = [
+        list(range(k, min(k + objective.size, len(candidates)))) for k in range(0, len(candidates), objective.size)
+    ]
+    tasks = [(objective.function, chunk, [candidates[i].copy() for i in chunk]) for chunk in chunks]
+    if executor is None:
+        return [outcome for task in tasks for outcome in _evaluate_chunk(*task)], None
+    futures, broken = [], None
+    for task in tasks:
+        try:
+            futures.append(executor.submit(_evaluate_chunk, *task))
+        except Exception as error:
+            broken = error
+            break
+    outcomes = []
+    for future in futures:
+        try:
+            outcomes += future.result()
+        except EXECUTOR_FAILURES as error:
+            broken = broken or error
     return outcomes, broken
 
 
@@ -448,4 +519,4 @@ def _check_objective_and_executor(objective: Any, executor: Any) -> None:
             ) from error
 
 
-__all__ = ["TuningError", "TuningResult", "cma_es"]
+__all__ = ["BatchedObjective", "TuningError", "TuningResult", "cma_es"]

@@ -406,3 +406,59 @@ def test_importing_tuning_does_not_import_cma_tqdm_or_dask() -> None:
         "assert not loaded, loaded"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+# ---------------------------------------------------------------------- batched objectives
+def hold_cost_batch(candidates: list[np.ndarray]) -> list[float]:
+    """The reference hold for many (log10 posture gain, squeeze scale) at once in a BatchSimulator: the box's fall
+    [mm] over 0.1 s plus 0.5 x the squeeze scale (a squeeze costs effort); one value per candidate."""
+    from bhgrasp.experiments.hold import SQUEEZE, reference_hold
+    from bhgrasp.sim.batch import BatchSimulator
+
+    hold = reference_hold()
+    q0, fingers, forces = hold.state.q, list(SQUEEZE), np.array(list(SQUEEZE.values()))
+    gain = np.array([10.0 ** x[0] for x in candidates])
+    squeeze = np.array([x[1] for x in candidates])
+
+    def controller(t, batch):
+        tips = np.einsum("nkij,ki->nj", batch.fingertip_jacobians(fingers), forces)
+        return batch.gravity_torques() + gain[:, None] * (q0 - batch.q) + squeeze[:, None] * tips
+
+    batch = BatchSimulator(hold.simulator, [hold.state] * len(candidates)).run(controller, 0.1)
+    drop = 1e3 * (hold.box_height - batch.object_positions()[:, 2])
+    return [float(d + 0.5 * s) for d, s in zip(drop, squeeze)]
+
+
+def test_a_batched_objective_gives_the_run_of_its_candidates_one_by_one() -> None:
+    """A generation evaluated in batches of 3 (one BatchSimulator each) or one candidate at a time, serially or on
+    a process pool: a batch gives the bits of separate runs, so CMA-ES takes the same path to the bit."""
+    from bhgrasp.tuning import BatchedObjective
+
+    settings = {"x0": [0.3, 0.8], "sigma0": 0.2, "seed": 3, "max_generations": 3, "population": 5,
+                "bounds": ([-1.0, 0.05], [1.0, 2.0])}  # fmt: skip
+    batched = cma_es(BatchedObjective(hold_cost_batch, size=3), executor="serial", **settings)
+    alone = cma_es(BatchedObjective(hold_cost_batch, size=1), executor="serial", **settings)
+    pooled = cma_es(BatchedObjective(hold_cost_batch, size=3), executor=None, **settings)
+    for other in (alone, pooled):
+        for name in ARRAY_FIELDS:
+            np.testing.assert_array_equal(getattr(other, name), getattr(batched, name))
+    assert batched.evaluations == 15 and np.isfinite(batched.history_fitness).all()
+
+
+def failing_batch(candidates: list[np.ndarray]) -> list[float]:
+    """NaN for a candidate whose first coordinate is negative; the whole call fails if one exceeds 2."""
+    if any(x[0] > 2.0 for x in candidates):
+        raise RuntimeError("a candidate beyond 2")
+    return [float("nan") if x[0] < 0.0 else float(np.sum(x**2)) for x in candidates]
+
+
+def test_a_batched_call_that_fails_fails_its_candidates_only() -> None:
+    from bhgrasp.tuning import BatchedObjective
+
+    result = cma_es(BatchedObjective(failing_batch, size=2), x0=[0.5, 0.5], sigma0=1.5, seed=0, max_generations=4,
+                    population=6, executor="serial")  # fmt: skip
+    assert any("not a finite number" in failure for failure in result.failures)
+    assert any("RuntimeError: a candidate beyond 2" in failure for failure in result.failures)
+    assert np.isfinite(result.best_fitness)
+    with pytest.raises(InputError, match="`size` must be a positive integer"):
+        BatchedObjective(failing_batch, size=0)
