@@ -49,24 +49,40 @@ def tracking_figure(
     for name, traj in runs.items():
         if "q_d" not in traj.log:
             raise InputError(f"run {name!r} has no logged reference `q_d` (use a JointTracking controller)")
+    for name, traj in runs.items():
         for row, (joint, label) in enumerate(zip(joints, labels)):
             desired = traj.log["q_d"][:, joint]
             (line,) = axes[row, 0].plot(traj.t, np.degrees(traj.q[:, joint]), lw=1.2, label=name)
-            axes[row, 0].plot(traj.t, np.degrees(desired), ls="--", lw=0.8, color=line.get_color())
             axes[row, 1].plot(traj.t, np.degrees(traj.q[:, joint] - desired), lw=1.0, color=line.get_color())
-            axes[row, 2].plot(traj.t, traj.u[:, joint], lw=0.6, color=line.get_color())
+            # torques: the raw signal faint and behind (a chattering law's band must not hide the others), its
+            # 20 ms running mean on top
+            axes[row, 2].plot(traj.t, traj.u[:, joint], lw=0.4, alpha=0.2, color=line.get_color(), zorder=1)
+            axes[row, 2].plot(traj.t, _running_mean(traj.t, traj.u[:, joint], 0.02), lw=1.1, color=line.get_color(),
+                              zorder=2)  # fmt: skip
             axes[row, 0].set_ylabel(f"{label} [deg]")
-    axes[0, 0].set_title("position (dashed: reference)")
+    first = next(iter(runs.values()))
+    for row, joint in enumerate(joints):  # the reference once, on top of every run
+        axes[row, 0].plot(first.t, np.degrees(first.log["q_d"][:, joint]), color="k", ls="--", lw=0.9, zorder=10,
+                          label="reference" if row == 0 else None)  # fmt: skip
+    axes[0, 0].set_title("position (black dashed: reference)")
     axes[0, 1].set_title("error q - q_d [deg]")
-    axes[0, 2].set_title("torque [N m]")
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
     for ax in axes.ravel():
         ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7, ncol=2)
+    axes[0, 2].set_title("torque [N m] (faint: raw; solid: 20 ms mean)")
     if title:
         figure.suptitle(title)
     return figure
+
+
+def _running_mean(t: np.ndarray, values: np.ndarray, window: float) -> np.ndarray:
+    """Centred running mean of ``values`` over ``window`` [s] (samples at a uniform step), same length."""
+    width = max(1, round(window / max(float(np.median(np.diff(t))), 1e-12))) if len(t) > 1 else 1
+    kernel = np.ones(width) / width
+    padded = np.pad(values, (width // 2, width - 1 - width // 2), mode="edge")
+    return np.convolve(padded, kernel, mode="valid")
 
 
 def save_case_figures(case: Any, output: Path) -> list[str]:
@@ -177,18 +193,30 @@ def object_error_figure(runs: dict[str, Trajectory], channels: Sequence[int] = (
     return figure
 
 
-def grasp_figure(traj: Trajectory, finger_names: Sequence[str], measured_normal: np.ndarray, true_mass=None) -> Figure:
-    """One grasp run: object pose error, measured vs. commanded normal forces, mass estimate or cone margin.
+def grasp_figure(
+    traj: Trajectory,
+    finger_names: Sequence[str],
+    measured_normal: np.ndarray,
+    true_mass=None,
+    grasp_time: float | None = None,
+    motion: tuple[float, float] | None = None,
+) -> Figure:
+    """One grasp run from the grasp on: object pose error, measured vs. commanded normal forces, mass or margin.
+
+    Fingers whose forces coincide stay visible: each finger's traces are drawn thinner than the previous
+    finger's, so equal traces nest.  Legends sit beside the panels, not over the traces.
 
     Args:
         traj: The run (logs ``object_error``, ``commanded_normal``).
         finger_names: The hand's fingers, in the order of ``commanded_normal``.
         measured_normal: (N, n_fingers) measured normal forces [N] (see ``grasp_metrics.finger_normal_forces``).
         true_mass: Drawn beside the mass estimate [kg].
+        grasp_time: When the grasp closed [s] (marked; the panels start there).
+        motion: (start, end) of the object motion [s] (shaded).
     """
     grasping = _grasping(traj)
     t = traj.t[grasping]
-    figure = Figure(figsize=(12, 7), layout="tight")
+    figure = Figure(figsize=(13, 7), layout="tight")
     axes = figure.subplots(2, 2, sharex=True).ravel()
     error = traj.log["object_error"][grasping]
     for k, axis in enumerate("xyz"):
@@ -197,9 +225,11 @@ def grasp_figure(traj: Trajectory, finger_names: Sequence[str], measured_normal:
     axes[0].set(ylabel="object position error [mm]", title="object pose error (world, COM)")
     axes[1].set(ylabel="object rotation error [mrad]")
     measured, commanded = measured_normal[grasping], traj.log["commanded_normal"][grasping]
+    widths = np.linspace(3.0, 1.0, len(finger_names)) if len(finger_names) > 1 else np.array([1.5])
     for k, finger in enumerate(finger_names):
-        line = axes[2].plot(t, measured[:, k], label=f"{finger} measured")[0]
-        axes[2].plot(t, commanded[:, k], "--", color=line.get_color(), label=f"{finger} commanded")
+        line = axes[2].plot(t, measured[:, k], lw=widths[k], label=f"{finger} measured")[0]
+        axes[2].plot(t, commanded[:, k], ":", lw=max(widths[k] / 2, 0.8), color="k" if k == 0 else line.get_color(),
+                     label=f"{finger} commanded")  # fmt: skip
     axes[2].set(xlabel="t [s]", ylabel="normal force [N]", title="contact forces")
     if "mass_estimate" in traj.log:
         axes[3].plot(t, np.ravel(traj.log["mass_estimate"][grasping]), label="estimate")
@@ -211,8 +241,14 @@ def grasp_figure(traj: Trajectory, finger_names: Sequence[str], measured_normal:
         axes[3].set(ylabel="cone margin [N]", title="commanded forces: mu f_n - |f_t|")
     axes[3].set(xlabel="t [s]")
     for axis in axes:
+        if motion is not None:
+            axis.axvspan(*motion, color="0.85", zorder=0, label="object motion")
+        if grasp_time is not None:
+            axis.axvline(grasp_time, color="k", lw=0.8, label="grasp closed")
         axis.grid(True, alpha=0.3)
-        axis.legend(fontsize=7)
+        axis.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    start = f"{t[0]:.2f} s" if len(t) else "-"
+    figure.suptitle(f"from the grasp on (t >= {start}; before it the fingers approach the object)", fontsize=9)
     return figure
 
 

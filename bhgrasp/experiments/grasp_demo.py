@@ -264,7 +264,8 @@ def demo_figure(result: GraspDemoResult, hand) -> Figure:
     from bhgrasp.plots import grasp_figure
 
     measured = finger_normal_forces(hand, result.trajectory)
-    return grasp_figure(result.trajectory, hand.fingers, measured, result.true_mass)
+    return grasp_figure(result.trajectory, hand.fingers, measured, result.true_mass, grasp_time=result.grasp_time,
+                        motion=(result.motion_start, result.motion_end))  # fmt: skip
 
 
 def save_demo(result: GraspDemoResult, hand, output: Path) -> list[Path]:
