@@ -45,11 +45,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp._native import optional_core
 from bhgrasp._validation import as_array, as_positive, as_vector, require_name
 from bhgrasp.errors import InputError
 from bhgrasp.grasp import _frames, contact_frames
 from bhgrasp.hand import Hand
-from bhgrasp.sim.compiled import optional_core
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp._native import optional_core
 from bhgrasp._validation import as_array, as_vector, require_name, require_rotation
 from bhgrasp.errors import InputError, ModelError
 from bhgrasp.resources import barrett_urdf_path, leaf_links, mimic_joints, read_urdf
@@ -260,8 +261,6 @@ class Hand:
         (:meth:`perturbed` makes a new hand); gravity is passed at every call.
         """
         if self._dynamics_kernel is False:
-            from bhgrasp.sim.compiled import optional_core  # here: bhgrasp.sim imports this module
-
             core = optional_core()
             self._dynamics_kernel = None if core is None else core.HandDynamics(self._model.saveToString())
         return self._dynamics_kernel

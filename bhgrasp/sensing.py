@@ -12,9 +12,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bhgrasp._native import optional_core
 from bhgrasp._validation import as_array, as_vector
 from bhgrasp.hand import Hand
-from bhgrasp.sim.compiled import optional_core
 from bhgrasp.sim.state import State
 
 

@@ -14,8 +14,8 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
+from bhgrasp._native import optional_core
 from bhgrasp.experiments.allegro_grasp import allegro_hand
-from bhgrasp.sim.compiled import optional_core
 
 pytestmark = pytest.mark.skipif(optional_core() is None, reason="bhgrasp._core is not built")
 

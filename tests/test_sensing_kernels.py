@@ -15,12 +15,12 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
+from bhgrasp._native import optional_core
 from bhgrasp.controllers.adaptive_grasp import object_parameters, object_regressor, object_regressor_python
 from bhgrasp.errors import InputError
 from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.grasp import _frames, _unit_normals, contact_frames
 from bhgrasp.sensing import ContactSensing
-from bhgrasp.sim.compiled import optional_core
 
 RELATIVE = 1e-14
 

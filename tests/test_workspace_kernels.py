@@ -17,13 +17,13 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
+from bhgrasp._native import optional_core
 from bhgrasp.controllers import WorkspaceComputedTorque, workspace_dynamics
 from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
 from bhgrasp.controllers.workspace import _finger_terms, _finger_terms_python, _kernel
 from bhgrasp.errors import InputError
 from bhgrasp.experiments import chapter4
 from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
-from bhgrasp.sim.compiled import optional_core
 from bhgrasp.trajectories import Constant
 
 RELATIVE = 1e-12

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp._native import optional_core
 from bhgrasp._validation import as_positive, as_real
 from bhgrasp.controllers.base import gain_vector
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
@@ -37,7 +38,6 @@ from bhgrasp.controllers.object_space import grasp_maps, pose_gains
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.objects import RigidObject
-from bhgrasp.sim.compiled import optional_core
 from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 

@@ -26,11 +26,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp._native import optional_core
 from bhgrasp._validation import as_vector
 from bhgrasp.controllers.base import Controller, gain_matrix
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
-from bhgrasp.sim.compiled import optional_core
 from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from bhgrasp._native import optional_core
 from bhgrasp.errors import CompiledEngineUnavailable
 from bhgrasp.sim.contact import ContactMemory, ContactSet, empty_contact_set
 
@@ -22,15 +23,6 @@ if TYPE_CHECKING:
     from bhgrasp.sim.simulator import Simulator
 
 _INTEGRATORS = {"implicit": 0, "semi-implicit": 1, "rk4": 2}
-
-
-def optional_core():
-    """The compiled extension ``bhgrasp._core``, or ``None`` when it does not load (for kernels with a Python twin)."""
-    try:
-        from bhgrasp import _core
-    except ImportError:
-        return None
-    return _core
 
 
 def core_module():

@@ -7,8 +7,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp._native import optional_core
 from bhgrasp.sim.actuation import Actuation
-from bhgrasp.sim.compiled import optional_core
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.state import State, Trajectory
 
