@@ -276,7 +276,7 @@ def _grasp_demo(args: argparse.Namespace) -> int:
     if args.html is not None:
         from bhgrasp.viz import SceneViewer
 
-        viewer = SceneViewer(result.scene)
+        viewer = SceneViewer(result.scene, quiet=True)  # its server ends with this command: no address to print
         try:
             viewer.replay(result.trajectory)
             print(f"wrote {viewer.save_html(args.html)} (MeshCat replay; opens offline)")

@@ -2,7 +2,9 @@
 
 A thin layer over :class:`pinocchio.visualize.MeshcatVisualizer` (which loads the scene's hand, objects and fixed
 environment from its collision geometry, all primitives for the packaged Barrett hand).  The MeshCat server runs
-on 127.0.0.1 and no browser is opened unless asked (``open=True``).  Overlays:
+on 127.0.0.1 and no browser is opened unless asked (``open=True``).  The object is drawn translucent so that the
+contact forces and cones inside it show; a light plate marks the ground (world z = 0); the camera frames the
+first object.  Overlays:
 
 - contact force arrows (force on the object, ``force_scale`` [m/N]), green while sticking, red while sliding;
 - friction cones at the contacts (apex at the contact point, axis along the normal, half-angle atan(mu));
@@ -17,7 +19,9 @@ at most 60 frames per second that loops endlessly (in the live viewer and in the
 
 from __future__ import annotations
 
+import contextlib
 import html
+import io
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -40,13 +44,14 @@ MAX_FPS = 60.0
 LOOP_FOREVER = float("inf")  # replay repetitions (msgpack float64 inf: JavaScript's Infinity)
 ROOT = "bhgrasp"
 HAND_RGBA = (0.55, 0.57, 0.62, 1.0)
-OBJECT_RGBA = (0.95, 0.55, 0.15, 1.0)
+OBJECT_RGBA = (0.95, 0.55, 0.15, 0.45)  # translucent: the contact forces and cones inside it stay visible
 ENVIRONMENT_RGBA = (0.45, 0.35, 0.25, 1.0)
 STICK, SLIP, CONE, GHOST, TIP = 0x22AA44, 0xDD2222, 0x3377FF, 0xFFAA33, 0xAA33FF
 CONE_HEIGHT = 0.015  # [m] drawn friction cones
 DISPLAY_FORCE_SCALE = 0.005  # [m/N] arrows of display()
+GROUND, GROUND_SIZE = 0xD8D8D0, 0.4  # colour, edge [m] of the ground plate
 CAMERA_TARGET = (0.0, 0.0, 0.15)  # [m] between the Barrett hand's fingers (a scene without objects)
-CAMERA_OFFSET = (0.17, -0.24, 0.12)  # [m] camera position relative to its target
+CAMERA_OFFSET = (0.12, -0.17, 0.09)  # [m] camera position relative to its target: the grasp fills the frame
 
 
 class SceneViewer:
@@ -59,6 +64,7 @@ class SceneViewer:
         open: bool = False,
         zmq_url: str | None = None,
         max_contacts: int = 24,
+        quiet: bool = False,
     ) -> None:
         """Load the scene into a (new, localhost) MeshCat server.
 
@@ -68,6 +74,7 @@ class SceneViewer:
             open: Open a browser tab on the viewer.
             zmq_url: Connect to a running ``meshcat-server`` instead of starting one.
             max_contacts: Contact overlay slots (contacts beyond this many in one frame are not drawn).
+            quiet: Do not print the server's address (e.g. for an HTML export whose server ends with the program).
         """
         if not isinstance(scene, Scene):
             raise InputError(f"`scene` must be a bhgrasp Scene, got {type(scene).__name__}")
@@ -80,12 +87,17 @@ class SceneViewer:
         self._geometry_data = pin.GeometryData(geometry)
         self._data = scene.model.createData()
         self.visualizer = MeshcatVisualizer(scene.model, geometry, geometry)
-        self.visualizer.initViewer(viewer=viewer, open=open, zmq_url=zmq_url)
+        with contextlib.redirect_stdout(io.StringIO()) if quiet else contextlib.nullcontext():
+            self.visualizer.initViewer(viewer=viewer, open=open, zmq_url=zmq_url)  # meshcat prints its address
         self.visualizer.loadViewerModel(rootNodeName=ROOT)
         self.viewer: meshcat.Visualizer = self.visualizer.viewer
         self._overlays_loaded = False
         self.viewer["/Grid"].set_property("visible", False)
         self.viewer["/Axes"].set_property("visible", False)
+        ground = self.viewer[f"{ROOT}/ground"]  # a ground reference: a light plate at world z = 0 (the hand's base)
+        plate = mg.MeshLambertMaterial(color=GROUND, opacity=0.7, transparent=True)
+        ground.set_object(mg.Box([GROUND_SIZE, GROUND_SIZE, 0.001]), plate)
+        ground.set_transform(_translation([0.0, 0.0, -0.0005]))
         first = scene.objects[0] if scene.objects else None
         first = getattr(first, "body", first)  # a spring-mounted object's rest pose is its body's
         target = np.asarray(CAMERA_TARGET if first is None else first.pose.translation, dtype=float)
