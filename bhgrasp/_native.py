@@ -1,4 +1,4 @@
-"""The compiled extension ``bhgrasp._core``, when it loads: one loader for the kernels that have a Python twin.
+"""The compiled extension ``bhgrasp._core``: one loader, and the kernels built once per model they copy.
 
 A module of its own, outside :mod:`bhgrasp.sim`, so that the model, grasp and controller modules use the compiled
 kernels without importing the simulator (DESIGN.md: controllers never import the simulator).
@@ -6,7 +6,14 @@ kernels without importing the simulator (DESIGN.md: controllers never import the
 
 from __future__ import annotations
 
+import weakref
+from collections.abc import Callable
 from types import ModuleType
+from typing import Any
+
+from bhgrasp.errors import CompiledEngineUnavailable
+
+_KERNELS: weakref.WeakKeyDictionary[Any, dict[str, Any]] = weakref.WeakKeyDictionary()
 
 
 def optional_core() -> ModuleType | None:
@@ -18,4 +25,33 @@ def optional_core() -> ModuleType | None:
     return _core
 
 
-__all__ = ["optional_core"]
+def required_core(what: str) -> ModuleType:
+    """``bhgrasp._core`` for ``what`` (e.g. "the compiled engine").
+
+    Raises:
+        CompiledEngineUnavailable: It does not load; the message says why, how to rebuild, and the Python fallback.
+    """
+    try:
+        from bhgrasp import _core
+    except ImportError as error:
+        raise CompiledEngineUnavailable(
+            f"{what} (bhgrasp._core) does not load ({error}); reinstall with `pip install -e .` (it needs a C++17 "
+            "compiler, e.g. Debian's g++), or pass engine='python' to use the Python reference"
+        ) from error
+    return _core
+
+
+def kernel(owner: Any, name: str, build: Callable[[ModuleType], Any]) -> Any:
+    """The compiled kernel ``name`` of ``owner`` (e.g. a Hand), ``build(core)`` on first use; ``None`` without the core.
+
+    Kept beside ``owner``, not in it (copies and pickles of the owner build their own); a kernel holds a copy of
+    the owner's model, which must not change in place afterwards.
+    """
+    kernels = _KERNELS.setdefault(owner, {})
+    if name not in kernels:
+        core = optional_core()
+        kernels[name] = None if core is None else build(core)
+    return kernels[name]
+
+
+__all__ = ["kernel", "optional_core", "required_core"]

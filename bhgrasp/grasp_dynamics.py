@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._native import optional_core
+from bhgrasp._native import kernel
 from bhgrasp._validation import as_array, as_positive, as_vector, require_name
 from bhgrasp.errors import InputError
 from bhgrasp.grasp import _frames, contact_frames
@@ -255,19 +255,9 @@ def _hand_index(hand: Hand) -> _HandIndex:
     return index
 
 
-_KERNELS: weakref.WeakKeyDictionary[Hand, Any] = weakref.WeakKeyDictionary()
-
-
 def _kernel(hand: Hand) -> Any:
     """The hand's compiled ``_core.GraspKinematics``, built on first use; ``None`` if ``bhgrasp._core`` is missing."""
-    try:
-        return _KERNELS[hand]
-    except KeyError:
-        pass
-    core = optional_core()
-    kernel = None if core is None else core.GraspKinematics(hand.model.saveToString())
-    _KERNELS[hand] = kernel
-    return kernel
+    return kernel(hand, "GraspKinematics", lambda core: core.GraspKinematics(hand.model.saveToString()))
 
 
 # skew(x) = x @ _LEVI_CIVITA reshaped (3, 3): skew(x)[i, j] = -eps_ijk x_k

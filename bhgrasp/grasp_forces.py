@@ -57,8 +57,9 @@ from bhgrasp._force_qp import (  # noqa: F401  (the constants are part of this m
     PRIMAL_INFEASIBILITY,
     ContactForceQPPython,
 )
+from bhgrasp._native import optional_core, required_core
 from bhgrasp._validation import as_array, as_real, as_vector
-from bhgrasp.errors import CompiledEngineUnavailable, InputError
+from bhgrasp.errors import InputError
 from bhgrasp.grasp import friction_pyramid
 
 ENGINES = (None, "compiled", "python")
@@ -147,7 +148,10 @@ class ContactForceQP:
         self.facets = len(pyramid)
         args = (self.n, self.mu, pyramid, self.mu * np.cos(np.pi / self.facets), self.min_normal_force,
                 as_real(tolerance, "tolerance"), self.max_iter, self.max_iter_in)  # fmt: skip
-        core = None if engine == "python" else _core(engine == "compiled")
+        if engine == "python":
+            core = None
+        else:
+            core = required_core("the compiled QP") if engine == "compiled" else optional_core()
         self._solver = ContactForceQPPython(*args) if core is None else core.ContactForceQP(*args)
         self.engine = "python" if core is None else "compiled"
         self._no_desired = np.zeros(3 * self.n)
@@ -174,20 +178,6 @@ class ContactForceQP:
         if not solver.holds(grasp):  # scale the torque rows so that they weigh like the force rows
             solver.set_grasp_map(grasp, _torque_scale(grasp))
         return ContactForceResult(*solver.solve(w, f_d))
-
-
-def _core(required: bool) -> Any:
-    """``bhgrasp._core``, or ``None`` when it does not load and is not ``required``."""
-    try:
-        from bhgrasp import _core as core
-    except ImportError as error:
-        if required:
-            raise CompiledEngineUnavailable(
-                f"the compiled QP of bhgrasp._core does not load ({error}); reinstall with `pip install -e .` (it "
-                "needs a C++17 compiler), or pass engine='python'"
-            ) from error
-        return None
-    return core
 
 
 def _torque_scale(grasp: np.ndarray) -> float:

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._native import optional_core
+from bhgrasp._native import kernel
 from bhgrasp._validation import as_array, as_vector, require_name, require_rotation
 from bhgrasp.errors import InputError, ModelError
 from bhgrasp.resources import barrett_urdf_path, leaf_links, mimic_joints, read_urdf
@@ -73,7 +73,6 @@ class Hand:
         self._base_at_origin = True  # skip world <- base products when the base frame is the world frame
         self._lower_triangle = np.tril_indices(model.nv, -1)
         self._gravity_world = np.zeros(3)
-        self._dynamics_kernel: Any = False  # not built yet (_dynamics)
         self.base_placement = base_placement if base_placement is not None else pin.SE3.Identity()
         self.gravity = gravity
 
@@ -260,12 +259,8 @@ class Hand:
         It holds a copy of the model: the hand's inertias must not be changed in place afterwards
         (:meth:`perturbed` makes a new hand); gravity is passed at every call.
         """
-        if self._dynamics_kernel is False:
-            core = optional_core()
-            self._dynamics_kernel = None if core is None else core.HandDynamics(self._model.saveToString())
-        return self._dynamics_kernel
+        return kernel(self, "HandDynamics", lambda core: core.HandDynamics(self._model.saveToString()))
 
-    # ------------------------------------------------------------------ configurations
     def neutral(self) -> np.ndarray:
         """Pinocchio's neutral configuration (all zeros for revolute joints: Barrett fingers open and flat)."""
         return pin.neutral(self._model)
@@ -572,12 +567,6 @@ class Hand:
                 f"  finger {finger}: tip {self._fingertips[finger]!r}, joints {', '.join(self.finger_joints(finger))}"
             )
         return "\n".join(lines)
-
-    def __getstate__(self) -> dict:
-        """Copies and pickles rebuild the compiled kernel on first use (it is not picklable)."""
-        state = self.__dict__.copy()
-        state["_dynamics_kernel"] = False
-        return state
 
     def __repr__(self) -> str:
         return f"Hand({self.name!r}, nq={self.nq}, fingers={self.fingers})"

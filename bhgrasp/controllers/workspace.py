@@ -18,7 +18,6 @@ exactly what they computed without the kernel: CMA-ES tuning ranks candidates by
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -26,7 +25,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._native import optional_core
+from bhgrasp._native import kernel
 from bhgrasp._validation import as_vector
 from bhgrasp.controllers.base import Controller, gain_matrix
 from bhgrasp.errors import InputError
@@ -129,28 +128,20 @@ def _finger_terms_python(hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, 
     )
 
 
-_KERNELS: weakref.WeakKeyDictionary[Hand, Any] = weakref.WeakKeyDictionary()
-
-
 def _kernel(hand: Hand) -> Any:
     """The hand's compiled ``_core.FingerDynamics``, built on first use; ``None`` if ``bhgrasp._core`` is missing.
 
     It holds a copy of the hand's model (the hand's inertias must not change in place afterwards); gravity is passed at
     every call.
     """
-    try:
-        return _KERNELS[hand]
-    except KeyError:
-        pass
-    core = optional_core()
-    kernel = None
-    if core is not None:
+
+    def build(core: Any) -> Any:
         model = hand.model
         frames = [model.getFrameId(frame) for frame in hand.fingertip_frames.values()]
-        kernel = core.FingerDynamics(model.saveToString(), frames,
-                                     [hand.finger_indices(finger).tolist() for finger in hand.fingers])  # fmt: skip
-    _KERNELS[hand] = kernel
-    return kernel
+        return core.FingerDynamics(model.saveToString(), frames,
+                                   [hand.finger_indices(finger).tolist() for finger in hand.fingers])  # fmt: skip
+
+    return kernel(hand, "FingerDynamics", build)
 
 
 class WorkspaceComputedTorque(Controller):

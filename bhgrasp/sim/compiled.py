@@ -14,8 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from bhgrasp._native import optional_core
-from bhgrasp.errors import CompiledEngineUnavailable
+from bhgrasp._native import optional_core, required_core
 from bhgrasp.sim.contact import ContactMemory, ContactSet, empty_contact_set
 
 if TYPE_CHECKING:
@@ -31,14 +30,7 @@ def core_module():
     Raises:
         CompiledEngineUnavailable: It is missing or does not load (the message says why and how to rebuild).
     """
-    try:
-        from bhgrasp import _core
-    except ImportError as error:
-        raise CompiledEngineUnavailable(
-            f"the compiled engine bhgrasp._core does not load ({error}); reinstall with `pip install -e .` (it needs "
-            "a C++17 compiler, e.g. Debian's g++), or pass engine='python' to use the reference engine"
-        ) from error
-    return _core
+    return required_core("the compiled engine")
 
 
 class CompiledStep:
