@@ -176,11 +176,19 @@ class Quintic(Reference):
         """Position, velocity and acceleration at time ``t`` [s]."""
         s = np.clip((_time(t) - self.delay) / self.duration, 0.0, 1.0)
         change = self.goal - self.start
-        blend = s**3 * (10.0 + s * (-15.0 + 6.0 * s))
+        blend, rate, curvature = minimum_jerk(s)
         position = np.where(s >= 1.0, self.goal, self.start + change * blend)
-        velocity = change * (30.0 * s**2 * (1.0 - s) ** 2) / self.duration
-        acceleration = change * (60.0 * s * (1.0 - s) * (1.0 - 2.0 * s)) / self.duration**2
-        return position, velocity, acceleration
+        return position, change * rate / self.duration, change * curvature / (self.duration * self.duration)
+
+
+def minimum_jerk(s: Any) -> tuple[Any, Any, Any]:
+    """The minimum-jerk blend b(s) = 10 s^3 - 15 s^4 + 6 s^5 and its first two derivatives in s, for s in [0, 1].
+
+    Products only (no ``**``): a float and a float64 array give the same bits, on any CPU (NumPy's vectorised
+    ``power`` may round differently from the C library's ``pow``).
+    """
+    square, rest = s * s, 1.0 - s
+    return square * s * (10.0 + s * (-15.0 + 6.0 * s)), 30.0 * square * rest * rest, 60.0 * s * rest * (1.0 - 2.0 * s)
 
 
 class PoseMotion(Reference):
@@ -207,7 +215,7 @@ class PoseMotion(Reference):
             raise InputError(f"`start` must be a pinocchio.SE3, got {type(start).__name__}")
         self.start = pin.SE3(start)
         self.offset = as_vector(offset, "offset", 6)
-        self._blend = Quintic(0.0, 1.0, duration, delay)
+        self.duration, self.delay = as_positive(duration, "duration"), as_real(delay, "delay")
 
     @property
     def size(self) -> int:
@@ -216,7 +224,9 @@ class PoseMotion(Reference):
 
     def __call__(self, t: float) -> Sample:
         """Pose (x, log R), twist (v, omega) and its derivative at time ``t`` [s]."""
-        blend, rate, curvature = (float(value[0]) for value in self._blend(t))
+        s = min(max((_time(t) - self.delay) / self.duration, 0.0), 1.0)  # the blend of Quintic(0, 1, ...), in floats
+        blend, rate, curvature = minimum_jerk(s)
+        rate, curvature = rate / self.duration, curvature / (self.duration * self.duration)
         rotation = pin.exp3(blend * self.offset[3:]) @ self.start.rotation
         position = np.concatenate((self.start.translation + blend * self.offset[:3], pin.log3(rotation)))
         return position, rate * self.offset, curvature * self.offset

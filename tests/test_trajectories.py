@@ -12,11 +12,13 @@ import bhgrasp as bh
 from bhgrasp.trajectories import (
     CartesianReference,
     Constant,
+    PoseMotion,
     Quintic,
     Reference,
     Sinusoid,
     SmoothStep,
     exponential_approach,
+    minimum_jerk,
 )
 
 STEP = 1e-5  # [s] central-difference step
@@ -90,6 +92,39 @@ def test_quintic_is_the_rest_to_rest_polynomial() -> None:
         assert position[0] == pytest.approx(polynomial(t), abs=1e-12)
         assert velocity[0] == pytest.approx(polynomial.deriv()(t), abs=1e-12)
         assert acceleration[0] == pytest.approx(polynomial.deriv(2)(t), abs=1e-11)
+
+
+def test_minimum_jerk_gives_the_same_bits_for_floats_and_arrays() -> None:
+    """The profile is products only: one float at a time equals the vectorised call, bit for bit."""
+    s = np.concatenate(([0.0, 0.5, 1.0], np.random.default_rng(3).uniform(0.0, 1.0, 2000)))
+    vectorised = minimum_jerk(s)
+    for k, value in enumerate(s.tolist()):
+        assert minimum_jerk(value) == tuple(float(part[k]) for part in vectorised)
+    assert minimum_jerk(0.0) == (0.0, 0.0, 0.0)
+    assert minimum_jerk(1.0) == (1.0, 0.0, 0.0)
+
+
+def test_pose_motion_turns_about_a_fixed_world_axis_with_the_quintic_blend() -> None:
+    """x = x_0 + b dx, R = exp(b dtheta) R_0; the twist is d/dt of the pose (finite differences); b as Quintic's."""
+    start = pin.SE3(pin.exp3(np.array([0.3, -0.2, 0.5])), np.array([0.1, 0.0, 0.2]))
+    offset = np.array([0.0, 0.004, 0.01, 0.1, -0.05, 0.2])
+    ref, blend = PoseMotion(start, offset, 0.8, delay=0.3), Quintic(0.0, 1.0, 0.8, delay=0.3)
+    for t in np.linspace(0.0, 1.5, 301):
+        sample, twist, derivative = ref(t)
+        b, rate, curvature = (float(part[0]) for part in blend(t))
+        np.testing.assert_array_equal(sample[:3], start.translation + b * offset[:3])
+        np.testing.assert_array_equal(twist, rate * offset)
+        np.testing.assert_array_equal(derivative, curvature * offset)
+        np.testing.assert_allclose(pin.exp3(sample[3:]), pin.exp3(b * offset[3:]) @ start.rotation, atol=1e-15)
+    for t in (0.47, 0.7, 0.93):  # away from the kinks at 0.3 and 1.1 s
+        (x_plus, v_plus, _), (x_minus, v_minus, _) = ref(t + STEP), ref(t - STEP)
+        _, twist, derivative = ref(t)
+        rotation_rate = (pin.exp3(x_plus[3:]) - pin.exp3(x_minus[3:])) / (2 * STEP)
+        omega = pin.unSkew(rotation_rate @ pin.exp3(ref(t)[0][3:]).T)
+        np.testing.assert_allclose((x_plus[:3] - x_minus[:3]) / (2 * STEP), twist[:3], atol=1e-9)
+        np.testing.assert_allclose(omega, twist[3:], atol=1e-8)
+        np.testing.assert_allclose((v_plus - v_minus) / (2 * STEP), derivative, atol=1e-7)
+    np.testing.assert_allclose(pin.exp3(ref(5.0)[0][3:]), pin.exp3(offset[3:]) @ start.rotation, atol=1e-15)
 
 
 def test_smooth_step_follows_thesis_5_36_with_per_component_delays() -> None:
