@@ -316,3 +316,29 @@ def test_trajectory_load_refuses_what_is_not_a_trajectory(tmp_path) -> None:
     np.save(tmp_path / "single.npy", np.zeros(3))
     with pytest.raises(bh.InputError, match="a single .npy array, expected an .npz archive"):
         Trajectory.load(tmp_path / "single.npy")
+
+
+# ---------------------------------------------------------------------- recorded controller logs
+def test_recorded_log_copies_each_sample_and_marks_absent_keys_nan() -> None:
+    """Keys that appear late, vanish or come back are NaN where absent; a log array changed in place later is not."""
+    hand = far_hand()
+    simulator = Simulator(Scene(hand))
+
+    class Logging:
+        def __init__(self) -> None:
+            self.log: dict = {}
+            self.buffer = np.zeros(2)
+
+        def __call__(self, t: float, state) -> np.ndarray:
+            k = round(t / simulator.dt)
+            self.buffer[:] = k  # one array, changed in place every call
+            self.log["always"] = self.buffer
+            if k >= 2:
+                self.log["late"] = np.array(float(k))
+            if k == 4:
+                self.log.pop("late")
+            return hand.gravity_torques(state.q)
+
+    log = simulator.run(Logging(), 6 * simulator.dt, progress=False).log
+    np.testing.assert_array_equal(log["always"], np.repeat(np.arange(7.0), 2).reshape(7, 2).clip(max=5.0))
+    np.testing.assert_array_equal(log["late"], [np.nan, np.nan, 2.0, 3.0, np.nan, 5.0, 5.0])
