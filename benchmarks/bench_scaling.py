@@ -89,7 +89,7 @@ def grasp_controller(setup):
     law = GraspSupervisor(setup.hand, setup.q_contact, SMCAdaptiveGrasp(setup.hand, Box(size=setup.box.size, mass=0.2)),
                           q_close=setup.q_close, fingers=setup.fingers)  # fmt: skip
     if setup.cancel_damping:  # the Allegro scene: cancel the joints' known damping, as the demo does
-        law = MotorCommands(law, setup.simulator.actuation)
+        law = MotorCommands(law, setup.simulator.actuation.drive)
     return lambda state: law(state.t, state)
 
 

@@ -96,7 +96,7 @@ def test_barrett_motor_torques_through_the_gears() -> None:
 
 def test_barrett_actuation_needs_a_barrett_hand() -> None:
     finger = bh.thesis_two_link_finger()
-    with pytest.raises(bh.InputError, match="BarrettActuation needs a Barrett hand; `hand` lacks joints"):
+    with pytest.raises(bh.InputError, match="the BH8-280 transmission needs a Barrett hand; `hand` lacks joints"):
         BarrettActuation(finger)
     with pytest.raises(bh.InputError, match="`breakaway_torque` must be a positive finite number"):
         BarrettActuation(bh.BarrettHand(), breakaway_torque=-1.0)

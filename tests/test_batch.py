@@ -18,6 +18,7 @@ from bhgrasp.experiments.hold import POSTURE_GAIN, SQUEEZE, reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import Actuation, BarrettActuation
 from bhgrasp.sim.batch import BatchSimulator
+from bhgrasp.transmission import Transmission
 
 
 def start_states(hold, n: int):
@@ -119,16 +120,23 @@ def test_batch_errors_name_the_argument() -> None:
     with pytest.raises(InputError, match="`env` must be an environment index"):
         batch.state(2)
 
-    class Gripper(Actuation):  # one motor closing every joint: a transmission the batch does not know
+    class OneMotor(Transmission):  # one motor closing every joint: a transmission the batch does not know
         n_inputs = 1
 
-        def transmission(self):
+        def matrix(self, modes=None):
             return np.ones((self.hand.nv, 1))
 
+        def gears(self, modes=None):
+            return np.ones((self.hand.nv, 1))
+
+        def joint_damping(self, modes=None):
+            return self.passive_damping.copy()
+
+    class Gripper(Actuation):
         def joint_torques(self, u):
             return np.full(self.hand.nv, u[0])
 
-    gripper = Simulator(hold.simulator.scene, actuation=Gripper(hold.hand))
+    gripper = Simulator(hold.simulator.scene, actuation=Gripper(OneMotor(hold.hand)))
     with pytest.raises(InputError, match="runs FullyActuated and BarrettActuation hands, got Gripper"):
         BatchSimulator(gripper, [gripper.initial_state()])
 

@@ -12,14 +12,14 @@ Phases (logged as ``phase``: 0 approach, 1 squeeze, 2 manipulate):
 2. **manipulate** — the grasp controller follows a minimum-jerk motion from the caught pose by ``offset``
    (position [m], rotation vector [rad], world) over ``move_time``.
 
-:class:`MotorCommands` adapts any joint-torque controller to an actuation with fewer inputs (the BH8-280's four
-motors): u solves T^T B u = T^T tau, i.e. the motors do the same work as tau on every motion the transmission T
-allows (B: joint torques per unit motor input).
+:class:`MotorCommands` adapts any joint-torque controller to a drive with fewer inputs (the BH8-280's four
+motors, :mod:`bhgrasp.barrett.transmission`): u solves T^T B u = T^T tau, i.e. the motors do the same work as tau
+on every motion the transmission T allows (B: joint torques per unit motor input).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -31,9 +31,9 @@ from bhgrasp.controllers.joint import ComputedTorque
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.sensing import ContactSensing
-from bhgrasp.sim.actuation import Actuation
 from bhgrasp.sim.state import State
 from bhgrasp.trajectories import PoseMotion, SmoothStep
+from bhgrasp.transmission import Transmission
 
 APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
 
@@ -154,37 +154,39 @@ class GraspSupervisor(Controller):
 
 
 class MotorCommands(Controller):
-    """Run a joint-torque controller through an actuation with fewer inputs: u with T^T B u = T^T (tau + D v).
+    """Run a joint-torque controller through a drive with fewer inputs: u with T^T B u = T^T (tau + D v).
 
-    D v compensates the actuation's known viscous damping (for the BH8-280 mostly the motors' torque-speed line
-    reflected through 125:1 gears, ~5.6 N m s/rad at a proximal joint, which a model-based joint law ignores).
+    The drive model (:class:`~bhgrasp.transmission.Transmission`, e.g. the BH8-280's
+    :class:`~bhgrasp.barrett.transmission.BarrettTransmission`) is the hand's, not the simulator's: its mode (the
+    TorqueSwitch states) is read from the state's ``actuation_modes``, as a real hand's driver reports them.  D v
+    compensates the drive's known viscous damping (for the BH8-280 mostly the motors' torque-speed line reflected
+    through 125:1 gears, ~5.6 N m s/rad at a proximal joint, which a model-based joint law ignores).
     """
 
-    def __init__(self, controller: Controller, actuation: Actuation) -> None:
-        """Wrap ``controller`` (joint torques, nv) for ``actuation`` (its ``n_inputs`` motor inputs)."""
+    def __init__(self, controller: Controller | Callable[[float, State], Any], drive: Transmission) -> None:
+        """Wrap ``controller`` (a :class:`Controller` or any ``(t, state) -> tau`` callable) for ``drive``."""
         super().__init__()
-        if not isinstance(actuation, Actuation):
-            raise InputError(f"`actuation` must be a bhgrasp Actuation, got {actuation!r}")
+        if not isinstance(drive, Transmission):
+            raise InputError(
+                f"`drive` must be a bhgrasp Transmission (e.g. BarrettTransmission(hand), or a simulator "
+                f"actuation's .drive), got {drive!r}"
+            )
         self.controller = controller
-        self.actuation = actuation
-        self.log = controller.log
+        self.drive = drive
+        log = getattr(controller, "log", None)
+        if isinstance(log, dict):
+            self.log = log
 
     def reset(self, state: State) -> None:
-        """Reset the wrapped controller."""
-        self.controller.reset(state)
+        """Reset the wrapped controller (if it has a ``reset``)."""
+        if hasattr(self.controller, "reset"):
+            self.controller.reset(state)
 
     def __call__(self, t: float, state: State) -> np.ndarray:
         """Motor inputs for the wrapped controller's joint torques."""
-        tau = self.controller(t, state) + self.actuation.joint_damping() * np.asarray(state.v, dtype=float)
-        return motor_inputs(self.actuation, tau)
+        modes = state.actuation_modes
+        tau = self.controller(t, state) + self.drive.joint_damping(modes) * np.asarray(state.v, dtype=float)
+        return self.drive.motor_inputs(tau, modes)
 
 
-def motor_inputs(actuation: Actuation, tau: Any) -> np.ndarray:
-    """Inputs u whose joint torques do the work of ``tau`` [N m] on every motion the transmission allows."""
-    transmission = actuation.transmission()
-    per_input = np.column_stack([actuation.joint_torques(e) for e in np.eye(actuation.n_inputs)])
-    tau = as_vector(tau, "tau", transmission.shape[0])
-    return np.linalg.solve(transmission.T @ per_input, transmission.T @ tau)
-
-
-__all__ = ["APPROACH", "MANIPULATE", "SQUEEZE", "GraspSupervisor", "MotorCommands", "motor_inputs"]
+__all__ = ["APPROACH", "MANIPULATE", "SQUEEZE", "GraspSupervisor", "MotorCommands"]

@@ -199,7 +199,7 @@ def run_grasp_demo(
     kp, kv = approach_gains
     supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=offset, kp=kp, kv=kv,
                                  q_close=setup.q_close, fingers=setup.fingers)  # fmt: skip
-    law: Controller = MotorCommands(supervisor, setup.simulator.actuation) if setup.cancel_damping else supervisor
+    law: Controller = MotorCommands(supervisor, setup.simulator.actuation.drive) if setup.cancel_damping else supervisor
     if viewer is not None:
         from bhgrasp.viz import LiveView
 

@@ -1,0 +1,192 @@
+"""The BH8-280's drive: four motors (spread, F1, F2, F3), their gears and the TorqueSwitch (thesis 2.4.7).
+
+Facts (sources in ``../shared/reference/barrett_public_data.md`` sections 1.4 and 5, keys as there):
+
+- spread motor : spread joint (F1 and F2 together) 17.5 : 1 (libbarrett ``SPREAD_RATIO``);
+- finger motor : proximal joint 125 : 1 (libbarrett ``J2_RATIO``; Barrett wiki, kinematics page);
+- finger motor : distal joint relative to the proximal link, coupled, 375 : 1, so distal = proximal / 3
+  (libbarrett ``J3_RATIO``);
+- finger motor : distal worm, absolute, 93.75 : 1: it drives the distal joint alone after breakaway (Barrett
+  wiki; BH8 manual p. 61);
+- puck torque limit MT 2200 / IPNM 20000 = 0.11 N m at the motor; speed limit MV 200 counts/ms at 4096
+  counts/rev = 307 rad/s at the motor (Robotnik ``pyHand_api.py`` defaults; libbarrett counts/ms);
+- breakaway torque 0.5 N m at the proximal joint (GraspIt! ``breakAwayTorque``; Barrett publishes no N m value,
+  its firmware sets the threshold through the puck properties IVEL, IOFF, IHIT, OT).
+
+TorqueSwitch (BH8 manual; Barrett wiki): a finger motor turns the proximal joint and, through the clutch, the distal
+joint at one third of its speed, until the proximal link is blocked while closing and its drive torque exceeds the
+breakaway threshold; then the proximal joint holds and the motor drives the distal joint alone through its 93.75:1
+worm.  Opening a broken-away finger drives the fingertip back to its stop, then the proximal link alone to its open
+stop, where the switch re-arms.  Modes per finger: 0 armed (coupled), 1 broken away, 2 re-opening the proximal link.
+
+Inputs are motor torques [N m] at the motor shafts.  A linear torque-speed line through the puck limits gives each
+motor a viscous damping [N m s/rad] at its shaft; through a gear ratio r it damps the driven joint by b_m r^2.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from bhgrasp._validation import as_positive
+from bhgrasp.errors import InputError
+from bhgrasp.hand import Hand
+from bhgrasp.transmission import Transmission, per_joint
+
+SPREAD_RATIO = 17.5  # motor : spread joint (libbarrett SPREAD_RATIO)
+PROXIMAL_RATIO = 125.0  # motor : proximal joint (libbarrett J2_RATIO, Barrett wiki)
+DISTAL_RATIO = 375.0  # motor : distal joint relative to the proximal link, coupled (libbarrett J3_RATIO)
+DISTAL_ALONE_RATIO = 93.75  # motor : distal worm gear, absolute (Barrett wiki); drives the distal after breakaway
+MAX_MOTOR_TORQUE = 2200 / 20000  # [N m] puck MT / IPNM (Robotnik pyHand_api defaults)
+MAX_MOTOR_SPEED = 200e3 / 4096 * 2 * np.pi  # [rad/s] finger puck default MV = 200 counts/ms, 4096 counts/rev
+# A linear torque-speed line through (MAX_MOTOR_TORQUE, 0) and (0, MAX_MOTOR_SPEED): motor viscous damping
+# [N m s/rad] at the shaft; through 125:1 it caps the proximal speed at 2.45 rad/s under full torque.
+MOTOR_DAMPING = MAX_MOTOR_TORQUE / MAX_MOTOR_SPEED
+BREAKAWAY_TORQUE = 0.5  # [N m] at the proximal joint (GraspIt! breakAwayTorque)
+FINGERS = ("F1", "F2", "F3")
+ARMED, BROKEN_AWAY, REOPENING = 0, 1, 2
+STOP_TOLERANCE = 1e-4  # [rad] a joint this close to its lower limit is at its stop
+
+
+class BarrettTransmission(Transmission):
+    """The BH8-280's four motors: spread coupling, finger gears and the TorqueSwitch rule (module docstring)."""
+
+    def __init__(
+        self,
+        hand: Hand,
+        breakaway_torque: float = BREAKAWAY_TORQUE,
+        motor_damping: float = MOTOR_DAMPING,
+        blocked_speed: float = 0.02,
+        damping: float | Sequence[float] = 0.0,
+    ) -> None:
+        """Couple a Barrett hand's joints.
+
+        Args:
+            hand: A Barrett hand (joints F1_spread, F2_spread and F*_proximal, F*_distal).
+            breakaway_torque: Proximal drive torque [N m] above which the TorqueSwitch breaks away.
+            motor_damping: Motor viscous damping at the shaft [N m s/rad] (its torque-speed line).
+            blocked_speed: Proximal speed [rad/s] below which the proximal link counts as blocked; breakaway needs
+                a blocked link (a start-up torque transient of a moving finger does not break the switch).
+            damping: Passive viscous joint damping [N m s/rad], scalar or per joint.
+        """
+        super().__init__(hand, damping)
+        names = hand.joint_names
+        required = ["F1_spread", "F2_spread"] + [f"{f}_{j}" for f in FINGERS for j in ("proximal", "distal")]
+        missing = [name for name in required if name not in names]
+        if missing:
+            raise InputError(f"the BH8-280 transmission needs a Barrett hand; `hand` lacks joints {missing}")
+        self.breakaway_torque = as_positive(breakaway_torque, "breakaway_torque")
+        self.motor_damping = float(per_joint(motor_damping, 1, "motor_damping")[0])
+        self.blocked_speed = as_positive(blocked_speed, "blocked_speed")
+        self.spread = (names.index("F1_spread"), names.index("F2_spread"))
+        self.proximal = [names.index(f"{f}_proximal") for f in FINGERS]
+        self.distal = [names.index(f"{f}_distal") for f in FINGERS]
+        self._lower = hand.lower
+
+    @property
+    def n_inputs(self) -> int:
+        """Spread motor, then the F1, F2, F3 finger motors."""
+        return 4
+
+    def matrix(self, modes: Any = None) -> np.ndarray:
+        """Spread column (1, 1) on F1/F2 spread; per finger (1, 1/3) on (proximal, distal), or (0, 1) if broken."""
+        modes = switch_modes(modes)
+        columns = np.zeros((self.hand.nv, 4))
+        columns[list(self.spread), 0] = 1.0
+        for finger in range(3):
+            if modes[finger] == BROKEN_AWAY:
+                columns[self.distal[finger], finger + 1] = 1.0
+            elif modes[finger] == REOPENING:
+                columns[self.proximal[finger], finger + 1] = 1.0
+            else:
+                columns[self.proximal[finger], finger + 1] = 1.0
+                columns[self.distal[finger], finger + 1] = PROXIMAL_RATIO / DISTAL_RATIO
+        return columns
+
+    def joint_torques(self, u: np.ndarray, modes: Any = None) -> np.ndarray:
+        """Motor torques through the gears: the power u * motor speed enters each driven coordinate [N m]."""
+        modes = switch_modes(modes)
+        tau = np.zeros(self.hand.nv)
+        tau[self.spread[0]] = SPREAD_RATIO * u[0]  # the coupled F2 spread shares the (1, 1) column
+        for finger in range(3):
+            if modes[finger] == BROKEN_AWAY:
+                tau[self.distal[finger]] = DISTAL_ALONE_RATIO * u[finger + 1]
+            else:
+                tau[self.proximal[finger]] = PROXIMAL_RATIO * u[finger + 1]
+        return tau
+
+    def gears(self, modes: Any = None) -> np.ndarray:
+        """B (nv, 4): :meth:`joint_torques` of each unit motor torque."""
+        return np.column_stack([self.joint_torques(unit, modes) for unit in np.eye(4)])
+
+    def joint_damping(self, modes: Any = None) -> np.ndarray:
+        """Passive damping plus the motors' damping reflected onto each driven coordinate (b_m ratio^2).
+
+        It is put on one joint of each transmission column whose entry is 1, so that ``T^T D T`` holds it once.
+        """
+        modes = switch_modes(modes)
+        damping = self.passive_damping.copy()
+        damping[self.spread[0]] += self.motor_damping * SPREAD_RATIO**2
+        for finger in range(3):
+            if modes[finger] == BROKEN_AWAY:
+                damping[self.distal[finger]] += self.motor_damping * DISTAL_ALONE_RATIO**2
+            else:
+                damping[self.proximal[finger]] += self.motor_damping * PROXIMAL_RATIO**2
+        return damping
+
+    def switch(
+        self, modes: Any, q_hand: np.ndarray, v_hand: np.ndarray, u: np.ndarray, drive: np.ndarray
+    ) -> np.ndarray:
+        """The TorqueSwitch modes after a step that ended at (``q_hand``, ``v_hand``) under motor torques ``u``.
+
+        ``drive``: the joint torques the drive delivered over the step [N m] (inputs plus the reactions that hold
+        joints outside T). Armed -> broken away when the finger closes (u > 0), its proximal link is blocked and
+        its drive torque exceeds the breakaway torque; broken away -> re-opening when it opens (u < 0) with the
+        fingertip at its stop; re-opening -> armed at the proximal stop, or when it closes again.
+        """
+        modes = switch_modes(modes).copy()
+        for finger in range(3):
+            motor, proximal, distal = u[finger + 1], self.proximal[finger], self.distal[finger]
+            at_stop = q_hand[[proximal, distal]] <= self._lower[[proximal, distal]] + STOP_TOLERANCE
+            if modes[finger] == ARMED:
+                blocked = abs(v_hand[proximal]) < self.blocked_speed
+                if motor > 0.0 and blocked and drive[proximal] > self.breakaway_torque:
+                    modes[finger] = BROKEN_AWAY
+            elif modes[finger] == BROKEN_AWAY and motor < 0.0 and at_stop[1]:
+                modes[finger] = REOPENING
+            elif modes[finger] == REOPENING and (at_stop[0] or motor > 0.0):
+                modes[finger] = ARMED
+        return modes
+
+
+_ARMED = np.zeros(3, dtype=int)
+
+
+def switch_modes(modes: Any) -> np.ndarray:
+    """TorqueSwitch modes (3,) as ints from a state's flags; ``None`` or empty: every switch armed."""
+    if modes is None or len(modes) == 0:
+        return _ARMED
+    array = np.asarray(modes)
+    integers = array if array.dtype.kind == "i" else array.astype(int)
+    if array.shape != (3,) or not (integers == array).all() or integers.min() < ARMED or integers.max() > REOPENING:
+        raise InputError(f"TorqueSwitch modes must be 3 values in (0, 1, 2), got {array.tolist()}")
+    return integers
+
+
+__all__ = [
+    "ARMED",
+    "BREAKAWAY_TORQUE",
+    "BROKEN_AWAY",
+    "DISTAL_ALONE_RATIO",
+    "DISTAL_RATIO",
+    "MAX_MOTOR_SPEED",
+    "MAX_MOTOR_TORQUE",
+    "MOTOR_DAMPING",
+    "PROXIMAL_RATIO",
+    "REOPENING",
+    "SPREAD_RATIO",
+    "BarrettTransmission",
+    "switch_modes",
+]
