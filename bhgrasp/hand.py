@@ -43,6 +43,7 @@ class Hand:
         gravity: Sequence[float] = STANDARD_GRAVITY,
         urdf_path: Path | None = None,
         collision_geometry: pin.GeometryModel | None = None,
+        base_joints: Sequence[str] = (),
     ) -> None:
         """Wrap a Pinocchio model.
 
@@ -55,6 +56,8 @@ class Hand:
             urdf_path: The URDF the model came from, if any (kept for later layers, e.g. collision geometry).
             collision_geometry: Collision shapes attached to the model's joints and frames, for a hand built
                 without a URDF (e.g. a planar finger's tip sphere); scenes use it instead of ``urdf_path``'s.
+            base_joints: Joints that move the whole hand and belong to no finger (a wrist mount's,
+                :func:`~bhgrasp.mount.mounted`): :meth:`finger_joints` leaves them out.
         """
         if not fingertips:
             raise ModelError("a hand needs at least one fingertip frame")
@@ -69,6 +72,7 @@ class Hand:
             require_name(frame, frame_names, "frame")
             self._tip_ids[str(finger)] = model.getFrameId(frame)
         self._fingertips = {finger: model.frames[i].name for finger, i in self._tip_ids.items()}
+        self.base_joints = tuple(require_name(joint, model.names[1:], "joint") for joint in base_joints)
         self._placement = pin.SE3.Identity()
         self._base_at_origin = True  # skip world <- base products when the base frame is the world frame
         self._lower_triangle = np.tril_indices(model.nv, -1)
@@ -205,7 +209,7 @@ class Hand:
         return {name: self._model.joints[self._model.getJointId(name)].idx_v for name in self.joint_names}
 
     def finger_joints(self, finger: str) -> tuple[str, ...]:
-        """Names of the joints that move a finger's tip, from the base outward."""
+        """Names of the joints that move a finger's tip, from the base outward (not the :attr:`base_joints`)."""
         joints = self._finger_joints.get(finger) if isinstance(finger, str) else None
         if joints is None:
             require_name(finger, self.fingers, "finger")  # raises: an unknown finger
@@ -217,7 +221,9 @@ class Hand:
         supports = {
             finger: model.supports[model.frames[frame].parentJoint][1:] for finger, frame in self._tip_ids.items()
         }
-        return {finger: tuple(model.names[j] for j in joints) for finger, joints in supports.items()}
+        base = set(self.base_joints)
+        return {finger: tuple(model.names[j] for j in joints if model.names[j] not in base)
+                for finger, joints in supports.items()}  # fmt: skip
 
     def finger_indices(self, finger: str) -> np.ndarray:
         """Velocity indices of a finger's joints (columns of its Jacobian that can be non-zero)."""
@@ -547,6 +553,7 @@ class Hand:
             gravity=self.gravity,
             urdf_path=self.urdf_path,
             collision_geometry=self.collision_geometry,
+            base_joints=self.base_joints,
         )
 
     # ------------------------------------------------------------------ display
@@ -557,10 +564,14 @@ class Hand:
             f"  {'joint':<16}{'lower':>9}{'upper':>9}  [deg]{'vel':>8} [rad/s]{'effort':>8} [N m]{'link mass':>11} [kg]"
         )
         for i, joint in enumerate(self.joint_names):
-            mass = self._model.inertias[self._model.getJointId(joint)].mass
+            joint_id = self._model.getJointId(joint)
+            mass = self._model.inertias[joint_id].mass
+            prismatic = self._model.joints[joint_id].shortname().startswith("JointModelP")
+            limits = (f"{self.lower[i]:9.3f}{self.upper[i]:9.3f}" if prismatic  # a sliding joint: [m], [m/s], [N]
+                      else f"{np.degrees(self.lower[i]):9.1f}{np.degrees(self.upper[i]):9.1f}")  # fmt: skip
             lines.append(
-                f"  {joint:<16}{np.degrees(self.lower[i]):9.1f}{np.degrees(self.upper[i]):9.1f}"
-                f"{self.velocity_limit[i]:13.3f}{self.effort_limit[i]:15.3f}{mass:14.4f}"
+                f"  {joint:<16}{limits}{self.velocity_limit[i]:13.3f}{self.effort_limit[i]:15.3f}{mass:14.4f}"
+                + "  [m, N]" * prismatic
             )
         for finger in self.fingers:
             lines.append(

@@ -106,3 +106,25 @@ def test_live_view_shows_every_nth_state_and_leaves_the_run_unchanged(held, monk
     np.testing.assert_allclose(shown, plain.t[:-1:10])  # the sensed states of calls 0, 10, 20, ...
     with pytest.raises(bh.InputError, match="every"):
         LiveView(hold.controller, viewer, every=0)
+
+
+def test_a_mounted_hands_viewer_follows_the_wrist():
+    """The viewer of a hand on a wrist mount draws its links where the scene's geometry is, mount moved and turned."""
+    from bhgrasp.mount import mounted
+    from bhgrasp.objects import Box
+    from bhgrasp.sim.scene import Scene
+
+    hand = mounted(bh.BarrettHand())
+    box = Box(size=(0.05,) * 3, mass=0.1, pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.3])))
+    scene = Scene(hand, [box])
+    viewer = SceneViewer(scene)
+    try:
+        q = np.r_[0.1, -0.05, 0.2, 0.3, 0.1, -0.2, hand.neutral()[6:]]
+        data, geometry_data = scene.model.createData(), pin.GeometryData(scene.geometry)
+        pin.updateGeometryPlacements(scene.model, data, scene.geometry, geometry_data, np.r_[q, 0, 0, 0.3, 0, 0, 0, 1])
+        shown = viewer.placements(q, [pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.3]))])
+        assert len(shown) == len(geometry_data.oMg)
+        for placement, truth in zip(shown, geometry_data.oMg):
+            np.testing.assert_allclose(placement, truth.homogeneous, atol=1e-12)
+    finally:
+        viewer.close()

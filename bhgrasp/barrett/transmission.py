@@ -19,8 +19,10 @@ breakaway threshold; then the proximal joint holds and the motor drives the dist
 worm.  Opening a broken-away finger drives the fingertip back to its stop, then the proximal link alone to its open
 stop, where the switch re-arms.  Modes per finger: 0 armed (coupled), 1 broken away, 2 re-opening the proximal link.
 
-Inputs are motor torques [N m] at the motor shafts.  A linear torque-speed line through the puck limits gives each
-motor a viscous damping [N m s/rad] at its shaft; through a gear ratio r it damps the driven joint by b_m r^2.
+Inputs are motor torques [N m] at the motor shafts, then one torque [N m or N] per joint outside the hand's eight
+(e.g. the wrist mount's of :func:`~bhgrasp.mount.mounted`), applied directly.  A linear torque-speed line through
+the puck limits gives each motor a viscous damping [N m s/rad] at its shaft; through a gear ratio r it damps the
+driven joint by b_m r^2.
 """
 
 from __future__ import annotations
@@ -64,7 +66,8 @@ class BarrettTransmission(Transmission):
         """Couple a Barrett hand's joints.
 
         Args:
-            hand: A Barrett hand (joints F1_spread, F2_spread and F*_proximal, F*_distal).
+            hand: A Barrett hand (joints F1_spread, F2_spread and F*_proximal, F*_distal), possibly mounted: its
+                other joints are driven directly.
             breakaway_torque: Proximal drive torque [N m] above which the TorqueSwitch breaks away.
             motor_damping: Motor viscous damping at the shaft [N m s/rad] (its torque-speed line).
             blocked_speed: Proximal speed [rad/s] below which the proximal link counts as blocked; breakaway needs
@@ -83,17 +86,19 @@ class BarrettTransmission(Transmission):
         self.spread = (names.index("F1_spread"), names.index("F2_spread"))
         self.proximal = [names.index(f"{f}_proximal") for f in FINGERS]
         self.distal = [names.index(f"{f}_distal") for f in FINGERS]
+        self.direct = [i for i, name in enumerate(names) if name not in required]  # e.g. a wrist mount's joints
         self._lower = hand.lower
 
     @property
     def n_inputs(self) -> int:
-        """Spread motor, then the F1, F2, F3 finger motors."""
-        return 4
+        """Spread motor, then the F1, F2, F3 finger motors, then one torque per joint of :attr:`direct`."""
+        return 4 + len(self.direct)
 
     def matrix(self, modes: Any = None) -> np.ndarray:
         """Spread column (1, 1) on F1/F2 spread; per finger (1, 1/3) on (proximal, distal), or (0, 1) if broken."""
         modes = switch_modes(modes)
-        columns = np.zeros((self.hand.nv, 4))
+        columns = np.zeros((self.hand.nv, self.n_inputs))
+        columns[self.direct, range(4, self.n_inputs)] = 1.0
         columns[list(self.spread), 0] = 1.0
         for finger in range(3):
             if modes[finger] == BROKEN_AWAY:
@@ -109,6 +114,7 @@ class BarrettTransmission(Transmission):
         """Motor torques through the gears: the power u * motor speed enters each driven coordinate [N m]."""
         modes = switch_modes(modes)
         tau = np.zeros(self.hand.nv)
+        tau[self.direct] = u[4:]
         tau[self.spread[0]] = SPREAD_RATIO * u[0]  # the coupled F2 spread shares the (1, 1) column
         for finger in range(3):
             if modes[finger] == BROKEN_AWAY:
@@ -118,8 +124,8 @@ class BarrettTransmission(Transmission):
         return tau
 
     def gears(self, modes: Any = None) -> np.ndarray:
-        """B (nv, 4): :meth:`joint_torques` of each unit motor torque."""
-        return np.column_stack([self.joint_torques(unit, modes) for unit in np.eye(4)])
+        """B (nv, n_inputs): :meth:`joint_torques` of each unit input."""
+        return np.column_stack([self.joint_torques(unit, modes) for unit in np.eye(self.n_inputs)])
 
     def joint_damping(self, modes: Any = None) -> np.ndarray:
         """Passive damping plus the motors' damping reflected onto each driven coordinate (b_m ratio^2).

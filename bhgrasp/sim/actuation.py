@@ -127,7 +127,10 @@ class FullyActuated(Actuation):
 
 
 class BarrettActuation(Actuation):
-    """The BH8-280's 4 motors with spread coupling and TorqueSwitch breakaway (inputs: motor torques [N m])."""
+    """The BH8-280's 4 motors with spread coupling and TorqueSwitch breakaway (inputs: motor torques [N m]).
+
+    On a mounted hand (:func:`~bhgrasp.mount.mounted`) the mount's joint torques follow the four motor torques.
+    """
 
     FINGERS = ("F1", "F2", "F3")
 
@@ -186,7 +189,8 @@ class BarrettActuation(Actuation):
     def joint_torques(self, u: np.ndarray) -> np.ndarray:
         """Motor torques (clipped to the puck limit if ``saturate``) through the gears [N m]."""
         if self.saturate:
-            u = np.clip(u, -MAX_MOTOR_TORQUE, MAX_MOTOR_TORQUE)
+            u = u.copy()
+            u[:4] = np.clip(u[:4], -MAX_MOTOR_TORQUE, MAX_MOTOR_TORQUE)  # the pucks; a mount's joints are not
         return self.drive.joint_torques(u, self.mode)
 
     def update(self, q_hand: np.ndarray, v_hand: np.ndarray, u: np.ndarray, drive_torques: np.ndarray) -> None:

@@ -77,6 +77,11 @@ class BatchSimulator:
             memory = state.contact_memory if state.contact_memory is not None else ContactMemory.empty()
             self._batch.set_state(i, state.scene_q, state.scene_v, native_memory(memory))
         self._barrett = isinstance(simulator.actuation, BarrettActuation)
+        if self._barrett and simulator.actuation.n_inputs != 4:
+            raise InputError(
+                "BatchSimulator runs the Barrett hand's four motors alone, got "
+                f"{simulator.actuation.n_inputs} inputs (a mounted hand): step it with Simulator"
+            )
         if self._barrett:
             self._batch.set_barrett(barrett_of(simulator.actuation))
             for i, state in enumerate(states):
