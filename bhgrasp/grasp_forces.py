@@ -140,14 +140,9 @@ class ContactForceQP:
                 raise InputError(f"`{name}` must be an integer >= 1, got {value!r}")
         if engine not in ENGINES:
             raise InputError(f"`engine` must be one of {ENGINES}, got {engine!r}")
-        self.n = int(n_contacts)
-        self.mu = as_real(mu, "mu")
-        self.min_normal_force = as_real(min_normal_force, "min_normal_force")
-        self.max_iter, self.max_iter_in = int(max_iter), int(max_iter_in)
-        pyramid, _ = friction_pyramid(self.mu, facets)
+        args = solver_arguments(n_contacts, mu, facets, min_normal_force, tolerance, max_iter, max_iter_in)
+        self.n, self.mu, pyramid, _, self.min_normal_force, _, self.max_iter, self.max_iter_in = args
         self.facets = len(pyramid)
-        args = (self.n, self.mu, pyramid, self.mu * np.cos(np.pi / self.facets), self.min_normal_force,
-                as_real(tolerance, "tolerance"), self.max_iter, self.max_iter_in)  # fmt: skip
         if engine == "python":
             core = None
         else:
@@ -178,6 +173,28 @@ class ContactForceQP:
         if not solver.holds(grasp):  # scale the torque rows so that they weigh like the force rows
             solver.set_grasp_map(grasp, _torque_scale(grasp))
         return ContactForceResult(*solver.solve(w, f_d))
+
+
+def solver_arguments(
+    n_contacts: int,
+    mu: float,
+    facets: int = 8,
+    min_normal_force: float = 0.0,
+    tolerance: float = 1e-9,
+    max_iter: int = 50,
+    max_iter_in: int = 10,
+) -> tuple:
+    """What :class:`ContactForceQP` (same arguments, same defaults) passes its solver's constructor.
+
+    (n, mu, pyramid (facets, 3), mu cos(pi / facets), f_min, tolerance, max_iter, max_iter_in), converted and checked
+    as :class:`ContactForceQP` does (``n_contacts`` and the iteration limits are checked there, before).  The compiled
+    SMC-adaptive law (:mod:`bhgrasp.controllers._smc_law`) builds its QPs from the same arguments.
+    """
+    mu = as_real(mu, "mu")
+    min_normal_force = as_real(min_normal_force, "min_normal_force")
+    pyramid, _ = friction_pyramid(mu, facets)
+    return (int(n_contacts), mu, pyramid, mu * np.cos(np.pi / len(pyramid)), min_normal_force,
+            as_real(tolerance, "tolerance"), int(max_iter), int(max_iter_in))  # fmt: skip
 
 
 def _torque_scale(grasp: np.ndarray) -> float:

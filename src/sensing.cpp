@@ -6,20 +6,33 @@
 
 namespace bhgrasp {
 
-FingerSums finger_contacts(const Indices& finger, Eigen::Index fingers, const Points& points, const Points& normals,
-                           const Points& forces) {
+FingerSums finger_contacts(const ConstIndices& finger, Eigen::Index fingers, const ConstPoints& points,
+                           const ConstPoints& normals, const ConstPoints& forces) {
+  FingerSums sums;
+  FingerWork work;
+  finger_contacts_into(finger, fingers, points, normals, forces, sums, work);
+  return sums;
+}
+
+void finger_contacts_into(const ConstIndices& finger, Eigen::Index fingers, const ConstPoints& points,
+                          const ConstPoints& normals, const ConstPoints& forces, FingerSums& sums, FingerWork& work) {
   const Eigen::Index m = finger.size();
   if (points.rows() != m || normals.rows() != m || forces.rows() != m || fingers < 0)
     throw std::invalid_argument("finger, points, normals and forces must have one row per contact");
-  FingerSums sums;
   sums.force.setZero(fingers, 3);
   sums.normal_force.setZero(fingers);
   sums.normal.setZero(fingers, 3);
   sums.count.setZero(fingers);
   sums.point.setZero(fingers, 3);
   sums.strongest.setConstant(fingers, -1);
-  Vector weight_sum = Vector::Zero(fingers), best = Vector::Constant(fingers, -1.0);
-  Points pressing_normal = Points::Zero(fingers, 3), plain_normal = Points::Zero(fingers, 3);
+  Vector& weight_sum = work.weight_sum;
+  Vector& best = work.best;
+  Points& pressing_normal = work.pressing_normal;
+  Points& plain_normal = work.plain_normal;
+  weight_sum.setZero(fingers);
+  best.setConstant(fingers, -1.0);
+  pressing_normal.setZero(fingers, 3);
+  plain_normal.setZero(fingers, 3);
   for (Eigen::Index k = 0; k < m; ++k) {
     const Eigen::Index f = finger[k];
     if (f < 0) continue;
@@ -51,7 +64,6 @@ FingerSums finger_contacts(const Indices& finger, Eigen::Index fingers, const Po
       sums.strongest[f] = -1;
     }
   }
-  return sums;
 }
 
 namespace {
@@ -86,24 +98,30 @@ Eigen::Matrix<double, 6, 7, Eigen::RowMajor> object_regressor(const Eigen::Matri
   return regressor;
 }
 
+Eigen::Matrix3d contact_frame(const Eigen::RowVector3d& normal, double switch_x) {
+  const double length = std::sqrt(normal.dot(normal));
+  const Eigen::RowVector3d unit = normal / length;
+  const Eigen::RowVector3d axis =
+      std::abs(unit.x()) > switch_x ? Eigen::RowVector3d::UnitY() : Eigen::RowVector3d::UnitX();
+  Eigen::RowVector3d t1 = axis - axis.dot(unit) * unit;
+  t1 /= std::sqrt(t1.dot(t1));
+  Eigen::Matrix3d frame;
+  frame.col(0) = t1.transpose();
+  frame.col(2) = unit.transpose();
+  frame(0, 1) = unit.y() * t1.z() - unit.z() * t1.y();
+  frame(1, 1) = unit.z() * t1.x() - unit.x() * t1.z();
+  frame(2, 1) = unit.x() * t1.y() - unit.y() * t1.x();
+  return frame;
+}
+
 Points contact_frames(const Points& normals, double zero_length, double switch_x, Eigen::Index& zero) {
   const Eigen::Index m = normals.rows();
   Points frames(3 * m, 3);
   zero = -1;
   for (Eigen::Index i = 0; i < m; ++i) {
     const Eigen::RowVector3d normal = normals.row(i);
-    const double length = std::sqrt(normal.dot(normal));
-    if (length < zero_length && zero < 0) zero = i;
-    const Eigen::RowVector3d unit = normal / length;
-    const Eigen::RowVector3d axis = std::abs(unit.x()) > switch_x ? Eigen::RowVector3d::UnitY() : Eigen::RowVector3d::UnitX();
-    Eigen::RowVector3d t1 = axis - axis.dot(unit) * unit;
-    t1 /= std::sqrt(t1.dot(t1));
-    auto frame = frames.middleRows<3>(3 * i);
-    frame.col(0) = t1.transpose();
-    frame.col(2) = unit.transpose();
-    frame(0, 1) = unit.y() * t1.z() - unit.z() * t1.y();
-    frame(1, 1) = unit.z() * t1.x() - unit.x() * t1.z();
-    frame(2, 1) = unit.x() * t1.y() - unit.y() * t1.x();
+    if (std::sqrt(normal.dot(normal)) < zero_length && zero < 0) zero = i;
+    frames.middleRows<3>(3 * i) = contact_frame(normal, switch_x);
   }
   return frames;
 }

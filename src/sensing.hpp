@@ -20,10 +20,22 @@ struct FingerSums {
   Indices strongest;    // (F,) row of the contact that presses hardest (the first of equals); -1 when none presses
 };
 
+// Work arrays of finger_contacts, (F,) and (F, 3); kept by a caller that sums every control cycle.
+struct FingerWork {
+  Vector weight_sum, best;
+  Points pressing_normal, plain_normal;
+};
+
+using ConstIndices = Eigen::Ref<const Indices>;
+using ConstPoints = Eigen::Ref<const Points>;
+
 // `finger[k]`: the finger (0 .. fingers - 1) of contact k, or -1 for a contact of no finger; `points`, `normals`
 // (unit, finger -> object) and `forces` (on the object) (m, 3).  Sizes are checked (std::invalid_argument).
-FingerSums finger_contacts(const Indices& finger, Eigen::Index fingers, const Points& points, const Points& normals,
-                           const Points& forces);
+FingerSums finger_contacts(const ConstIndices& finger, Eigen::Index fingers, const ConstPoints& points,
+                           const ConstPoints& normals, const ConstPoints& forces);
+// The same sums into `sums`, with `work` (both allocated only when the number of fingers changes).
+void finger_contacts_into(const ConstIndices& finger, Eigen::Index fingers, const ConstPoints& points,
+                          const ConstPoints& normals, const ConstPoints& forces, FingerSums& sums, FingerWork& work);
 
 // Y_o (6, 7) of bhgrasp.controllers.adaptive_grasp.object_regressor: Y_o sigma_o = M_o a_r + C_o(omega) v_r + N_o
 // at the COM, world, for sigma_o = (m, I_xx, I_xy, I_xz, I_yy, I_yz, I_zz) (body-frame inertia about the COM).
@@ -38,5 +50,7 @@ Eigen::Matrix<double, 6, 7, Eigen::RowMajor> object_regressor(const Eigen::Matri
 // projected on the tangent plane, t2 = n x t1.  `zero` is set to the first normal shorter than `zero_length` (-1:
 // none; its frame is then not finite).
 Points contact_frames(const Points& normals, double zero_length, double switch_x, Eigen::Index& zero);
+// The frame (columns t1, t2, n) of one normal, as a block of contact_frames (not finite for a zero normal).
+Eigen::Matrix3d contact_frame(const Eigen::RowVector3d& normal, double switch_x);
 
 }  // namespace bhgrasp
