@@ -16,6 +16,7 @@
 #include "grasp.hpp"
 #include "recording.hpp"
 #include "sensing.hpp"
+#include "smc_law.hpp"
 #include "workspace.hpp"
 
 namespace nb = nanobind;
@@ -280,4 +281,18 @@ NB_MODULE(_core, m) {
   force_qp.attr("FEASIBLE_RESIDUAL") = ForceQPConstants::feasible_residual;
   force_qp.attr("ADMISSIBLE_TOLERANCE") = ForceQPConstants::admissible_tolerance;
   force_qp.attr("CHECK_ITER") = ForceQPConstants::check_iter;
+  nb::class_<SMCAdaptiveLaw>(m, "SMCAdaptiveLaw")
+      .def(nb::init<GraspKinematics&, HandDynamics&, int>(), "kinematics"_a, "dynamics"_a, "fingers"_a,
+           nb::keep_alive<1, 2>(), nb::keep_alive<1, 3>())
+      .def("configure", &SMCAdaptiveLaw::configure, "rho"_a, "k_o"_a, "object_adaptation"_a, "force_gain"_a,
+           "force_integral"_a, "k_f"_a, "normal_only"_a, "squeeze"_a, "gravity"_a, "initial_estimate"_a, "mu"_a,
+           "pyramid"_a, "inscribed"_a, "min_normal_force"_a, "tolerance"_a, "max_iter"_a, "max_iter_in"_a,
+           "zero_length"_a, "switch_x"_a)
+      .def("reset", &SMCAdaptiveLaw::reset)
+      .def("set_base", &SMCAdaptiveLaw::set_base, "rotation"_a, "translation"_a, "gravity"_a)
+      .def("sense", &SMCAdaptiveLaw::sense, "finger"_a, "joint"_a, "points"_a, "normals"_a, "forces"_a)
+      .def("grasp", &SMCAdaptiveLaw::grasp, "q"_a, "v"_a, "rotation"_a, "translation"_a, "twist"_a, "dt"_a,
+           "target_rotation"_a, "target_translation"_a, "velocity"_a, "acceleration"_a, "out"_a)
+      .def_prop_rw("object_estimate", &SMCAdaptiveLaw::object_estimate, &SMCAdaptiveLaw::set_object_estimate)
+      .def_prop_ro("log_size", &SMCAdaptiveLaw::log_size);
 }
