@@ -21,6 +21,11 @@ q_dot_r = P v_r + J_h^+ (c e_fc + h eta), e_fc = F_dc - F_c the contact force er
 
 with q_dd_r = P a_r + P_dot v_r (the force terms are not differentiated) and, when ``hand_adaptation`` is given,
 sigma_f_dot = -Gamma_f Y_f^T s_f (5.60) over the hand's Pinocchio inertial parameters (10 per body).
+
+Two engines: ``"compiled"`` runs a grasp cycle in one call of ``bhgrasp._core.SMCAdaptiveLaw`` (``src/smc_law.cpp``,
+glued in :mod:`bhgrasp.controllers._smc_law`), ``"python"`` runs the code below (the readable twin;
+``tests/test_smc_law_twin.py`` holds the two equal to round-off).  The compiled law covers ``hand_adaptation=None``
+and ``distribution="qp"`` (either ``force_error``); other options run the Python code.
 """
 
 from __future__ import annotations
@@ -30,8 +35,9 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._native import optional_core
-from bhgrasp._validation import as_positive, as_real
+from bhgrasp._native import optional_core, required_core
+from bhgrasp._validation import as_positive, as_real, as_vector
+from bhgrasp.controllers._smc_law import CompiledSMCLaw
 from bhgrasp.controllers.base import gain_vector
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
 from bhgrasp.controllers.object_space import grasp_maps, pose_gains
@@ -40,6 +46,8 @@ from bhgrasp.hand import Hand
 from bhgrasp.objects import RigidObject
 from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
+
+ENGINES = (None, "compiled", "python")
 
 # Body-frame inertia basis matching sigma_o[1:] = (I_xx, I_xy, I_xz, I_yy, I_yz, I_zz).
 _INERTIA_BASIS = np.zeros((6, 3, 3))
@@ -89,6 +97,10 @@ class SMCAdaptiveGrasp(ObjectGraspController):
     (s_o), ``joint_sliding`` (s_f, zeros without a grasp), ``force_error`` (e_fc per touching finger's contact,
     contact frame, in finger order of the hand; zeros for fingers not touching), ``desired_force`` (F_dc, same
     layout) [N].
+
+    :attr:`engine` says which engine runs (module docstring).  The compiled one reads the gains, ``mu``,
+    ``squeeze``, ``min_normal_force``, ``gravity`` and ``force_error`` when it is built and at every :meth:`reset`
+    (the Python one at every call); ``reference`` is read at every call by both.
     """
 
     def __init__(
@@ -110,6 +122,7 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         approach_torque: float = 0.05,
         gravity: Any = (0.0, 0.0, -9.81),
         distribution: str = "qp",
+        engine: str | None = None,
     ) -> None:
         """Set up the controller.
 
@@ -129,6 +142,13 @@ class SMCAdaptiveGrasp(ObjectGraspController):
                 printed in (5.57)).
             mu, squeeze, min_normal_force, approach_torque, gravity, distribution: As in
                 :class:`~bhgrasp.controllers.grasping.ObjectGraspController`.
+            engine: ``None`` (default): the compiled law when ``bhgrasp._core`` loads and it covers the options
+                (``hand_adaptation=None``, ``distribution="qp"``, no subclass overriding a step of the law), else
+                the Python one; ``"compiled"`` (raises if it does not load or cover them) or ``"python"``.
+
+        Raises:
+            InputError: A bad argument, or ``engine="compiled"`` with options it does not cover.
+            CompiledEngineUnavailable: ``engine="compiled"`` but ``bhgrasp._core`` does not load.
         """
         super().__init__(nominal, reference, mu, squeeze, min_normal_force, approach_torque, gravity, distribution)
         if not isinstance(nominal_object, RigidObject):
@@ -148,10 +168,44 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         self.k_f = gain_vector(k_f, nominal.nv, "k_f")
         self.hand_adaptation = None if hand_adaptation is None else as_positive(hand_adaptation, "hand_adaptation")
         self.force_error = force_error
+        if engine not in ENGINES:
+            raise InputError(f"`engine` must be one of {ENGINES}, got {engine!r}")
+        self._compiled: CompiledSMCLaw | None = None
         self._initial_object = object_parameters(nominal_object.mass, nominal_object.inertia)
         self.object_estimate = self._initial_object.copy()
         self.hand_estimate = nominal.inertial_parameters()
         self._integral: dict[str, np.ndarray] = {}
+        uncovered = self._python_only()
+        if engine == "compiled" and uncovered:
+            raise InputError(f"engine='compiled' does not cover {uncovered}; pass engine='python' (or None)")
+        core = None
+        if engine != "python" and not uncovered:
+            core = required_core("the compiled SMC-adaptive law") if engine == "compiled" else optional_core()
+        if core is not None:
+            self._compiled = CompiledSMCLaw(self, core)
+        self.engine = "python" if self._compiled is None else "compiled"
+
+    def _python_only(self) -> str:
+        """The options the compiled law does not cover ('' if none)."""
+        overridden = [name for name in ("grasp_torques", "distribute", "errors", "target", "touching")
+                      if getattr(type(self), name) is not getattr(SMCAdaptiveGrasp, name)]  # fmt: skip
+        return ", ".join(
+            [f"hand_adaptation={self.hand_adaptation}"] * (self.hand_adaptation is not None)
+            + [f"distribution={self.distribution!r}"] * (self.distribution != "qp")
+            + [f"a subclass overriding {name}" for name in overridden]
+        )
+
+    @property
+    def object_estimate(self) -> np.ndarray:
+        """sigma_o, the object estimate (m [kg], I_xx, I_xy, I_xz, I_yy, I_yz, I_zz [kg m^2], body frame, COM)."""
+        return self._object_estimate if self._compiled is None else self._compiled.kernel.object_estimate
+
+    @object_estimate.setter
+    def object_estimate(self, value: Any) -> None:
+        if self._compiled is None:
+            self._object_estimate = value
+        else:
+            self._compiled.kernel.object_estimate = as_vector(value, "object_estimate", 7)
 
     def reset(self, state: State) -> None:
         """Restart the estimates from the nominal models and clear the force integrals."""
@@ -159,9 +213,13 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         self.object_estimate = self._initial_object.copy()
         self.hand_estimate = self.nominal.inertial_parameters()
         self._integral.clear()
+        if self._compiled is not None:
+            self._compiled.configure(self)  # also resets the compiled law's estimate, integrals and QPs
 
     def __call__(self, t: float, state: State) -> np.ndarray:
         """Joint torques [N m]; before the grasp the base closes the fingers."""
+        if self._compiled is not None:
+            return self._compiled(self, t, state)
         n = len(self.nominal.fingers)
         self.log["joint_sliding"] = np.zeros(self.nominal.nv)
         self.log["force_error"] = self.log["desired_force"] = np.zeros((n, 3))

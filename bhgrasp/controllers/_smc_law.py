@@ -1,0 +1,161 @@
+"""The compiled engine of :class:`~bhgrasp.controllers.adaptive_grasp.SMCAdaptiveGrasp`: one grasp cycle, one call.
+
+``bhgrasp._core.SMCAdaptiveLaw`` (``src/smc_law.cpp``) runs, per grasp cycle, what the Python twin runs in
+:meth:`ObjectGraspController.__call__ <bhgrasp.controllers.grasping.ObjectGraspController.__call__>`,
+:meth:`~bhgrasp.controllers.adaptive_grasp.SMCAdaptiveGrasp.grasp_torques` and
+:meth:`~bhgrasp.controllers.grasping.ObjectGraspController.distribute` once the reference is evaluated: the contacts
+by finger, their frames, P, P_dot, G, J_h, J_h^+, the errors, the object regressor and estimate, the wrench, its QP
+distribution (one warm-started QP per contact count), the force errors and their integrals, and the torques.  This
+module keeps what stays in Python, exactly as the twin does it: the input checks, the approach branch (fewer than two
+touching fingers), the hold pose, the clock and the reference; and it publishes the log.  The log's arrays are views
+of one fresh buffer per call (a recorder may keep them).  ``tests/test_smc_law_twin.py`` holds both engines in
+lockstep.
+"""
+
+from __future__ import annotations
+
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp._validation import as_array, as_vector
+from bhgrasp.errors import InputError
+from bhgrasp.grasp import TANGENT_SWITCH, ZERO_NORMAL, _grasp_map, contact_frames
+from bhgrasp.grasp_dynamics import _hand_index
+from bhgrasp.grasp_dynamics import _kernel as _kinematics_kernel
+from bhgrasp.grasp_forces import solver_arguments
+
+_ROW_CACHE = 256  # contact-body tuples whose finger and joint rows are kept (a run meets a handful)
+
+
+def log_layout(nv: int, fingers: int) -> list[tuple[str, Any]]:
+    """(key, index into the buffer) in the order ``src/smc_law.hpp`` writes them; (F, 3) entries as (start, stop)."""
+    keys = [("tau", nv), ("object_error", 6), ("wrench", 6), ("feasible", 0), ("infeasible_cycles", 0),
+            ("wrench_residual", 0), ("qp_iterations", 0), ("cone_margin", 0), ("commanded_normal", fingers),
+            ("contacts", 0), ("object_sliding", 6), ("joint_sliding", nv), ("force_error", (fingers, 3)),
+            ("desired_force", (fingers, 3)), ("object_parameters", 7)]  # fmt: skip
+    layout, start = [], 0
+    for key, size in keys:
+        if size == 0:  # a 0-d view
+            layout.append((key, (start, Ellipsis)))
+            start += 1
+        else:
+            stop = start + (size[0] * size[1] if isinstance(size, tuple) else size)
+            layout.append((key, (start, stop) if isinstance(size, tuple) else slice(start, stop)))
+            start = stop
+    return layout
+
+
+class CompiledSMCLaw:
+    """The compiled law of one controller, with its caches (contact rows by body names, the hand's base)."""
+
+    def __init__(self, law: Any, core: ModuleType) -> None:
+        """Build ``core.SMCAdaptiveLaw`` on the hand's kernels and configure it from ``law``."""
+        hand = law.nominal
+        self.kernel = core.SMCAdaptiveLaw(_kinematics_kernel(hand), hand._dynamics(), len(hand.fingers))
+        self._finger_of = {link: hand.fingers.index(f) for link, f in law.sensing._finger_of.items()}
+        self._joint_of = _hand_index(hand).joints
+        self._rows: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+        self._base: tuple[Any, Any] | None = None
+        self._held: tuple[Any, np.ndarray, np.ndarray] | None = None  # law._hold and its arrays
+        self._zeros = np.zeros(6)
+        self._zeros.flags.writeable = False
+        nv, fingers = hand.nv, len(hand.fingers)
+        self._size = self.kernel.log_size
+        layout = log_layout(nv, fingers)
+        self._tau = layout[0][1]
+        self._flat = [(key, index) for key, index in layout[1:] if not isinstance(index, tuple) or index[1] is Ellipsis]
+        self._blocks = [(key, slice(*index), (fingers, 3)) for key, index in layout if isinstance(index, tuple)
+                        and index[1] is not Ellipsis]  # fmt: skip
+        self._wrench = dict(layout)["wrench"]
+        parameters = dict(layout)["object_parameters"]
+        self._mass = slice(parameters.start, parameters.start + 1)
+        assert parameters.stop == self._size, "the log layout of src/smc_law.hpp and this module differ"
+        self.configure(law)
+
+    def configure(self, law: Any) -> None:
+        """Copy ``law``'s gains, QP settings and initial estimate into the kernel, and reset it."""
+        arguments = solver_arguments(1, law.mu, min_normal_force=law.min_normal_force)[1:]
+        self.kernel.configure(law.rho, law.k_o, law.object_adaptation, law.force_gain, law.force_integral, law.k_f,
+                              law.force_error == "normal", law.squeeze, law.gravity, law._initial_object, *arguments,
+                              ZERO_NORMAL, TANGENT_SWITCH)  # fmt: skip
+
+    def _index(self, bodies: tuple) -> tuple[np.ndarray, np.ndarray]:
+        """The finger (-1: none) and parent joint of every contact row (ContactSensing's and parent_joints' maps)."""
+        finger_of, joint_of = self._finger_of, self._joint_of
+        rows = (np.array([finger_of.get(link, -1) for link, _ in bodies], dtype=np.int64),
+                np.array([joint_of.get(link, -1) for link, _ in bodies], dtype=np.int64))  # fmt: skip
+        if len(self._rows) >= _ROW_CACHE:
+            self._rows.clear()
+        self._rows[bodies] = rows
+        return rows
+
+    def __call__(self, law: Any, t: float, state: Any) -> np.ndarray:
+        """Joint torques [N m]: ``law.__call__`` (ObjectGraspController's then SMCAdaptiveGrasp's) on the kernel."""
+        hand, log, kernel = law.nominal, law.log, self.kernel
+        q = as_vector(state.q, "state.q", hand.nq)
+        if not state.object_poses:
+            raise InputError(f"{type(law).__name__} needs the object's pose in the state (a scene with an object)")
+        bodies = state.contact_bodies
+        finger, joint = self._rows.get(bodies) or self._index(bodies)
+        touching = kernel.sense(finger, joint, state.contact_points, state.contact_normals, state.contact_forces)
+        if touching < 2:
+            return self._approach(law, q, touching)
+        pose = state.object_poses[0]
+        if law._hold is None:
+            law._hold = pin.SE3(pose)
+        dt = 0.0 if law._time is None else t - law._time
+        if dt < 0.0:
+            raise InputError(f"time went backwards: t = {t} after {law._time}; call reset() to restart")
+        law._time = t
+        if law.reference is None:
+            held = self._held
+            if held is None or held[0] is not law._hold:
+                held = self._held = (law._hold, law._hold.rotation.copy(), law._hold.translation.copy())
+            rotation_d, position_d, velocity, acceleration = held[1], held[2], self._zeros, self._zeros
+        else:
+            sample, velocity, acceleration = law.reference(t)
+            rotation_d, position_d = pin.exp3(sample[3:]), sample[:3]
+        v = as_vector(state.v, "v", hand.nv)  # (Hand.slotine_li_torque's check)
+        placement, gravity = hand._placement, hand._model_gravity
+        if self._base is None or self._base[0] is not placement or self._base[1] is not gravity:
+            kernel.set_base(placement.rotation, placement.translation, gravity)
+            self._base = (placement, gravity)
+        out = np.empty(self._size)
+        status = kernel.grasp(q, v, pose.rotation, pose.translation, state.object_twists[0], dt, rotation_d,
+                              position_d, velocity, acceleration, out)  # fmt: skip
+        if status in (1, 2, 3):
+            self._raise(law, state, status, out)
+        log.update([(key, out[index]) for key, index in self._flat])
+        for key, index, shape in self._blocks:
+            log[key] = out[index].reshape(shape)
+        log["mass_estimate"] = out[self._mass]
+        tau = out[self._tau]
+        if status:
+            raise InputError(f"{type(law).__name__} produced non-finite torques {tau} at t = {t} s")
+        return tau
+
+    def _approach(self, law: Any, q: np.ndarray, touching: int) -> np.ndarray:
+        """Fewer than two touching fingers: SMCAdaptiveGrasp's zero logs, then the base's closing torques."""
+        hand = law.nominal
+        law._hold = None
+        estimate, zeros = self.kernel.object_estimate, np.zeros((len(hand.fingers), 3))
+        law.log.update(joint_sliding=np.zeros(hand.nv), force_error=zeros, desired_force=zeros,
+                       object_sliding=np.zeros(6), object_parameters=estimate, mass_estimate=estimate[:1],
+                       contacts=np.array(float(touching)), commanded_normal=np.zeros(len(hand.fingers)))  # fmt: skip
+        return hand.gravity_torques(q) + law._closing
+
+    def _raise(self, law: Any, state: Any, status: int, out: np.ndarray) -> None:
+        """Raise what the twin's check raises for the kernel's status 1 (normals), 2 (G) or 3 (the wrench)."""
+        contacts = list(law.touching(state).values())
+        normals = np.array([c.normal for c in contacts])
+        if status == 1:
+            contact_frames(normals)  # raises InputError naming the zero or non-finite normal
+        elif status == 2:
+            points, com = np.array([c.point for c in contacts]), state.object_poses[0].translation
+            as_array(_grasp_map(points, contact_frames(normals), com), "grasp_map", (6, 3 * len(contacts)))
+        else:
+            as_vector(out[self._wrench], "wrench", 6)
+        raise InputError(f"{type(law).__name__}: the compiled law found non-finite values (status {status})")
