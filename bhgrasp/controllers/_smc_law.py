@@ -153,8 +153,9 @@ class CompiledSMCLaw:
         normals = np.array([c.normal for c in contacts])
         if status == 1:
             contact_frames(normals)  # raises InputError naming the zero or non-finite normal
-        elif status == 2:
-            points, com = np.array([c.point for c in contacts]), state.object_poses[0].translation
+        elif status == 2:  # GraspContacts.grasp_map's check, then ContactForceQP.solve's
+            com = as_vector(state.object_poses[0].translation, "reference", 3)
+            points = np.array([c.point for c in contacts])
             as_array(_grasp_map(points, contact_frames(normals), com), "grasp_map", (6, 3 * len(contacts)))
         else:
             as_vector(out[self._wrench], "wrench", 6)

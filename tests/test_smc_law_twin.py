@@ -1,0 +1,216 @@
+"""The compiled SMC-adaptive law (``src/smc_law.cpp``) against its Python twin, state by state.
+
+The grasp demo's scene (the Barrett hand lifts and turns a 0.6 kg box, the law told 0.3 kg) is simulated once and
+every sensed state is fed to a compiled and a Python :class:`SMCAdaptiveGrasp`, each with its own internal state
+(estimate, force integrals, QP warm starts, hold pose, clock): bare laws through the approach branch, the grasp
+transition, the hold and a reset; laws under a :class:`GraspSupervisor` through its reset and the moving
+reference; fingers letting go (another contact count, infeasible QPs, lost integrals).  Torques and every log
+entry must agree to 1e-9 relative, to the largest value the entry takes over the run (the wrench's for the wrench
+residual, itself round-off); measured: < 2e-15, NumPy's and Eigen's sums round differently.  Integer-valued
+entries (contacts, QP iterations, feasibility) must be equal.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import bhgrasp
+from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
+from bhgrasp.controllers.supervisor import GraspSupervisor
+from bhgrasp.errors import CompiledEngineUnavailable, InputError
+from bhgrasp.experiments.box_grasp import box_grasp
+from bhgrasp.experiments.grasp_demo import MU_ASSUMED, OFFSET, SQUEEZE
+from bhgrasp.objects import Box
+from bhgrasp.trajectories import PoseMotion
+
+pytest.importorskip("bhgrasp._core")
+
+TOLERANCE = 1e-9
+EXACT = ("contacts", "qp_iterations", "feasible", "infeasible_cycles", "phase", "arrived")
+SCALE_OF = {"wrench_residual": "wrench"}  # |G f - w| is round-off of the QP's solve (<= 4e-10 N): scaled by |w|
+
+
+def smc(setup, engine, **options):
+    """The demo's SMC-adaptive law (told 0.3 kg) on ``engine``."""
+    box = Box(size=setup.box.size, mass=0.3)
+    return SMCAdaptiveGrasp(setup.hand, box, mu=MU_ASSUMED, squeeze=SQUEEZE, engine=engine, **options)
+
+
+@pytest.fixture(scope="module")
+def run():
+    """The demo (3 s): its scene and every (t, state) the controller was given."""
+    setup = box_grasp(mass=0.6)
+    states = []
+    supervisor = GraspSupervisor(setup.hand, setup.q_contact, smc(setup, "compiled"), offset=OFFSET)
+
+    def capture(t, state):
+        states.append((t, state))
+        return supervisor(t, state)
+
+    setup.simulator.run(capture, 3.0, state=setup.state, progress=False)
+    return setup, states
+
+
+def lockstep(compiled, python, states, reset_at=()) -> dict[str, float]:
+    """Feed both controllers every state; per log key (and "tau") the largest |compiled - python| over the run
+    divided by the largest |python| over the run (by the wrench's for the wrench residual; integer-valued entries
+    must be equal)."""
+    difference: dict[str, float] = {}
+    scale: dict[str, float] = {}
+    for k, (t, state) in enumerate(states):
+        if k in reset_at:
+            compiled.reset(state)
+            python.reset(state)
+        pairs = {"tau": (compiled(t, state), python(t, state))}
+        assert compiled.log.keys() == python.log.keys(), (k, set(compiled.log) ^ set(python.log))
+        pairs.update((key, (compiled.log[key], value)) for key, value in python.log.items())
+        for key, (a, b) in pairs.items():
+            a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+            assert a.shape == b.shape, (k, key)
+            if key in EXACT:
+                np.testing.assert_array_equal(a, b, err_msg=f"{key} at call {k}")
+            difference[key] = max(difference.get(key, 0.0), float(np.max(np.abs(a - b), initial=0.0)))
+            scale[key] = max(scale.get(key, 0.0), float(np.max(np.abs(b), initial=0.0)))
+    worst = {key: value / scale[SCALE_OF.get(key, key)] if value else 0.0 for key, value in difference.items()}
+    assert max(worst.values()) <= TOLERANCE, worst
+    return worst
+
+
+def test_the_engines_agree_on_the_demo_with_a_hold_and_a_reset(run):
+    setup, states = run
+    compiled, python = smc(setup, None), smc(setup, "python")
+    assert (compiled.engine, python.engine) == ("compiled", "python")
+    grasped = [k for k, (t, s) in enumerate(states) if sum(c.link is not None for c in python.touching(s).values()) > 1]
+    first = grasped[0]
+    assert 100 < first < 1000 and len(grasped) > 2000  # the approach branch, the transition and a long hold
+    worst = lockstep(compiled, python, states, reset_at=(0, first + 500))
+    print("hold:", {key: f"{error:.1e}" for key, error in worst.items()})
+    assert worst["tau"] > 0.0  # the two really are two computations
+    # holding the first pose while the replayed box moves away drives the mass to its projection's floor
+    assert compiled.log["mass_estimate"][0] == python.log["mass_estimate"][0] == 1e-3
+
+
+def test_the_engines_agree_under_the_supervisor_on_the_moving_reference(run):
+    setup, states = run
+    compiled, python = (GraspSupervisor(setup.hand, setup.q_contact, smc(setup, engine), offset=OFFSET)
+                        for engine in ("compiled", "python"))  # fmt: skip
+    worst = lockstep(compiled, python, states)
+    print("moving:", {key: f"{error:.1e}" for key, error in worst.items()})
+    assert isinstance(compiled.grasp.reference, PoseMotion) and compiled.log["phase"] == 2.0
+    np.testing.assert_allclose(compiled.grasp.object_estimate, python.grasp.object_estimate, rtol=1e-12)
+
+
+def test_the_engines_agree_with_the_full_force_error_and_other_gains(run):
+    setup, states = run
+    options = {"force_error": "full", "k_f": 0.08, "rho": 30.0, "object_adaptation": np.arange(1.0, 8.0)}
+    compiled, python = smc(setup, "compiled", **options), smc(setup, "python", **options)
+    lockstep(compiled, python, states[::3])  # dt of 3 ms
+
+
+def without(state, prefixes):
+    """The state without the contacts of the fingers whose links start with ``prefixes``."""
+    keep = [k for k, (link, _) in enumerate(state.contact_bodies) if not link.startswith(prefixes)]
+    return replace(state, contact_points=state.contact_points[keep], contact_normals=state.contact_normals[keep],
+                   contact_forces=state.contact_forces[keep],
+                   contact_bodies=tuple(state.contact_bodies[k] for k in keep))  # fmt: skip
+
+
+def test_the_engines_agree_when_fingers_let_go_and_touch_again(run):
+    """F3 lets go now and then (two contacts: another QP, F3's integral lost), F2 too (the approach branch)."""
+    setup, states = run
+    stream = []
+    for k, (t, state) in enumerate(states[600:2400]):
+        phase = k % 300
+        if 100 <= phase < 140:
+            state = without(state, ("F3",))
+        elif 200 <= phase < 210:
+            state = without(state, ("F2", "F3"))
+        stream.append((t, state))
+    compiled, python = smc(setup, "compiled"), smc(setup, "python")
+    worst = lockstep(compiled, python, stream)
+    print("let go:", {key: f"{error:.1e}" for key, error in worst.items()})
+    counts = {sum(c.link is not None for c in python.touching(state).values()) for _, state in stream}
+    assert counts >= {1, 2, 3}
+
+
+def test_the_options_the_compiled_law_does_not_cover_run_the_python_code(barrett):
+    box = Box(size=(0.06, 0.05, 0.05), mass=0.3)
+    assert SMCAdaptiveGrasp(barrett, box).engine == "compiled"
+    assert SMCAdaptiveGrasp(barrett, box, hand_adaptation=0.1).engine == "python"
+    assert SMCAdaptiveGrasp(barrett, box, distribution="pinv").engine == "python"
+
+    class Scaled(SMCAdaptiveGrasp):
+        def distribute(self, contacts, wrench):
+            return 2.0 * super().distribute(contacts, wrench)
+
+    assert Scaled(barrett, box).engine == "python"
+    with pytest.raises(InputError, match=r"engine='compiled' does not cover hand_adaptation=0.1, distribution='pinv'"):
+        SMCAdaptiveGrasp(barrett, box, hand_adaptation=0.1, distribution="pinv", engine="compiled")
+    with pytest.raises(InputError, match="a subclass overriding distribute"):
+        Scaled(barrett, box, engine="compiled")
+    with pytest.raises(InputError, match="`engine` must be one of"):
+        SMCAdaptiveGrasp(barrett, box, engine="c++")
+
+
+def test_without_the_core_the_default_is_the_python_law(barrett, monkeypatch):
+    box = Box(size=(0.06, 0.05, 0.05), mass=0.3)
+    monkeypatch.delattr(bhgrasp, "_core")  # the core does not load
+    monkeypatch.setitem(sys.modules, "bhgrasp._core", None)
+    assert SMCAdaptiveGrasp(barrett, box).engine == "python"
+    with pytest.raises(CompiledEngineUnavailable, match="engine='python'"):
+        SMCAdaptiveGrasp(barrett, box, engine="compiled")
+
+
+def opposed(state):
+    """The state with a second contact on F1's strongest link pressing along the opposite normal: a zero mean."""
+    rows = [k for k, (link, _) in enumerate(state.contact_bodies) if link.startswith("F1")]
+    k = max(rows, key=lambda r: state.contact_forces[r] @ state.contact_normals[r])
+    normals = np.vstack((state.contact_normals, -state.contact_normals[k]))
+    forces = np.vstack((state.contact_forces, -state.contact_forces[k]))
+    points = np.vstack((state.contact_points, state.contact_points[k]))
+    keep = [r for r in range(len(normals)) if r not in rows or r == k]
+    bodies = (*state.contact_bodies, state.contact_bodies[k])
+    return replace(state, contact_points=points[keep], contact_normals=normals[keep], contact_forces=forces[keep],
+                   contact_bodies=tuple(bodies[r] for r in keep))  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        lambda s: replace(s, q=s.q[:5]),
+        lambda s: replace(s, q=np.full_like(s.q, np.nan)),
+        lambda s: replace(s, object_poses=()),
+        lambda s: replace(s, v=np.full_like(s.v, np.nan)),
+        lambda s: replace(s, object_twists=np.full_like(s.object_twists, np.nan)),
+        lambda s: replace(s, object_poses=(pin.SE3(s.object_poses[0].rotation, np.full(3, np.nan)),)),
+        opposed,
+    ],
+    ids=["q-shape", "q-nan", "no-object", "v-nan", "twist-nan", "com-nan", "zero-normal"],
+)
+def test_bad_input_raises_the_same_error_on_both_engines(run, bad):
+    setup, states = run
+    t, state = states[-1]
+    messages = []
+    for engine in ("compiled", "python"):
+        law = smc(setup, engine)
+        law.reset(state)
+        law(t - 1e-3, state)
+        with pytest.raises(InputError) as error:
+            law(t, bad(state))
+        messages.append(str(error.value))
+    assert messages[0] == messages[1]
+
+
+def test_time_going_backwards_raises_on_both_engines(run):
+    setup, states = run
+    t, state = states[-1]
+    for engine in ("compiled", "python"):
+        law = smc(setup, engine)
+        law(t, state)
+        with pytest.raises(InputError, match="time went backwards"):
+            law(t - 1e-3, state)
