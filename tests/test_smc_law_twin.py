@@ -12,6 +12,8 @@ entries (contacts, QP iterations, feasibility) must be equal.
 
 from __future__ import annotations
 
+import copy
+import pickle
 import sys
 from dataclasses import replace
 
@@ -155,6 +157,22 @@ def test_the_options_the_compiled_law_does_not_cover_run_the_python_code(barrett
         Scaled(barrett, box, engine="compiled")
     with pytest.raises(InputError, match="`engine` must be one of"):
         SMCAdaptiveGrasp(barrett, box, engine="c++")
+
+
+def test_copies_and_pickles_build_their_own_compiled_law(run):
+    setup, states = run
+    law = smc(setup, "compiled")
+    law.object_estimate = law.object_estimate * 1.5
+    for copied in (copy.deepcopy(law), pickle.loads(pickle.dumps(law))):
+        assert copied.engine == "compiled" and copied._compiled is not law._compiled
+        np.testing.assert_array_equal(copied.object_estimate, law.object_estimate)
+    t, state = states[-1]
+    law(t, state)
+    with pytest.raises(InputError, match="call reset\\(\\) first"):
+        copy.deepcopy(law)
+    law.reset(state)
+    twin = copy.deepcopy(law)
+    np.testing.assert_array_equal(twin(t, state), law(t, state))
 
 
 def test_without_the_core_the_default_is_the_python_law(barrett, monkeypatch):

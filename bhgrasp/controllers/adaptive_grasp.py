@@ -195,6 +195,28 @@ class SMCAdaptiveGrasp(ObjectGraspController):
             + [f"a subclass overriding {name}" for name in overridden]
         )
 
+    def __getstate__(self) -> dict:
+        """Copies and pickles rebuild the compiled law; refused once it has run grasp cycles since :meth:`reset`."""
+        state = self.__dict__.copy()
+        compiled = state["_compiled"]
+        if compiled is not None:
+            if self._time is not None:
+                raise InputError(
+                    "a compiled SMCAdaptiveGrasp that has run grasp cycles cannot be copied or pickled (its force "
+                    "integrals and QP warm starts live in C++): call reset() first, or use engine='python'"
+                )
+            state.update(_compiled=None, _object_estimate=compiled.kernel.object_estimate, _rebuild=True)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        """Restore a copy, building its own compiled law if the original had one."""
+        rebuild = state.pop("_rebuild", False)
+        self.__dict__.update(state)
+        if rebuild:
+            estimate = self._object_estimate
+            self._compiled = CompiledSMCLaw(self, required_core("the compiled SMC-adaptive law"))
+            self.object_estimate = estimate
+
     @property
     def object_estimate(self) -> np.ndarray:
         """sigma_o, the object estimate (m [kg], I_xx, I_xy, I_xz, I_yy, I_yz, I_zz [kg m^2], body frame, COM)."""
