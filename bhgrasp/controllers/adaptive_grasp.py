@@ -219,7 +219,10 @@ class SMCAdaptiveGrasp(ObjectGraspController):
 
     @property
     def object_estimate(self) -> np.ndarray:
-        """sigma_o, the object estimate (m [kg], I_xx, I_xy, I_xz, I_yy, I_yz, I_zz [kg m^2], body frame, COM)."""
+        """sigma_o = (m [kg], I_xx, I_xy, I_xz, I_yy, I_yz, I_zz [kg m^2], body frame, COM), the object estimate.
+
+        On the compiled engine a copy (the estimate lives in C++): assign the whole vector to change it.
+        """
         return self._object_estimate if self._compiled is None else self._compiled.kernel.object_estimate
 
     @object_estimate.setter
