@@ -90,9 +90,13 @@ def test_unread_fields_are_not_built(engine: str) -> None:
     simulator = engine_twin(hold.simulator, engine)
     state, _ = simulator.step(hold.state, hold.controller(hold.state.t, hold.state))
     assert isinstance(state, SimulatedState)
-    for name in DERIVED_FIELDS:
+    for name in DERIVED_FIELDS - {"q", "v"}:
         with pytest.raises(AttributeError):
             object.__getattribute__(state, name)  # the slot is empty until the field is read
+    for hand, scene in ((state.q, state.scene_q), (state.v, state.scene_v)):  # the hand's: views of the scene's
+        assert np.shares_memory(hand, scene) and np.array_equal(hand, scene[: len(hand)])
+        with pytest.raises(ValueError, match="read-only"):
+            hand[0] = 1.0  # the next step starts from scene_q: nobody may change it
     poses = state.object_poses
     assert object.__getattribute__(state, "object_poses") is poses  # built once, then kept
     assert object.__getattribute__(state, "object_twists") is state.object_twists  # built with the poses

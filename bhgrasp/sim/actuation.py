@@ -40,6 +40,9 @@ from bhgrasp.transmission import DirectDrive, Transmission, per_joint
 class Actuation(ABC):
     """Base of the actuation models: a drive (:attr:`drive`) simulated with saturation, friction and modes."""
 
+    saturate: bool = False  # whether inputs are clipped to their limits
+    motor_damping: float | None = None  # [N m s/rad] at the motor shafts, for drives with motors
+
     def __init__(self, drive: Transmission, friction: float | Sequence[float] = 0.0):
         """Simulate ``drive``.
 
@@ -51,11 +54,12 @@ class Actuation(ABC):
         self.hand = drive.hand
         self.damping = drive.passive_damping
         self.friction = per_joint(friction, drive.hand.nv, "friction")
+        self._inputs = drive.n_inputs  # read at every step: a drive's input count is fixed
 
     @property
     def n_inputs(self) -> int:
         """Number of control inputs."""
-        return self.drive.n_inputs
+        return self._inputs
 
     def transmission(self) -> np.ndarray:
         """``T`` (nv_hand, n_driven): hand velocities = ``T @`` driven velocities, in the current mode."""
@@ -77,7 +81,7 @@ class Actuation(ABC):
         """After each step: ``drive_torques`` are the joint torques the drive delivered (inputs + reactions)."""
 
     def modes(self) -> np.ndarray:
-        """Numeric mode flags to record (e.g. TorqueSwitch broken per finger); empty if none."""
+        """Numeric mode flags to record (e.g. TorqueSwitch broken per finger); empty if none (a fresh array)."""
         return np.zeros(0)
 
     def _modes(self) -> np.ndarray | None:

@@ -162,6 +162,10 @@ class Simulator:
         self.engine = ContactEngine(scene, self.law)
         self.model, self.data = scene.model, scene.data
         self._nvh = scene.nv_hand
+        self._hand_sizes = (scene.nq_hand, scene.nv_hand)
+        kind = type(self.actuation)  # an actuation without modes needs no restore or update around each step
+        self._modal = not (kind.restore is Actuation.restore and kind.reset is Actuation.reset
+                           and kind.update is Actuation.update)  # fmt: skip
         self._lower, self._upper = scene.hand.lower, scene.hand.upper
         self._object_identity = np.eye(scene.nv - self._nvh)
         self._lower_triangle = np.tril_indices(scene.nv, -1)
@@ -192,7 +196,8 @@ class Simulator:
 
     def _state(self, t: float, q: np.ndarray, v: np.ndarray, contacts: Any, memory: Any) -> SimulatedState:
         """The state at ``t``: ``contacts`` and ``memory`` as the engine made them (converted when first read)."""
-        return SimulatedState.lazy(t, q, v, self.actuation.modes().copy(), _StepOutput(self, contacts, memory))
+        return SimulatedState.lazy(t, q, v, self.actuation.modes(), _StepOutput(self, contacts, memory),
+                                   self._hand_sizes)  # fmt: skip
 
     def _objects(self, q: np.ndarray, v: np.ndarray) -> tuple[tuple[pin.SE3, ...], np.ndarray]:
         """Object poses (COM frames, world) and twists (n_objects, 6) (COM velocity, angular velocity; world)."""
@@ -234,7 +239,8 @@ class Simulator:
         q, v = state.scene_q, state.scene_v
         # The step depends only on the state: its contact memory and actuation modes, not the last run's.
         memory = self._memory(state)
-        self.actuation.restore(state.actuation_modes, q[: self.scene.nq_hand])
+        if self._modal:
+            self.actuation.restore(state.actuation_modes, q[: self.scene.nq_hand])
         tau_hand = self.actuation.joint_torques(u)
         if disturbance is not None:
             tau_hand = tau_hand + disturbance
@@ -251,7 +257,8 @@ class Simulator:
         t = round(state.t / self.dt + 1) * self.dt  # k dt exactly: no accumulated rounding
         if divergence is None or divergence.kind:  # the compiled step checked the same conditions
             self._check(t, q_next, v_next, contacts)
-        self.actuation.update(q_next[: self.scene.nq_hand], v_next[: self._nvh], u, drive)
+        if self._modal:
+            self.actuation.update(q_next[: self.scene.nq_hand], v_next[: self._nvh], u, drive)
         return self._state(t, q_next, v_next, contacts, memory), StepInfo(contacts, drive)
 
     def _implicit_gyroscopic(self, v: np.ndarray, bias: np.ndarray) -> None:

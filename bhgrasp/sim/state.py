@@ -67,8 +67,9 @@ class SimulatedState(State):
     """A :class:`State` a simulator stepped to: the fields in :data:`DERIVED_FIELDS` are built when first read.
 
     A step keeps the scene's ``q``, ``v``, its contacts and contact memory as the engine returned them (the compiled
-    engine's arrays stay in C++ objects); the hand's ``q`` and ``v``, the object poses and twists, the contact arrays
-    and body names and the :class:`~bhgrasp.sim.contact.ContactMemory` are made from them on first access and kept.
+    engine's arrays stay in C++ objects); a simulator's step sets the hand's ``q`` and ``v`` as read-only views of
+    the scene's; the object poses and twists, the contact arrays and body names and the
+    :class:`~bhgrasp.sim.contact.ContactMemory` are made from them on first access and kept.
     Reading a field gives the same value as an eagerly built :class:`State` would hold; ``dataclasses.replace``
     and pickling build every field first.
     """
@@ -88,19 +89,35 @@ class SimulatedState(State):
         return object.__getattribute__(self, name)
 
     @classmethod
-    def lazy(cls, t: float, scene_q: np.ndarray, scene_v: np.ndarray, modes: np.ndarray, source: Any) -> SimulatedState:
+    def lazy(
+        cls,
+        t: float,
+        scene_q: np.ndarray,
+        scene_v: np.ndarray,
+        modes: np.ndarray,
+        source: Any,
+        hand_sizes: tuple[int, int] | None = None,
+    ) -> SimulatedState:
         """A state with its time, scene ``q``, ``v`` and actuation modes, the rest built by ``source.derive``.
+
+        With ``hand_sizes`` = (nq_hand, nv_hand) the hand's ``q`` and ``v`` are set at once as read-only views of
+        the scene's arrays (which no one changes after the step that made them); otherwise they are derived too.
 
         ``source.derive(name, state)`` returns a dict of derived fields that includes ``name`` (it may add others
         it computed on the way, e.g. twists with poses).
         """
         state = object.__new__(cls)
-        set_t, set_q, set_v, set_modes, set_source = _SETTERS
+        set_t, set_scene_q, set_scene_v, set_modes, set_source, set_q, set_v = _SETTERS
         set_t(state, t)
-        set_q(state, scene_q)
-        set_v(state, scene_v)
+        set_scene_q(state, scene_q)
+        set_scene_v(state, scene_v)
         set_modes(state, modes)
         set_source(state, source)
+        if hand_sizes is not None:  # the hand's q and v: read-only views of the scene's (built for every state)
+            q, v = scene_q[: hand_sizes[0]], scene_v[: hand_sizes[1]]
+            q.flags.writeable = v.flags.writeable = False
+            set_q(state, q)
+            set_v(state, v)
         return state
 
 
@@ -108,7 +125,7 @@ class SimulatedState(State):
 _SETTERS = tuple(
     owner.__dict__[name].__set__
     for owner, name in ((State, "t"), (State, "scene_q"), (State, "scene_v"), (State, "actuation_modes"),
-                        (SimulatedState, "_source"))
+                        (SimulatedState, "_source"), (State, "q"), (State, "v"))
 )  # fmt: skip
 
 
