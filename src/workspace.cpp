@@ -1,9 +1,13 @@
-// The finger terms kernel: see workspace.hpp.  compute() mirrors _finger_terms_python in
-// bhgrasp/controllers/workspace.py: the same Pinocchio algorithms, called as the Python API calls them.
+// The finger kernels: see workspace.hpp.  compute() mirrors _finger_terms_python in bhgrasp/controllers/workspace.py
+// (the same Pinocchio algorithms, called as the Python API calls them), workspace() _workspace_dynamics and
+// fingertip_torque() _fingertip_torque (the same maths, line for line).
 #include "workspace.hpp"
 
 #include <algorithm>
 #include <stdexcept>
+
+#include <Eigen/LU>
+#include <Eigen/SVD>
 
 #include <pinocchio/algorithm/crba.hpp>
 #include <pinocchio/algorithm/frames.hpp>
@@ -35,6 +39,7 @@ FingerDynamics::FingerDynamics(const std::string& model, const std::vector<int>&
   gravity_torque_.resize(model_.nv);
   frame_jacobian_.resize(6, model_.nv);
   terms_.resize(frames_.size());
+  workspace_.resize(frames_.size());
   for (std::size_t f = 0; f < frames_.size(); ++f) {
     const auto n = static_cast<Eigen::Index>(indices_[f].size());
     terms_[f].positions.resize(static_cast<Eigen::Index>(frames_.size()), 3);
@@ -42,6 +47,7 @@ FingerDynamics::FingerDynamics(const std::string& model, const std::vector<int>&
     terms_[f].mass.resize(n, n);
     terms_[f].gravity.resize(n);
     terms_[f].velocity.resize(n);
+    workspace_[f].jacobian.resize(3, model_.nv);
   }
 }
 
@@ -85,6 +91,71 @@ const FingerTerms& FingerDynamics::compute(int finger, const Eigen::Vector3d& gr
   pinocchio::forwardKinematics(model_, data_, Ref(q), Ref(v), Ref(zero_));
   out.bias = pinocchio::getFrameClassicalAcceleration(model_, data_, frame, pinocchio::LOCAL_WORLD_ALIGNED).linear();
   return out;
+}
+
+const WorkspaceTerms& FingerDynamics::workspace(int finger, const Eigen::Vector3d& gravity,
+                                                const RowMatrix3& rotation, const Eigen::Vector3d& translation,
+                                                const ConstVector& q, const ConstVector& v) {
+  const FingerTerms& terms = compute(finger, gravity, q, v);  // checks the finger number and the sizes
+  const std::vector<Eigen::Index>& index = indices_[static_cast<std::size_t>(finger)];
+  const auto n = static_cast<Eigen::Index>(index.size());
+  if (n > 3) throw std::invalid_argument("FingerDynamics.workspace: a finger of at most 3 joints (J_t square)");
+  WorkspaceTerms& out = workspace_[static_cast<std::size_t>(finger)];
+
+  // _finger_terms: to the world frame, x_world = R x + p (the hand's products)
+  out.position = terms.positions.row(finger).transpose();
+  Eigen::Vector3d bias = terms.bias;
+  if (rotation.isIdentity(0.0) && translation.isZero(0.0)) {
+    out.jacobian = terms.jacobian;
+  } else {
+    out.position = (rotation * out.position + translation).eval();
+    out.jacobian.noalias() = rotation * terms.jacobian;
+    bias = rotation * terms.bias;
+  }
+
+  // _workspace_dynamics: B from the SVD of J_f (signs made unique), J_t = B^T J_f, then (2.35)-(2.37)
+  Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, 3> jacobian(3, n);
+  for (Eigen::Index k = 0; k < n; ++k) jacobian.col(k) = out.jacobian.col(index[k]);
+  const Eigen::JacobiSVD<decltype(jacobian)> svd(jacobian, Eigen::ComputeFullU);
+  const auto& singular = svd.singularValues();
+  out.singular = singular(n - 1) < 1e-6 * std::max(singular(0), 1e-12);
+  if (out.singular) return out;
+  out.basis = svd.matrixU().leftCols(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    Eigen::Index largest = 0;
+    out.basis.col(j).cwiseAbs().maxCoeff(&largest);
+    if (out.basis(largest, j) < 0.0) out.basis.col(j) *= -1.0;
+  }
+  out.task_jacobian.noalias() = out.basis.transpose() * jacobian;
+  const TaskMatrix inverse = out.task_jacobian.inverse();
+  const TaskMatrix mass_f = terms.mass;
+  const TaskMatrix mass_x = inverse.transpose() * mass_f * inverse;
+  const TaskVector velocity_f = terms.velocity, gravity_f = terms.gravity;
+  const TaskVector bias_t = out.basis.transpose() * bias;
+  out.coriolis = inverse.transpose() * velocity_f - mass_x * bias_t;
+  out.mass = 0.5 * (mass_x + mass_x.transpose());
+  out.gravity = inverse.transpose() * gravity_f;
+  return out;
+}
+
+TaskVector fingertip_torque(const ConstRowMatrix& basis, const ConstRowMatrix& task_jacobian,
+                            const ConstRowMatrix& mass, const ConstVectorRef& coriolis, const ConstVectorRef& gravity,
+                            const Eigen::Vector3d& position, const ConstVectorRef& velocity, const Eigen::Vector3d& x_d,
+                            const Eigen::Vector3d& xd_d, const Eigen::Vector3d& xdd_d, const RowMatrix3& kp,
+                            const RowMatrix3& kv) {
+  const Eigen::Index r = basis.cols(), n = task_jacobian.cols();
+  if (basis.rows() != 3 || r < 1 || r > 3 || n > 3 || task_jacobian.rows() != r || mass.rows() != r ||
+      mass.cols() != r || coriolis.size() != r || gravity.size() != r || velocity.size() != n)
+    throw std::invalid_argument(
+        "fingertip_torque: basis (3, r), task_jacobian (r, n_f), mass (r, r), coriolis and gravity (r,), velocity "
+        "(n_f,), with r, n_f <= 3");
+  const TaskMatrix b = basis, jacobian = task_jacobian, mass_x = mass;
+  const TaskVector velocity_f = velocity, coriolis_x = coriolis, gravity_x = gravity;
+  const Eigen::Vector3d error = position - x_d;
+  const TaskVector error_dot = jacobian * velocity_f - b.transpose() * xd_d;  // task coordinates: J_t q_dot_f = B^T x_dot
+  const TaskMatrix kp_t = b.transpose() * kp * b, kv_t = b.transpose() * kv * b;
+  const TaskVector command = b.transpose() * xdd_d - kv_t * error_dot - kp_t * (b.transpose() * error);
+  return jacobian.transpose() * (mass_x * command + coriolis_x + gravity_x);
 }
 
 }  // namespace bhgrasp

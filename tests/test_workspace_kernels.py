@@ -1,10 +1,11 @@
-"""The compiled finger terms (src/workspace.cpp: FingerDynamics) against their Python twin.
+"""The compiled finger kernels (src/workspace.cpp: FingerDynamics) against their Python twins.
 
-Truths: the twin (bhgrasp.controllers.workspace._finger_terms_python: the hand's methods, Pinocchio's Python API),
-equal to the bit, so that the workspace dynamics and the fingertip computed torque built on them, whose small linear
-algebra stays in NumPy, give the same torques with and without the compiled core; and the identities the workspace
-dynamics must satisfy: M_x = (J_t M_f^-1 J_t^T)^-1 for the square task Jacobian, B orthonormal with J_f = B J_t
-(to 1e-12 relative, on configurations with cond(J_t) < 100; tests/test_controllers.py checks the RNEA identity).
+Truths: the twins in bhgrasp.controllers.workspace: _finger_terms_python (the hand's methods, Pinocchio's Python API;
+equal to the bit), _workspace_dynamics and _fingertip_torque (NumPy's SVD, inverse and products: equal to round-off,
+1e-12 relative, on configurations with cond(J_t) < 100), so that the controllers built on them give the same torques,
+to round-off, with and without the compiled core; and the identities the workspace dynamics must satisfy: M_x =
+(J_t M_f^-1 J_t^T)^-1 for the square task Jacobian, B orthonormal with J_f = B J_t (tests/test_controllers.py checks
+the RNEA identity).
 """
 
 from __future__ import annotations
@@ -20,7 +21,14 @@ import bhgrasp as bh
 from bhgrasp._native import optional_core
 from bhgrasp.controllers import WorkspaceComputedTorque, workspace_dynamics
 from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
-from bhgrasp.controllers.workspace import _finger_terms, _finger_terms_python, _kernel
+from bhgrasp.controllers.workspace import (
+    _finger_terms,
+    _finger_terms_python,
+    _fingertip_torque,
+    _kernel,
+    _workspace,
+    _workspace_dynamics,
+)
 from bhgrasp.errors import InputError
 from bhgrasp.experiments import chapter4
 from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
@@ -93,7 +101,47 @@ def test_the_workspace_mass_is_the_inverse_of_the_projected_inverse_mass(hand: b
 
 
 @pytest.mark.parametrize("hand", HANDS, ids=IDS)
-def test_workspace_dynamics_with_and_without_the_kernel_are_equal_to_the_bit(
+def test_the_workspace_terms_are_the_python_twin_to_round_off(hand: bh.Hand) -> None:
+    """FingerDynamics.workspace (Eigen's SVD, inverse and products) is _workspace_dynamics (NumPy's), field by field."""
+    rng = np.random.default_rng(2)
+    names = (*FIELDS, "position", "fingertip Jacobian")
+    for _ in range(100):
+        q, v, finger = well_conditioned(hand, rng)
+        index, number = hand.finger_indices(finger), hand.fingers.index(finger)
+        compiled = _workspace(hand, q, v, finger, index, number, _kernel(hand))
+        python = _workspace_dynamics(hand, q, v, finger, index, number)
+        for name, got, expected in zip(names, compiled, python, strict=True):
+            assert got.shape == expected.shape, name
+            assert_close(got, expected, name)
+
+
+@pytest.mark.parametrize("hand", HANDS, ids=IDS)
+def test_the_fingertip_torque_is_the_python_twin_to_round_off(hand: bh.Hand) -> None:
+    """FingerDynamics.fingertip_torque is _fingertip_torque for random references and SPD gains."""
+    rng = np.random.default_rng(3)
+    for _ in range(100):
+        q, v, finger = well_conditioned(hand, rng)
+        index, number = hand.finger_indices(finger), hand.fingers.index(finger)
+        terms = _workspace(hand, q, v, finger, index, number, _kernel(hand))
+        root = rng.normal(size=(2, 3, 3))
+        kp, kv = (r @ r.T + np.eye(3) for r in root)
+        x_d, xd_d, xdd_d = terms[5] + 0.01 * rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
+        args = (*terms[:6], v[index], x_d, xd_d, xdd_d, kp, kv)
+        assert_close(_kernel(hand).fingertip_torque(*args), _fingertip_torque(*args), "tau_f")
+
+
+def test_the_kernel_checks_the_torque_sizes() -> None:
+    hand = bh.BarrettHand()
+    q, v = hand.configuration(F3_proximal=0.6, F3_distal=0.4), np.zeros(hand.nv)
+    terms = _workspace(hand, q, v, "F3", hand.finger_indices("F3"), 2, _kernel(hand))
+    reference, gains = (np.zeros(3),) * 3, (np.eye(3),) * 2
+    for wrong in (np.zeros(3), np.zeros(1)):  # joint velocities of another size than the finger's 2
+        with pytest.raises(ValueError, match=r"fingertip_torque: basis \(3, r\), task_jacobian \(r, n_f\)"):
+            _kernel(hand).fingertip_torque(*terms[:6], wrong, *reference, *gains)
+
+
+@pytest.mark.parametrize("hand", HANDS, ids=IDS)
+def test_workspace_dynamics_with_and_without_the_kernel_agree_to_round_off(
     hand: bh.Hand, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     rng = np.random.default_rng(2)
@@ -103,7 +151,7 @@ def test_workspace_dynamics_with_and_without_the_kernel_are_equal_to_the_bit(
     for case, got in zip(cases, compiled, strict=True):
         expected = workspace_dynamics(hand, *case)
         for name in FIELDS:
-            np.testing.assert_array_equal(getattr(got, name), getattr(expected, name), err_msg=name)
+            assert_close(getattr(got, name), getattr(expected, name), name)
 
 
 def test_the_controller_gives_the_same_torques_without_the_kernel(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -117,26 +165,37 @@ def test_the_controller_gives_the_same_torques_without_the_kernel(monkeypatch: p
     no_kernel(monkeypatch)
     controller.reset(states[0])
     for state, (tau, log) in zip(states, compiled, strict=True):
-        np.testing.assert_array_equal(controller(state.t, state), tau)
+        assert_close(controller(state.t, state), tau, "tau")
         for key, value in controller.log.items():
-            np.testing.assert_array_equal(log[key], value, err_msg=key)
+            assert_close(log[key], value, key)
 
 
 def test_the_impedance_controller_gives_the_same_torques_without_the_kernel(monkeypatch: pytest.MonkeyPatch) -> None:
+    """In lockstep: the Python twin, fed the states of the compiled controller's run, gives its torques and logs."""
     setup = chapter4._cached_f3_setup(chapter4.TUNING_SPRING)
-    runs = []
-    for patch in (False, True):
-        if patch:
-            no_kernel(monkeypatch)
+
+    def controller() -> ImpedanceController:
         law = ForceImpedance(Constant(setup.tip0), setup.normal, 6.0, setup.surface_point(), setup.k_e, mass=0.01,
                              stiffness=100.0, period=chapter4.DT)  # fmt: skip
-        controller = ImpedanceController(setup.hand, {"F3": law}, *chapter4.F3_GAINS)
-        runs.append(chapter4.run(setup, controller, 0.5))  # contact at ~0.36 s
-    np.testing.assert_array_equal(runs[0].q, runs[1].q)
-    np.testing.assert_array_equal(runs[0].tau, runs[1].tau)
-    for key, values in runs[0].log.items():
-        np.testing.assert_array_equal(values, runs[1].log[key], err_msg=key)
-    assert runs[0].contact_count().max() > 0
+        return ImpedanceController(setup.hand, {"F3": law}, *chapter4.F3_GAINS)
+
+    compiled, steps = controller(), []
+
+    def recording(t: float, state: bh.State) -> np.ndarray:
+        tau = compiled(t, state)
+        steps.append((t, state, tau, {key: np.array(value) for key, value in compiled.log.items()}))
+        return tau
+
+    recording.reset = compiled.reset  # type: ignore[attr-defined]
+    traj = chapter4.run(setup, recording, 0.5)  # contact at ~0.36 s
+    assert traj.contact_count().max() > 0
+    no_kernel(monkeypatch)
+    python = controller()
+    python.reset(steps[0][1])
+    for t, state, tau, log in steps:
+        assert_close(python(t, state), tau, f"tau at t = {t}")
+        for key, value in python.log.items():
+            assert_close(np.asarray(value, dtype=float), log[key], f"{key} at t = {t}")
 
 
 @pytest.mark.parametrize("with_kernel", [True, False])

@@ -34,7 +34,7 @@ import numpy as np
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter, critical_damping
-from bhgrasp.controllers.workspace import WorkspaceComputedTorque, _finger_terms
+from bhgrasp.controllers.workspace import WorkspaceComputedTorque
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.sensing import ContactSensing, FingerContact
@@ -343,7 +343,6 @@ class ImpedanceController(Controller):
         self.laws = dict(laws)
         self._commands = {finger: _Commanded() for finger in self.laws}
         self.inner = WorkspaceComputedTorque(nominal, self._commands, kp=kp, kv=kv)
-        self._numbers = {finger: nominal.fingers.index(finger) for finger in self.laws}
         self.sensing = ContactSensing(nominal)
         self.feedforward = bool(feedforward)
         self.log_reaction_torque = bool(log_reaction_torque)
@@ -366,13 +365,13 @@ class ImpedanceController(Controller):
         self._time = t
         hand = self.nominal
         q, v = as_vector(state.q, "state.q", hand.nq), as_vector(state.v, "state.v", hand.nv)
-        terms = {finger: _finger_terms(hand, q, v, finger, number) for finger, number in self._numbers.items()}
+        terms = self.inner._workspaces(q, v)
         contacts = self.sensing.fingers(state)
         extra = np.zeros(hand.nv)
         for finger, law in self.laws.items():
             contact = contacts[finger]
-            positions, jacobian = terms[finger][:2]  # every fingertip [m], the finger's tip Jacobian (world)
-            sample = law.command(t, positions[self._numbers[finger]], contact, dt)
+            position, jacobian = terms[finger][5:]  # the fingertip [m] and its Jacobian (world)
+            sample = law.command(t, position, contact, dt)
             self._commands[finger].sample = sample
             if self.feedforward:
                 force = np.asarray(law.feedforward(contact))

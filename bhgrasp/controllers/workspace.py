@@ -10,10 +10,10 @@ fewer joints than 3 (the Barrett F3: proximal and distal only) moves its tip in 
 tip position within the column space of J (an orthonormal basis B, J_t = B^T J), and the reference must lie in
 that plane.  Joints outside the controlled fingers are held by joint-space computed torque.
 
-The joint-space terms (tip positions, J, M_f, G_f, C q_dot, J_dot q_dot) come from one call of a compiled kernel
-(``src/workspace.cpp``) equal to the bit to the hand's methods; the small linear algebra that turns them into M_x,
-C_x, G_x and torques stays in NumPy (LAPACK's SVD and inverse, BLAS products), so that the controllers compute
-exactly what they computed without the kernel: CMA-ES tuning ranks candidates by the last bits of their fitness.
+The whole chain (the joint-space terms tip position, J, M_f, G_f, C q_dot, J_dot q_dot; the SVD, inverse and products
+that turn them into B, J_t, M_x, C_x, G_x; the computed torque) runs in a compiled kernel (``src/workspace.cpp``)
+when ``bhgrasp._core`` loads.  Its Python twins are :func:`_finger_terms_python` (equal to the bit),
+:func:`_workspace_dynamics` and :func:`_fingertip_torque` (NumPy: equal to round-off, tests/test_workspace_kernels.py).
 """
 
 from __future__ import annotations
@@ -61,32 +61,74 @@ def workspace_dynamics(hand: Hand, q: Any, v: Any, finger: str) -> WorkspaceDyna
     """
     q, v = as_vector(q, "q", hand.nq), as_vector(v, "v", hand.nv)
     index = hand.finger_indices(finger)
-    return WorkspaceDynamics(*_workspace_dynamics(hand, q, v, finger, index, hand.fingers.index(finger))[:5])
+    return WorkspaceDynamics(*_workspace(hand, q, v, finger, index, hand.fingers.index(finger), _kernel(hand))[:5])
+
+
+Workspace = tuple[np.ndarray, ...]  # basis, J_t, M_x, C_x x_dot, G_x, then the fingertip [m] and its Jacobian (3, nv)
+
+
+def _workspace(hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, index: np.ndarray, number: int,
+               kernel: Any) -> Workspace:  # fmt: skip
+    """:func:`workspace_dynamics`'s fields, then the fingertip position [m] and Jacobian (3, nv), world frame.
+
+    For validated ``q``, ``v``; ``index`` are the finger's joint indices, ``number`` its place in ``hand.fingers``,
+    ``kernel`` the hand's :func:`_kernel`: its ``workspace`` for a finger of at most 3 joints, else
+    :func:`_workspace_dynamics` (its twin).
+    """
+    if kernel is None or len(index) > 3:
+        return _workspace_dynamics(hand, q, v, finger, index, number)
+    placement = hand.base_placement
+    singular, *terms = kernel.workspace(number, hand.model.gravity.linear, placement.rotation, placement.translation,
+                                        q, v)  # fmt: skip
+    if singular:
+        raise _singular(finger, q[index], len(index))
+    return tuple(terms)
+
+
+def _singular(finger: str, angles: np.ndarray, rank: int) -> InputError:
+    return InputError(f"finger {finger!r} is at a singular configuration q = {angles} (J has rank < {rank})")
 
 
 def _workspace_dynamics(
-    hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, index: np.ndarray, number: int, terms: Terms | None = None
-) -> tuple[np.ndarray, ...]:
-    """:func:`workspace_dynamics`'s fields, then the fingertip position [m], for validated ``q``, ``v``.
+    hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, index: np.ndarray, number: int
+) -> Workspace:
+    """:func:`_workspace` in NumPy: the twin of the compiled ``FingerDynamics.workspace``.
 
-    ``index`` are the finger's joint indices, ``number`` its place in ``hand.fingers`` and ``terms`` its
-    :func:`_finger_terms` at (q, v) if the caller has them.
+    B spans the column space of J_f (left singular vectors), each column's largest entry made positive (a sign that
+    changes nothing but makes B unique).
     """
-    if terms is None:
-        terms = _finger_terms(hand, q, v, finger, number)
-    positions, jacobian, mass_f, gravity_f, velocity_f, bias = terms
-    jacobian = jacobian[:, index]
+    positions, jacobian_all, mass_f, gravity_f, velocity_f, bias = _finger_terms(hand, q, v, finger, number)
+    jacobian = jacobian_all[:, index]
     u, singular, _ = np.linalg.svd(jacobian)
     rank = min(3, len(index))
     if singular[rank - 1] < 1e-6 * max(singular[0], 1e-12):
-        raise InputError(f"finger {finger!r} is at a singular configuration q = {q[index]} (J has rank < {rank})")
+        raise _singular(finger, q[index], rank)
     basis = u[:, :rank]
+    basis = basis * np.sign(basis[np.abs(basis).argmax(axis=0), np.arange(rank)])
     task_jacobian = basis.T @ jacobian
     inverse = np.linalg.inv(task_jacobian)
     mass_x = inverse.T @ mass_f @ inverse
     bias = basis.T @ bias
     coriolis_x = inverse.T @ velocity_f - mass_x @ bias
-    return basis, task_jacobian, 0.5 * (mass_x + mass_x.T), coriolis_x, inverse.T @ gravity_f, positions[number]
+    return (basis, task_jacobian, 0.5 * (mass_x + mass_x.T), coriolis_x, inverse.T @ gravity_f, positions[number],
+            jacobian_all)  # fmt: skip
+
+
+def _fingertip_torque(
+    basis: np.ndarray, task_jacobian: np.ndarray, mass: np.ndarray, coriolis: np.ndarray, gravity: np.ndarray,
+    position: np.ndarray, velocity: np.ndarray, x_d: np.ndarray, xd_d: np.ndarray, xdd_d: np.ndarray,
+    kp: np.ndarray, kv: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """tau_f [N m] of the fingertip computed torque (module docstring) from a finger's workspace terms.
+
+    ``velocity``: the finger's joint velocities q_dot_f; ``x_d``, ``xd_d``, ``xdd_d``: the reference [m], [m/s],
+    [m/s^2]; ``kp``, ``kv``: the (3, 3) Cartesian gains.  The twin of the compiled ``FingerDynamics.fingertip_torque``.
+    """
+    error = position - x_d
+    error_dot = task_jacobian @ velocity - basis.T @ xd_d  # task coordinates: J_t q_dot_f = B^T x_dot
+    kp_t, kv_t = basis.T @ kp @ basis, basis.T @ kv @ basis
+    command = basis.T @ xdd_d - kv_t @ error_dot - kp_t @ (basis.T @ error)
+    return task_jacobian.T @ (mass @ command + coriolis + gravity)
 
 
 Terms = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
@@ -203,30 +245,32 @@ class WorkspaceComputedTorque(Controller):
         q, v = as_vector(state.q, "state.q", hand.nq), as_vector(state.v, "state.v", hand.nv)
         return self._control(t, state, q, v)
 
+    def _workspaces(self, q: np.ndarray, v: np.ndarray) -> dict[str, Workspace]:
+        """Every controlled finger's :func:`_workspace` at validated (q, v): the fingertip, Jacobian and dynamics."""
+        hand, kernel = self.nominal, _kernel(self.nominal)
+        return {finger: _workspace(hand, q, v, finger, index, number, kernel)
+                for finger, _, index, number in self._fingers}  # fmt: skip
+
     def _control(
-        self, t: float, state: State, q: np.ndarray, v: np.ndarray, terms: Mapping[str, Terms] | None = None
+        self, t: float, state: State, q: np.ndarray, v: np.ndarray, workspace: Mapping[str, Workspace] | None = None
     ) -> np.ndarray:
         """:meth:`__call__` for the state's validated ``q`` and ``v`` (an outer loop that checked them calls this).
 
-        ``terms``: the controlled fingers' :func:`_finger_terms` at (q, v), if the caller has them.
+        ``workspace``: :meth:`_workspaces` at (q, v), if the caller has them.
         """
         hand = self.nominal
         if self._hold is None:
             self.reset(state)
+        kernel = _kernel(hand)
         tau = np.zeros(hand.nv)
         targets, errors = [], []
         for finger, reference, index, number in self._fingers:
             x_d, xd_d, xdd_d = reference(t)
-            given = None if terms is None else terms[finger]
-            basis, jacobian, mass, coriolis, gravity, position = _workspace_dynamics(hand, q, v, finger, index,
-                                                                                     number, given)  # fmt: skip
-            error = position - x_d
-            error_dot = jacobian @ v[index] - basis.T @ xd_d  # task coordinates: J_t q_dot_f = B^T x_dot
-            kp, kv = basis.T @ self.kp @ basis, basis.T @ self.kv @ basis
-            command = basis.T @ xdd_d - kv @ error_dot - kp @ (basis.T @ error)
-            tau[index] = jacobian.T @ (mass @ command + coriolis + gravity)
+            terms = _workspace(hand, q, v, finger, index, number, kernel) if workspace is None else workspace[finger]
+            torque = _fingertip_torque if kernel is None or len(index) > 3 else kernel.fingertip_torque
+            tau[index] = torque(*terms[:6], v[index], x_d, xd_d, xdd_d, self.kp, self.kv)
             targets.append(x_d)
-            errors.append(error)
+            errors.append(terms[5] - x_d)
         if len(self._other):
             other = self._other
             acceleration = np.zeros(hand.nv)  # fingers are separate chains: M has no finger-to-finger blocks
