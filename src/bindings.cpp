@@ -222,6 +222,11 @@ NB_MODULE(_core, m) {
           "base_rotation"_a, "base_translation"_a, "q"_a, "joints"_a, "points"_a, "forces"_a)
       .def_prop_ro("nv", &HandDynamics::nv);
 
+  nb::class_<WorkspaceTerms>(m, "WorkspaceTerms")  // the fields of bhgrasp.controllers.workspace._Workspace
+      .def_ro("singular", &WorkspaceTerms::singular).def_ro("position", &WorkspaceTerms::position)
+      .def_ro("jacobian", &WorkspaceTerms::jacobian).def_ro("basis", &WorkspaceTerms::basis)
+      .def_ro("task_jacobian", &WorkspaceTerms::task_jacobian).def_ro("mass", &WorkspaceTerms::mass)
+      .def_ro("coriolis", &WorkspaceTerms::coriolis).def_ro("gravity", &WorkspaceTerms::gravity);
   nb::class_<FingerDynamics>(m, "FingerDynamics")
       .def(nb::init<const std::string&, const std::vector<int>&, const std::vector<std::vector<int>>&>(), "model"_a,
            "frames"_a, "indices"_a)
@@ -236,18 +241,10 @@ NB_MODULE(_core, m) {
                                    terms.bias);
           },
           "finger"_a, "gravity"_a, "q"_a, "v"_a)
-      .def(  // copies, in the order of bhgrasp.controllers.workspace._workspace_dynamics's result
-          "workspace",
-          [](FingerDynamics& kernel, int finger, const Eigen::Vector3d& gravity, const RowMatrix3& rotation,
-             const Eigen::Vector3d& translation, const FingerDynamics::ConstVector& q,
-             const FingerDynamics::ConstVector& v) {
-            const WorkspaceTerms& w = kernel.workspace(finger, gravity, rotation, translation, q, v);
-            return std::make_tuple(w.singular, w.basis, w.task_jacobian, w.mass, w.coriolis, w.gravity, w.position,
-                                   w.jacobian);
-          },
-          "finger"_a, "gravity"_a, "rotation"_a, "translation"_a, "q"_a, "v"_a)
-      .def_static("fingertip_torque", &fingertip_torque, "basis"_a, "task_jacobian"_a, "mass"_a, "coriolis"_a,
-                  "gravity"_a, "position"_a, "velocity"_a, "x_d"_a, "xd_d"_a, "xdd_d"_a, "kp"_a, "kv"_a)
+      .def("workspace", &FingerDynamics::workspace, nb::rv_policy::copy, "finger"_a, "gravity"_a, "rotation"_a,
+           "translation"_a, "q"_a, "v"_a)
+      .def_static("fingertip_torque", &fingertip_torque, "terms"_a, "velocity"_a, "x_d"_a, "xd_d"_a, "xdd_d"_a,
+                  "kp"_a, "kv"_a)
       .def_prop_ro("nv", &FingerDynamics::nv);
 
   nb::class_<GraspKinematics>(m, "GraspKinematics")

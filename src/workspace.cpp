@@ -138,24 +138,19 @@ const WorkspaceTerms& FingerDynamics::workspace(int finger, const Eigen::Vector3
   return out;
 }
 
-TaskVector fingertip_torque(const ConstRowMatrix& basis, const ConstRowMatrix& task_jacobian,
-                            const ConstRowMatrix& mass, const ConstVectorRef& coriolis, const ConstVectorRef& gravity,
-                            const Eigen::Vector3d& position, const ConstVectorRef& velocity, const Eigen::Vector3d& x_d,
-                            const Eigen::Vector3d& xd_d, const Eigen::Vector3d& xdd_d, const RowMatrix3& kp,
-                            const RowMatrix3& kv) {
-  const Eigen::Index r = basis.cols(), n = task_jacobian.cols();
-  if (basis.rows() != 3 || r < 1 || r > 3 || n > 3 || task_jacobian.rows() != r || mass.rows() != r ||
-      mass.cols() != r || coriolis.size() != r || gravity.size() != r || velocity.size() != n)
-    throw std::invalid_argument(
-        "fingertip_torque: basis (3, r), task_jacobian (r, n_f), mass (r, r), coriolis and gravity (r,), velocity "
-        "(n_f,), with r, n_f <= 3");
-  const TaskMatrix b = basis, jacobian = task_jacobian, mass_x = mass;
-  const TaskVector velocity_f = velocity, coriolis_x = coriolis, gravity_x = gravity;
-  const Eigen::Vector3d error = position - x_d;
+TaskVector fingertip_torque(const WorkspaceTerms& terms, const Eigen::Ref<const Eigen::VectorXd>& velocity,
+                            const Eigen::Vector3d& x_d, const Eigen::Vector3d& xd_d, const Eigen::Vector3d& xdd_d,
+                            const RowMatrix3& kp, const RowMatrix3& kv) {
+  if (terms.singular || velocity.size() != terms.task_jacobian.cols())
+    throw std::invalid_argument("fingertip_torque: terms of a regular configuration, velocity of size n_f");
+  const TaskMatrix& b = terms.basis;
+  const TaskMatrix& jacobian = terms.task_jacobian;
+  const TaskVector velocity_f = velocity;
+  const Eigen::Vector3d error = terms.position - x_d;
   const TaskVector error_dot = jacobian * velocity_f - b.transpose() * xd_d;  // task coordinates: J_t q_dot_f = B^T x_dot
   const TaskMatrix kp_t = b.transpose() * kp * b, kv_t = b.transpose() * kv * b;
   const TaskVector command = b.transpose() * xdd_d - kv_t * error_dot - kp_t * (b.transpose() * error);
-  return jacobian.transpose() * (mass_x * command + coriolis_x + gravity_x);
+  return jacobian.transpose() * (terms.mass * command + terms.coriolis + terms.gravity);
 }
 
 }  // namespace bhgrasp

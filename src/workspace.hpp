@@ -62,7 +62,8 @@ class FingerDynamics {
   const FingerTerms& compute(int finger, const Eigen::Vector3d& gravity, const ConstVector& q, const ConstVector& v);
 
   // The workspace terms of finger `finger` (n_f <= 3 joints, else std::invalid_argument) at (q, v) for a hand base
-  // at (`rotation`, `translation`) in the world and `gravity` in the model frame.  Lives here as compute()'s result.
+  // at (`rotation`, `translation`) in the world and `gravity` in the model frame.  Lives here until the next call for
+  // the same finger, as compute()'s result (the binding returns a copy).
   const WorkspaceTerms& workspace(int finger, const Eigen::Vector3d& gravity, const RowMatrix3& rotation,
                                   const Eigen::Vector3d& translation, const ConstVector& q, const ConstVector& v);
 
@@ -81,19 +82,13 @@ class FingerDynamics {
   std::vector<WorkspaceTerms> workspace_;      // one per finger, sized once
 };
 
-using ConstRowMatrix = Eigen::Ref<const RowMatrix>;
-using ConstVectorRef = Eigen::Ref<const Eigen::VectorXd>;
-
-// Fingertip computed torque (bhgrasp.controllers.workspace.WorkspaceComputedTorque) from a finger's workspace terms
-// (`basis` (3, r) ... `gravity` (r,), `position` (3,)), its joint velocities `velocity` (n_f,), the reference x_d [m],
-// x_dot_d, x_ddot_d and the Cartesian gains kp, kv (3, 3):
+// Fingertip computed torque (bhgrasp.controllers.workspace.WorkspaceComputedTorque) from a finger's workspace terms,
+// its joint velocities `velocity` (n_f,), the reference x_d [m], x_dot_d, x_ddot_d and the Cartesian gains kp, kv:
 //   tau_f = J_t^T (M_x (B^T x_ddot_d - Kv_t e_dot - Kp_t B^T e) + C_x x_dot + G_x),
 //   e = x - x_d, e_dot = J_t q_dot_f - B^T x_dot_d, Kp_t = B^T Kp B, Kv_t = B^T Kv B.
-// Sizes are checked (std::invalid_argument).
-TaskVector fingertip_torque(const ConstRowMatrix& basis, const ConstRowMatrix& task_jacobian,
-                            const ConstRowMatrix& mass, const ConstVectorRef& coriolis, const ConstVectorRef& gravity,
-                            const Eigen::Vector3d& position, const ConstVectorRef& velocity, const Eigen::Vector3d& x_d,
-                            const Eigen::Vector3d& xd_d, const Eigen::Vector3d& xdd_d, const RowMatrix3& kp,
-                            const RowMatrix3& kv);
+// Sizes are checked (std::invalid_argument), and that the terms are not singular.
+TaskVector fingertip_torque(const WorkspaceTerms& terms, const Eigen::Ref<const Eigen::VectorXd>& velocity,
+                            const Eigen::Vector3d& x_d, const Eigen::Vector3d& xd_d, const Eigen::Vector3d& xdd_d,
+                            const RowMatrix3& kp, const RowMatrix3& kv);
 
 }  // namespace bhgrasp

@@ -370,13 +370,12 @@ class ImpedanceController(Controller):
         extra = np.zeros(hand.nv)
         for finger, law in self.laws.items():
             contact = contacts[finger]
-            position, jacobian = terms[finger][5:]  # the fingertip [m] and its Jacobian (world)
-            sample = law.command(t, position, contact, dt)
+            sample = law.command(t, terms[finger].position, contact, dt)
             self._commands[finger].sample = sample
             if self.feedforward:
                 force = np.asarray(law.feedforward(contact))
-                if force.any():  # (J^T 0 adds nothing)
-                    extra += jacobian.T @ force
+                if np.count_nonzero(force):  # (J^T 0 adds nothing)
+                    extra += terms[finger].jacobian.T @ force  # the fingertip Jacobian (world)
             self.log[f"{finger}/x_c"] = sample[0]
             for key, value in law.log.items():
                 self.log[f"{finger}/{key}"] = np.array(value, dtype=float)

@@ -18,6 +18,7 @@ when ``bhgrasp._core`` loads.  Its Python twins are :func:`_finger_terms_python`
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -61,28 +62,55 @@ def workspace_dynamics(hand: Hand, q: Any, v: Any, finger: str) -> WorkspaceDyna
     """
     q, v = as_vector(q, "q", hand.nq), as_vector(v, "v", hand.nv)
     index = hand.finger_indices(finger)
-    return WorkspaceDynamics(*_workspace(hand, q, v, finger, index, hand.fingers.index(finger), _kernel(hand))[:5])
+    terms = _workspace(hand, q, v, finger, index, hand.fingers.index(finger), _kernel(hand))
+    return WorkspaceDynamics(*(np.array(value) for value in (terms.basis, terms.task_jacobian, terms.mass,
+                                                              terms.coriolis, terms.gravity)))  # fmt: skip
 
 
-Workspace = tuple[np.ndarray, ...]  # basis, J_t, M_x, C_x x_dot, G_x, then the fingertip [m] and its Jacobian (3, nv)
+@dataclass(frozen=True)
+class _Workspace:
+    """One finger's workspace terms and fingertip, world frame: the Python twin's form of ``_core.WorkspaceTerms``.
+
+    Attributes: position [m] (3,) and jacobian (3, nv) of the fingertip; basis, task_jacobian, mass, coriolis and
+    gravity as :class:`WorkspaceDynamics`' basis, jacobian, mass, coriolis and gravity; singular (always False here:
+    the twin raises instead).
+    """
+
+    position: np.ndarray
+    jacobian: np.ndarray
+    basis: np.ndarray
+    task_jacobian: np.ndarray
+    mass: np.ndarray
+    coriolis: np.ndarray
+    gravity: np.ndarray
+    singular: bool = False
 
 
 def _workspace(hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, index: np.ndarray, number: int,
-               kernel: Any) -> Workspace:  # fmt: skip
-    """:func:`workspace_dynamics`'s fields, then the fingertip position [m] and Jacobian (3, nv), world frame.
+               kernel: Any) -> Any:  # fmt: skip
+    """The workspace terms of ``finger`` at validated (q [rad], v [rad/s]), world frame: a :class:`_Workspace`.
 
-    For validated ``q``, ``v``; ``index`` are the finger's joint indices, ``number`` its place in ``hand.fingers``,
-    ``kernel`` the hand's :func:`_kernel`: its ``workspace`` for a finger of at most 3 joints, else
-    :func:`_workspace_dynamics` (its twin).
+    ``index`` are the finger's joint indices, ``number`` its place in ``hand.fingers``, ``kernel`` the hand's
+    :func:`_kernel`: its ``workspace`` (a ``_core.WorkspaceTerms``, the same fields) for a finger of at most 3 joints,
+    else :func:`_workspace_dynamics` (its twin).
+
+    Raises:
+        InputError: If the finger's Jacobian is singular (stretched finger) at ``q``.
     """
     if kernel is None or len(index) > 3:
         return _workspace_dynamics(hand, q, v, finger, index, number)
-    placement = hand.base_placement
-    singular, *terms = kernel.workspace(number, hand.model.gravity.linear, placement.rotation, placement.translation,
-                                        q, v)  # fmt: skip
-    if singular:
+    if hand._base_at_origin:
+        rotation, translation = _IDENTITY, _ORIGIN
+    else:
+        placement = hand.base_placement
+        rotation, translation = placement.rotation, placement.translation
+    terms = kernel.workspace(number, hand._model_gravity, rotation, translation, q, v)
+    if terms.singular:
         raise _singular(finger, q[index], len(index))
-    return tuple(terms)
+    return terms
+
+
+_IDENTITY, _ORIGIN = np.eye(3), np.zeros(3)  # the placement of a hand base at the world origin
 
 
 def _singular(finger: str, angles: np.ndarray, rank: int) -> InputError:
@@ -91,7 +119,7 @@ def _singular(finger: str, angles: np.ndarray, rank: int) -> InputError:
 
 def _workspace_dynamics(
     hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, index: np.ndarray, number: int
-) -> Workspace:
+) -> _Workspace:
     """:func:`_workspace` in NumPy: the twin of the compiled ``FingerDynamics.workspace``.
 
     B spans the column space of J_f (left singular vectors), each column's largest entry made positive (a sign that
@@ -110,25 +138,25 @@ def _workspace_dynamics(
     mass_x = inverse.T @ mass_f @ inverse
     bias = basis.T @ bias
     coriolis_x = inverse.T @ velocity_f - mass_x @ bias
-    return (basis, task_jacobian, 0.5 * (mass_x + mass_x.T), coriolis_x, inverse.T @ gravity_f, positions[number],
-            jacobian_all)  # fmt: skip
+    return _Workspace(positions[number], jacobian_all, basis, task_jacobian, 0.5 * (mass_x + mass_x.T), coriolis_x,
+                      inverse.T @ gravity_f)  # fmt: skip
 
 
 def _fingertip_torque(
-    basis: np.ndarray, task_jacobian: np.ndarray, mass: np.ndarray, coriolis: np.ndarray, gravity: np.ndarray,
-    position: np.ndarray, velocity: np.ndarray, x_d: np.ndarray, xd_d: np.ndarray, xdd_d: np.ndarray,
-    kp: np.ndarray, kv: np.ndarray,
+    terms: Any, velocity: np.ndarray, x_d: np.ndarray, xd_d: np.ndarray, xdd_d: np.ndarray, kp: np.ndarray,
+    kv: np.ndarray,
 ) -> np.ndarray:  # fmt: skip
-    """tau_f [N m] of the fingertip computed torque (module docstring) from a finger's workspace terms.
+    """tau_f [N m] of the fingertip computed torque (module docstring) from a finger's workspace ``terms``.
 
     ``velocity``: the finger's joint velocities q_dot_f; ``x_d``, ``xd_d``, ``xdd_d``: the reference [m], [m/s],
     [m/s^2]; ``kp``, ``kv``: the (3, 3) Cartesian gains.  The twin of the compiled ``FingerDynamics.fingertip_torque``.
     """
-    error = position - x_d
+    basis, task_jacobian = terms.basis, terms.task_jacobian
+    error = terms.position - x_d
     error_dot = task_jacobian @ velocity - basis.T @ xd_d  # task coordinates: J_t q_dot_f = B^T x_dot
     kp_t, kv_t = basis.T @ kp @ basis, basis.T @ kv @ basis
     command = basis.T @ xdd_d - kv_t @ error_dot - kp_t @ (basis.T @ error)
-    return task_jacobian.T @ (mass @ command + coriolis + gravity)
+    return task_jacobian.T @ (terms.mass @ command + terms.coriolis + terms.gravity)
 
 
 Terms = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
@@ -245,14 +273,14 @@ class WorkspaceComputedTorque(Controller):
         q, v = as_vector(state.q, "state.q", hand.nq), as_vector(state.v, "state.v", hand.nv)
         return self._control(t, state, q, v)
 
-    def _workspaces(self, q: np.ndarray, v: np.ndarray) -> dict[str, Workspace]:
+    def _workspaces(self, q: np.ndarray, v: np.ndarray) -> dict[str, Any]:
         """Every controlled finger's :func:`_workspace` at validated (q, v): the fingertip, Jacobian and dynamics."""
         hand, kernel = self.nominal, _kernel(self.nominal)
         return {finger: _workspace(hand, q, v, finger, index, number, kernel)
                 for finger, _, index, number in self._fingers}  # fmt: skip
 
     def _control(
-        self, t: float, state: State, q: np.ndarray, v: np.ndarray, workspace: Mapping[str, Workspace] | None = None
+        self, t: float, state: State, q: np.ndarray, v: np.ndarray, workspace: Mapping[str, Any] | None = None
     ) -> np.ndarray:
         """:meth:`__call__` for the state's validated ``q`` and ``v`` (an outer loop that checked them calls this).
 
@@ -268,18 +296,23 @@ class WorkspaceComputedTorque(Controller):
             x_d, xd_d, xdd_d = reference(t)
             terms = _workspace(hand, q, v, finger, index, number, kernel) if workspace is None else workspace[finger]
             torque = _fingertip_torque if kernel is None or len(index) > 3 else kernel.fingertip_torque
-            tau[index] = torque(*terms[:6], v[index], x_d, xd_d, xdd_d, self.kp, self.kv)
+            tau[index] = torque(terms, v[index], x_d, xd_d, xdd_d, self.kp, self.kv)
             targets.append(x_d)
-            errors.append(terms[5] - x_d)
+            errors.append(terms.position - x_d)
         if len(self._other):
             other = self._other
             acceleration = np.zeros(hand.nv)  # fingers are separate chains: M has no finger-to-finger blocks
             acceleration[other] = -self._joint_kv * v[other] - self._joint_kp * (q - self._hold)[other]
             tau[other] = pin.rnea(hand.model, hand.data, q, v, acceleration)[other]  # hand.inverse_dynamics, unchecked
-        self.log["x_d"], self.log["x_error"] = np.concatenate(targets), np.concatenate(errors)
-        if not np.isfinite(tau).all():
+        self.log["x_d"], self.log["x_error"] = _stacked(targets), _stacked(errors)
+        if not math.isfinite(tau @ tau) and not np.isfinite(tau).all():  # the product: one cheap test per call
             raise InputError(f"WorkspaceComputedTorque produced non-finite torques {tau} at t = {t} s")
         return tau
+
+
+def _stacked(arrays: list[np.ndarray]) -> np.ndarray:
+    """``np.concatenate(arrays)``, for one array (one finger controlled) a cheaper copy."""
+    return arrays[0].copy() if len(arrays) == 1 else np.concatenate(arrays)
 
 
 __all__ = ["WorkspaceComputedTorque", "WorkspaceDynamics", "workspace_dynamics"]
