@@ -6,6 +6,7 @@ kernels without importing the simulator (DESIGN.md: controllers never import the
 
 from __future__ import annotations
 
+import sys
 import weakref
 from collections.abc import Callable
 from types import ModuleType
@@ -14,10 +15,14 @@ from typing import Any
 from bhgrasp.errors import CompiledEngineUnavailable
 
 _KERNELS: weakref.WeakKeyDictionary[Any, dict[str, Any]] = weakref.WeakKeyDictionary()
+_MISSING = object()
 
 
 def optional_core() -> ModuleType | None:
     """``bhgrasp._core``, or ``None`` when it does not load (the callers then run their Python twins)."""
+    loaded = sys.modules.get("bhgrasp._core")  # the per-step callers' fast path: imported before
+    if loaded is not None:
+        return loaded
     try:
         from bhgrasp import _core
     except ImportError:
@@ -47,11 +52,14 @@ def kernel(owner: Any, name: str, build: Callable[[ModuleType], Any]) -> Any:
     Kept beside ``owner``, not in it (copies and pickles of the owner build their own); a kernel holds a copy of
     the owner's model, which must not change in place afterwards.
     """
-    kernels = _KERNELS.setdefault(owner, {})
-    if name not in kernels:
+    kernels = _KERNELS.get(owner)  # (a get is cheaper than setdefault, which makes a weak reference every call)
+    if kernels is None:
+        kernels = _KERNELS[owner] = {}
+    found = kernels.get(name, _MISSING)
+    if found is _MISSING:
         core = optional_core()
-        kernels[name] = None if core is None else build(core)
-    return kernels[name]
+        found = kernels[name] = None if core is None else build(core)
+    return found
 
 
 __all__ = ["kernel", "optional_core", "required_core"]

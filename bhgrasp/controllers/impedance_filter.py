@@ -87,8 +87,10 @@ class TustinImpedanceFilter:
 
     def reset(self) -> None:
         """Zero input and output history."""
-        self._inputs = np.zeros((2, self.size))  # F(n-1), F(n-2)
-        self._outputs = np.zeros((3, self.size))  # E(n-1), E(n-2), E(n-3)
+        zero = [0.0] * self.size
+        # per component, as floats (a few scalar operations cost less than as many on 3-vectors; the same IEEE ones)
+        self._inputs = (zero, zero)  # F(n-1), F(n-2)
+        self._outputs = (zero, zero, zero)  # E(n-1), E(n-2), E(n-3)
         self._cached: tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]] | None = None
 
     def _coefficients(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
@@ -109,23 +111,18 @@ class TustinImpedanceFilter:
             if float(dt) == 0.0:  # the first call after a reset: no time has passed, nothing to advance
                 return self._state()
             raise InputError(f"TustinImpedanceFilter runs at period T = {self.period} s, called with dt = {dt}")
-        numerator, denominator = self._coefficients()
-        inputs, outputs = self._inputs, self._outputs
-        output = (
-            numerator[0] * force + numerator[1] * inputs[0] + numerator[2] * inputs[1]
-            - denominator[1] * outputs[0] - denominator[2] * outputs[1]
-        )  # fmt: skip
-        inputs[1] = inputs[0]  # shift the histories in place
-        inputs[0] = force
-        outputs[2] = outputs[1]
-        outputs[1] = outputs[0]
-        outputs[0] = output
+        (b0, b1, b2), (_, a1, a2) = self._coefficients()
+        f0, (f1, f2), (e1, e2, _) = force.tolist(), self._inputs, self._outputs
+        e0 = [b0 * x0 + b1 * x1 + b2 * x2 - a1 * y1 - a2 * y2 for x0, x1, x2, y1, y2 in zip(f0, f1, f2, e1, e2)]
+        self._inputs, self._outputs = (f0, f1), (e0, e1, e2)  # the histories shifted
         return self._state()
 
     def _state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         e0, e1, e2 = self._outputs
         t = self.period
-        return e0.copy(), (e0 - e1) / t, (e0 - 2 * e1 + e2) / (t * t)
+        tt = t * t
+        return (np.array(e0), np.array([(x0 - x1) / t for x0, x1 in zip(e0, e1)]),
+                np.array([(x0 - 2.0 * x1 + x2) / tt for x0, x1, x2 in zip(e0, e1, e2)]))  # fmt: skip
 
 
 __all__ = ["ImpedanceFilter", "TustinImpedanceFilter", "critical_damping"]
