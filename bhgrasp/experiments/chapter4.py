@@ -642,9 +642,15 @@ def _discrete_fim(
     start, t_before, force_before = approach
     controller.inner.q_rest = setup.q0  # the joints outside F3 held where a run from the start holds them
     controller.reset(start)
-    # as a plain callable: the simulator records none of the controller's internals (only forces are read)
-    traj = setup.simulator.run(controller.__call__, duration - start.t, state=start, progress=False)
-    return np.concatenate((t_before, traj.t[1:])), np.concatenate((force_before, normal_force(setup, traj)[1:]))
+    # Simulator.run's loop without its recorder: only the forces are read, per sample as normal_force reads them
+    sim, state = setup.simulator, start
+    sim.actuation.restore(state.actuation_modes, state.scene_q[: sim.scene.nq_hand])
+    steps = round((duration - start.t) / sim.dt)
+    times, forces = np.empty(steps), np.empty(steps)
+    for k in range(steps):
+        state, _ = sim.step(state, controller(state.t, state))
+        times[k], forces[k] = state.t, float(np.sum(state.contact_forces @ setup.normal))
+    return np.concatenate((t_before, times)), np.concatenate((force_before, forces))
 
 
 def _discrete_fim_controller(setup: Setup, mass: float, stiffness: float, force: float) -> ImpedanceController:
