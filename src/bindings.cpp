@@ -226,7 +226,8 @@ NB_MODULE(_core, m) {
       .def_ro("singular", &WorkspaceTerms::singular).def_ro("position", &WorkspaceTerms::position)
       .def_ro("jacobian", &WorkspaceTerms::jacobian).def_ro("basis", &WorkspaceTerms::basis)
       .def_ro("task_jacobian", &WorkspaceTerms::task_jacobian).def_ro("mass", &WorkspaceTerms::mass)
-      .def_ro("coriolis", &WorkspaceTerms::coriolis).def_ro("gravity", &WorkspaceTerms::gravity);
+      .def_ro("coriolis", &WorkspaceTerms::coriolis).def_ro("gravity", &WorkspaceTerms::gravity)
+      .def("torque", &fingertip_torque, "velocity"_a, "x_d"_a, "xd_d"_a, "xdd_d"_a, "kp"_a, "kv"_a);
   nb::class_<FingerDynamics>(m, "FingerDynamics")
       .def(nb::init<const std::string&, const std::vector<int>&, const std::vector<std::vector<int>>&>(), "model"_a,
            "frames"_a, "indices"_a)
@@ -243,8 +244,6 @@ NB_MODULE(_core, m) {
           "finger"_a, "gravity"_a, "q"_a, "v"_a)
       .def("workspace", &FingerDynamics::workspace, nb::rv_policy::copy, "finger"_a, "gravity"_a, "rotation"_a,
            "translation"_a, "q"_a, "v"_a)
-      .def_static("fingertip_torque", &fingertip_torque, "terms"_a, "velocity"_a, "x_d"_a, "xd_d"_a, "xdd_d"_a,
-                  "kp"_a, "kv"_a)
       .def_prop_ro("nv", &FingerDynamics::nv);
 
   nb::class_<GraspKinematics>(m, "GraspKinematics")

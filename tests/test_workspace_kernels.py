@@ -119,7 +119,7 @@ def test_the_workspace_terms_are_the_python_twin_to_round_off(hand: bh.Hand) -> 
 
 @pytest.mark.parametrize("hand", HANDS, ids=IDS)
 def test_the_fingertip_torque_is_the_python_twin_to_round_off(hand: bh.Hand) -> None:
-    """FingerDynamics.fingertip_torque is _fingertip_torque for random references and SPD gains."""
+    """WorkspaceTerms.torque (src: fingertip_torque) is _fingertip_torque for random references and SPD gains."""
     rng = np.random.default_rng(3)
     for _ in range(100):
         q, v, finger = well_conditioned(hand, rng)
@@ -130,7 +130,8 @@ def test_the_fingertip_torque_is_the_python_twin_to_round_off(hand: bh.Hand) -> 
         kp, kv = (r @ r.T + np.eye(3) for r in root)
         x_d, xd_d, xdd_d = python.position + 0.01 * rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
         args = (v[index], x_d, xd_d, xdd_d, kp, kv)
-        assert_close(_kernel(hand).fingertip_torque(compiled, *args), _fingertip_torque(python, *args), "tau_f")
+        assert_close(compiled.torque(*args), _fingertip_torque(python, *args), "tau_f")
+        np.testing.assert_array_equal(python.torque(*args), _fingertip_torque(python, *args))
 
 
 def test_the_kernel_checks_the_torque_sizes() -> None:
@@ -140,7 +141,7 @@ def test_the_kernel_checks_the_torque_sizes() -> None:
     reference, gains = (np.zeros(3),) * 3, (np.eye(3),) * 2
     for wrong in (np.zeros(3), np.zeros(1)):  # joint velocities of another size than the finger's 2
         with pytest.raises(ValueError, match="fingertip_torque: terms of a regular configuration, velocity of size"):
-            _kernel(hand).fingertip_torque(terms, wrong, *reference, *gains)
+            terms.torque(wrong, *reference, *gains)
 
 
 @pytest.mark.parametrize("hand", HANDS, ids=IDS)

@@ -73,7 +73,7 @@ class _Workspace:
 
     Attributes: position [m] (3,) and jacobian (3, nv) of the fingertip; basis, task_jacobian, mass, coriolis and
     gravity as :class:`WorkspaceDynamics`' basis, jacobian, mass, coriolis and gravity; singular (always False here:
-    the twin raises instead).
+    the twin raises instead).  :meth:`torque` is the fingertip computed torque from them.
     """
 
     position: np.ndarray
@@ -84,6 +84,10 @@ class _Workspace:
     coriolis: np.ndarray
     gravity: np.ndarray
     singular: bool = False
+
+    def torque(self, *args: Any) -> np.ndarray:
+        """:func:`_fingertip_torque` of these terms (as ``_core.WorkspaceTerms.torque``)."""
+        return _fingertip_torque(self, *args)
 
 
 def _workspace(hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, index: np.ndarray, number: int,
@@ -149,7 +153,7 @@ def _fingertip_torque(
     """tau_f [N m] of the fingertip computed torque (module docstring) from a finger's workspace ``terms``.
 
     ``velocity``: the finger's joint velocities q_dot_f; ``x_d``, ``xd_d``, ``xdd_d``: the reference [m], [m/s],
-    [m/s^2]; ``kp``, ``kv``: the (3, 3) Cartesian gains.  The twin of the compiled ``FingerDynamics.fingertip_torque``.
+    [m/s^2]; ``kp``, ``kv``: the (3, 3) Cartesian gains.  The twin of the compiled ``WorkspaceTerms.torque``.
     """
     basis, task_jacobian = terms.basis, terms.task_jacobian
     error = terms.position - x_d
@@ -289,14 +293,14 @@ class WorkspaceComputedTorque(Controller):
         hand = self.nominal
         if self._hold is None:
             self.reset(state)
-        kernel = _kernel(hand)
+        if workspace is None:
+            workspace = self._workspaces(q, v)
         tau = np.zeros(hand.nv)
         targets, errors = [], []
-        for finger, reference, index, number in self._fingers:
+        for finger, reference, index, _ in self._fingers:
             x_d, xd_d, xdd_d = reference(t)
-            terms = _workspace(hand, q, v, finger, index, number, kernel) if workspace is None else workspace[finger]
-            torque = _fingertip_torque if kernel is None or len(index) > 3 else kernel.fingertip_torque
-            tau[index] = torque(terms, v[index], x_d, xd_d, xdd_d, self.kp, self.kv)
+            terms = workspace[finger]
+            tau[index] = terms.torque(v[index], x_d, xd_d, xdd_d, self.kp, self.kv)
             targets.append(x_d)
             errors.append(terms.position - x_d)
         if len(self._other):
