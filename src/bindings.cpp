@@ -222,7 +222,7 @@ NB_MODULE(_core, m) {
           "base_rotation"_a, "base_translation"_a, "q"_a, "joints"_a, "points"_a, "forces"_a)
       .def_prop_ro("nv", &HandDynamics::nv);
 
-  nb::class_<WorkspaceTerms>(m, "WorkspaceTerms")  // the fields of bhgrasp.controllers.workspace._Workspace
+  nb::class_<WorkspaceTerms>(m, "WorkspaceTerms")  // the fields of bhgrasp.controllers._workspace_terms._Workspace
       .def_ro("singular", &WorkspaceTerms::singular).def_ro("position", &WorkspaceTerms::position)
       .def_ro("jacobian", &WorkspaceTerms::jacobian).def_ro("basis", &WorkspaceTerms::basis)
       .def_ro("task_jacobian", &WorkspaceTerms::task_jacobian).def_ro("mass", &WorkspaceTerms::mass)
@@ -232,7 +232,7 @@ NB_MODULE(_core, m) {
       .def(nb::init<const std::string&, const std::vector<int>&, const std::vector<std::vector<int>>&>(), "model"_a,
            "frames"_a, "indices"_a)
       // copies out as writable arrays in NumPy's layout (the kernel's own are overwritten by its next call), in the
-      // order of bhgrasp.controllers.workspace._finger_terms_python
+      // order of bhgrasp.controllers._workspace_terms._finger_terms_python
       .def(
           "compute",
           [](FingerDynamics& kernel, int finger, const Eigen::Vector3d& gravity, const FingerDynamics::ConstVector& q,

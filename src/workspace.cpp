@@ -1,6 +1,6 @@
-// The finger kernels: see workspace.hpp.  compute() mirrors _finger_terms_python in bhgrasp/controllers/workspace.py
-// (the same Pinocchio algorithms, called as the Python API calls them), workspace() _workspace_dynamics and
-// fingertip_torque() _fingertip_torque (the same maths, line for line).
+// The finger kernels: see workspace.hpp.  In bhgrasp/controllers/_workspace_terms.py, compute() mirrors
+// _finger_terms_python (the same Pinocchio algorithms, called as the Python API calls them), workspace()
+// _workspace_dynamics and fingertip_torque() _fingertip_torque (the same maths, line for line).
 #include "workspace.hpp"
 
 #include <algorithm>
@@ -147,7 +147,7 @@ TaskVector fingertip_torque(const WorkspaceTerms& terms, const Eigen::Ref<const 
   const TaskMatrix& jacobian = terms.task_jacobian;
   const TaskVector velocity_f = velocity;
   const Eigen::Vector3d error = terms.position - x_d;
-  const TaskVector error_dot = jacobian * velocity_f - b.transpose() * xd_d;  // task coordinates: J_t q_dot_f = B^T x_dot
+  const TaskVector error_dot = jacobian * velocity_f - b.transpose() * xd_d;  // task coordinates: J_t q_f' = B^T x'
   const TaskMatrix kp_t = b.transpose() * kp * b, kv_t = b.transpose() * kv * b;
   const TaskVector command = b.transpose() * xdd_d - kv_t * error_dot - kp_t * (b.transpose() * error);
   return jacobian.transpose() * (terms.mass * command + terms.coriolis + terms.gravity);

@@ -2,10 +2,10 @@
 // the joint-space terms of one finger (FingerDynamics::compute), the task-space terms built from them
 // (FingerDynamics::workspace: SVD, inverse and products in Eigen) and the fingertip computed torque (fingertip_torque).
 //
-// Python twins (bhgrasp.controllers.workspace): _finger_terms_python (the same Pinocchio algorithms through its Python
-// API; equal to the bit), _workspace_dynamics and _fingertip_torque (NumPy; equal to round-off, 1e-12 relative):
-// tests/test_workspace_kernels.py.  Units SI; compute() in the hand's model frame, workspace() and fingertip_torque()
-// in the world frame (the hand's base placement passed in).
+// Python twins (bhgrasp.controllers._workspace_terms): _finger_terms_python (the same Pinocchio algorithms through
+// its Python API; equal to the bit), _workspace_dynamics and _fingertip_torque (NumPy; equal to round-off, 1e-12
+// relative): tests/test_workspace_kernels.py.  Units SI; compute() in the hand's model frame, workspace() and
+// fingertip_torque() in the world frame (the hand's base placement passed in).
 #pragma once
 
 #include <string>

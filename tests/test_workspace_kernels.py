@@ -1,11 +1,11 @@
 """The compiled finger kernels (src/workspace.cpp: FingerDynamics) against their Python twins.
 
-Truths: the twins in bhgrasp.controllers.workspace: _finger_terms_python (the hand's methods, Pinocchio's Python API;
-equal to the bit), _workspace_dynamics and _fingertip_torque (NumPy's SVD, inverse and products: equal to round-off,
-1e-12 relative, on configurations with cond(J_t) < 100), so that the controllers built on them give the same torques,
-to round-off, with and without the compiled core; and the identities the workspace dynamics must satisfy: M_x =
-(J_t M_f^-1 J_t^T)^-1 for the square task Jacobian, B orthonormal with J_f = B J_t (tests/test_controllers.py checks
-the RNEA identity).
+Truths: the twins in bhgrasp.controllers._workspace_terms: _finger_terms_python (the hand's methods, Pinocchio's
+Python API; equal to the bit), _workspace_dynamics and _fingertip_torque (NumPy's SVD, inverse and products: equal to
+round-off, 1e-12 relative, on configurations with cond(J_t) < 100), so that the controllers built on them give the
+same torques, to round-off, with and without the compiled core; and the identities the workspace dynamics must
+satisfy: M_x = (J_t M_f^-1 J_t^T)^-1 for the square task Jacobian, B orthonormal with J_f = B J_t
+(tests/test_controllers.py checks the RNEA identity).
 """
 
 from __future__ import annotations
@@ -20,8 +20,7 @@ import pytest
 import bhgrasp as bh
 from bhgrasp._native import optional_core
 from bhgrasp.controllers import WorkspaceComputedTorque, workspace_dynamics
-from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
-from bhgrasp.controllers.workspace import (
+from bhgrasp.controllers._workspace_terms import (
     _finger_terms,
     _finger_terms_python,
     _fingertip_torque,
@@ -29,6 +28,7 @@ from bhgrasp.controllers.workspace import (
     _workspace,
     _workspace_dynamics,
 )
+from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
 from bhgrasp.errors import InputError
 from bhgrasp.experiments import chapter4
 from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
@@ -56,7 +56,7 @@ IDS = ["barrett", "perturbed", "tilted", "planar", "one-link"]
 
 
 def no_kernel(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr("bhgrasp.controllers.workspace._kernel", lambda hand: None)
+    monkeypatch.setattr("bhgrasp.controllers._workspace_terms._kernel", lambda hand: None)
 
 
 @pytest.mark.parametrize("hand", HANDS, ids=IDS)
@@ -108,7 +108,7 @@ def test_the_workspace_terms_are_the_python_twin_to_round_off(hand: bh.Hand) -> 
     for _ in range(100):
         q, v, finger = well_conditioned(hand, rng)
         index, number = hand.finger_indices(finger), hand.fingers.index(finger)
-        compiled = _workspace(hand, q, v, finger, index, number, _kernel(hand))
+        compiled = _workspace(hand, q, v, finger, index, number)
         python = _workspace_dynamics(hand, q, v, finger, index, number)
         assert not compiled.singular and not python.singular
         for name in names:
@@ -124,7 +124,7 @@ def test_the_fingertip_torque_is_the_python_twin_to_round_off(hand: bh.Hand) -> 
     for _ in range(100):
         q, v, finger = well_conditioned(hand, rng)
         index, number = hand.finger_indices(finger), hand.fingers.index(finger)
-        compiled = _workspace(hand, q, v, finger, index, number, _kernel(hand))
+        compiled = _workspace(hand, q, v, finger, index, number)
         python = _workspace_dynamics(hand, q, v, finger, index, number)
         root = rng.normal(size=(2, 3, 3))
         kp, kv = (r @ r.T + np.eye(3) for r in root)
@@ -137,7 +137,7 @@ def test_the_fingertip_torque_is_the_python_twin_to_round_off(hand: bh.Hand) -> 
 def test_the_kernel_checks_the_torque_sizes() -> None:
     hand = bh.BarrettHand()
     q, v = hand.configuration(F3_proximal=0.6, F3_distal=0.4), np.zeros(hand.nv)
-    terms = _workspace(hand, q, v, "F3", hand.finger_indices("F3"), 2, _kernel(hand))
+    terms = _workspace(hand, q, v, "F3", hand.finger_indices("F3"), 2)
     reference, gains = (np.zeros(3),) * 3, (np.eye(3),) * 2
     for wrong in (np.zeros(3), np.zeros(1)):  # joint velocities of another size than the finger's 2
         with pytest.raises(ValueError, match="fingertip_torque: terms of a regular configuration, velocity of size"):
@@ -227,6 +227,13 @@ def test_base_placement_and_gravity_changes_reach_the_kernel() -> None:
     for got, expected in zip(after, _finger_terms_python(hand, q, v, finger, number), strict=True):
         np.testing.assert_array_equal(got, expected)
     assert not np.array_equal(after[0], before[0]) and not np.array_equal(after[3], before[3])
+    index = hand.finger_indices(finger)
+    compiled, python = (
+        _workspace(hand, q, v, finger, index, number),
+        _workspace_dynamics(hand, q, v, finger, index, number),
+    )
+    for name in ("position", "jacobian", "basis", "gravity"):
+        assert_close(getattr(compiled, name), getattr(python, name), name)
 
 
 def test_copies_and_pickles_of_a_hand_get_their_own_kernel() -> None:
