@@ -16,6 +16,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive
 from bhgrasp.errors import InputError
+from bhgrasp.grasp_motion import ManipulableSpace, manipulable_space
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.ik import ik
 from bhgrasp.objects import Box, FixedBox
@@ -54,6 +55,21 @@ class BoxGrasp:
     q_close: np.ndarray | None = None
     fingers: tuple[str, ...] | None = None
     cancel_damping: bool = False
+
+    def manipulable_space(self) -> ManipulableSpace:
+        """The object motions the planned grasp allows (:mod:`bhgrasp.grasp_motion`), before anything is simulated.
+
+        Each grasping fingertip at ``q_contact`` touches the nearest point of the box's surface.
+        """
+        fingers = self.fingers or self.hand.fingers
+        tips = self.hand.fingertip_positions(self.q_contact)[[self.hand.fingers.index(f) for f in fingers]]
+        pose, half = self.box.pose, 0.5 * np.asarray(self.box.size)
+        local = (tips - pose.translation) @ pose.rotation  # box frame
+        points = np.clip(local, -half, half) @ pose.rotation.T + pose.translation  # the nearest surface points
+        normals = points - tips  # from the fingertip into the box
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        frames = [self.hand.fingertip_frames[f] for f in fingers]
+        return manipulable_space(self.hand, self.q_contact, points, normals, frames, pose.translation, fingers)
 
 
 def box_grasp(

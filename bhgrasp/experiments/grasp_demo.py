@@ -169,12 +169,18 @@ def run_grasp_demo(
 ) -> GraspDemoResult:
     """Grasp, lift and turn the box; see the module docstring.
 
+    Raises:
+        UnreachableError: ``offset`` is outside the planned grasp's manipulable space
+            (:meth:`~bhgrasp.experiments.box_grasp.BoxGrasp.manipulable_space`); the message names the missing
+            direction or the joint, and gives the nearest offset the grasp can make.
+
     Args:
         mass: True box mass [kg].
         estimate: Mass [kg] the controller starts from.
         controller: One of :data:`CONTROLLERS`.
         duration: Simulated time [s].
-        offset: Object motion after the squeeze (position [m], rotation vector [rad], world).
+        offset: Object motion after the squeeze (position [m], rotation vector [rad], world); one the planned grasp
+            cannot make without sliding, or without a joint passing its limit, is refused before simulating.
         distribution: ``"qp"`` (friction-cone QP) or ``"pinv"`` (the thesis' G^+ baseline).
         approach_gains: Joint computed-torque gains (Kp [1/s^2], Kv [1/s]) of the approach.
         gains: (kp, kv) of the "ctc", "natural" or "stiffness" controller instead of the demo's.
@@ -194,6 +200,7 @@ def run_grasp_demo(
                          sensor_noise=sensor_noise, hand=hand)  # fmt: skip
     mass, estimate, duration, offset = float(mass), float(estimate), float(duration), as_vector(offset, "offset", 6)
     setup = grasp_scene(hand, mass, float(stiffness))
+    setup.manipulable_space().check(offset)  # a motion the grasp cannot make is refused before simulating
     nominal_box = Box(size=setup.box.size, mass=estimate)
     grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains)
     kp, kv = approach_gains
