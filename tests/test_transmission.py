@@ -19,7 +19,7 @@ from bhgrasp.barrett.transmission import (
     switch_modes,
 )
 from bhgrasp.controllers.supervisor import MotorCommands
-from bhgrasp.sim.actuation import BarrettActuation
+from bhgrasp.sim.actuation import Actuation, BarrettActuation
 from bhgrasp.transmission import DirectDrive
 
 MODES = [np.array(modes) for modes in itertools.product((0, 1, 2), repeat=3)]
@@ -117,6 +117,13 @@ def test_full_actuation_passes_torques_through_and_bad_drives_are_refused() -> N
         DirectDrive(hand, damping="x")
     with pytest.raises(bh.InputError, match="`hand` must be a bhgrasp Hand"):
         DirectDrive("hand")
+
+    class Direct(Actuation):
+        def joint_torques(self, u):
+            return u
+
+    with pytest.raises(bh.InputError, match="`drive` must be a bhgrasp Transmission"):
+        Direct(hand)  # a hand where its drive model belongs
 
 
 def test_controllers_and_drive_models_never_import_the_simulator() -> None:

@@ -33,6 +33,7 @@ from bhgrasp.barrett.transmission import (  # noqa: F401  (the drive's constants
     SPREAD_RATIO,
     BarrettTransmission,
 )
+from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.transmission import DirectDrive, Transmission, per_joint
 
@@ -50,6 +51,8 @@ class Actuation(ABC):
             drive: The hand's drive model; its ``passive_damping`` is this actuation's :attr:`damping`.
             friction: Coulomb joint friction [N m], scalar or per joint (regularised over 1e-3 rad/s).
         """
+        if not isinstance(drive, Transmission):
+            raise InputError(f"`drive` must be a bhgrasp Transmission (e.g. DirectDrive(hand)), got {drive!r}")
         self.drive = drive
         self.hand = drive.hand
         self.damping = drive.passive_damping
