@@ -229,6 +229,24 @@ class Hand:
         """Velocity indices of a finger's joints (columns of its Jacobian that can be non-zero)."""
         return np.array([self.joint_index(joint) for joint in self.finger_joints(finger)], dtype=int)
 
+    def collision_model(self) -> pin.GeometryModel:
+        """A copy of the hand's collision shapes on its own model (``collision_geometry``, else its URDF's, else none).
+
+        Raises:
+            ModelError: The URDF's collision geometry does not load.
+        """
+        if self.collision_geometry is not None:
+            return self.collision_geometry.copy()
+        path = self.urdf_path
+        if path is None:
+            return pin.GeometryModel()
+        try:
+            return pin.buildGeomFromUrdfString(
+                self._model, path.read_text(), pin.GeometryType.COLLISION, None, [str(p) for p in path.parents]
+            )
+        except (ValueError, RuntimeError, OSError) as error:
+            raise ModelError(f"cannot load the collision geometry of {str(path)!r}: {error}") from error
+
     # ------------------------------------------------------------------ world placement and gravity
     @property
     def base_placement(self) -> pin.SE3:

@@ -63,7 +63,7 @@ def mounted(hand: Hand, reach: float = 1.0, name: str | None = None) -> Hand:
         wrist.addJointFrame(joint)
         wrist.appendBodyToJoint(joint, pin.Inertia.Zero(), pin.SE3.Identity())
     model, geometry = pin.appendModel(
-        wrist, hand.model, pin.GeometryModel(), _hand_geometry(hand), wrist.getFrameId(MOUNT_JOINTS[-1]),
+        wrist, hand.model, pin.GeometryModel(), hand.collision_model(), wrist.getFrameId(MOUNT_JOINTS[-1]),
         pin.SE3.Identity(),
     )  # fmt: skip
     model.name = hand.model.name
@@ -87,21 +87,6 @@ def mounted(hand: Hand, reach: float = 1.0, name: str | None = None) -> Hand:
         collision_geometry=geometry,
         base_joints=MOUNT_JOINTS + hand.base_joints,
     )
-
-
-def _hand_geometry(hand: Hand) -> pin.GeometryModel:
-    """The hand's collision geometry on its own model (from ``collision_geometry``, else its URDF, else none)."""
-    if hand.collision_geometry is not None:
-        return hand.collision_geometry.copy()
-    if hand.urdf_path is None:
-        return pin.GeometryModel()
-    path = hand.urdf_path
-    try:
-        return pin.buildGeomFromUrdfString(
-            hand.model, path.read_text(), pin.GeometryType.COLLISION, None, [str(p) for p in path.parents]
-        )
-    except (ValueError, RuntimeError, OSError) as error:
-        raise ModelError(f"cannot load the collision geometry of {str(path)!r}: {error}") from error
 
 
 def mount_pose(coordinates: Any) -> pin.SE3:

@@ -165,14 +165,25 @@ class BarrettActuation(Actuation):
             damping: Viscous joint damping [N m s/rad].
             friction: Coulomb joint friction [N m].
         """
-        drive = BarrettTransmission(hand, breakaway_torque, motor_damping, blocked_speed, damping)
-        super().__init__(drive, friction)
-        self.breakaway_torque, self.motor_damping = drive.breakaway_torque, drive.motor_damping
-        self.blocked_speed = drive.blocked_speed
+        super().__init__(BarrettTransmission(hand, breakaway_torque, motor_damping, blocked_speed, damping), friction)
         self.saturate = bool(saturate)
-        self._spread, self._proximal, self._distal = drive.spread, drive.proximal, drive.distal
-        self._lower = hand.lower
         self.mode = np.zeros(3, dtype=int)  # per finger: 0 coupled, 1 broken away, 2 re-opening the proximal
+
+    # the drive's parameters, read from it (one source for the Python rule and the batch's C++ copy)
+    @property
+    def breakaway_torque(self) -> float:
+        """Proximal drive torque [N m] above which the TorqueSwitch breaks away."""
+        return self.drive.breakaway_torque
+
+    @property
+    def motor_damping(self) -> float:
+        """Motor viscous damping at the shaft [N m s/rad]."""
+        return self.drive.motor_damping
+
+    @property
+    def blocked_speed(self) -> float:
+        """Proximal speed [rad/s] below which the proximal link counts as blocked."""
+        return self.drive.blocked_speed
 
     @property
     def broken(self) -> np.ndarray:

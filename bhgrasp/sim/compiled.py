@@ -135,14 +135,15 @@ def barrett_of(actuation: BarrettActuation):
 
     barrett = core_module().Barrett()
     barrett.nv_hand = actuation.hand.nv
-    barrett.spread_first, barrett.spread_second = actuation._spread
-    barrett.proximal, barrett.distal = list(actuation._proximal), list(actuation._distal)
+    drive = actuation.drive
+    barrett.spread_first, barrett.spread_second = drive.spread
+    barrett.proximal, barrett.distal = list(drive.proximal), list(drive.distal)
     barrett.spread_ratio, barrett.proximal_ratio = model.SPREAD_RATIO, model.PROXIMAL_RATIO
     barrett.distal_ratio, barrett.distal_alone_ratio = model.DISTAL_RATIO, model.DISTAL_ALONE_RATIO
     barrett.max_motor_torque, barrett.breakaway_torque = model.MAX_MOTOR_TORQUE, actuation.breakaway_torque
     barrett.motor_damping, barrett.blocked_speed = actuation.motor_damping, actuation.blocked_speed
     barrett.saturate = actuation.saturate
-    barrett.damping, barrett.friction, barrett.lower = actuation.damping, actuation.friction, actuation._lower
+    barrett.damping, barrett.friction, barrett.lower = actuation.damping, actuation.friction, actuation.hand.lower
     return barrett
 
 

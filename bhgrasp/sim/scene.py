@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.errors import InputError, ModelError
+from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.objects import FixedBox, Plane, RigidObject, SpringMounted
 
@@ -210,26 +210,11 @@ class Scene:
         return root, joint
 
     def _hand_geometry(self) -> pin.GeometryModel:
-        path = self.hand.urdf_path
-        if self.hand.collision_geometry is not None:
-            geometry = self.hand.collision_geometry.copy()
-        elif path is None:
-            return pin.GeometryModel()
-        else:
-            geometry = self._urdf_geometry(path)
+        geometry = self.hand.collision_model()
         placement = self.hand.base_placement
         for geometry_object in geometry.geometryObjects:
             if geometry_object.parentJoint == 0:
                 geometry_object.placement = placement * geometry_object.placement
-        return geometry
-
-    def _urdf_geometry(self, path) -> pin.GeometryModel:
-        try:
-            geometry = pin.buildGeomFromUrdfString(
-                self.hand.model, path.read_text(), pin.GeometryType.COLLISION, None, [str(p) for p in path.parents]
-            )
-        except (ValueError, RuntimeError, OSError) as error:
-            raise ModelError(f"cannot load the collision geometry of {str(path)!r}: {error}") from error
         return geometry
 
     def _add_geometry(self, name: str, joint: int, placement: pin.SE3, shape: object) -> int:
