@@ -2,8 +2,20 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace bhgrasp {
+
+namespace {
+
+// Finger f's motor-coordinate column (proximal, distal entries) in TorqueSwitch mode `mode` (BarrettTransmission.matrix).
+std::array<double, 2> finger_column(const Barrett& barrett, int mode) {
+  if (mode == 1) return {{0.0, 1.0}};
+  if (mode == 2) return {{1.0, 0.0}};
+  return {{1.0, barrett.proximal_ratio / barrett.distal_ratio}};
+}
+
+}  // namespace
 
 Drive barrett_drive(const Barrett& barrett, const Modes& modes) {
   Drive drive;
@@ -15,13 +27,17 @@ Drive barrett_drive(const Barrett& barrett, const Modes& modes) {
     const int proximal = barrett.proximal[finger], distal = barrett.distal[finger];
     if (modes[finger] == 1) {
       drive.transmission(distal, finger + 1) = 1.0;
-      damping[distal] += barrett.motor_damping * (barrett.distal_alone_ratio * barrett.distal_alone_ratio);
+      damping[distal] += barrett.efficiency * barrett.motor_damping * (barrett.distal_alone_ratio * barrett.distal_alone_ratio);
     } else {
       drive.transmission(proximal, finger + 1) = 1.0;
       if (modes[finger] == 0) drive.transmission(distal, finger + 1) = barrett.proximal_ratio / barrett.distal_ratio;
-      damping[proximal] += barrett.motor_damping * (barrett.proximal_ratio * barrett.proximal_ratio);
+      damping[proximal] += barrett.efficiency * barrett.motor_damping * (barrett.proximal_ratio * barrett.proximal_ratio);
     }
   }
+  std::vector<Eigen::Index> kept{0};  // locked fingers' columns leave T: their joints hold
+  for (int finger = 0; finger < 3; ++finger)
+    if (!modes[static_cast<std::size_t>(finger + 3)]) kept.push_back(finger + 1);
+  if (kept.size() < 4) drive.transmission = Matrix(drive.transmission(Eigen::all, kept));
   drive.joint_damping = damping;
   drive.friction = barrett.friction;
   drive.motor_damping = damping - barrett.damping;
@@ -36,15 +52,16 @@ Vector barrett_torques(const Barrett& barrett, const Modes& modes, const MotorIn
   tau[barrett.spread_first] = barrett.spread_ratio * clipped[0];  // the coupled F2 spread shares the column
   for (int finger = 0; finger < 3; ++finger) {
     if (modes[finger] == 1)
-      tau[barrett.distal[finger]] = barrett.distal_alone_ratio * clipped[finger + 1];
+      tau[barrett.distal[finger]] = barrett.efficiency * barrett.distal_alone_ratio * clipped[finger + 1];
     else
-      tau[barrett.proximal[finger]] = barrett.proximal_ratio * clipped[finger + 1];
+      tau[barrett.proximal[finger]] = barrett.efficiency * barrett.proximal_ratio * clipped[finger + 1];
   }
   return tau;
 }
 
 void barrett_update(const Barrett& barrett, Modes& modes, const Vector& q_hand, const Vector& v_hand,
                     const MotorInputs& u, const Vector& drive_torques) {
+  const Modes before = modes;
   for (int finger = 0; finger < 3; ++finger) {
     const double motor = u[finger + 1];
     const int proximal = barrett.proximal[finger], distal = barrett.distal[finger];
@@ -58,6 +75,26 @@ void barrett_update(const Barrett& barrett, Modes& modes, const Vector& q_hand, 
       mode = 2;
     } else if (mode == 2 && (proximal_at_stop || motor > 0.0)) {
       mode = 0;
+    }
+  }
+  if (!barrett.self_locking) return;
+  const Vector torques = barrett_torques(barrett, modes, u);  // the pucks' torques through the gears
+  for (int finger = 0; finger < 3; ++finger) {
+    const auto f = static_cast<std::size_t>(finger);
+    const double motor = u[finger + 1];
+    const int proximal = barrett.proximal[f], distal = barrett.distal[f];
+    const std::array<double, 2> c = finger_column(barrett, modes[f]);
+    int& locked = modes[f + 3];
+    if (modes[f] != before[f]) locked = 0;  // a new coordinate starts unlocked
+    if (motor == 0.0) {
+      locked = 1;
+    } else if (locked) {
+      const double given = c[0] * torques[proximal] + c[1] * torques[distal];
+      const double held = c[0] * drive_torques[proximal] + c[1] * drive_torques[distal];
+      locked = (motor > 0.0 ? 1.0 : -1.0) * (given - held) <= 0.0;
+    } else {
+      const double speed = (c[0] * v_hand[proximal] + c[1] * v_hand[distal]) / (c[0] * c[0] + c[1] * c[1]);
+      locked = motor * speed < 0.0;
     }
   }
 }

@@ -1,6 +1,7 @@
-// The BH8-280's four motors and TorqueSwitch for the compiled batch (bhgrasp/sim/actuation.py: BarrettActuation,
-// the readable twin; its module docstring explains the model).  Per finger the mode is 0 coupled (armed), 1 broken
-// away (the motor drives the distal joint alone), 2 re-opening the proximal link.  tests/test_batch.py steps a batch
+// The BH8-280's four motors, TorqueSwitch and self-locking worm drives for the compiled batch
+// (bhgrasp/sim/actuation.py: BarrettActuation, the readable twin; bhgrasp/barrett/transmission.py explains the
+// model).  Per finger the mode is 0 coupled (armed), 1 broken away (the motor drives the distal joint alone), 2
+// re-opening the proximal link; then per finger 1 if its worm drive is locked (its column leaves the transmission).  tests/test_batch.py steps a batch
 // of Barrett hands against separate Simulator runs (the Python actuation) bit for bit.
 #pragma once
 
@@ -10,7 +11,7 @@
 
 namespace bhgrasp {
 
-using Modes = std::array<int, 3>;  // TorqueSwitch mode of F1, F2, F3
+using Modes = std::array<int, 6>;  // TorqueSwitch mode of F1, F2, F3, then their worm locks (0 or 1)
 using MotorInputs = Eigen::Vector4d;  // spread, F1, F2, F3 motor torques [N m]
 
 struct Barrett {
@@ -22,7 +23,8 @@ struct Barrett {
   double breakaway_torque = 0.0;  // [N m] proximal drive torque that breaks a blocked switch away
   double motor_damping = 0.0;     // [N m s/rad] at the motor shaft
   double blocked_speed = 0.0;     // [rad/s] proximal speed below which the link counts as blocked
-  bool saturate = false;
+  double efficiency = 1.0;        // forward efficiency of the finger worm drives
+  bool saturate = false, self_locking = false;
   Vector damping, friction, lower;  // (nv_hand,) passive joint damping, Coulomb friction, lower joint limits
 };
 
@@ -32,8 +34,8 @@ Drive barrett_drive(const Barrett& barrett, const Modes& modes);
 // Joint torques [N m] the motor inputs apply in `modes` (BarrettActuation.joint_torques).
 Vector barrett_torques(const Barrett& barrett, const Modes& modes, const MotorInputs& u);
 
-// After a step to (q_hand, v_hand) under inputs u with delivered drive torques: the switches' next modes
-// (BarrettActuation.update).
+// After a step to (q_hand, v_hand) under inputs u with delivered drive torques: the switches' next modes and the
+// worm locks (BarrettActuation.update; BarrettTransmission.switch and locks).
 void barrett_update(const Barrett& barrett, Modes& modes, const Vector& q_hand, const Vector& v_hand,
                     const MotorInputs& u, const Vector& drive_torques);
 

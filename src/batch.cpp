@@ -41,7 +41,7 @@ Batch::Batch(const std::string& model, const std::string& geometry, const Settin
   if (size < 1) throw std::invalid_argument("a batch needs at least one environment");
   for (int i = 0; i < size; ++i) engines_.push_back(std::make_unique<Engine>(model, geometry, settings));
   memories_.resize(static_cast<std::size_t>(size));
-  modes_.assign(static_cast<std::size_t>(size), Modes{{0, 0, 0}});
+  modes_.assign(static_cast<std::size_t>(size), Modes{{0, 0, 0, 0, 0, 0}});
   contacts_.resize(static_cast<std::size_t>(size));
   divergences_.resize(static_cast<std::size_t>(size));
   for (auto& memory : memories_) memory = Memory{Indices(0), Points(0, 3), Points(0, 3), Flags(0)};
@@ -83,13 +83,17 @@ void Batch::set_barrett(const Barrett& barrett) {
     throw std::invalid_argument("the Barrett model does not fit the scene's hand");
   barrett_ = barrett;
   barrett_drives_.clear();
-  for (int code = 0; code < 27; ++code) barrett_drives_.push_back(barrett_drive(barrett_, {{code / 9, code / 3 % 3, code % 3}}));
+  for (int code = 0; code < 27 * 8; ++code) {  // TorqueSwitch code 9 m0 + 3 m1 + m2, then 27 x the lock bits
+    const int s = code % 27, l = code / 27;
+    barrett_drives_.push_back(barrett_drive(barrett_, {{s / 9, s / 3 % 3, s % 3, l / 4, l / 2 % 2, l % 2}}));
+  }
 }
 
 void Batch::set_modes(int env, const Modes& modes) {
   if (env < 0 || env >= size()) throw std::out_of_range("no such environment");
-  for (int mode : modes)
-    if (mode < 0 || mode > 2) throw std::invalid_argument("a TorqueSwitch mode is 0, 1 or 2");
+  for (int k = 0; k < 6; ++k)
+    if (modes[k] < 0 || modes[k] > (k < 3 ? 2 : 1))
+      throw std::invalid_argument("a TorqueSwitch mode is 0, 1 or 2 and a worm lock 0 or 1");
   modes_[static_cast<std::size_t>(env)] = modes;
 }
 
@@ -101,7 +105,11 @@ void Batch::step_barrett(const Rows& u, double max_speed, double max_penetration
     if (divergences_[e].kind) return;  // frozen where it diverged
     Modes& modes = modes_[e];
     const MotorInputs inputs = u.row(i).transpose();
-    const Drive& drive = barrett_drives_[static_cast<std::size_t>(9 * modes[0] + 3 * modes[1] + modes[2])];
+    if (barrett_.self_locking)  // an idle motor's worm holds for the step (BarrettActuation.begin)
+      for (int finger = 0; finger < 3; ++finger)
+        if (inputs[finger + 1] == 0.0) modes[static_cast<std::size_t>(finger + 3)] = 1;
+    const int code = 9 * modes[0] + 3 * modes[1] + modes[2] + 27 * (4 * modes[3] + 2 * modes[4] + modes[5]);
+    const Drive& drive = barrett_drives_[static_cast<std::size_t>(code)];
     StepResult result = engines_[e]->step(q_.row(i).transpose(), v_.row(i).transpose(),
                                           barrett_torques(barrett_, modes, inputs), drive, memories_[e], max_speed,
                                           max_penetration);

@@ -31,7 +31,8 @@ class Batch {
   // One step of every environment that has not diverged: tau_hand (N, nv_hand) [N m].
   void step(const Rows& tau_hand, const Drive& drive, double max_speed, double max_penetration, int threads);
 
-  // Barrett hands: the model (its 27 mode drives are built here), each environment's TorqueSwitch modes, and one
+  // Barrett hands: the model (its 27 x 8 mode drives are built here), each environment's modes (TorqueSwitch, worm
+  // locks), and one
   // step from motor inputs u (N, 4) [N m]: torques and drive in each environment's modes, then its mode update.
   void set_barrett(const Barrett& barrett);
   void set_modes(int env, const Modes& modes);
@@ -57,7 +58,7 @@ class Batch {
   Rows q_, v_;
   int nv_hand_ = 0;
   Barrett barrett_;
-  std::vector<Drive> barrett_drives_;  // by mode code 9 m0 + 3 m1 + m2 (empty: no Barrett model set)
+  std::vector<Drive> barrett_drives_;  // by code 9 m0 + 3 m1 + m2 + 27 (4 l0 + 2 l1 + l2) (empty: no Barrett model)
   std::vector<Modes> modes_;
 };
 

@@ -142,6 +142,7 @@ NB_MODULE(_core, m) {
       .def_rw("distal_alone_ratio", &Barrett::distal_alone_ratio).def_rw("max_motor_torque", &Barrett::max_motor_torque)
       .def_rw("breakaway_torque", &Barrett::breakaway_torque).def_rw("motor_damping", &Barrett::motor_damping)
       .def_rw("blocked_speed", &Barrett::blocked_speed).def_rw("saturate", &Barrett::saturate)
+      .def_rw("efficiency", &Barrett::efficiency).def_rw("self_locking", &Barrett::self_locking)
       .def_rw("damping", &Barrett::damping).def_rw("friction", &Barrett::friction)
       .def_rw("lower", &Barrett::lower);
 

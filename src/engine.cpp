@@ -171,14 +171,15 @@ Matrix Engine::frame_jacobians(const Vector& q, const std::vector<int>& frames) 
 // ------------------------------------------------------------------ the step
 StepResult Engine::step(const Vector& q, const Vector& v, const Vector& tau_hand, const Drive& drive,
                         const Memory& memory, double max_speed, double max_penetration) {
-  if (q.size() != model_.nq || v.size() != model_.nv || tau_hand.size() != settings_.nv_hand)
+  if (q.size() != model_.nq || v.size() != model_.nv ||
+      (tau_hand.size() != settings_.nv_hand && tau_hand.size() != model_.nv))
     throw std::invalid_argument("q, v or tau_hand of the wrong size");
   if (drive.transmission.rows() != settings_.nv_hand || drive.joint_damping.size() != settings_.nv_hand ||
       drive.friction.size() != settings_.nv_hand || drive.motor_damping.size() != settings_.nv_hand)
     throw std::invalid_argument("the drive's transmission, damping or friction has the wrong size");
   Vector& tau = work_.tau;
   tau.setZero(model_.nv);
-  tau.head(settings_.nv_hand) = tau_hand;
+  tau.head(tau_hand.size()) = tau_hand;  // hand joint torques, or generalized forces on the whole scene
   StepResult result;
   const double dt = settings_.dt;
   if (settings_.integrator == 0) {

@@ -131,7 +131,8 @@ class Engine {
   // `model` and `geometry`: Pinocchio's text serialisations (Model.saveToString, GeometryModel.saveToString).
   Engine(const std::string& model, const std::string& geometry, Settings settings);
 
-  // Advance dt from (q, v) with hand joint torques tau_hand [N m]; max_speed/max_penetration bound divergence.
+  // Advance dt from (q, v) with hand joint torques tau_hand [N m] (or nv generalized forces: hand torques, then
+  // external forces on the objects' coordinates); max_speed/max_penetration bound divergence.
   StepResult step(const Vector& q, const Vector& v, const Vector& tau_hand, const Drive& drive, const Memory& memory,
                   double max_speed, double max_penetration);
 

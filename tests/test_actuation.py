@@ -85,10 +85,10 @@ def test_fully_actuated_saturation() -> None:
 
 def test_barrett_motor_torques_through_the_gears() -> None:
     hand = bh.BarrettHand()
-    actuation = BarrettActuation(hand, saturate=True)
+    actuation = BarrettActuation(hand, saturate=True, efficiency=0.4)
     tau = actuation.joint_torques(np.array([0.0, 1.0, 0.05, 0.0]))
-    assert tau[1] == pytest.approx(PROXIMAL_RATIO * MAX_MOTOR_TORQUE)  # 1 N m clipped to the 0.11 N m puck limit
-    assert tau[4] == pytest.approx(PROXIMAL_RATIO * 0.05)
+    assert tau[1] == pytest.approx(0.4 * PROXIMAL_RATIO * MAX_MOTOR_TORQUE)  # 1 N m clipped to the 0.11 N m limit
+    assert tau[4] == pytest.approx(0.4 * PROXIMAL_RATIO * 0.05)  # through the worm's forward efficiency
     transmission = actuation.transmission()
     np.testing.assert_array_equal(transmission[:, 0], [1, 0, 0, 1, 0, 0, 0, 0])
     np.testing.assert_allclose(transmission[[1, 2], 1], [1.0, 1.0 / 3.0])
@@ -100,5 +100,9 @@ def test_barrett_actuation_needs_a_barrett_hand() -> None:
         BarrettActuation(finger)
     with pytest.raises(bh.InputError, match="`breakaway_torque` must be a positive finite number"):
         BarrettActuation(bh.BarrettHand(), breakaway_torque=-1.0)
+    with pytest.raises(bh.InputError, match=r"`efficiency` must be in \(0, 1\], got 1.5"):
+        BarrettActuation(bh.BarrettHand(), efficiency=1.5)
+    with pytest.raises(bh.InputError, match="`efficiency` must be a positive finite number"):
+        BarrettActuation(bh.BarrettHand(), efficiency=0.0)
     with pytest.raises(bh.InputError, match="`damping` must be finite and >= 0"):
         FullyActuated(bh.BarrettHand(), damping=-0.1)

@@ -15,6 +15,7 @@ from bhgrasp.barrett.transmission import (
     MOTOR_DAMPING,
     PROXIMAL_RATIO,
     SPREAD_RATIO,
+    WORM_EFFICIENCY,
     BarrettTransmission,
     switch_modes,
 )
@@ -34,16 +35,20 @@ def motor_speeds(drive: BarrettTransmission, modes: np.ndarray, w: np.ndarray) -
 
 @pytest.mark.parametrize("modes", MODES, ids=lambda m: "".join(map(str, m)))
 def test_motor_power_reaches_the_joints_and_reflected_damping_is_b_r_squared(modes: np.ndarray) -> None:
-    """u . (motor speeds) = tau . v for every allowed motion v = T w; w^T T^T D T w = b_m |motor speeds|^2."""
+    """tau . v = u . (eta motor speeds) for every allowed motion v = T w (the worms pass eta of the finger motors'
+    power, the spread gears all of it); w^T T^T D T w = b_m |motor speeds|^2 weighted the same way."""
     hand = bh.BarrettHand()
-    drive = BarrettTransmission(hand, damping=0.0)
-    rng = np.random.default_rng(int("".join(map(str, modes)), 3))
-    transmission, gears = drive.matrix(modes), drive.gears(modes)
-    for u, w in zip(rng.normal(size=(5, 4)), rng.normal(size=(5, 4))):
-        speeds = motor_speeds(drive, modes, w)
-        assert (gears @ u) @ (transmission @ w) == pytest.approx(u @ speeds, rel=1e-13)
-        v = transmission @ w
-        assert v @ (drive.joint_damping(modes) * v) == pytest.approx(MOTOR_DAMPING * speeds @ speeds, rel=1e-13)
+    for efficiency in (1.0, WORM_EFFICIENCY, 0.3):
+        drive = BarrettTransmission(hand, damping=0.0, efficiency=efficiency)
+        rng = np.random.default_rng(int("".join(map(str, modes)), 3))
+        transmission, gears = drive.matrix(modes), drive.gears(modes)
+        passed = np.array([1.0, efficiency, efficiency, efficiency])  # share of each motor's power at the joints
+        for u, w in zip(rng.normal(size=(5, 4)), rng.normal(size=(5, 4))):
+            speeds = motor_speeds(drive, modes, w)
+            assert (gears @ u) @ (transmission @ w) == pytest.approx(u @ (passed * speeds), rel=1e-13)
+            v = transmission @ w
+            expected = MOTOR_DAMPING * speeds @ (passed * speeds)
+            assert v @ (drive.joint_damping(modes) * v) == pytest.approx(expected, rel=1e-13)
     for finger, mode in enumerate(modes):  # the kinematics of each mode
         proximal, distal = PROXIMAL[finger], DISTAL[finger]
         column = transmission[:, finger + 1]
@@ -53,13 +58,17 @@ def test_motor_power_reaches_the_joints_and_reflected_damping_is_b_r_squared(mod
 
 
 def test_stall_torque_times_the_gear_ratio_is_the_joint_torque() -> None:
-    drive = BarrettTransmission(bh.BarrettHand())
+    """Ideal gears: the URDF's effort limits (13.75 N m proximal, the puck limit through 125:1); the worms pass eta."""
+    ideal = BarrettTransmission(bh.BarrettHand(), efficiency=1.0)
     stall = np.full(4, MAX_MOTOR_TORQUE)
-    tau = drive.joint_torques(stall, [0, 1, 2])
+    tau = ideal.joint_torques(stall, [0, 1, 2])
     assert tau[0] == pytest.approx(SPREAD_RATIO * MAX_MOTOR_TORQUE)  # 1.925 N m, the URDF's spread effort limit
     assert tau[1] == tau[7 - 1] == pytest.approx(PROXIMAL_RATIO * MAX_MOTOR_TORQUE)  # 13.75 N m: F1, F3 proximal
     assert tau[5] == pytest.approx(DISTAL_ALONE_RATIO * MAX_MOTOR_TORQUE)  # F2 broken away: 10.3 N m distal
     np.testing.assert_allclose(tau[[0, 1, 5]], bh.BarrettHand().effort_limit[[0, 1, 5]], rtol=1e-3)
+    worm = BarrettTransmission(bh.BarrettHand()).joint_torques(stall, [0, 1, 2])
+    eta = WORM_EFFICIENCY
+    np.testing.assert_allclose(worm, tau * [1, eta, eta, 1, eta, eta, eta, eta], rtol=1e-15)  # the spread: no worm
 
 
 def test_the_torque_switch_breaks_away_exactly_above_its_threshold_and_re_arms_at_the_stops() -> None:

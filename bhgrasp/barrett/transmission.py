@@ -19,10 +19,20 @@ breakaway threshold; then the proximal joint holds and the motor drives the dist
 worm.  Opening a broken-away finger drives the fingertip back to its stop, then the proximal link alone to its open
 stop, where the switch re-arms.  Modes per finger: 0 armed (coupled), 1 broken away, 2 re-opening the proximal link.
 
+Worm drives: each finger motor turns its joints through single-start worms, which Barrett calls
+"non-backdrivable" (Barrett wiki, safety page).  A worm is self-locking when its friction angle phi exceeds its lead
+angle lambda; its forward efficiency is then eta = tan(lambda) / tan(lambda + phi) < tan(lambda) / tan(2 lambda)
+= (1 - tan^2 lambda) / 2 < 1/2 (Shigley's Mechanical Engineering Design, worm gearing).  Barrett publishes neither
+angle, so the default efficiency is that bound, 0.5 (a user who measured theirs sets it).  Model (:meth:`locks`):
+a finger's motor coordinate is *locked* (held, its reaction carried by the worm) whenever its load would drive it
+back against the motor or the motor is idle, and it unlocks when the motor alone gives more than holding needs in
+the motor's direction.  The spread's 17.5:1 drive is not modelled as self-locking (its puck default HOLD = 1 keeps
+it in position control, the fingers' HOLD = 0 leaves them to their worms).
+
 Inputs are motor torques [N m] at the motor shafts, then one torque [N m or N] per joint outside the hand's eight
 (e.g. the wrist mount's of :func:`~bhgrasp.mount.mounted`), applied directly.  A linear torque-speed line through
-the puck limits gives each motor a viscous damping [N m s/rad] at its shaft; through a gear ratio r it damps the
-driven joint by b_m r^2.
+the puck limits gives each motor a viscous damping [N m s/rad] at its shaft; through a gear ratio r and the
+efficiency eta it damps the driven joint by eta b_m r^2 (a finger's torque is eta r (u - b_m r w)).
 """
 
 from __future__ import annotations
@@ -47,6 +57,7 @@ MAX_MOTOR_SPEED = 200e3 / 4096 * 2 * np.pi  # [rad/s] finger puck default MV = 2
 # [N m s/rad] at the shaft; through 125:1 it caps the proximal speed at 2.45 rad/s under full torque.
 MOTOR_DAMPING = MAX_MOTOR_TORQUE / MAX_MOTOR_SPEED
 BREAKAWAY_TORQUE = 0.5  # [N m] at the proximal joint (GraspIt! breakAwayTorque)
+WORM_EFFICIENCY = 0.5  # forward efficiency of a finger's worm drive: the bound for a self-locking worm (docstring)
 FINGERS = ("F1", "F2", "F3")
 ARMED, BROKEN_AWAY, REOPENING = 0, 1, 2
 STOP_TOLERANCE = 1e-4  # [rad] a joint this close to its lower limit is at its stop
@@ -62,6 +73,8 @@ class BarrettTransmission(Transmission):
         motor_damping: float = MOTOR_DAMPING,
         blocked_speed: float = 0.02,
         damping: float | Sequence[float] = 0.0,
+        efficiency: float = WORM_EFFICIENCY,
+        self_locking: bool = True,
     ) -> None:
         """Couple a Barrett hand's joints.
 
@@ -73,6 +86,8 @@ class BarrettTransmission(Transmission):
             blocked_speed: Proximal speed [rad/s] below which the proximal link counts as blocked; breakaway needs
                 a blocked link (a start-up torque transient of a moving finger does not break the switch).
             damping: Passive viscous joint damping [N m s/rad], scalar or per joint.
+            efficiency: Forward efficiency of the finger worm drives, in (0, 1] (1: ideal gears).
+            self_locking: Whether the finger drives self-lock (:meth:`locks`); ``False``: they back-drive freely.
         """
         super().__init__(hand, damping)
         names = hand.joint_names
@@ -83,6 +98,10 @@ class BarrettTransmission(Transmission):
         self.breakaway_torque = as_positive(breakaway_torque, "breakaway_torque")
         self.motor_damping = float(per_joint(motor_damping, 1, "motor_damping")[0])
         self.blocked_speed = as_positive(blocked_speed, "blocked_speed")
+        self.efficiency = as_positive(efficiency, "efficiency")
+        if self.efficiency > 1.0:
+            raise InputError(f"`efficiency` must be in (0, 1], got {efficiency!r}")
+        self.self_locking = bool(self_locking)
         self.spread = (names.index("F1_spread"), names.index("F2_spread"))
         self.proximal = [names.index(f"{f}_proximal") for f in FINGERS]
         self.distal = [names.index(f"{f}_distal") for f in FINGERS]
@@ -118,9 +137,9 @@ class BarrettTransmission(Transmission):
         tau[self.spread[0]] = SPREAD_RATIO * u[0]  # the coupled F2 spread shares the (1, 1) column
         for finger in range(3):
             if modes[finger] == BROKEN_AWAY:
-                tau[self.distal[finger]] = DISTAL_ALONE_RATIO * u[finger + 1]
+                tau[self.distal[finger]] = self.efficiency * DISTAL_ALONE_RATIO * u[finger + 1]
             else:
-                tau[self.proximal[finger]] = PROXIMAL_RATIO * u[finger + 1]
+                tau[self.proximal[finger]] = self.efficiency * PROXIMAL_RATIO * u[finger + 1]
         return tau
 
     def gears(self, modes: Any = None) -> np.ndarray:
@@ -137,9 +156,9 @@ class BarrettTransmission(Transmission):
         damping[self.spread[0]] += self.motor_damping * SPREAD_RATIO**2
         for finger in range(3):
             if modes[finger] == BROKEN_AWAY:
-                damping[self.distal[finger]] += self.motor_damping * DISTAL_ALONE_RATIO**2
+                damping[self.distal[finger]] += self.efficiency * self.motor_damping * DISTAL_ALONE_RATIO**2
             else:
-                damping[self.proximal[finger]] += self.motor_damping * PROXIMAL_RATIO**2
+                damping[self.proximal[finger]] += self.efficiency * self.motor_damping * PROXIMAL_RATIO**2
         return damping
 
     def switch(
@@ -166,15 +185,41 @@ class BarrettTransmission(Transmission):
                 modes[finger] = ARMED
         return modes
 
+    def locks(self, locked: np.ndarray, modes: Any, v_hand: np.ndarray, u: np.ndarray, drive: np.ndarray) -> np.ndarray:
+        """Which finger drives are locked after a step that ended at velocity ``v_hand`` under motor torques ``u``.
+
+        ``locked`` (3,) bool: the drives locked during the step; ``modes``: the TorqueSwitch modes after it (a
+        finger whose mode changed starts unlocked, on its new coordinate); ``drive``: the joint torques the drive
+        delivered [N m].  Along a finger's motor coordinate w (its column c of :meth:`matrix`), the motor gives
+        F = c . B u and the drive delivered H = c . drive (what holding took, while locked).  A locked drive
+        unlocks when the motor turns (u != 0) and gives more than holding needs in its direction, sign(u) F >
+        sign(u) H; an unlocked drive locks when the motor is idle (u = 0) or the load turns it back, u w < 0.
+        """
+        if not self.self_locking:
+            return np.zeros(3, dtype=bool)
+        modes = switch_modes(modes)
+        columns, torques = self.matrix(modes), self.joint_torques(u, modes)
+        result = np.array(locked, dtype=bool)
+        for finger in range(3):
+            motor, column = u[finger + 1], columns[:, finger + 1]
+            if locked[finger]:
+                result[finger] = motor == 0.0 or np.sign(motor) * (column @ torques - column @ drive) <= 0.0
+            else:
+                speed = column @ v_hand / (column @ column)  # w from v = c w on the finger's joints
+                result[finger] = motor == 0.0 or motor * speed < 0.0
+        return result
+
 
 _ARMED = np.zeros(3, dtype=int)
 
 
 def switch_modes(modes: Any) -> np.ndarray:
-    """TorqueSwitch modes (3,) as ints from a state's flags; ``None`` or empty: every switch armed."""
+    """TorqueSwitch modes (3,) as ints from a state's flags (3, or 6 with the worm locks); ``None``/empty: armed."""
     if modes is None or len(modes) == 0:
         return _ARMED
     array = np.asarray(modes)
+    if array.shape == (6,) and np.isin(array[3:], (0, 1)).all():
+        array = array[:3]
     integers = array if array.dtype.kind == "i" else array.astype(int)
     if array.shape != (3,) or not (integers == array).all() or integers.min() < ARMED or integers.max() > REOPENING:
         raise InputError(f"TorqueSwitch modes must be 3 values in (0, 1, 2), got {array.tolist()}")
@@ -193,6 +238,7 @@ __all__ = [
     "PROXIMAL_RATIO",
     "REOPENING",
     "SPREAD_RATIO",
+    "WORM_EFFICIENCY",
     "BarrettTransmission",
     "switch_modes",
 ]

@@ -8,10 +8,10 @@ Coulomb joint friction, and the mode state carried from step to step.  Joints ou
 back-drivable) are offered on both models.
 
 - :class:`FullyActuated`: one torque per joint (the thesis' assumption), ``T = I``; optional saturation.
-- :class:`BarrettActuation`: the BH8-280's four motors and TorqueSwitch (thesis 2.4.7), simulating
-  :class:`~bhgrasp.barrett.transmission.BarrettTransmission` (the gear ratios, the breakaway rule and their
-  sources are there).  Modes per finger: 0 coupled, 1 broken away, 2 re-opening.  Inputs are motor torques [N m]
-  at the motor shafts.
+- :class:`BarrettActuation`: the BH8-280's four motors, TorqueSwitch (thesis 2.4.7) and self-locking worm drives,
+  simulating :class:`~bhgrasp.barrett.transmission.BarrettTransmission` (the gear ratios, the breakaway and
+  locking rules and their sources are there).  Modes: per finger 0 coupled, 1 broken away, 2 re-opening, then per
+  finger 1 if its worm drive is locked (its joints held).  Inputs are motor torques [N m] at the motor shafts.
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ from bhgrasp.barrett.transmission import (  # noqa: F401  (the drive's constants
     MOTOR_DAMPING,
     PROXIMAL_RATIO,
     SPREAD_RATIO,
+    WORM_EFFICIENCY,
     BarrettTransmission,
 )
 from bhgrasp.errors import InputError
@@ -79,6 +80,9 @@ class Actuation(ABC):
         """Take the mode flags a :class:`~bhgrasp.sim.state.State` carries (``None``: re-armed, as a run starts)."""
         if modes is None or len(modes) == 0:
             self.reset(q_hand)
+
+    def begin(self, u: np.ndarray) -> None:  # noqa: B027  (optional hook)
+        """Before each step, with the step's inputs ``u`` (after :meth:`restore`)."""
 
     def update(self, q_hand: np.ndarray, v_hand: np.ndarray, u: np.ndarray, drive_torques: np.ndarray) -> None:  # noqa: B027
         """After each step: ``drive_torques`` are the joint torques the drive delivered (inputs + reactions)."""
@@ -150,6 +154,8 @@ class BarrettActuation(Actuation):
         blocked_speed: float = 0.02,
         damping: float | Sequence[float] = 0.0,
         friction: float | Sequence[float] = 0.0,
+        efficiency: float = WORM_EFFICIENCY,
+        self_locking: bool = True,
     ) -> None:
         """Couple the Barrett hand's joints.
 
@@ -164,10 +170,16 @@ class BarrettActuation(Actuation):
                 a blocked link (a start-up torque transient of a moving finger does not break the switch).
             damping: Viscous joint damping [N m s/rad].
             friction: Coulomb joint friction [N m].
+            efficiency: Forward efficiency of the finger worm drives (default 0.5, the self-locking bound).
+            self_locking: Whether the finger worm drives self-lock (the real hand's are "non-backdrivable").
         """
-        super().__init__(BarrettTransmission(hand, breakaway_torque, motor_damping, blocked_speed, damping), friction)
+        drive = BarrettTransmission(
+            hand, breakaway_torque, motor_damping, blocked_speed, damping, efficiency, self_locking
+        )
+        super().__init__(drive, friction)
         self.saturate = bool(saturate)
         self.mode = np.zeros(3, dtype=int)  # per finger: 0 coupled, 1 broken away, 2 re-opening the proximal
+        self.locked = np.zeros(3, dtype=bool)  # per finger: its worm drive holds its joints
 
     # the drive's parameters, read from it (one source for the Python rule and the batch's C++ copy)
     @property
@@ -190,19 +202,33 @@ class BarrettActuation(Actuation):
         """Per finger: whether its TorqueSwitch is not armed (broken away or re-opening)."""
         return self.mode > 0
 
+    @property
+    def self_locking(self) -> bool:
+        """Whether the finger worm drives self-lock."""
+        return self.drive.self_locking
+
     def reset(self, q_hand: np.ndarray) -> None:
-        """Re-arm every TorqueSwitch."""
+        """Re-arm every TorqueSwitch; every worm drive starts unlocked."""
         self.mode[:] = 0
+        self.locked[:] = False
 
     def restore(self, modes: np.ndarray | None, q_hand: np.ndarray) -> None:
-        """Take the TorqueSwitch modes a state carries (``None``: every switch re-armed)."""
+        """Take the modes a state carries (``None``: every switch re-armed, every drive unlocked)."""
         if modes is None or len(modes) == 0:
             self.reset(q_hand)
         else:
-            self.mode[:] = np.asarray(modes, dtype=int)
+            self.mode[:] = np.asarray(modes[:3], dtype=int)
+            self.locked[:] = np.asarray(modes[3:6], dtype=bool) if len(modes) == 6 else False
 
     def _modes(self) -> np.ndarray:
         return self.mode
+
+    def transmission(self) -> np.ndarray:
+        """``T`` in the current TorqueSwitch modes without the columns of locked finger drives (their joints hold)."""
+        columns = self.drive.matrix(self.mode)
+        if not self.locked.any():
+            return columns
+        return np.delete(columns, 1 + np.flatnonzero(self.locked), axis=1)
 
     def joint_torques(self, u: np.ndarray) -> np.ndarray:
         """Motor torques (clipped to the puck limit if ``saturate``) through the gears [N m]."""
@@ -211,13 +237,32 @@ class BarrettActuation(Actuation):
             u[:4] = np.clip(u[:4], -MAX_MOTOR_TORQUE, MAX_MOTOR_TORQUE)  # the pucks; a mount's joints are not
         return self.drive.joint_torques(u, self.mode)
 
+    def begin(self, u: np.ndarray) -> None:
+        """An idle finger motor's worm is locked for the step: its load cannot turn it, not even for one step."""
+        if self.drive.self_locking:
+            self.locked |= u[1:4] == 0.0
+
     def update(self, q_hand: np.ndarray, v_hand: np.ndarray, u: np.ndarray, drive_torques: np.ndarray) -> None:
-        """The TorqueSwitch rule (:meth:`~bhgrasp.barrett.transmission.BarrettTransmission.switch`)."""
-        self.mode[:] = self.drive.switch(self.mode, q_hand, v_hand, u, drive_torques)
+        """The TorqueSwitch and worm-lock rules, with the motor torques the pucks delivered.
+
+        (``switch`` and ``locks`` of :class:`~bhgrasp.barrett.transmission.BarrettTransmission`.)
+        """
+        if self.saturate:
+            u = u.copy()
+            u[:4] = np.clip(u[:4], -MAX_MOTOR_TORQUE, MAX_MOTOR_TORQUE)
+        modes = self.drive.switch(self.mode, q_hand, v_hand, u, drive_torques)
+        locked = self.locked & (modes == self.mode)  # a finger on a new coordinate starts unlocked
+        self.locked[:] = self.drive.locks(locked, modes, v_hand, u, drive_torques)
+        self.mode[:] = modes
 
     def modes(self) -> np.ndarray:
-        """TorqueSwitch state per finger: 0 armed (coupled), 1 broken away, 2 re-opening the proximal link."""
-        return self.mode.astype(float)
+        """Per finger the TorqueSwitch (0 armed, 1 broken away, 2 re-opening), then its worm lock (1.0: locked).
+
+        Without ``self_locking``: the 3 TorqueSwitch values only.
+        """
+        if not self.drive.self_locking:
+            return self.mode.astype(float)
+        return np.concatenate((self.mode, self.locked)).astype(float)
 
 
 __all__ = [

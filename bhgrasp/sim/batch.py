@@ -86,8 +86,8 @@ class BatchSimulator:
             self._batch.set_barrett(barrett_of(simulator.actuation))
             for i, state in enumerate(states):
                 modes = state.actuation_modes
-                armed = modes is None or len(modes) == 0
-                self._batch.set_modes(i, [0, 0, 0] if armed else [int(mode) for mode in modes])
+                modes = [0] * 6 if modes is None or len(modes) == 0 else [int(mode) for mode in modes]
+                self._batch.set_modes(i, [*modes, 0, 0, 0][:6])
         self._drive = drive_of(simulator.actuation)
         tips = simulator.scene.hand.fingertip_frames
         self._tip_frames = {finger: scene.model.getFrameId(frame) for finger, frame in tips.items()}
@@ -120,10 +120,14 @@ class BatchSimulator:
 
     @property
     def modes(self) -> np.ndarray:
-        """(N, n_modes) actuation modes per environment (Barrett: TorqueSwitch of F1, F2, F3; full actuation: none)."""
+        """(N, n_modes) actuation modes per environment (full actuation: none).
+
+        Barrett: the TorqueSwitch of F1, F2, F3, then (if self-locking) their worm locks.
+        """
         if not self._barrett:
             return np.zeros((self.size, 0))
-        return np.array([self._batch.modes(i) for i in range(self.size)], dtype=float)
+        count = 6 if self.simulator.actuation.self_locking else 3
+        return np.array([self._batch.modes(i)[:count] for i in range(self.size)], dtype=float)
 
     def object_positions(self, index: int = 0) -> np.ndarray:
         """(N, 3) world position [m] of object ``index``'s centre of mass (free objects)."""

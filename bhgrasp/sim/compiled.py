@@ -143,6 +143,7 @@ def barrett_of(actuation: BarrettActuation):
     barrett.max_motor_torque, barrett.breakaway_torque = model.MAX_MOTOR_TORQUE, actuation.breakaway_torque
     barrett.motor_damping, barrett.blocked_speed = actuation.motor_damping, actuation.blocked_speed
     barrett.saturate = actuation.saturate
+    barrett.efficiency, barrett.self_locking = actuation.drive.efficiency, actuation.self_locking
     barrett.damping, barrett.friction, barrett.lower = actuation.damping, actuation.friction, actuation.hand.lower
     return barrett
 

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_positive, as_vector
+from bhgrasp._validation import as_array, as_positive, as_vector
 from bhgrasp.errors import InputError, SimulationDiverged
 from bhgrasp.objects import RigidObject
 from bhgrasp.sim.actuation import Actuation, FullyActuated
@@ -165,7 +165,7 @@ class Simulator:
         self._hand_sizes = (scene.nq_hand, scene.nv_hand)
         kind = type(self.actuation)  # an actuation without modes needs no restore or update around each step
         self._modal = not (kind.restore is Actuation.restore and kind.reset is Actuation.reset
-                           and kind.update is Actuation.update)  # fmt: skip
+                           and kind.update is Actuation.update and kind.begin is Actuation.begin)  # fmt: skip
         self._lower, self._upper = scene.hand.lower, scene.hand.upper
         self._object_identity = np.eye(scene.nv - self._nvh)
         self._lower_triangle = np.tril_indices(scene.nv, -1)
@@ -217,13 +217,38 @@ class Simulator:
         return memory
 
     # ------------------------------------------------------------------ one step
-    def step(self, state: State, u: Any, disturbance: Any = None) -> tuple[State, StepInfo]:
-        """Advance ``dt`` with inputs ``u`` held constant; ``disturbance`` adds joint torques [N m].
+    def step(self, state: State, u: Any, disturbance: Any = None, object_forces: Any = None) -> tuple[State, StepInfo]:
+        """Advance ``dt`` with inputs ``u`` held constant.
+
+        ``disturbance`` adds joint torques [N m]; ``object_forces`` (n_objects, 3) pushes each object at its
+        centre of mass [N, world frame].
 
         Raises:
             SimulationDiverged: Non-finite input or state, runaway speed or penetration.
         """
-        return self._advance(state, self._input(u, state.t), self._disturbance(disturbance, "disturbance"))
+        disturbance = self._disturbance(disturbance, "disturbance")
+        if object_forces is not None:
+            disturbance = self._with_object_forces(disturbance, object_forces)
+        return self._advance(state, self._input(u, state.t), disturbance)
+
+    def _with_object_forces(self, disturbance: np.ndarray | None, forces: Any) -> np.ndarray:
+        """Generalized forces on the whole scene: hand joint torques, then world forces at the objects' COMs.
+
+        A free object's first three velocity coordinates translate its COM along the world axes
+        (:meth:`~bhgrasp.sim.scene.Scene.object_twist`), so a world force F enters as it is; a spring-mounted
+        object's slide takes F . direction.
+        """
+        forces = as_array(forces, "object_forces", (len(self.scene.objects), 3))
+        total = np.zeros(self.scene.nv)
+        if disturbance is not None:
+            total[: self._nvh] = disturbance
+        for index, force in enumerate(forces):
+            rows = self.scene.object_v_slice(index)
+            if rows.stop - rows.start == 6:
+                total[rows.start : rows.start + 3] = force
+            else:
+                total[rows] = force @ self.scene.objects[index].direction
+        return total
 
     def _input(self, u: Any, t: float) -> np.ndarray:
         """The control input as a finite float array of shape (n_inputs,)."""
@@ -241,8 +266,13 @@ class Simulator:
         memory = self._memory(state)
         if self._modal:
             self.actuation.restore(state.actuation_modes, q[: self.scene.nq_hand])
+            self.actuation.begin(u)
         tau_hand = self.actuation.joint_torques(u)
-        if disturbance is not None:
+        if disturbance is not None and len(disturbance) > self._nvh:  # external forces on the objects too
+            disturbance = disturbance.copy()
+            disturbance[: self._nvh] += tau_hand
+            tau_hand = disturbance
+        elif disturbance is not None:
             tau_hand = tau_hand + disturbance
         if self._compiled is not None:
             q_next, v_next, contacts, drive, memory, divergence = self._compiled.step(q, v, tau_hand, memory)
@@ -359,7 +389,7 @@ class Simulator:
         self._implicit_gyroscopic(v, bias)
         passive, stiffness, damping = self._passive(q, v)
         tau = np.zeros(self.scene.nv)
-        tau[: self._nvh] = tau_hand
+        tau[: len(tau_hand)] = tau_hand  # hand joint torques, or with external forces on the objects' coordinates
         # Springs acting on joint coordinates (limits, object springs): the explicit torque is in `passive`;
         # their stiffness acts on the displacement dt v+ of this step.
         matrix = mass + dt * np.diag(dt * stiffness + damping)
@@ -413,7 +443,7 @@ class Simulator:
     def _explicit(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray):
         dt, model = self.dt, self.model
         tau = np.zeros(self.scene.nv)
-        tau[: self._nvh] = tau_hand
+        tau[: len(tau_hand)] = tau_hand
         transmission = self._transmission()
         if self.integrator == "semi-implicit":
             acceleration, contacts, forces, sticking, displacement, drive = self._acceleration(q, v, tau, transmission)
@@ -492,6 +522,7 @@ class Simulator:
         seed: int | None = None,
         progress: bool = True,
         record_every: int = 1,
+        object_forces: Callable[[float], Any] | None = None,
     ) -> Trajectory:
         """Simulate ``duration`` [s] under ``controller`` and record everything.
 
@@ -506,6 +537,8 @@ class Simulator:
             seed: Seed of the sensor noise (required with ``sensor_noise``).
             progress: Show a tqdm progress bar for runs of more than 20 000 steps.
             record_every: Record one sample every this many physics steps.
+            object_forces: ``t -> (n_objects, 3)`` forces [N, world frame] on the objects' centres of mass (e.g. a
+                shake test), or ``None``.
         """
         duration = as_positive(duration, "duration")
         steps = round(duration / self.dt)
@@ -547,6 +580,8 @@ class Simulator:
             if k % record_every == 0:
                 recorder.add(state, u, info, getattr(controller, "log", None))
             torque = self._disturbance(disturbance(state.t), "disturbance(t)") if callable(disturbance) else disturbance
+            if object_forces is not None:
+                torque = self._with_object_forces(torque, object_forces(state.t))
             state, info = self._advance(state, u, torque)
         recorder.add(state, u, info, getattr(controller, "log", None))
         return recorder.trajectory()
