@@ -19,16 +19,19 @@ stops.  A move (trapezoidal, velocity, close, open) also ends when the motor has
 
 Assumptions (Barrett publishes no firmware source nor units for KP, KD, ACCEL):
 
-- PID output in puck torque units = (KP e + KD de + KI sum e) / 4096 (:data:`PID_SCALE`, a Q12 fixed point), e in
+- PID output in puck torque units = (KP e + KD de + KI sum e) / 1024 (:data:`PID_SCALE`, Q10 fixed point), e in
   counts, de in counts per 1 ms tick; motor torque = units / IPNM.  So at the motor the finger defaults are
-  kp = 3.98e-3 N m/rad, kd = 1.99e-5 N m s/rad (spread 7.96e-3, 7.96e-5).  Why 2^12: the simulated motor is its
-  torque-speed line (a damper b_m = MT / MV-speed = 3.6e-4 N m s/rad at the shaft, no rotor inertia), on which a
-  sampled D term is stable only if kd < b_m and a P term with kp dt / b_m < 2; unscaled gains (kp = 16 N m/rad) would
-  chatter at MT.  With 2^12 the loop is first order with time constant (b_m + kd) / kp = 95 ms (finger), 55 ms
-  (spread), and a finger holds its proximal joint with kp 125^2 = 62 N m/rad.  Gains are overridable in SI.
+  kp = 0.0159 N m/rad, kd = 7.96e-5 N m s/rad (spread 0.0318, 3.18e-4).  Why: the simulated motor is its
+  torque-speed line (a damper b_m = 0.11 N m / 307 rad/s = 3.6e-4 N m s/rad at the shaft, no rotor inertia), and a
+  finger's links reflect almost no inertia through 125:1, so a sampled D term is stable only with kd < b_m (unscaled,
+  KD 2500 gives kd = 0.08 and KP 500 kp = 16 N m/rad: the output would chatter at MT).  With 2^10 a finger's loop is
+  first order, time constant (b_m + kd) / kp = 27.5 ms; it holds the proximal joint with kp 125^2 = 249 N m/rad and
+  closes in about 1 s (the often quoted, unverified, close time); the spread (which carries F1 and F2's inertia) is
+  second order with damping ratio about 0.5.  Gains are overridable in SI.
 - ACCEL in counts/ms^2 / 256 (:data:`ACCEL_UNIT`): the finger default ramps to MV in 256 ms.
 - the control loop runs at 1 kHz (:data:`PERIOD`; libbarrett's velocities are counts per ms); a stall is a motor
-  slower than :data:`STALL_SPEED` for TSTOP ms; a trapezoidal move is done within :data:`DONE_TOLERANCE` of E.
+  slower than :data:`STALL_SPEED` for TSTOP ms (and ends where it stands); a trapezoidal move is done within
+  :data:`DONE_TOLERANCE` of E; VELOCITY integrates V into a PID reference kept within the error that saturates MT.
 """
 
 from __future__ import annotations
