@@ -12,27 +12,30 @@ Encoders: a finger's motor turns 93.75 (q_proximal + q_distal) (libbarrett ``han
 (1/125 + 1/375) - inner; 125 q_proximal while the TorqueSwitch is armed), the spread motor 17.5 q_spread
 (``hand.cpp:238``); 4096 counts/rev.
 
-================================  ============================================  ====================================
-libbarrett ``Hand`` (hand.h/.cpp)  puck properties set                           here
-================================  ============================================  ====================================
-``close(digits)`` cpp:151          CMD = CMD_CLOSE (18, h:170)                   ``close(digits)``: V = +MCV to CT
-``open(digits)`` cpp:146           CMD = CMD_OPEN (20, h:171)                    ``open(digits)``: V = -MOV to OT
-``trapezoidalMove(jp)`` cpp:156    E = j2pp jp, MODE = TRAPEZOIDAL (5)           ``trapezoidal_move(positions)``
-``velocityMove(jv)`` cpp:163       V = j2pp jv / 1000 [counts/ms], MODE = 4      ``velocity_move(velocities)``
-``setPositionMode()`` cpp:171      MODE = PID (3)                                ``set_position_mode(digits)``
-``setPositionCommand(jp)`` cpp:175 P = j2pp jp                                   ``set_position(positions)``
-``setTorqueMode()`` cpp:180        MODE = TORQUE (2)                             ``set_torque_mode(digits)``
-``setTorqueCommand(jt)`` cpp:184   T = j2pt jt, j2pt = IPNM / ratio (cpp:96)     ``set_torque(torques)``
-``idle()`` h:73                    MODE = IDLE (0), whole hand                   ``idle()``
-``doneMoving(digits)`` cpp:119     reads MODE: IDLE, or PID with HOLD            ``done_moving(digits)``
-``getInnerLinkPosition()`` cpp:232 counts / j2pp (no breakaway encoder)          ``inner_link_positions()``
-``getOuterLinkPosition()`` cpp:233 inner 125 / 375                               ``outer_link_positions()``
-``getPrimaryEncoderPosition()``    P [counts]                                    ``encoder_positions()``
-================================  ============================================  ====================================
+===================================  =========================================  =================================
+libbarrett ``Hand`` (hand.h/.cpp)    puck properties it sets                    here (:class:`BarrettDriver`)
+===================================  =========================================  =================================
+``close(digits)`` cpp:151            CMD = CMD_CLOSE (18, h:170)                ``close(digits)``: V = +MCV to CT
+``open(digits)`` cpp:146             CMD = CMD_OPEN (20, h:171)                 ``open(digits)``: V = -MOV to OT
+``trapezoidalMove(jp)`` cpp:156      E = j2pp jp, MODE = TRAPEZOIDAL (5)        ``trapezoidal_move(positions)``
+``velocityMove(jv)`` cpp:163         V = j2pp jv / 1000 [counts/ms], MODE = 4   ``velocity_move(velocities)``
+``setPositionMode()`` cpp:171        MODE = PID (3)                             ``set_position_mode(digits)``
+``setPositionCommand(jp)`` cpp:175   P = j2pp jp                                ``set_position(positions)``
+``setTorqueMode()`` cpp:180          MODE = TORQUE (2)                          ``set_torque_mode(digits)``
+``setTorqueCommand(jt)`` cpp:184     T = j2pt jt, j2pt = IPNM / ratio (cpp:96)  ``set_torque(torques)``
+``idle()`` h:73                      MODE = IDLE (0), whole hand                ``idle()``
+``doneMoving(digits)`` cpp:119       reads MODE: IDLE, or PID with HOLD         ``done_moving(digits)``
+``getInnerLinkPosition()`` cpp:232   P / j2pp (no breakaway encoder)            ``inner_link_positions()``
+``getOuterLinkPosition()`` cpp:233   inner 125 / 375                            ``outer_link_positions()``
+``getPrimaryEncoderPosition()``      P [counts]                                 ``encoder_positions()``
+blocking call (``blockIf``) cpp:273  waits for ``doneMoving``                   script step ``("done", ...)``
+===================================  =========================================  =================================
 
 j2pp = 4096 / 2 pi x (125 finger, 17.5 spread) counts/rad (``hand.cpp:95-100``).  Close and open run at MCV / MOV
 (capped at MV) until the target CT / OT or a stall (TSTOP); the Robotnik driver (``pyHand_api.py:848-880``) sets
 TSTOP before them the same way.  A blocking libbarrett call is a :meth:`BarrettDriver.script` step ``"done"``.
+An IDLE puck (HOLD = 0 after a move) gives no torque: the real worm drives hold the finger, a simulated hand without
+a worm-drive model lets it sag.
 """
 
 from __future__ import annotations
