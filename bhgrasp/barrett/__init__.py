@@ -1,10 +1,12 @@
-"""The Barrett BH8-280 as its users know it: its drive (four motors, gears, TorqueSwitch) and its driver.
+"""The Barrett BH8-280 as its users know it: its drive (motors, gears, TorqueSwitch), its sensors and its driver.
 
-:mod:`bhgrasp.barrett.transmission` holds the hand's own facts (gear ratios, puck limits, the TorqueSwitch rule);
-the simulator (:class:`~bhgrasp.sim.actuation.BarrettActuation`) and the controllers
-(:class:`~bhgrasp.controllers.supervisor.MotorCommands`) both use it.  :mod:`bhgrasp.barrett.pucks` models the
-motor pucks' firmware (modes, PID, trapezoidal and velocity moves) and :mod:`bhgrasp.barrett.commands` the
-libbarrett ``Hand`` calls on them (:class:`BarrettDriver`, a controller that outputs motor torques).
+:mod:`bhgrasp.barrett.transmission` holds the hand's own facts (gear ratios, puck limits, the TorqueSwitch rule,
+the worm drives); the simulator (:class:`~bhgrasp.sim.actuation.BarrettActuation`) and the controllers
+(:class:`~bhgrasp.controllers.supervisor.MotorCommands`) both use it.  :mod:`bhgrasp.barrett.sensors` reads a
+:class:`~bhgrasp.sim.state.State` as libbarrett reports the hand's encoders, fingertip torque sensors and tactile
+pads (:mod:`bhgrasp.barrett.tactile`).  :mod:`bhgrasp.barrett.pucks` models the motor pucks' firmware (modes, PID,
+trapezoidal and velocity moves) and :mod:`bhgrasp.barrett.commands` the libbarrett ``Hand`` calls on them
+(:class:`BarrettDriver`, a controller that outputs motor torques).
 """
 
 from typing import Any
@@ -20,6 +22,14 @@ from bhgrasp.barrett.pucks import (
     Puck,
     PuckProperties,
 )
+from bhgrasp.barrett.sensors import (
+    BarrettReading,
+    BarrettSensors,
+    encoder_counts,
+    link_positions,
+    motor_angles,
+)
+from bhgrasp.barrett.tactile import TactilePad, finger_pad, pad_pressures, palm_pad
 from bhgrasp.barrett.transmission import BarrettTransmission
 
 
@@ -42,7 +52,16 @@ __all__ = [
     "TRAPEZOIDAL",
     "VELOCITY",
     "BarrettDriver",
+    "BarrettReading",
+    "BarrettSensors",
     "BarrettTransmission",
     "Puck",
     "PuckProperties",
+    "TactilePad",
+    "encoder_counts",
+    "finger_pad",
+    "link_positions",
+    "motor_angles",
+    "pad_pressures",
+    "palm_pad",
 ]
