@@ -140,10 +140,10 @@ def test_cells_conserve_the_pads_normal_force(hand, sensors, pad) -> None:
     lo, hi = pad.cells[:, [0, 2]].min(axis=0), pad.cells[:, [1, 3]].max(axis=0)
     rows, pressing = [], 0.0
     for centre in rng.uniform(lo + 0.004, hi - 0.004, (4, 2)):
-        if pad.name == "palm" and abs(centre[1]) > 0.0115 and abs(centre[0]) > 0.026:
-            continue  # a palm corner without cells
-        for offset in rng.normal(scale=0.001, size=(3, 2)):  # a patch of three points
-            link, point = pad_point(pad.name, *(centre + offset), 0.0005)
+        for u, w in centre + rng.uniform(-0.0015, 0.0015, (3, 2)):  # a patch of three points
+            if pad.name == "palm" and abs(w) > 0.011 and abs(u) > 0.0275:
+                continue  # a palm corner without cells (rows of 5 at |w| > 11.5 mm span |u| <= 27 mm)
+            link, point = pad_point(pad.name, u, w, 0.0005)
             normal = pad_normal(pad.name) + rng.normal(scale=0.05, size=3)
             normal /= np.linalg.norm(normal)
             force = rng.uniform(0.5, 3.0) * normal + rng.normal(scale=0.3, size=3)
@@ -169,6 +169,8 @@ def test_contacts_off_the_pads_read_nothing(hand, sensors) -> None:
     ]
     reading = sensors.read(contacts(hand, q, rows))
     assert (reading.tactile == 0).all()
+    on = [("F1_distal_link", [0.03, 0.01, 0.0], *press), (*pad_point("palm", 0.02, 0.005, 0.0), [0, 0, 1], [0, 0, 5])]
+    assert (sensors.read(contacts(hand, q, on)).tactile.sum(axis=1) > 0).tolist() == [True, False, False, True]
 
 
 def test_a_contact_between_two_equal_cells_splits_equally(hand, sensors) -> None:

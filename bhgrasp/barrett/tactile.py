@@ -97,7 +97,11 @@ def finger_pad(finger: str) -> TactilePad:
 
 
 def palm_pad() -> TactilePad:
-    """The palm's pad on the ``palm_surface`` plane (GraspIt's palm x, y are this frame's -x, -y)."""
+    """The palm's pad on the ``palm_surface`` plane (GraspIt's palm x, y are this frame's -x, -y).
+
+    Points down to 5 mm below the plane (a penetrating contact on the palm's top) count; the palm cylinder's side
+    (radius 44.5 mm) lies outside every cell's reach.
+    """
     cells = [(x, x + 10.0, *band) for band, (start, stop) in _PALM_ROWS for x in np.arange(start, stop, 11.0)]
     axes = np.array([[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]])
     return TactilePad("palm", "palm_surface", axes, 1e-3 * np.array(cells), margin=0.5e-3, floor=-5e-3)
