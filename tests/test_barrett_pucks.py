@@ -29,9 +29,10 @@ F1P, F1D, F2P, F2D, F3P, F3D = 1, 2, 4, 5, 6, 7  # joint indices of the packaged
 SCALE = 1024  # the PID scale bhgrasp.barrett.pucks documents (KP counts -> puck units / 1024)
 
 
-def _sim(hand: bh.Hand, objects=()) -> Simulator:
+def _sim(hand: bh.Hand, objects=(), self_locking: bool = True) -> Simulator:
     contact = SpringDamper(5e4, 50.0)
-    return Simulator(Scene(hand, objects), dt=1e-3, actuation=BarrettActuation(hand), contact=contact)
+    actuation = BarrettActuation(hand, self_locking=self_locking)
+    return Simulator(Scene(hand, objects), dt=1e-3, actuation=actuation, contact=contact)
 
 
 def _gains(kp_units: float, kd_units: float) -> tuple[float, float]:
@@ -163,22 +164,29 @@ def test_close_on_an_object_stalls_on_contact_and_reports_done() -> None:
 
 
 def test_pid_hold_gives_way_by_the_disturbance_over_its_stiffness() -> None:
-    """A proximal disturbance d moves a held finger by d / (125^2 kp) (kp from KP 500), the motor pushes -d / 125."""
+    """Through back-drivable gears of efficiency eta, a proximal disturbance d moves a held finger by
+    d / (eta 125^2 kp) (kp from KP 500) and the motor pushes -d / (eta 125); the real self-locking worm gives 0."""
     hand = bh.BarrettHand()
-    sim = _sim(hand)
-    start = sim.initial_state(hand.configuration(F2_proximal=0.8, F2_distal=0.8 / 3))
-    driver = BarrettDriver(hand)
-    driver.script([(0.0, "set_position_mode", "F2")])
-    disturbance = np.zeros(8)
-    disturbance[F2P] = 0.3  # [N m] closing, below the 0.5 N m breakaway
-    trajectory = sim.run(driver, 0.8, state=start, progress=False,
-                         disturbance=lambda t: disturbance if t >= 0.4 else np.zeros(8))  # fmt: skip
-    kp, _ = _gains(500, 2500)
-    k = np.flatnonzero(trajectory.t < 0.4)[-1]  # steady before the disturbance (it holds against gravity)
-    assert trajectory.q[-1, F2P] - trajectory.q[k, F2P] == pytest.approx(0.3 / (125**2 * kp), rel=0.05)  # 1.2 mrad
-    torques = trajectory.log["motor_torques"][:, 1]
-    assert torques[-1] - torques[k] == pytest.approx(-0.3 / 125, rel=0.02)
-    assert not trajectory.modes.any()
+    for self_locking in (False, True):
+        sim = _sim(hand, self_locking=self_locking)
+        start = sim.initial_state(hand.configuration(F2_proximal=0.8, F2_distal=0.8 / 3))
+        driver = BarrettDriver(hand)
+        driver.script([(0.0, "set_position_mode", "F2")])
+        disturbance = np.zeros(8)
+        disturbance[F2P] = 0.3  # [N m] closing, below the 0.5 N m breakaway
+        trajectory = sim.run(driver, 0.8, state=start, progress=False,
+                             disturbance=lambda t: disturbance if t >= 0.4 else np.zeros(8))  # fmt: skip
+        kp, _ = _gains(500, 2500)
+        eta = sim.actuation.drive.efficiency
+        k = np.flatnonzero(trajectory.t < 0.4)[-1]  # steady before the disturbance (it holds against gravity)
+        moved = trajectory.q[-1, F2P] - trajectory.q[k, F2P]
+        assert not trajectory.modes[:, :3].any()
+        if self_locking:
+            assert moved == 0.0  # the worm does not let the load turn it
+            continue
+        assert moved == pytest.approx(0.3 / (eta * 125**2 * kp), rel=0.05)  # 2.4 mrad
+        torques = trajectory.log["motor_torques"][:, 1]
+        assert torques[-1] - torques[k] == pytest.approx(-0.3 / (eta * 125), rel=0.02)
 
 
 def test_a_mounted_hand_gets_zero_on_its_mount_and_the_pucks_tick_at_1_khz() -> None:

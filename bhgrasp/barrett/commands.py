@@ -34,8 +34,8 @@ blocking call (``blockIf``) cpp:273  waits for ``doneMoving``                   
 j2pp = 4096 / 2 pi x (125 finger, 17.5 spread) counts/rad (``hand.cpp:95-100``).  Close and open run at MCV / MOV
 (capped at MV) until the target CT / OT or a stall (TSTOP); the Robotnik driver (``pyHand_api.py:848-880``) sets
 TSTOP before them the same way.  A blocking libbarrett call is a :meth:`BarrettDriver.script` step ``"done"``.
-An IDLE puck (HOLD = 0 after a move) gives no torque: the real worm drives hold the finger, a simulated hand without
-a worm-drive model lets it sag.
+An IDLE puck (HOLD = 0 after a move) gives no torque: the worm drives hold the finger (the simulator's
+``BarrettActuation(self_locking=True)``, its default); with ``self_locking=False`` an idle finger sags.
 """
 
 from __future__ import annotations
@@ -47,7 +47,8 @@ import numpy as np
 
 from bhgrasp._validation import as_vector, require_name
 from bhgrasp.barrett import pucks as fw
-from bhgrasp.barrett.transmission import DISTAL_ALONE_RATIO, PROXIMAL_RATIO, SPREAD_RATIO, BarrettTransmission
+from bhgrasp.barrett.sensors import motor_angles
+from bhgrasp.barrett.transmission import PROXIMAL_RATIO, SPREAD_RATIO, BarrettTransmission
 from bhgrasp.controllers.base import Controller
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
@@ -56,7 +57,6 @@ from bhgrasp.sim.state import State
 DIGITS = ("F1", "F2", "F3", "SPREAD")  # libbarrett's order
 GROUPS = {"GRASP": DIGITS[:3], "WHOLE_HAND": DIGITS}
 JOINT_RATIO = np.array([PROXIMAL_RATIO] * 3 + [SPREAD_RATIO])  # libbarrett J2_RATIO, SPREAD_RATIO
-MOTOR_RATIO = np.array([DISTAL_ALONE_RATIO] * 3 + [SPREAD_RATIO])  # motor angle per (q_proximal + q_distal)
 INPUT = [1, 2, 3, 0]  # BarrettTransmission input of each digit
 
 
@@ -85,9 +85,8 @@ class BarrettDriver(Controller):
         super().__init__()
         self.drive = BarrettTransmission(hand)
         d = self.drive
-        self._joints = [(d.proximal[i], d.distal[i]) for i in range(3)] + [(d.spread[0], None)]
-        stops = [hand.upper[p] + (hand.upper[q] if q is not None else 0.0) for p, q in self._joints]
-        travel = fw.COUNTS_PER_RAD * MOTOR_RATIO * np.array(stops)
+        upper = hand.upper
+        travel = fw.COUNTS_PER_RAD * motor_angles(upper[d.proximal], upper[d.distal], upper[d.spread[0]])
         self.pucks = [
             fw.Puck(props, (0.0, top), *(gains or (None, None, None)))
             for props, gains, top in zip([finger] * 3 + [spread], [finger_gains] * 3 + [spread_gains], travel)
@@ -207,10 +206,9 @@ class BarrettDriver(Controller):
 
     def _read(self, state: State) -> None:
         q, v = np.asarray(state.q, dtype=float), np.asarray(state.v, dtype=float)
-        angle = [q[p] + (q[d] if d is not None else 0.0) for p, d in self._joints]
-        rate = [v[p] + (v[d] if d is not None else 0.0) for p, d in self._joints]
-        self._counts = fw.COUNTS_PER_RAD * MOTOR_RATIO * np.array(angle)
-        self._speeds = fw.COUNTS_PER_RAD * MOTOR_RATIO * np.array(rate) * 1e-3  # [counts/ms]
+        d = self.drive
+        self._counts = fw.COUNTS_PER_RAD * motor_angles(q[d.proximal], q[d.distal], q[d.spread[0]])
+        self._speeds = fw.COUNTS_PER_RAD * motor_angles(v[d.proximal], v[d.distal], v[d.spread[0]]) * 1e-3  # /ms
 
     def _run_script(self, t: float) -> None:
         while self._next < len(self._script):

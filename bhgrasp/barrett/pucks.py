@@ -40,12 +40,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from bhgrasp.barrett.sensors import COUNTS_PER_REV
 from bhgrasp.errors import InputError
 
 IDLE, TORQUE, PID, VELOCITY, TRAPEZOIDAL = 0, 2, 3, 4, 5  # MotorPuck::MotorMode
 MODES = {IDLE: "IDLE", TORQUE: "TORQUE", PID: "PID", VELOCITY: "VELOCITY", TRAPEZOIDAL: "TRAPEZOIDAL"}
-COUNTS_PER_REV = 4096  # motor encoder (Robotnik pyHand_api CTS 4096)
-COUNTS_PER_RAD = COUNTS_PER_REV / (2.0 * np.pi)
+COUNTS_PER_RAD = COUNTS_PER_REV / (2.0 * np.pi)  # the motor encoder's (bhgrasp.barrett.sensors)
 PID_SCALE = 1024.0  # assumption: PID gains are Q10 fixed point (module docstring)
 ACCEL_UNIT = 1.0 / 256.0  # assumption: ACCEL in counts/ms^2 / 256
 PERIOD = 1e-3  # [s] puck control period (assumption: 1 kHz)
