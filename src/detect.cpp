@@ -27,6 +27,13 @@ Vector3 patch_point(const coal::ContactPatch& patch, std::size_t i) {
   return point;
 }
 
+// Whether every contact of a query has a finite, plausible depth (contact.py _converged: EPA converged).
+bool converged(const coal::CollisionResult& result) {
+  for (std::size_t i = 0; i < result.numContacts(); ++i)
+    if (!(std::abs(result.getContact(i).penetration_depth) <= 1.0)) return false;
+  return true;
+}
+
 }  // namespace
 
 // ------------------------------------------------------------------ detection (sim/contact.py: ContactEngine.detect)
@@ -57,6 +64,11 @@ Contacts Engine::detect(const Vector& q, const Memory& memory) {
     result.clear();
     if (!coal::collide(shape_a.get(), transform_a, shape_b.get(), transform_b, requests_[k], result))
       continue;
+    if (!converged(result)) {  // EPA stopped short at the tight tolerance: ask again at coal's default
+      result.clear();
+      if (!coal::collide(shape_a.get(), transform_a, shape_b.get(), transform_b, fallback_requests_[k], result))
+        continue;
+    }
     coal::ContactPatchResult& patches = patch_results_[k];
     coal::computeContactPatch(shape_a.get(), transform_a, shape_b.get(), transform_b, result,
                               patch_requests_[k], patches);

@@ -223,6 +223,7 @@ class Engine {
   Settings settings_;
   Matrix identity_objects_;
   std::vector<coal::CollisionRequest> requests_;
+  std::vector<coal::CollisionRequest> fallback_requests_;  // coal's default tolerance, for an EPA that stopped short
   std::vector<coal::ContactPatchRequest> patch_requests_;
   std::vector<coal::CollisionResult> results_;
   std::vector<coal::ContactPatchResult> patch_results_;

@@ -211,9 +211,22 @@ class ContactSet:
 
 
 _NARROW_TOLERANCE = 1e-10  # GJK/EPA: coal's default 1e-6 tilts a box-on-box normal by up to 0.027 (1.5 deg)
+# At 1e-10 coal 3.0.3's EPA may stop unconverged (a box edge in a cylinder: depth -1.8e308, point 0); such a query is
+# asked again at coal's default tolerance, which converged there (depth 0.53 mm, as coal.distance gives).
+_FALLBACK_TOLERANCE = 1e-6
+_MAX_DEPTH = 1.0  # [m] a reported penetration beyond this is a failed query, not a contact
 
 
-def _fresh_request(template: coal.CollisionRequest) -> coal.CollisionRequest:
+def _converged(result: coal.CollisionResult) -> bool:
+    """Whether every contact of a collision query has a finite, plausible depth (EPA converged)."""
+    for i in range(result.numContacts()):
+        depth = result.getContact(i).penetration_depth
+        if not abs(depth) <= _MAX_DEPTH:
+            return False
+    return True
+
+
+def _fresh_request(template: coal.CollisionRequest, tolerance: float = _NARROW_TOLERANCE) -> coal.CollisionRequest:
     """A collision request of our own with ``template``'s settings (Pinocchio may store GJK guesses in its own).
 
     GJK and EPA run to 1e-10: with coal's default 1e-6, the normal of a box resting on a box came out up to 0.027
@@ -224,7 +237,7 @@ def _fresh_request(template: coal.CollisionRequest) -> coal.CollisionRequest:
     request.num_max_contacts = template.num_max_contacts
     request.security_margin = template.security_margin
     request.break_distance = template.break_distance
-    request.gjk_tolerance = request.epa_tolerance = _NARROW_TOLERANCE
+    request.gjk_tolerance = request.epa_tolerance = tolerance
     return request
 
 
@@ -265,6 +278,7 @@ class ContactEngine:
             )
             for pair in scene.pairs
         ]  # fmt: skip
+        self._fallback = [_fresh_request(request, _FALLBACK_TOLERANCE) for _, _, _, _, request, *_ in self._narrow]
         self._probe = coal.Sphere(1e-12)  # a point, for signed-distance queries
         self._probe_placement = coal.Transform3s()
         self._distance_request, self._distance_result = coal.DistanceRequest(), coal.DistanceResult()
@@ -292,6 +306,10 @@ class ContactEngine:
             result.clear()
             if not coal.collide(shape_a, transform_a, shape_b, transform_b, request, result):
                 continue
+            if not _converged(result):
+                result.clear()
+                if not coal.collide(shape_a, transform_a, shape_b, transform_b, self._fallback[k], result):
+                    continue
             coal.computeContactPatch(shape_a, transform_a, shape_b, transform_b, result, patch_request, patches)
             for p in range(patches.numContactPatches()):
                 patch = patches.getContactPatch(p)
