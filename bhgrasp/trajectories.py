@@ -232,6 +232,54 @@ class PoseMotion(Reference):
         return position, rate * self.offset, curvature * self.offset
 
 
+class PosePath(Reference):
+    """Back-to-back minimum-jerk moves of a rigid-body pose: waypoints joined at rest.
+
+    E.g. a wrist's approach, lift, hold and place.
+    Move i starts when move i-1 ends (the first after ``delay``) and changes the pose by its world offset (dx [m],
+    dtheta [rad]) as :class:`PoseMotion` does; a zero offset is a pause.  The sample and its derivatives are
+    :class:`PoseMotion`'s, from the pose the earlier moves reached; every move starts and ends at rest, so the
+    path is C2 at the joins.
+    """
+
+    def __init__(self, start: Any, moves: Any, delay: float = 0.0) -> None:
+        """Build the path.
+
+        Args:
+            start: Initial pose, a ``pinocchio.SE3`` (world <- body).
+            moves: Sequence of (offset (6,), duration [s] > 0).
+            delay: Start time of the first move [s] >= 0.
+        """
+        if not isinstance(start, pin.SE3):
+            raise InputError(f"`start` must be a pinocchio.SE3, got {type(start).__name__}")
+        moves = list(moves)
+        if not moves:
+            raise InputError("`moves` must hold at least one (offset, duration) pair")
+        self.segments: list[PoseMotion] = []
+        pose, begin = pin.SE3(start), as_real(delay, "delay")
+        for i, move in enumerate(moves):
+            if len(move) != 2:
+                raise InputError(f"`moves[{i}]` must be an (offset (6,), duration [s]) pair, got {move!r}")
+            offset, duration = as_vector(move[0], f"moves[{i}] offset", 6), as_positive(move[1], f"moves[{i}] duration")
+            self.segments.append(PoseMotion(pose, offset, duration, begin))
+            pose = pin.SE3(pin.exp3(offset[3:]) @ pose.rotation, pose.translation + offset[:3])
+            begin += duration
+        self.end_time, self.end = begin, pose
+
+    @property
+    def size(self) -> int:
+        """Six: position and rotation vector."""
+        return 6
+
+    def __call__(self, t: float) -> Sample:
+        """Pose (x, log R), world twist and its derivative at time ``t`` [s]."""
+        t = _time(t)
+        for segment in self.segments:
+            if t < segment.delay + segment.duration:
+                return segment(t)
+        return self.segments[-1](t)
+
+
 class Constant(Reference):
     """A set point: ``value`` with zero velocity and acceleration."""
 
@@ -363,6 +411,7 @@ __all__ = [
     "CartesianReference",
     "Constant",
     "PoseMotion",
+    "PosePath",
     "Quintic",
     "Reference",
     "Sample",

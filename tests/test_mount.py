@@ -150,6 +150,20 @@ def test_the_servo_feels_the_load_through_the_contact_torques(tray_lift) -> None
     assert np.abs(trajectory.log["mount_error"][:, :3]).max() < 5e-4  # the servo holds the path within 0.5 mm
 
 
+def test_without_load_feedforward_the_servo_pd_carries_the_tray_at_m_g_over_kp() -> None:
+    """compensate_load=False (grasps from a support): at rest the PD alone holds the tray's weight, so the mount
+    sags by m g / kp_z (closed form), where the feedforward version holds the reference."""
+    hand = mounted(bh.BarrettHand())
+    tray = Box(size=(0.12, 0.12, 0.01), mass=0.2, friction=0.8, pose=pin.SE3(np.eye(3), np.array([0, 0, 0.09605])))
+    simulator = Simulator(Scene(hand, [tray]), dt=1e-3)
+    hold = MountReference(PoseMotion(pin.SE3.Identity(), np.zeros(6), 1.0), hand.base_placement)
+    start = simulator.initial_state(hand.neutral())
+    for compensate, expected in ((False, -0.2 * 9.81 / 2e4), (True, 0.0)):
+        servo = MountServo(hand, hold, compensate_load=compensate)
+        trajectory = simulator.run(servo, 0.6, state=start, progress=False)
+        assert trajectory.log["mount_error"][-1, 2] == pytest.approx(expected, abs=2e-6), compensate  # 98 um / 0
+
+
 def test_the_barrett_drive_runs_a_mounted_hand_with_direct_mount_inputs() -> None:
     hand = mounted(bh.BarrettHand())
     drive = BarrettTransmission(hand)

@@ -34,3 +34,15 @@ def test_a_pushed_free_body_accelerates_by_f_over_m_and_a_mounted_one_along_its_
     assert np.abs(slide - exact).max() < 0.03 * 2 * 2.0 / 50.0  # implicit Euler's damping: 1.2 % here
     with pytest.raises(bh.InputError, match="`object_forces` must"):
         simulator.step(simulator.initial_state(), np.zeros(8), object_forces=np.zeros((1, 3)))
+
+
+def test_a_run_stops_at_the_first_state_until_accepts() -> None:
+    """A falling box: the run ends at the first step below the line, the trajectory with it (x = g t^2 / 2)."""
+    hand = bh.BarrettHand()
+    box = Box(size=(0.05, 0.05, 0.05), mass=0.3, pose=pin.SE3(np.eye(3), np.r_[0.3, 0.0, 1.0]))
+    simulator = Simulator(Scene(hand, [box]), dt=1e-3)
+    trajectory = simulator.run(lambda t, s: np.zeros(8), 1.0, progress=False,
+                               until=lambda s: s.object_poses[0].translation[2] < 0.95)  # fmt: skip
+    z = trajectory.object_position[:, 0, 2]
+    assert z[-1] < 0.95 <= z[-2]
+    assert trajectory.t[-1] == pytest.approx(np.sqrt(2 * 0.05 / 9.81), abs=2e-3)  # 0.101 s, not the 1 s asked

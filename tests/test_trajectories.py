@@ -13,6 +13,7 @@ from bhgrasp.trajectories import (
     CartesianReference,
     Constant,
     PoseMotion,
+    PosePath,
     Quintic,
     Reference,
     Sinusoid,
@@ -125,6 +126,39 @@ def test_pose_motion_turns_about_a_fixed_world_axis_with_the_quintic_blend() -> 
         np.testing.assert_allclose(omega, twist[3:], atol=1e-8)
         np.testing.assert_allclose((v_plus - v_minus) / (2 * STEP), derivative, atol=1e-7)
     np.testing.assert_allclose(pin.exp3(ref(5.0)[0][3:]), pin.exp3(offset[3:]) @ start.rotation, atol=1e-15)
+
+
+def test_pose_path_moves_back_to_back_and_composes_rotations_about_world_axes() -> None:
+    """Waypoints are the cumulative offsets (R_k = exp(dtheta_k) R_k-1), reached at rest at each join; between
+    joins the twist is d/dt of the pose (finite differences); a zero offset holds the pose."""
+    start = pin.SE3(pin.exp3(np.array([0.1, 0.2, -0.3])), np.array([0.0, 0.1, 0.3]))
+    moves = [([0.0, 0.0, -0.05, 0.0, 0.0, 0.0], 1.0), ([0.0] * 6, 0.5), ([0.02, 0.0, 0.1, 0.0, 0.3, 0.0], 0.8),
+             ([0.0, 0.0, 0.0, 0.2, 0.0, 0.0], 0.6)]  # fmt: skip
+    path = PosePath(start, moves, delay=0.2)
+    pose, t = pin.SE3(start), 0.2
+    for offset, duration in moves:
+        offset = np.array(offset)
+        sample, twist, derivative = path(t)  # the join: the pose reached, at rest
+        np.testing.assert_allclose(sample[:3], pose.translation, atol=1e-15)
+        np.testing.assert_allclose(pin.exp3(sample[3:]), pose.rotation, atol=1e-14)
+        assert not twist.any() and not derivative.any()
+        pose = pin.SE3(pin.exp3(offset[3:]) @ pose.rotation, pose.translation + offset[:3])
+        t += duration
+    assert path.end_time == pytest.approx(t)
+    np.testing.assert_allclose(pin.exp3(path(10.0)[0][3:]), pose.rotation, atol=1e-14)
+    for t in (0.55, 1.45, 1.9, 2.3, 2.8, 3.05):  # inside moves: v, omega, and their rates by finite differences
+        (x_plus, v_plus, _), (x_minus, v_minus, _) = path(t + STEP), path(t - STEP)
+        sample, twist, derivative = path(t)
+        rotation_rate = (pin.exp3(x_plus[3:]) - pin.exp3(x_minus[3:])) / (2 * STEP)
+        np.testing.assert_allclose((x_plus[:3] - x_minus[:3]) / (2 * STEP), twist[:3], atol=1e-9)
+        np.testing.assert_allclose(pin.unSkew(rotation_rate @ pin.exp3(sample[3:]).T), twist[3:], atol=1e-8)
+        np.testing.assert_allclose((v_plus - v_minus) / (2 * STEP), derivative, atol=1e-6)
+    (hold_start, *_), (hold_end, *_) = path(1.25), path(1.65)
+    np.testing.assert_array_equal(hold_start, hold_end)  # the pause
+    with pytest.raises(bh.InputError, match="`moves` must hold at least one"):
+        PosePath(start, [])
+    with pytest.raises(bh.InputError, match=r"`moves\[0\]` must be an \(offset"):
+        PosePath(start, [([0.0] * 6,)])
 
 
 def test_smooth_step_follows_thesis_5_36_with_per_component_delays() -> None:

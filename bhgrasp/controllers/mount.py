@@ -9,7 +9,11 @@
 ID the nominal hand's inverse dynamics with a_ref = (c_dd_d on the mount, 0 on the fingers), tau_contact the joint
 torques of the sensed contact forces (:meth:`~bhgrasp.sensing.ContactSensing.reaction_torques`: what a wrist
 force-torque sensor gives an arm), so the servo carries the hand and its load and the PD only corrects the rest,
-like an arm's joint servos.  The finger rows are the finger controller's, or by default the fingers' rows of the same
+like an arm's joint servos.  That feedforward closes a loop through the environment when the grasped object also
+rests on a support (squeezing it into a table raises the sensed force, which the servo then pushes harder
+against: a gain-one loop that oscillates): ``compensate_load=False`` leaves the load to the PD, as for grasps from
+a support (:mod:`~bhgrasp.experiments.grasp_bench`).  The finger rows are the finger controller's, or by default
+the fingers' rows of the same
 inverse dynamics plus a joint PD that holds them still (a finger under gravity compensation alone swings when the
 wrist brakes: 0.8 rad on a 10 cm lift in 0.5 s).
 """
@@ -49,6 +53,7 @@ class MountServo(Controller):
         kp: Any = SERVO_KP,
         kd: Any = SERVO_KD,
         finger_gains: tuple[float, float] = (1.0, 0.01),
+        compensate_load: bool = True,
     ) -> None:
         """Set up the servo.
 
@@ -60,6 +65,7 @@ class MountServo(Controller):
                 rows of the same inverse dynamics, plus a joint PD of ``finger_gains``; the PD takes their loads).
             kp, kd: Servo gains per mount coordinate (scalar or six values) [N/m, N m/rad], [N s/m, N m s/rad].
             finger_gains: (kp [N m/rad], kd [N m s/rad]) of the finger hold when ``fingers`` is ``None``.
+            compensate_load: Feed the sensed contact load forward on the mount rows (module docstring).
         """
         super().__init__()
         if not isinstance(nominal, Hand) or nominal.joint_names[:6] != MOUNT_JOINTS:
@@ -70,6 +76,7 @@ class MountServo(Controller):
         self.kp, self.kd = gain_vector(kp, 6, "kp"), gain_vector(kd, 6, "kd")
         self.finger_kp, self.finger_kd = finger_gains
         self.sensing = ContactSensing(nominal)
+        self.compensate_load = bool(compensate_load)
         self._acceleration = np.zeros(nominal.nv)
         self._hold: np.ndarray | None = None
 
@@ -95,7 +102,7 @@ class MountServo(Controller):
             if self._hold is None:
                 self._hold = q[6:].copy()
             tau = model - np.r_[np.zeros(6), self.finger_kp * (q[6:] - self._hold) + self.finger_kd * v[6:]]
-        load = self.sensing.reaction_torques(state)[:6]
+        load = self.sensing.reaction_torques(state)[:6] if self.compensate_load else 0.0
         tau[:6] = model[:6] - load - self.kp * (q[:6] - c_d) - self.kd * (v[:6] - c_dot_d)
         self.log["mount_error"], self.log["mount_reference"] = q[:6] - c_d, c_d
         return tau

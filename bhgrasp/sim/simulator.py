@@ -523,6 +523,7 @@ class Simulator:
         progress: bool = True,
         record_every: int = 1,
         object_forces: Callable[[float], Any] | None = None,
+        until: Callable[[State], bool] | None = None,
     ) -> Trajectory:
         """Simulate ``duration`` [s] under ``controller`` and record everything.
 
@@ -539,6 +540,8 @@ class Simulator:
             record_every: Record one sample every this many physics steps.
             object_forces: ``t -> (n_objects, 3)`` forces [N, world frame] on the objects' centres of mass (e.g. a
                 shake test), or ``None``.
+            until: ``state -> bool`` checked after every step: the run stops early at the first state it accepts
+                (e.g. an object that left the hand); the trajectory ends there.
         """
         duration = as_positive(duration, "duration")
         steps = round(duration / self.dt)
@@ -583,6 +586,8 @@ class Simulator:
             if object_forces is not None:
                 torque = self._with_object_forces(torque, object_forces(state.t))
             state, info = self._advance(state, u, torque)
+            if until is not None and until(state):
+                break
         recorder.add(state, u, info, getattr(controller, "log", None))
         return recorder.trajectory()
 
