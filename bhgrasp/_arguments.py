@@ -100,3 +100,22 @@ def _number(text: str, expected: str) -> float:
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"must be {expected}, got {text!r}")
     return value
+
+
+def bench_object(text: str):
+    """A grasp-benchmark object, ``KIND:DIMS:MASS`` (:class:`~bhgrasp.experiments.bench_objects.BenchObject`)."""
+    from bhgrasp.errors import InputError
+    from bhgrasp.experiments.bench_objects import BenchObject
+
+    try:
+        return BenchObject.parse(text)
+    except InputError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def existing_file(text: str) -> Path:
+    """A file that exists (to read)."""
+    path = Path(text)
+    if not path.is_file():
+        raise argparse.ArgumentTypeError(f"no such file: {text!r}")
+    return path

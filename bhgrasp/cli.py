@@ -92,6 +92,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     bench = commands.add_parser("bench", help="run benchmarks/*.py of a source checkout (ratios, see BENCHMARKS.md)")
     bench.add_argument("--quick", action="store_true", help="a few repetitions only (a smoke run)")
+    bench_grasp = commands.add_parser(
+        "grasp-bench",
+        help="the grasp benchmark (issue 16): per object and grasp, approach -> close -> lift 10 cm -> push 10 m N "
+        "along +-x, +-y, +-z -> place, on the wrist-mounted BH8-280; prints the success table",
+    )
+    bench_grasp.add_argument(
+        "--object", dest="objects", action="append", type=checked.bench_object, default=None, metavar="KIND:DIMS:MASS",
+        help="box:0.06x0.05x0.05:0.3 (edges, m), cylinder:0.033x0.10:0.35 (radius x height), sphere:0.035:0.2 "
+        "(radius); masses in kg; repeatable (default: the built-in set)",
+    )  # fmt: skip
+    bench_grasp.add_argument("--grasp", dest="grasps", action="append", choices=("power", "precision"), default=None,
+                             help="repeatable (default: both)")  # fmt: skip
+    bench_grasp.add_argument("--actuation", dest="actuations", action="append", choices=("barrett", "full"),
+                             default=None, help="repeatable (default: barrett, the real 4-motor hand)")  # fmt: skip
+    bench_grasp.add_argument("--json", type=checked.output_file, default=None, help="write the trials here")
+    bench_grasp.add_argument("--report", type=checked.output_file, default=None, help="write the markdown report")
+    bench_grasp.add_argument("--compare", type=checked.existing_file, default=None,
+                             help="check the trials against this committed JSON (exit 1 on a difference)")  # fmt: skip
+    bench_grasp.add_argument("--workers", type=checked.positive_int, default=None, help="processes (default: cores)")
     experiments = commands.add_parser(
         "experiments",
         help="reproduce a thesis chapter: report (markdown), figures and figures of merit (chapterN.json); compare "
@@ -182,6 +201,8 @@ def _run(args: argparse.Namespace) -> int:
         return _bench(args.quick)
     if args.command == "demo":
         return _grasp_demo(args)
+    if args.command == "grasp-bench":
+        return _grasp_bench(args)
     return _tour(args.output, args.samples, args.seed, args.hold)
 
 
@@ -248,6 +269,38 @@ def _bench(quick: bool) -> int:
         if status:
             print(f"bhgrasp: error: {script.name} exited with {status}", file=sys.stderr)
             return status
+    return 0
+
+
+def _grasp_bench(args: argparse.Namespace) -> int:
+    import json
+
+    from bhgrasp.experiments import bench_report
+    from bhgrasp.experiments.bench_objects import OBJECT_SET
+
+    objects = args.objects or list(OBJECT_SET)
+    grasps, actuations = args.grasps or ["power", "precision"], args.actuations or ["barrett"]
+    count = len(objects) * len(grasps) * len(actuations)
+    print(f"grasp benchmark: {count} trials ({len(objects)} objects x {grasps} x {actuations}), 19 s each ...")
+    trials, walls = bench_report.run_bench(objects, grasps, actuations, workers=args.workers,
+                                           progress=sys.stderr.isatty())  # fmt: skip
+    for actuation, (ok, strict, total) in bench_report.success_rates(trials).items():
+        print(f"{actuation}: {ok}/{total} succeed ({strict} strict)")
+    for trial in trials:
+        if not trial["success"]:
+            print(f"  {trial['object']} {trial['grasp']} {trial['actuation']}: {trial['failure']}")
+    print(f"wall time per trial: {min(walls):.1f}-{max(walls):.1f} s")
+    if args.json is not None:
+        bench_report.write_json(trials, args.json)
+    if args.report is not None:
+        args.report.write_text(bench_report.markdown(trials))
+    if args.compare is not None:
+        reference = json.loads(args.compare.read_text())["trials"]
+        problems = bench_report.compare(trials, reference)
+        for problem in problems:
+            print(f"  differs: {problem}", file=sys.stderr)
+        print(f"compared {len(trials)} trials with {args.compare}: {len(problems)} difference(s)")
+        return 1 if problems else 0
     return 0
 
 

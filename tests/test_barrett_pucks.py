@@ -174,8 +174,9 @@ def test_pid_hold_gives_way_by_the_disturbance_over_its_stiffness() -> None:
         driver.script([(0.0, "set_position_mode", "F2")])
         disturbance = np.zeros(8)
         disturbance[F2P] = 0.3  # [N m] closing, below the 0.5 N m breakaway
+        push = disturbance.copy()
         trajectory = sim.run(driver, 0.8, state=start, progress=False,
-                             disturbance=lambda t: disturbance if t >= 0.4 else np.zeros(8))  # fmt: skip
+                             disturbance=lambda t, push=push: push if t >= 0.4 else np.zeros(8))  # fmt: skip
         kp, _ = _gains(500, 2500)
         eta = sim.actuation.drive.efficiency
         k = np.flatnonzero(trajectory.t < 0.4)[-1]  # steady before the disturbance (it holds against gravity)

@@ -1,0 +1,97 @@
+"""The grasp benchmark's objects: household-sized boxes, cylinders and spheres the BH8-280 spans, as ``KIND:DIMS:MASS``.
+
+An object is given as ``box:0.06x0.05x0.05:0.3`` (edges x, y, z [m]), ``cylinder:0.033x0.10:0.35`` (radius x height
+[m], axis vertical) or ``sphere:0.035:0.2`` (radius [m]); the last field is the mass [kg].  :data:`OBJECT_SET` is the
+built-in set: the issue's three examples (a box, a soup-can-sized cylinder, a ball) and three more of household
+sizes (a flat box, a slim bottle, a larger ball), each well under the hand's 2 kg per finger load limit (Barrett
+wiki, safety page).  The sizes are of everyday items, not a published object set's measured values.
+
+Each object rests on a table whose top is the plane z = 0, its body frame at its centre of mass; boxes and cylinders
+stand upright, box edges along the world axes.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp.errors import InputError
+from bhgrasp.objects import Box, Cylinder, RigidObject, Sphere
+
+KINDS = {"box": 3, "cylinder": 2, "sphere": 1}  # kind -> number of dimensions
+_NUMBER = r"[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?"
+
+
+@dataclass(frozen=True)
+class BenchObject:
+    """One benchmark object: ``kind`` ('box', 'cylinder', 'sphere'), ``dims`` [m] (see module), ``mass`` [kg]."""
+
+    kind: str
+    dims: tuple[float, ...]
+    mass: float
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise InputError(f"object kind must be one of {sorted(KINDS)}, got {self.kind!r}")
+        if len(self.dims) != KINDS[self.kind]:
+            raise InputError(f"a {self.kind} takes {KINDS[self.kind]} dimension(s) [m], got {list(self.dims)}")
+        values = (*self.dims, self.mass)
+        if not all(math.isfinite(v) and v > 0 for v in values):
+            raise InputError(f"object dimensions and mass must be positive and finite, got {self.spec}")
+        if max(self.dims) > 0.15:
+            raise InputError(f"object dimensions must be at most 0.15 m (what the hand spans), got {self.spec}")
+        if not self.name:
+            object.__setattr__(self, "name", self.spec)
+
+    @classmethod
+    def parse(cls, text: str) -> BenchObject:
+        """An object from ``KIND:DIMS:MASS`` (module docstring), e.g. ``cylinder:0.033x0.10:0.35``."""
+        match = re.fullmatch(rf"(\w+):({_NUMBER}(?:x{_NUMBER})*):({_NUMBER})", text.strip())
+        if match is None:
+            raise InputError(
+                f"an object is KIND:DIMS:MASS, e.g. box:0.06x0.05x0.05:0.3, cylinder:0.033x0.10:0.35 or "
+                f"sphere:0.035:0.2 (m, kg), got {text!r}"
+            )
+        kind, dims, mass = match.groups()
+        return cls(kind, tuple(float(d) for d in dims.split("x")), float(mass))
+
+    @property
+    def spec(self) -> str:
+        """The ``KIND:DIMS:MASS`` text of this object."""
+        return f"{self.kind}:{'x'.join(f'{d:g}' for d in self.dims)}:{self.mass:g}"
+
+    @property
+    def half_extents(self) -> np.ndarray:
+        """Half sizes along the world x, y, z [m] as it rests on the table."""
+        if self.kind == "box":
+            return 0.5 * np.array(self.dims)
+        if self.kind == "cylinder":
+            return np.array([self.dims[0], self.dims[0], 0.5 * self.dims[1]])
+        return np.full(3, self.dims[0])
+
+    def body(self, friction: float) -> RigidObject:
+        """The rigid body resting on the table (its lowest point at z = 0), centred on the z axis."""
+        pose = pin.SE3(np.eye(3), np.array([0.0, 0.0, self.half_extents[2]]))
+        common = {"mass": self.mass, "pose": pose, "friction": friction, "name": self.name}
+        if self.kind == "box":
+            return Box(size=self.dims, **common)
+        if self.kind == "cylinder":
+            return Cylinder(radius=self.dims[0], length=self.dims[1], **common)
+        return Sphere(radius=self.dims[0], **common)
+
+
+OBJECT_SET = (
+    BenchObject("box", (0.06, 0.05, 0.05), 0.3, "box"),
+    BenchObject("cylinder", (0.033, 0.10), 0.35, "can"),
+    BenchObject("sphere", (0.035,), 0.2, "ball"),
+    BenchObject("box", (0.085, 0.07, 0.03), 0.1, "flat box"),
+    BenchObject("cylinder", (0.025, 0.12), 0.25, "bottle"),
+    BenchObject("sphere", (0.045,), 0.15, "large ball"),
+)
+
+__all__ = ["KINDS", "OBJECT_SET", "BenchObject"]

@@ -1,0 +1,289 @@
+"""The grasp benchmark (issue 16): approach -> close -> lift 10 cm -> shake in six directions -> place, per object.
+
+One trial (:func:`run_trial`) puts a wrist-mounted BH8-280 (:func:`~bhgrasp.mount.mounted`) palm down above an
+object resting on a table (:mod:`~bhgrasp.experiments.bench_objects`) and runs DexGraspBench's shake protocol:
+
+1. **approach** (0-1 s): the wrist descends 5 cm to the grasp height, the fingers pre-shaped (proximal 0.8 rad),
+   the spread held in position mode, the hand shifted along its F3 axis so that the fingers reach the object
+   together (:mod:`~bhgrasp.experiments.bench_placement`);
+2. **close** (from 1 s): ``power`` - the hand's own ``close()`` (libbarrett's CMD_CLOSE: each finger runs to a stall,
+   then its puck idles and its worm holds it) at full puck torque, the knuckles touching the object's top;
+   ``precision`` - the same close force-limited (puck MT lowered to :data:`PRECISION_MT`), the knuckles 2 cm
+   above it; spheres take a 30 deg spread (:data:`SPHERE_SPREAD`), boxes and cylinders 0 (F1, F2 facing F3);
+3. **lift** (3-4 s): 10 cm up, then 0.5 s at rest; the object's pose in the palm frame at 4.5 s is the held pose;
+4. **shake** (4.5-16.5 s): an external force of 10 m newtons on the object's centre of mass along +x, -x, +y, -y,
+   +z, -z (world), 2 s each;
+5. **place** (16.5-17.5 s): 10 cm down, then ``open()`` for 1.5 s.
+
+``actuation``: ``barrett`` - :class:`~bhgrasp.sim.actuation.BarrettActuation` (four saturated pucks, TorqueSwitch,
+self-locking worms) commanded through :class:`~bhgrasp.barrett.commands.BarrettDriver`; ``full`` - the idealised
+hand of the thesis (eight independent, back-drivable joint torques): each finger closes with the joint torques the
+real close delivers at stall (eta r MT on the proximal joint, a third of it on the distal) and keeps them, each
+joint damped as the real motors damp theirs, the spread held by a PD.  The wrist follows its path under
+:class:`~bhgrasp.controllers.mount.MountServo` in both (without load feedforward: the object starts on the table).
+
+Success: through the shake the object stays within 5 cm and 15 deg of its held pose in the palm frame
+(DexGraspBench's thresholds); ``strict`` is ours, 1 cm and 5 deg; ``placed``: a successful trial whose object is
+back at its resting height after the release.  Every trial simulates a fixed 19 s, or stops when its object leaves
+the table.  The contact law is stiffer than the simulator's default (1e6 N/m normal, 1e5 N/m tangential): the
+power close squeezes with hundreds of newtons, which the default 1e4 N/m would meet with centimetres of penetration.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+import bhgrasp as bh
+from bhgrasp.barrett.commands import BarrettDriver
+from bhgrasp.barrett.pucks import FINGER_PUCK
+from bhgrasp.barrett.transmission import PROXIMAL_RATIO, WORM_EFFICIENCY, BarrettTransmission
+from bhgrasp.controllers.mount import MountServo
+from bhgrasp.errors import InputError
+from bhgrasp.experiments.bench_objects import BenchObject
+from bhgrasp.experiments.bench_placement import grasp_offset, hand_depth
+from bhgrasp.mount import MountReference, mounted
+from bhgrasp.objects import FixedBox
+from bhgrasp.sim import Simulator
+from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
+from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.scene import Scene
+from bhgrasp.trajectories import PosePath
+
+GRASPS = ("power", "precision")
+ACTUATIONS = ("barrett", "full")
+FRICTION = 0.8
+APPROACH, CLOSE_AT, LIFT_AT, HELD_AT, SHAKE_TIME = 0.05, 1.0, 3.0, 4.5, 2.0  # [m], [s], [s], [s], [s]
+PRESHAPE = 0.8  # [rad] proximal angle of the open hand (the distal follows at a third)
+# [rad] spread for spheres, measured on both balls and both grasps: 0 and 30 deg hold all four; at 60 deg (the
+# spherical grasp) the 35 mm ball slips out between F1 and F2 in the precision grasp, at 90 deg three of four fail
+SPHERE_SPREAD = math.pi / 6
+LIFT = 0.10  # [m]
+RELEASE = 1.5  # [s] of open() after the place
+# [s] the physics step: the contact's explicit geometry needs omega dt ~ 1 for a distal link (0.042 kg) on 1e6 N/m
+# (omega = 4900 rad/s): at 1 ms and at 0.5 ms jammed power grasps (the bottle, the can) diverged
+DT = 2.5e-4
+DIRECTIONS = ("+x", "-x", "+y", "-y", "+z", "-z")
+PRECISION_MT = 600.0  # puck torque units (0.03 N m at the motor): the force-limited close
+LOOSE, STRICT = (0.05, math.radians(15.0)), (0.01, math.radians(5.0))  # [m], [rad]
+PALM_CLEARANCE = {"power": 0.0, "precision": 0.02}  # [m] the knuckles above the object's top
+TABLE = 0.3  # [m] half the table's edge
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One benchmark case: an object, a grasp ('power' or 'precision') and an actuation ('barrett' or 'full')."""
+
+    item: BenchObject
+    grasp: str
+    actuation: str = "barrett"
+
+    def __post_init__(self) -> None:
+        if self.grasp not in GRASPS:
+            raise InputError(f"`grasp` must be one of {GRASPS}, got {self.grasp!r}")
+        if self.actuation not in ACTUATIONS:
+            raise InputError(f"`actuation` must be one of {ACTUATIONS}, got {self.actuation!r}")
+
+
+def spread_of(item: BenchObject) -> float:
+    """The pre-shape spread [rad]: :data:`SPHERE_SPREAD` for spheres, 0 (F1, F2 facing F3) otherwise."""
+    return SPHERE_SPREAD if item.kind == "sphere" else 0.0
+
+
+def idealised_damping(hand: bh.Hand) -> np.ndarray:
+    """The idealised hand's joint damping [N m s/rad], as the BH8-280's motors damp the coordinates they drive.
+
+    eta b_m r^2 with 125:1 on the proximal, 93.75:1 on the distal and 17.5:1 on the spread joints; none on the mount.
+    """
+    drive = BarrettTransmission(hand)
+    damping = drive.joint_damping([0, 0, 0])  # armed: the spread and the proximal joints
+    damping[drive.distal] = drive.joint_damping([1, 1, 1])[drive.distal]  # broken away: the distal joints
+    damping[drive.spread[1]] = damping[drive.spread[0]]
+    return damping
+
+
+def setup(trial: Trial, dt: float = DT):
+    """The simulator, its start state, the mounted hand and the wrist path of a trial."""
+    item = trial.item
+    top = 2 * item.half_extents[2]
+    grasp_height = top + PALM_CLEARANCE[trial.grasp] + hand_depth(spread_of(item), PRESHAPE)  # the hand base
+    rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
+    offset = np.array([0.0, grasp_offset(item, spread_of(item), PALM_CLEARANCE[trial.grasp], PRESHAPE), 0.0])
+    base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + APPROACH]) - rotation @ offset)  # fingers together
+    hand = mounted(bh.BarrettHand(base_placement=base))
+    table = FixedBox(size=(2 * TABLE, 2 * TABLE, 0.1), pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.05])),
+                     friction=FRICTION)  # fmt: skip
+    scene = Scene(hand, [item.body(FRICTION)], environment=[table])
+    if trial.actuation == "barrett":
+        actuation = BarrettActuation(hand, saturate=True)
+    else:  # the same motors' damping on each joint, reflected as through the worms (module docstring)
+        actuation = FullyActuated(hand, damping=idealised_damping(hand))
+    law = SpringDamper(
+        stiffness=1e6, damping=2e3, friction=FRICTION, tangential_stiffness=1e5, tangential_damping=200.0
+    )
+    simulator = Simulator(scene, dt=dt, contact=law, actuation=actuation)
+    q = hand.neutral()
+    spread = spread_of(item)
+    for finger in hand.fingers:
+        q[hand.joint_index(f"{finger}_proximal")], q[hand.joint_index(f"{finger}_distal")] = PRESHAPE, PRESHAPE / 3
+    q[[hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]] = spread
+    down, up = np.array([0, 0, -APPROACH, 0, 0, 0]), np.array([0, 0, LIFT, 0, 0, 0])
+    shake = 6 * SHAKE_TIME
+    moves = [(down, CLOSE_AT), (np.zeros(6), LIFT_AT - CLOSE_AT), (up, 1.0), (np.zeros(6), HELD_AT - LIFT_AT - 1.0),
+             (np.zeros(6), shake), (-up, 1.0)]  # fmt: skip
+    path = MountReference(PosePath(base, moves), hand.base_placement)
+    return simulator, simulator.initial_state(q), hand, path
+
+
+class BenchController:
+    """The trial's commands: the wrist on its path (MountServo), the fingers by the driver or by joint torques."""
+
+    def __init__(self, trial: Trial, hand: bh.Hand, path: MountReference) -> None:
+        self.trial, self.hand = trial, hand
+        self.servo = MountServo(hand, path, fingers=lambda t, s: np.zeros(hand.nv), compensate_load=False)
+        self.spread = [hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]
+        self.place_at = HELD_AT + 6 * SHAKE_TIME + 1.0
+        self.log: dict = {}
+        if trial.actuation == "barrett":
+            mt = PRECISION_MT if trial.grasp == "precision" else FINGER_PUCK.MT
+            self.driver = BarrettDriver(hand, finger=FINGER_PUCK.with_(MT=mt))
+            self.driver.script([(0.0, "set_position_mode", "SPREAD"), (CLOSE_AT, "close", "GRASP"),
+                                (self.place_at, "open", "GRASP")])  # fmt: skip
+            self.log = self.driver.log
+        else:
+            mt = PRECISION_MT if trial.grasp == "precision" else FINGER_PUCK.MT
+            self.close_torque = WORM_EFFICIENCY * PROXIMAL_RATIO * mt / FINGER_PUCK.IPNM  # the real close's stall
+
+    def reset(self, state: bh.State) -> None:
+        """Start a trial at ``state`` (the driver's script, the spread hold)."""
+        self.servo.reset(state)
+        if self.trial.actuation == "barrett":
+            self.driver.reset(state)
+        else:
+            self.spread_hold = float(state.q[self.spread[0]])
+
+    def __call__(self, t: float, state: bh.State) -> np.ndarray:
+        """The inputs of the trial's actuation: puck torques (or joint torques), then the wrist's."""
+        mount = self.servo(t, state)[:6]
+        if self.trial.actuation == "barrett":
+            u = self.driver(t, state)
+            u[4:] = mount
+            return u
+        tau = np.zeros(self.hand.nv)
+        tau[:6] = mount
+        sign = 0.0 if t < CLOSE_AT else (1.0 if t < self.place_at else -1.0)
+        for finger in self.hand.fingers:
+            tau[self.hand.joint_index(f"{finger}_proximal")] = sign * self.close_torque
+            tau[self.hand.joint_index(f"{finger}_distal")] = sign * self.close_torque / 3.0
+        error = self.spread_hold - state.q[self.spread[0]]
+        tau[self.spread] = 2.0 * error - 0.05 * state.v[self.spread[0]]
+        return tau
+
+
+def relative_poses(hand: bh.Hand, trajectory) -> tuple[np.ndarray, np.ndarray]:
+    """Per sample, the object's position [m] and rotation (3, 3) in the palm frame (the hand base's)."""
+    positions, rotations = [], []
+    for k in range(len(trajectory.t)):
+        palm = hand.frame_placement(trajectory.q[k], "palm")
+        rotation = pin.Quaternion(*np.roll(trajectory.object_quaternion[k, 0], 1)).toRotationMatrix()
+        relative = palm.actInv(pin.SE3(rotation, trajectory.object_position[k, 0]))
+        positions.append(relative.translation)
+        rotations.append(relative.rotation)
+    return np.array(positions), np.array(rotations)
+
+
+def shake_force(mass: float):
+    """The shake, ``t -> (1, 3)`` world force [N]: 10 m newtons along each of :data:`DIRECTIONS` for 2 s."""
+    axes = np.vstack([np.eye(3)[[0, 0, 1, 1, 2, 2]] * np.array([1, -1, 1, -1, 1, -1])[:, None]])
+    none = np.zeros((1, 3))
+
+    def force(t: float) -> np.ndarray:
+        k = math.floor((t - HELD_AT) / SHAKE_TIME)
+        return 10.0 * mass * axes[k][None, :] if 0 <= k < 6 else none
+
+    return force
+
+
+def simulate_trial(trial: Trial, dt: float = DT, record_every: int = 40, duration: float | None = None):
+    """The trial's trajectory (a sample every ``record_every`` steps) and its mounted hand.
+
+    ``duration`` [s] cuts the protocol short (default: all of it).
+    """
+    simulator, state, hand, path = setup(trial, dt)
+    controller = BenchController(trial, hand, path)
+    duration = HELD_AT + 6 * SHAKE_TIME + 1.0 + RELEASE if duration is None else duration
+    trajectory = simulator.run(controller, duration, state=state, progress=False, record_every=record_every,
+                               object_forces=shake_force(trial.item.mass), until=gone)  # fmt: skip
+    return trajectory, hand
+
+
+def run_trial(trial: Trial, dt: float = DT, record_every: int = 40) -> dict:
+    """Run one trial (module docstring) and return its record (SI units; rotations [rad], forces [N])."""
+    trajectory, hand = simulate_trial(trial, dt, record_every)
+    return evaluate(trial, trajectory, hand)
+
+
+def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
+    """A trial's record from its trajectory.
+
+    Lifted height, displacement and rotation in the palm frame through the shake, success, placement, slip, peak
+    forces and torques, and why it failed.
+    """
+    t = trajectory.t
+    held = min(int(np.searchsorted(t, HELD_AT - 1e-9)), len(t) - 1)
+    shaken = min(int(np.searchsorted(t, HELD_AT + 6 * SHAKE_TIME - 1e-9)), len(t) - 1)
+    positions, rotations = relative_poses(hand, trajectory)
+    offsets = np.linalg.norm(positions[held : shaken + 1] - positions[held], axis=1)
+    turns = np.array([np.linalg.norm(pin.log3(rotations[held].T @ r)) for r in rotations[held : shaken + 1]])
+    lifted = float(trajectory.object_position[held, 0, 2] - trajectory.object_position[0, 0, 2])
+    if t[shaken] < HELD_AT + 6 * SHAKE_TIME - 1e-9:  # the run stopped: the object left the scene
+        lifted = min(lifted, 0.0) if t[-1] < HELD_AT else lifted
+    record = {
+        "object": trial.item.name, "spec": trial.item.spec, "grasp": trial.grasp, "actuation": trial.actuation,
+        "lifted": lifted, "max_displacement": float(offsets.max()), "max_rotation": float(turns.max()),
+        "success": bool(lifted > 0.5 * LIFT and offsets.max() < LOOSE[0] and turns.max() < LOOSE[1]),
+        "strict_success": bool(lifted > 0.5 * LIFT and offsets.max() < STRICT[0] and turns.max() < STRICT[1]),
+    }  # fmt: skip
+    final = trajectory.object_position[-1, 0, 2] - trajectory.object_position[0, 0, 2]
+    record["placed"] = bool(record["success"] and abs(final) < 0.005)  # set down and let go at its resting height
+    record.update(contact_summary(trajectory, held, shaken))
+    fingers = slice(1, 4) if trial.actuation == "barrett" else [hand.joint_index(f"{f}_{j}") for f in hand.fingers
+                                                                for j in ("proximal", "distal")]  # fmt: skip
+    record["peak_motor_torque"] = float(np.abs(trajectory.u[:, fingers]).max())  # finger pucks or joints [N m]
+    record["failure"] = failure_reason(record, offsets, turns, t[held : shaken + 1])
+    return record
+
+
+def gone(state: bh.State) -> bool:
+    """Whether the object left the scene: off the table's edge or below its top (the trial stops there)."""
+    position = state.object_poses[0].translation
+    return bool(position[2] < -0.05 or abs(position[0]) > TABLE or abs(position[1]) > TABLE)
+
+
+def contact_summary(trajectory, held: int, shaken: int) -> dict:
+    """Peak contact force [N] of the whole trial and the sliding contact samples while held (lift end to shake end)."""
+    forces = np.linalg.norm(trajectory.contact_force, axis=1) if len(trajectory.contact_force) else np.zeros(1)
+    rows = slice(trajectory.contact_offsets[held], trajectory.contact_offsets[shaken + 1])
+    loaded = np.linalg.norm(trajectory.contact_force[rows], axis=1) > 0.1
+    return {"peak_contact_force": float(forces.max()),
+            "slip_samples": int((loaded & ~trajectory.contact_sticking[rows]).sum())}  # fmt: skip
+
+
+def failure_reason(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.ndarray) -> str:
+    """Why a trial failed ('' if it succeeded): not lifted, or the push direction that moved the object too far."""
+    if record["lifted"] <= 0.5 * LIFT:
+        return f"not lifted: the object rose {1e3 * record['lifted']:.0f} mm of the wrist's {1e3 * LIFT:.0f}"
+    if record["success"]:
+        return ""
+    k = int(np.flatnonzero((offsets >= LOOSE[0]) | (turns >= LOOSE[1]))[0])
+    direction = DIRECTIONS[min(int((times[k] - HELD_AT) // SHAKE_TIME), 5)]
+    return f"moved {1e3 * offsets[k]:.0f} mm / {math.degrees(turns[k]):.0f} deg under the {direction} push"
+
+
+__all__ = [
+    "ACTUATIONS", "DIRECTIONS", "GRASPS", "BenchController", "Trial", "evaluate", "run_trial", "setup", "shake_force",
+    "simulate_trial", "spread_of",
+]  # fmt: skip
