@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -114,6 +115,11 @@ BAD_ARGUMENTS = {
     "demo --html /nonexistent/dir/x.html": "argument --html: the folder '/nonexistent/dir' of "
     "'/nonexistent/dir/x.html' does not exist",
     "experiments ch3 --output /nonexistent/dir/results": "argument --output: the folder '/nonexistent/dir' of",
+    "grasp-bench --object cube:1:2": "argument --object: object kind must be one of ['box', 'cylinder', 'sphere'], "
+    "got 'cube'",
+    "grasp-bench --object box:0.3x0.05x0.05:0.3": "argument --object: object dimensions must be at most 0.15 m",
+    "grasp-bench --grasp pinch": "argument --grasp: invalid choice: 'pinch'",
+    "grasp-bench --compare /nonexistent/bench.json": "argument --compare: no such file: '/nonexistent/bench.json'",
 }
 
 
@@ -175,7 +181,7 @@ def test_bench_runs_the_benchmark_scripts(capfd: pytest.CaptureFixture) -> None:
     assert all(f"== bench_{name}.py" in out for name in names)
 
 
-@pytest.mark.parametrize("command", ["demo", "tour", "info", "tune", "bench", "experiments"])
+@pytest.mark.parametrize("command", ["demo", "tour", "info", "tune", "bench", "experiments", "grasp-bench"])
 def test_every_subcommand_has_help(command: str, capsys: pytest.CaptureFixture) -> None:
     with pytest.raises(SystemExit) as caught:
         main([command, "--help"])
@@ -214,3 +220,23 @@ def test_long_commands_show_progress_on_a_terminal(tmp_path: Path, capsys: pytes
     monkeypatch.setattr(sys.stderr, "isatty", lambda: False)
     assert main(["experiments", "ch3", "--output", str(tmp_path), "--scale", "0.05", "--no-figures"]) == 0
     assert "ch3: " not in capsys.readouterr().err  # a log (CI) gets no bar
+
+
+def test_grasp_bench_reproduces_a_committed_trial_and_flags_a_difference(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    """One trial of the committed report, run again: the same record; against an altered reference, exit 1."""
+    from bhgrasp.experiments.results import REFERENCE
+
+    committed = REFERENCE / "grasp_benchmark.json"
+    argv = ["grasp-bench", "--object", "box:0.06x0.05x0.05:0.3", "--grasp", "precision", "--workers", "1",
+            "--json", str(tmp_path / "run.json"), "--compare", str(committed)]  # fmt: skip
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "barrett: 1/1 succeed (1 strict)" in out and "compared 1 trials with" in out and "0 difference(s)" in out
+    altered = json.loads(committed.read_text())
+    for trial in altered["trials"]:
+        trial["peak_contact_force"] = None if trial["peak_contact_force"] is None else trial["peak_contact_force"] + 1
+    (tmp_path / "altered.json").write_text(json.dumps(altered))
+    assert main([*argv[:-1], str(tmp_path / "altered.json")]) == 1
+    assert "peak_contact_force" in capsys.readouterr().err

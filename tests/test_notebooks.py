@@ -11,11 +11,12 @@ from nbclient import NotebookClient
 
 NOTEBOOKS = sorted((Path(__file__).resolve().parents[1] / "notebooks").glob("*.ipynb"))
 BUDGET = 120.0  # [s] per notebook on 2 cores (the limit)
-FIGURES = {"02_joint_control": 1, "03_force_control": 1, "05_grasp_and_manipulate": 1, "06_bring_your_own_hand": 2}
+FIGURES = {"02_joint_control": 1, "03_force_control": 1, "05_grasp_and_manipulate": 1, "06_bring_your_own_hand": 2,
+           "07_barrett_hand": 1}  # fmt: skip
 
 
 def test_every_tutorial_is_present() -> None:
-    assert [path.name[:2] for path in NOTEBOOKS] == ["01", "02", "03", "04", "05", "06"]
+    assert [path.name[:2] for path in NOTEBOOKS] == ["01", "02", "03", "04", "05", "06", "07"]
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[path.stem for path in NOTEBOOKS])

@@ -26,8 +26,8 @@ angle lambda; its forward efficiency is then eta = tan(lambda) / tan(lambda + ph
 angle, so the default efficiency is that bound, 0.5 (a user who measured theirs sets it).  Model (:meth:`locks`):
 a finger's motor coordinate is *locked* (held, its reaction carried by the worm) whenever its load would drive it
 back against the motor or the motor is idle, and it unlocks when the motor alone gives more than holding needs in
-the motor's direction.  The spread's 17.5:1 drive is not modelled as self-locking (its puck default HOLD = 1 keeps
-it in position control, the fingers' HOLD = 0 leaves them to their worms).
+the motor's direction.  The spread is back-drivable ("the backdrivability built into this degree of freedom", BH8
+manual 9.3.2): its puck holds it (default HOLD = 1), where the fingers' HOLD = 0 leaves them to their worms.
 
 Inputs are motor torques [N m] at the motor shafts, then one torque [N m or N] per joint outside the hand's eight
 (e.g. the wrist mount's of :func:`~bhgrasp.mount.mounted`), applied directly.  A linear torque-speed line through
