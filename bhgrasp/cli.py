@@ -281,7 +281,7 @@ def _grasp_bench(args: argparse.Namespace) -> int:
     objects = args.objects or list(OBJECT_SET)
     grasps, actuations = args.grasps or ["power", "precision"], args.actuations or ["barrett"]
     count = len(objects) * len(grasps) * len(actuations)
-    print(f"grasp benchmark: {count} trials ({len(objects)} objects x {grasps} x {actuations}), 19 s each ...")
+    print(f"grasp benchmark: {count} trials ({len(objects)} objects x {grasps} x {actuations}), 18 s each ...")
     trials, walls = bench_report.run_bench(objects, grasps, actuations, workers=args.workers,
                                            progress=sys.stderr.isatty())  # fmt: skip
     for actuation, (ok, strict, total) in bench_report.success_rates(trials).items():

@@ -143,7 +143,13 @@ def test_scene_pairs_and_names() -> None:
     hand = bh.BarrettHand()
     scene = Scene(hand, [Sphere(radius=0.02, mass=0.1, name="ball"), Box(size=(0.02,) * 3, mass=0.1)], [table()])
     hand_links = scene.hand_geometries
-    assert len(scene.pairs) == 2 * len(hand_links) + 2 + 1  # hand x objects, objects x table, object x object
+    moving = [g for g in hand_links if scene.geometry.geometryObjects[g].parentJoint != 0]  # not the fixed palm
+    # hand x objects, objects x table, object x object, then the table x the moving links
+    assert len(scene.pairs) == 2 * len(hand_links) + 2 + 1 + len(moving)
+    assert [(p.body_a, p.friction_b) for p in scene.pairs[-len(moving) :]] == [("table", None)] * len(moving)
+    assert scene.pairs[-1].friction(0.5) == min(0.5, table().friction)  # the table's and the pad's coefficients
+    fixed_only = Scene(hand, [Sphere(radius=0.02, mass=0.1)], [table()], environment_touches_hand=False)
+    assert len(fixed_only.pairs) == len(hand_links) + 1
     assert scene.object_names == ["ball", "object1"]
     with pytest.raises(bh.InputError, match="object names must be unique"):
         Scene(hand, [Sphere(radius=0.02, mass=0.1, name="a"), Sphere(radius=0.02, mass=0.1, name="a")])

@@ -19,15 +19,16 @@ breakaway threshold; then the proximal joint holds and the motor drives the dist
 worm.  Opening a broken-away finger drives the fingertip back to its stop, then the proximal link alone to its open
 stop, where the switch re-arms.  Modes per finger: 0 armed (coupled), 1 broken away, 2 re-opening the proximal link.
 
-Worm drives: each finger motor turns its joints through single-start worms, which Barrett calls
-"non-backdrivable" (Barrett wiki, safety page).  A worm is self-locking when its friction angle phi exceeds its lead
-angle lambda; its forward efficiency is then eta = tan(lambda) / tan(lambda + phi) < tan(lambda) / tan(2 lambda)
-= (1 - tan^2 lambda) / 2 < 1/2 (Shigley's Mechanical Engineering Design, worm gearing).  Barrett publishes neither
-angle, so the default efficiency is that bound, 0.5 (a user who measured theirs sets it).  Model (:meth:`locks`):
-a finger's motor coordinate is *locked* (held, its reaction carried by the worm) whenever its load would drive it
-back against the motor or the motor is idle, and it unlocks when the motor alone gives more than holding needs in
-the motor's direction.  The spread is back-drivable ("the backdrivability built into this degree of freedom", BH8
-manual 9.3.2): its puck holds it (default HOLD = 1), where the fingers' HOLD = 0 leaves them to their worms.
+Worm drives: each finger motor turns its joints through single-start worms (Barrett wiki, kinematics page), which
+Barrett calls "non-backdrivable" (Barrett wiki, safety page).  A worm is self-locking when its friction angle phi
+exceeds its lead angle lambda; its forward efficiency is then eta = tan(lambda) / tan(lambda + phi) < tan(lambda) /
+tan(2 lambda) = (1 - tan^2 lambda) / 2 < 1/2 (Shigley's Mechanical Engineering Design, worm gearing).  Barrett
+publishes neither angle, so the default efficiency is that bound, 0.5 (a user who measured theirs sets it).  Model
+(:meth:`locks`): a finger's motor coordinate is *locked* (held, its reaction carried by the worm) whenever its load
+would drive it back against the motor or the motor is idle, and it unlocks when the motor alone gives more than
+holding needs in the motor's direction.  The spread is back-drivable ("the backdrivability built into this degree
+of freedom", BH8 manual 9.3.2): its puck holds it (default HOLD = 1), where the fingers' HOLD = 0 leaves them to
+their worms.
 
 Inputs are motor torques [N m] at the motor shafts, then one torque [N m or N] per joint outside the hand's eight
 (e.g. the wrist mount's of :func:`~bhgrasp.mount.mounted`), applied directly.  A linear torque-speed line through

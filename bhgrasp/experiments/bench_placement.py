@@ -66,6 +66,13 @@ class _Reach:
         return high
 
 
+def _deepest_corner(shape: coal.CollisionGeometry, placement: pin.SE3) -> float:
+    """The largest z [m] of a shape's local bounding-box corners placed by ``placement``."""
+    shape.computeLocalAABB()
+    box = shape.aabb_local
+    return max(placement.act(np.array(corner))[2] for corner in itertools.product(*zip(box.min_, box.max_)))
+
+
 def hand_depth(spread: float, opening: float) -> float:
     """How far [m] below the hand base (hand frame z) its lowest non-finger shape reaches.
 
@@ -74,15 +81,9 @@ def hand_depth(spread: float, opening: float) -> float:
     reach = _Reach(BenchObject("sphere", (0.01,), 0.1), spread, opening)
     q = reach.hand.configuration(F1_spread=spread, F2_spread=spread)
     pin.updateGeometryPlacements(reach.hand.model, reach.model_data, reach.geometry, reach.data, q)
-    deepest = 0.0
-    for i, item in enumerate(reach.geometry.geometryObjects):
-        if any(part in item.name for part in ("proximal", "distal")):
-            continue
-        item.geometry.computeLocalAABB()
-        box = item.geometry.aabb_local
-        corners = itertools.product(*zip(box.min_, box.max_))
-        deepest = max(deepest, max(reach.data.oMg[i].act(np.array(c))[2] for c in corners))
-    return deepest
+    shapes = reach.geometry.geometryObjects
+    return max(_deepest_corner(item.geometry, reach.data.oMg[i]) for i, item in enumerate(shapes)
+               if not any(part in item.name for part in ("proximal", "distal")))  # fmt: skip
 
 
 def grasp_offset(item: BenchObject, spread: float, clearance: float, opening: float) -> float:

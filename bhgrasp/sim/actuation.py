@@ -4,8 +4,8 @@ An actuation model gives the simulator a transmission ``T`` (hand velocities ``v
 coordinates ``w``) and the joint torques its inputs produce, from the hand's drive model
 (:mod:`bhgrasp.transmission`, shared with the controllers); it adds what only a simulation needs: saturation,
 Coulomb joint friction, and the mode state carried from step to step.  Joints outside ``T``'s range are held
-(their velocity is zero).  Passive joint damping and friction (the real hand's worm drives are not
-back-drivable) are offered on both models.
+(their velocity is zero).  Passive joint damping and Coulomb friction are offered on both models; the BH8-280's
+self-locking worms are :class:`BarrettActuation`'s own (a locked finger's column leaves ``T``).
 
 - :class:`FullyActuated`: one torque per joint (the thesis' assumption), ``T = I``; optional saturation.
 - :class:`BarrettActuation`: the BH8-280's four motors, TorqueSwitch (thesis 2.4.7) and self-locking worm drives,

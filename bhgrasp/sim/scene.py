@@ -33,13 +33,13 @@ class CollisionPair:
     Attributes:
         index: Index in the geometry model's collision pairs.
         geom_a: Geometry index of body a (a hand link, the environment, or the first object).
-        geom_b: Geometry index of body b (an object).
+        geom_b: Geometry index of body b (an object, or a hand link that the environment stops).
         joint_a: Pinocchio joint carrying body a (0 = fixed: environment or palm).
         joint_b: Joint carrying body b.
         body_a: Display name of body a (link, environment or object name).
         body_b: Display name of body b.
         friction_a: Coulomb coefficient of surface a; ``None`` for a hand link (the contact law's pad value).
-        friction_b: Coulomb coefficient of surface b.
+        friction_b: Coulomb coefficient of surface b; ``None`` for a hand link.
     """
 
     index: int
@@ -50,12 +50,13 @@ class CollisionPair:
     body_a: str
     body_b: str
     friction_a: float | None
-    friction_b: float
+    friction_b: float | None
 
     def friction(self, hand_friction: float) -> float:
         """Coefficient of the pair: the smaller of the two surfaces' (hand pads have ``hand_friction``)."""
         first = hand_friction if self.friction_a is None else self.friction_a
-        return min(first, self.friction_b)
+        second = hand_friction if self.friction_b is None else self.friction_b
+        return min(first, second)
 
 
 class Scene:
@@ -66,6 +67,7 @@ class Scene:
         hand: Hand,
         objects: Sequence[RigidObject | SpringMounted] = (),
         environment: Sequence[Environment] = (),
+        environment_touches_hand: bool = True,
     ) -> None:
         """Assemble the scene.
 
@@ -74,10 +76,13 @@ class Scene:
                 ``hand.collision_geometry`` if set, else read from ``hand.urdf_path`` (else none).
             objects: Free rigid objects and spring-mounted (compliant) objects, in state order.
             environment: Fixed shapes (planes, fixed boxes).
+            environment_touches_hand: Whether the environment also stops the hand's moving links (a table under a
+                closing finger); the hand's sensing reads object contacts only (body a a hand link).
         """
         self.hand = hand
         self.objects = tuple(objects)
         self.environment = tuple(environment)
+        self.environment_touches_hand = bool(environment_touches_hand)
         for i, item in enumerate(self.objects):
             if not isinstance(item, RigidObject | SpringMounted):
                 raise InputError(f"`objects[{i}]` must be a RigidObject or SpringMounted, got {type(item).__name__}")
@@ -221,14 +226,22 @@ class Scene:
         return self.geometry.addGeometryObject(pin.GeometryObject(name, joint, placement, shape))
 
     def _collision_pairs(self) -> list[CollisionPair]:
-        """Every hand link vs every object, objects vs environment, objects vs objects (a, b, friction of a)."""
+        """The pairs (a, b, friction of a): hand links vs objects, environment vs objects, objects vs objects.
+
+        Then, with ``environment_touches_hand``, the environment vs every moving hand link.
+        """
         candidates: list[tuple[int, int, float | None]] = []
         for b in self.object_geometries:
             candidates += [(a, b, None) for a in self.hand_geometries]
             candidates += [(a, b, env.friction) for a, env in zip(self.environment_geometries, self.environment)]
         for i, (a, first) in enumerate(zip(self.object_geometries, self.objects)):
             candidates += [(a, b, first.friction) for b in self.object_geometries[i + 1 :]]
-        friction_of = dict(zip(self.object_geometries, (o.friction for o in self.objects)))
+        if self.environment_touches_hand:  # after the others: the earlier pairs keep their indices
+            moving = [g for g in self.hand_geometries if self.geometry.geometryObjects[g].parentJoint != 0]
+            for a, env in zip(self.environment_geometries, self.environment):
+                candidates += [(a, b, env.friction) for b in moving]
+        friction_of: dict[int, float | None] = dict(zip(self.object_geometries, (o.friction for o in self.objects)))
+        friction_of.update(dict.fromkeys(self.hand_geometries))  # hand pads: the contact law's coefficient
         pairs = []
         for index, (a, b, friction_a) in enumerate(candidates):
             self.geometry.addCollisionPair(pin.CollisionPair(a, b))
