@@ -11,6 +11,7 @@ import pytest
 
 from bhgrasp.errors import InputError
 from bhgrasp.experiments import bench_report
+from bhgrasp.experiments.bench_metrics import evaluate
 from bhgrasp.experiments.bench_objects import OBJECT_SET, BenchObject
 from bhgrasp.experiments.grasp_bench import (
     CLOSE_AT,
@@ -18,7 +19,6 @@ from bhgrasp.experiments.grasp_bench import (
     LIFT,
     SHAKE_TIME,
     Trial,
-    evaluate,
     shake_force,
     simulate_trial,
 )

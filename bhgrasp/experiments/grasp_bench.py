@@ -193,18 +193,6 @@ class BenchController:
         return tau
 
 
-def relative_poses(hand: bh.Hand, trajectory) -> tuple[np.ndarray, np.ndarray]:
-    """Per sample, the object's position [m] and rotation (3, 3) in the palm frame (the hand base's)."""
-    positions, rotations = [], []
-    for k in range(len(trajectory.t)):
-        palm = hand.frame_placement(trajectory.q[k], "palm")
-        rotation = pin.Quaternion(*np.roll(trajectory.object_quaternion[k, 0], 1)).toRotationMatrix()
-        relative = palm.actInv(pin.SE3(rotation, trajectory.object_position[k, 0]))
-        positions.append(relative.translation)
-        rotations.append(relative.rotation)
-    return np.array(positions), np.array(rotations)
-
-
 def shake_force(mass: float):
     """The shake, ``t -> (1, 3)`` world force [N]: 10 m newtons along each of :data:`DIRECTIONS` for 2 s."""
     axes = np.vstack([np.eye(3)[[0, 0, 1, 1, 2, 2]] * np.array([1, -1, 1, -1, 1, -1])[:, None]])
@@ -232,38 +220,10 @@ def simulate_trial(trial: Trial, dt: float = DT, record_every: int = 40, duratio
 
 def run_trial(trial: Trial, dt: float = DT, record_every: int = 40) -> dict:
     """Run one trial (module docstring) and return its record (SI units; rotations [rad], forces [N])."""
+    from bhgrasp.experiments.bench_metrics import evaluate  # (it imports this module's protocol constants)
+
     trajectory, hand = simulate_trial(trial, dt, record_every)
     return evaluate(trial, trajectory, hand)
-
-
-def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
-    """A trial's record from its trajectory.
-
-    Lifted height, displacement and rotation in the palm frame through the shake, success, placement, slip, peak
-    forces and torques, and why it failed.
-    """
-    t = trajectory.t
-    held = min(int(np.searchsorted(t, HELD_AT - 1e-9)), len(t) - 1)
-    shaken = min(int(np.searchsorted(t, HELD_AT + 6 * SHAKE_TIME - 1e-9)), len(t) - 1)
-    positions, rotations = relative_poses(hand, trajectory)
-    offsets = np.linalg.norm(positions[held : shaken + 1] - positions[held], axis=1)
-    turns = np.array([np.linalg.norm(pin.log3(rotations[held].T @ r)) for r in rotations[held : shaken + 1]])
-    lifted = float(trajectory.object_position[held, 0, 2] - trajectory.object_position[0, 0, 2])
-    held_through = lifted > 0.5 * LIFT and t[-1] >= HELD_AT + 6 * SHAKE_TIME - 1e-9  # not stopped: still in the scene
-    record = {
-        "object": trial.item.name, "spec": trial.item.spec, "grasp": trial.grasp, "actuation": trial.actuation,
-        "lifted": lifted, "max_displacement": float(offsets.max()), "max_rotation": float(turns.max()),
-        "success": bool(held_through and offsets.max() < LOOSE[0] and turns.max() < LOOSE[1]),
-        "strict_success": bool(held_through and offsets.max() < STRICT[0] and turns.max() < STRICT[1]),
-    }  # fmt: skip
-    final = trajectory.object_position[-1, 0, 2] - trajectory.object_position[0, 0, 2]
-    record["placed"] = bool(record["success"] and abs(final) < 0.005)  # set down and let go at its resting height
-    record.update(contact_summary(trajectory, hand, held, shaken))
-    fingers = slice(1, 4) if trial.actuation == "barrett" else [hand.joint_index(f"{f}_{j}") for f in hand.fingers
-                                                                for j in ("proximal", "distal")]  # fmt: skip
-    record["peak_motor_torque"] = float(np.abs(trajectory.u[:, fingers]).max())  # finger pucks or joints [N m]
-    record["failure"] = failure_reason(record, offsets, turns, t[held : shaken + 1], float(t[-1]))
-    return record
 
 
 def gone(state: bh.State) -> bool:
@@ -271,40 +231,7 @@ def gone(state: bh.State) -> bool:
     return bool(state.object_poses[0].translation[2] < -0.05)
 
 
-def contact_summary(trajectory, hand: bh.Hand, held: int, shaken: int) -> dict:
-    """The hand's peak contact force [N] on the object, and its sliding contact samples while held.
-
-    Contacts of a hand link (body a) on the object (body b) count, not the table's; "held" is the lift's end to the
-    shake's end.
-    """
-    links = {frame.name for frame in hand.model.frames}
-    bodies = trajectory.pair_bodies[trajectory.contact_pair]
-    on_object = np.array([a in links and b == trajectory.object_names[0] for a, b in bodies], dtype=bool)
-    forces = np.linalg.norm(trajectory.contact_force, axis=1) * on_object
-    rows = slice(trajectory.contact_offsets[held], trajectory.contact_offsets[shaken + 1])
-    loaded = (forces[rows] > 0.1) & ~trajectory.contact_sticking[rows]
-    return {"peak_contact_force": float(forces.max(initial=0.0)), "slip_samples": int(loaded.sum())}
-
-
-def failure_reason(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.ndarray, end: float) -> str:
-    """Why a trial failed ('' if it succeeded).
-
-    Not lifted, the push direction that moved the object too far, or the object leaving the scene (the run's
-    ``end`` [s] before the shake's).
-    """
-    if record["lifted"] <= 0.5 * LIFT:
-        return f"not lifted: the object rose {1e3 * record['lifted']:.0f} mm of the wrist's {1e3 * LIFT:.0f}"
-    if record["success"]:
-        return ""
-    moved = np.flatnonzero((offsets >= LOOSE[0]) | (turns >= LOOSE[1]))
-    if len(moved) == 0:
-        return f"the object left the scene at {end:.2f} s"
-    k = int(moved[0])
-    direction = DIRECTIONS[min(int((times[k] - HELD_AT) // SHAKE_TIME), 5)]
-    return f"moved {1e3 * offsets[k]:.0f} mm / {math.degrees(turns[k]):.0f} deg under the {direction} push"
-
-
 __all__ = [
-    "ACTUATIONS", "DIRECTIONS", "GRASPS", "BenchController", "Trial", "evaluate", "run_trial", "setup", "shake_force",
+    "ACTUATIONS", "DIRECTIONS", "GRASPS", "BenchController", "Trial", "gone", "run_trial", "setup", "shake_force",
     "simulate_trial", "spread_of",
 ]  # fmt: skip
