@@ -9,6 +9,7 @@ error; the sweep goes on (:func:`~bhgrasp.sweep.run_sweep`).  ``python -m bhgras
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import json
 import math
@@ -24,8 +25,7 @@ METRICS = ("lifted", "max_displacement", "max_rotation", "slip_samples", "peak_c
 
 def bench_rollout(parameters: dict[str, Any], seed: int) -> dict[str, Any]:
     """One trial as a sweep rollout (deterministic: ``seed`` is unused)."""
-    item = BenchObject.parse(parameters["spec"])
-    item = BenchObject(item.kind, item.dims, item.mass, parameters["name"])
+    item = dataclasses.replace(BenchObject.parse(parameters["spec"]), name=parameters["name"])
     record = run_trial(Trial(item, parameters["grasp"], parameters["actuation"]))
     return {key: value for key, value in record.items() if key not in parameters and key != "object"}
 

@@ -230,12 +230,17 @@ class BarrettActuation(Actuation):
             return columns
         return np.delete(columns, 1 + np.flatnonzero(self.locked), axis=1)
 
+    def delivered(self, u: np.ndarray) -> np.ndarray:
+        """The inputs the pucks deliver: clipped to their limit if ``saturate`` (a mount's joints are not)."""
+        if not self.saturate:
+            return u
+        u = u.copy()
+        u[:4] = np.clip(u[:4], -MAX_MOTOR_TORQUE, MAX_MOTOR_TORQUE)
+        return u
+
     def joint_torques(self, u: np.ndarray) -> np.ndarray:
         """Motor torques (clipped to the puck limit if ``saturate``) through the gears [N m]."""
-        if self.saturate:
-            u = u.copy()
-            u[:4] = np.clip(u[:4], -MAX_MOTOR_TORQUE, MAX_MOTOR_TORQUE)  # the pucks; a mount's joints are not
-        return self.drive.joint_torques(u, self.mode)
+        return self.drive.joint_torques(self.delivered(u), self.mode)
 
     def begin(self, u: np.ndarray) -> None:
         """An idle finger motor's worm is locked for the step: its load cannot turn it, not even for one step."""
@@ -247,9 +252,7 @@ class BarrettActuation(Actuation):
 
         (``switch`` and ``locks`` of :class:`~bhgrasp.barrett.transmission.BarrettTransmission`.)
         """
-        if self.saturate:
-            u = u.copy()
-            u[:4] = np.clip(u[:4], -MAX_MOTOR_TORQUE, MAX_MOTOR_TORQUE)
+        u = self.delivered(u)
         modes = self.drive.switch(self.mode, q_hand, v_hand, u, drive_torques)
         locked = self.locked & (modes == self.mode)  # a finger on a new coordinate starts unlocked
         self.locked[:] = self.drive.locks(locked, modes, v_hand, u, drive_torques)
