@@ -113,6 +113,7 @@ class FullyActuated(Actuation):
         saturate: bool = False,
         damping: float | Sequence[float] = 0.0,
         friction: float | Sequence[float] = 0.0,
+        limit: float | Sequence[float] | None = None,
     ) -> None:
         """One torque per joint of ``hand``.
 
@@ -121,15 +122,16 @@ class FullyActuated(Actuation):
             saturate: Clip each torque to ``hand.effort_limit``.
             damping: Passive viscous joint damping [N m s/rad], scalar or per joint.
             friction: Coulomb joint friction [N m], scalar or per joint.
+            limit: Clip each torque to this [N m] instead (scalar or per joint; implies ``saturate``).
         """
         super().__init__(DirectDrive(hand, damping), friction)
-        self.saturate = bool(saturate)
+        self.saturate = bool(saturate) or limit is not None
+        self.limit = hand.effort_limit if limit is None else per_joint(limit, hand.nv, "limit")
 
     def joint_torques(self, u: np.ndarray) -> np.ndarray:
-        """The inputs themselves (clipped to the effort limits if ``saturate``)."""
+        """The inputs themselves (clipped to :attr:`limit` if ``saturate``)."""
         if self.saturate:
-            limit = self.hand.effort_limit
-            return np.clip(u, -limit, limit)
+            return np.clip(u, -self.limit, self.limit)
         return np.array(u, dtype=float)
 
     def joint_damping(self) -> np.ndarray:

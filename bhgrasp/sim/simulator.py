@@ -46,6 +46,7 @@ from bhgrasp.sim.contact import ContactEngine, ContactMemory, ContactSet, Spring
 from bhgrasp.sim.integrators import gyroscopic_torque, spin_midpoint
 from bhgrasp.sim.recorder import Recorder
 from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.sensor_model import SensorModel, Sensors
 from bhgrasp.sim.state import SimulatedState, State, Trajectory
 
 INTEGRATORS = ("implicit", "semi-implicit", "rk4")
@@ -524,6 +525,7 @@ class Simulator:
         record_every: int = 1,
         object_forces: Callable[[float], Any] | None = None,
         until: Callable[[State], bool] | None = None,
+        sensors: SensorModel | None = None,
     ) -> Trajectory:
         """Simulate ``duration`` [s] under ``controller`` and record everything.
 
@@ -533,30 +535,38 @@ class Simulator:
             duration: Simulated time [s].
             state: Start state (default :meth:`initial_state`).
             control_dt: Controller period [s] (a multiple of ``dt``; inputs held in between); default ``dt``.
-            sensor_noise: (sigma_q [rad], sigma_v [rad/s]) Gaussian noise on the hand state the controller sees.
+            sensor_noise: (sigma_q [rad], sigma_v [rad/s]) Gaussian noise on the hand state the controller sees:
+                short for ``sensors=SensorModel(joint_position=sigma_q, joint_velocity=sigma_v)``.
             disturbance: Joint torques [N m] added to the actuators': an array, or a callable ``t -> array``.
-            seed: Seed of the sensor noise (required with ``sensor_noise``).
+            seed: Seed of the sensor noise (required with noisy ``sensor_noise`` or ``sensors``).
             progress: Show a tqdm progress bar for runs of more than 20 000 steps.
             record_every: Record one sample every this many physics steps.
             object_forces: ``t -> (n_objects, 3)`` forces [N, world frame] on the objects' centres of mass (e.g. a
                 shake test), or ``None``.
             until: ``state -> bool`` checked after every step: the run stops early at the first state it accepts
                 (e.g. an object that left the hand); the trajectory ends there.
+            sensors: What the controller's sensors get wrong (:class:`~bhgrasp.sim.sensor_model.SensorModel`:
+                noise on the joints, the object's pose and twist and the contact forces, and a delay).
         """
         duration = as_positive(duration, "duration")
         steps = round(duration / self.dt)
         hold = 1 if control_dt is None else round(as_positive(control_dt, "control_dt") / self.dt)
         if hold < 1 or abs(hold * self.dt - (control_dt or self.dt)) > 1e-9 * max(1.0, hold):
             raise InputError(f"`control_dt` must be a positive multiple of dt = {self.dt}, got {control_dt}")
-        if sensor_noise is not None and seed is None:
-            raise InputError("`sensor_noise` needs a `seed` (runs are deterministic)")
+        if sensor_noise is not None:
+            if sensors is not None:
+                raise InputError("give `sensor_noise` or `sensors`, not both (sensor_noise is short for sensors)")
+            if seed is None:
+                raise InputError("`sensor_noise` needs a `seed` (runs are deterministic)")
+            sigma = as_vector(sensor_noise, "sensor_noise", 2)
+            sensors = SensorModel(joint_position=sigma[0], joint_velocity=sigma[1])
+        reader = Sensors(SensorModel() if sensors is None else sensors, seed)
         if isinstance(record_every, bool) or not isinstance(record_every, int | np.integer) or record_every < 1:
             raise InputError(
                 f"`record_every` must be a positive integer (physics steps per sample), got {record_every!r}"
             )
         if disturbance is not None and not callable(disturbance):
             disturbance = self._disturbance(disturbance, "disturbance")
-        rng = np.random.default_rng(seed)
         state = self.initial_state() if state is None else state
         if state.scene_q is None or state.scene_q.shape != (self.scene.nq,):
             raise InputError(
@@ -578,7 +588,7 @@ class Simulator:
             iterator = tqdm(iterator, desc="simulating", unit="step", mininterval=1.0)
         for k in iterator:
             if k % hold == 0:
-                sensed = _noisy(state, sensor_noise, rng)
+                sensed = reader.read(state)
                 u = self._input(np.array(controller(state.t, sensed), dtype=float), state.t)
             if k % record_every == 0:
                 recorder.add(state, u, info, getattr(controller, "log", None))
@@ -590,19 +600,6 @@ class Simulator:
                 break
         recorder.add(state, u, info, getattr(controller, "log", None))
         return recorder.trajectory()
-
-
-def _noisy(state: State, noise: tuple[float, float] | None, rng: np.random.Generator) -> State:
-    if noise is None:
-        return state
-    sigma_q, sigma_v = noise
-    from dataclasses import replace
-
-    return replace(
-        state,
-        q=state.q + rng.normal(scale=sigma_q, size=state.q.shape),
-        v=state.v + rng.normal(scale=sigma_v, size=state.v.shape),
-    )
 
 
 __all__ = ["ENGINES", "INTEGRATORS", "Simulator", "StepInfo"]
