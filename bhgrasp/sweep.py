@@ -286,9 +286,10 @@ def grasp_rollout(parameters: dict[str, Any], seed: int) -> dict[str, float]:
     """The grasp demo as a sweep scenario; ``parameters`` are keyword arguments of ``run_grasp_demo``.
 
     For example ``mass``, ``estimate``, ``controller``, ``distribution``, ``stiffness``, ``duration`` and
-    ``sensor_noise`` (whose draws use the case's ``seed``).  Returns the demo's figures of merit: pose errors
-    [m, rad], force error (fraction), slip events, the final mass estimate [kg] (NaN for non-adaptive controllers),
-    the grasp time [s] and the minimum cone margin [N].
+    ``sensor_noise`` and the uncertainties of :mod:`bhgrasp.experiments.uncertainty` (whose draws use the case's
+    ``seed``).  Returns the demo's figures of merit: pose errors [m, rad] (the controller's, and the true ones
+    against its reference), force error (fraction), slip events, the final mass estimate [kg] (NaN for non-adaptive
+    controllers), the grasp time [s] and the minimum cone margin [N].
     """
     from bhgrasp.experiments.grasp_demo import run_grasp_demo
 
@@ -297,6 +298,8 @@ def grasp_rollout(parameters: dict[str, Any], seed: int) -> dict[str, float]:
     return {
         "position_error": result.position_error,
         "rotation_error": result.rotation_error,
+        "true_position_error": result.true_position_error,
+        "true_rotation_error": result.true_rotation_error,
         "force_error": result.force_error,
         "slip_events": float(result.slip_events),
         "mass_estimate": float("nan") if result.mass_estimate is None else result.mass_estimate,

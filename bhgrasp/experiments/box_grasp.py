@@ -73,7 +73,15 @@ class BoxGrasp:
 
 
 def box_grasp(
-    mass: float = 1.0, actuation: str = "full", opening: float = 0.3, dt: float = 1e-3, stiffness: float = STIFFNESS
+    mass: float = 1.0,
+    actuation: str = "full",
+    opening: float = 0.3,
+    dt: float = 1e-3,
+    stiffness: float = STIFFNESS,
+    friction: float = FRICTION,
+    joint_friction: float = 0.0,
+    joint_damping: float = JOINT_DAMPING,
+    torque_limit: float | None = None,
 ) -> BoxGrasp:
     """Build the scene.
 
@@ -83,8 +91,15 @@ def box_grasp(
         opening: Proximal opening [rad] of the start configuration relative to the contact configuration.
         dt: Simulator step [s].
         stiffness: Contact stiffness [N/m] (damping 2e-3 s times it).
+        friction: The true friction coefficient of the box, its pedestal and the finger pads.
+        joint_friction: Coulomb friction [N m] on every joint.
+        joint_damping: Viscous joint damping [N m s/rad].
+        torque_limit: Each joint torque [N m] is clipped to this (``"full"`` actuation; default: no limit).
     """
     mass = as_positive(mass, "mass")
+    friction = as_positive(friction, "friction")
+    if torque_limit is not None and actuation != "full":
+        raise InputError(f"`torque_limit` applies to the 'full' actuation, got actuation {actuation!r}")
     hand = BarrettHand()
     centre = np.array([0.0, 0.0, CONTACT_HEIGHT])
     half = 0.5 * BOX_SIZE[1] + PAD_RADIUS
@@ -100,16 +115,17 @@ def box_grasp(
     for finger in hand.fingers:
         index = hand.joint_index(f"{finger}_proximal")
         q_start[index] = max(q_contact[index] - opening, hand.lower[index])
-    box = Box(size=BOX_SIZE, mass=mass, friction=FRICTION, pose=pin.SE3(np.eye(3), centre))
+    box = Box(size=BOX_SIZE, mass=mass, friction=friction, pose=pin.SE3(np.eye(3), centre))
     pedestal_centre = centre - [0.0, 0.0, 0.5 * BOX_SIZE[2] + 0.5 * PEDESTAL]
-    pedestal = FixedBox(size=(PEDESTAL,) * 3, pose=pin.SE3(np.eye(3), pedestal_centre), friction=FRICTION)
+    pedestal = FixedBox(size=(PEDESTAL,) * 3, pose=pin.SE3(np.eye(3), pedestal_centre), friction=friction)
+    joints = {"damping": joint_damping, "friction": joint_friction}
     if actuation == "full":
-        drive: Actuation = FullyActuated(hand, damping=JOINT_DAMPING)
+        drive: Actuation = FullyActuated(hand, limit=torque_limit, **joints)
     elif actuation == "barrett":
-        drive = BarrettActuation(hand, damping=JOINT_DAMPING)
+        drive = BarrettActuation(hand, **joints)
     else:
         raise InputError(f"`actuation` must be 'full' or 'barrett', got {actuation!r}")
-    law = SpringDamper(stiffness=stiffness, damping=2e-3 * stiffness, friction=FRICTION)
+    law = SpringDamper(stiffness=stiffness, damping=2e-3 * stiffness, friction=friction)
     simulator = Simulator(Scene(hand, [box], environment=[pedestal]), dt=dt, contact=law, actuation=drive)
     return BoxGrasp(simulator, simulator.initial_state(q_start), hand, box, q_contact, q_start)
 

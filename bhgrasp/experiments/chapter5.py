@@ -301,8 +301,14 @@ def _plots():
     return plots
 
 
+def _robustness(scale: float = 1.0) -> Case:
+    from bhgrasp.experiments.robustness import robustness
+
+    return robustness(scale)
+
+
 CASES: dict[str, Callable[[float], Case]] = {
-    "pregrasp": pregrasp, "laws": object_laws, "smc": smc_adaptive, "mass": mass_sweep,
+    "pregrasp": pregrasp, "laws": object_laws, "smc": smc_adaptive, "mass": mass_sweep, "robustness": _robustness,
 }  # fmt: skip
 
 

@@ -13,7 +13,6 @@ does) and the run time.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -28,10 +27,17 @@ from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
 from bhgrasp.errors import InputError
 from bhgrasp.experiments.allegro_grasp import allegro_box_grasp
 from bhgrasp.experiments.box_grasp import STIFFNESS, BoxGrasp, box_grasp
+from bhgrasp.experiments.demo_result import MU_ASSUMED, GraspDemoResult
+from bhgrasp.experiments.uncertainty import (
+    PLANT,
+    SENSED,
+    UNCERTAINTIES,
+    check_uncertainty,
+    final_pose_error,
+    sensor_model,
+)
 from bhgrasp.grasp_metrics import finger_normal_forces, slip_events
 from bhgrasp.objects import Box
-from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import Trajectory
 
 if TYPE_CHECKING:
     from bhgrasp.plots import Figure
@@ -39,71 +45,23 @@ if TYPE_CHECKING:
 CONTROLLERS = ("smc-adaptive", "ctc", "natural", "stiffness", "pd")
 HANDS = ("barrett", "allegro")
 OFFSET = (0.0, 0.0, 0.010, 0.1, 0.0, 0.0)  # [m, rad]: 10 mm up, 0.1 rad about x
-MU_ASSUMED = 0.6  # the true friction is 0.8
 SQUEEZE = 5.0  # [N] desired normal force per contact (the thesis' 5 N)
 
 
-@dataclass
-class GraspDemoResult:
-    """The run and its figures of merit (errors at the end; force error over the settled window).
-
-    Times [s] are absolute: the grasp closes at ``grasp_time``, the object moves from ``motion_start`` to
-    ``motion_end``, and the force error is taken from ``settle_time`` on.  ``q_contact`` is the IK contact
-    configuration the approach aimed at; ``scene`` the simulated scene (for :mod:`bhgrasp.viz`).
-    """
-
-    trajectory: Trajectory
-    controller: str
-    true_mass: float
-    initial_estimate: float
-    mass_estimate: float | None
-    grasp_time: float
-    motion_start: float
-    motion_end: float
-    settle_time: float
-    position_error: float
-    rotation_error: float
-    force_error: float
-    slip_events: int
-    cone_margin: float
-    infeasible_samples: int
-    wall_time: float
-    q_contact: np.ndarray
-    scene: Scene
-
-    def summary(self) -> str:
-        """A few lines for the terminal."""
-        duration = float(self.trajectory.t[-1])
-        estimate = "" if self.mass_estimate is None else f", estimated {self.mass_estimate:.3f} kg"
-        motion = f"motion {self.motion_start:.2f}-{self.motion_end:.2f} s"
-        final, window = "final", f"max over fingers from {self.settle_time:.2f} s"
-        if duration < self.motion_end:  # a short run: say what the numbers are
-            stage = "before the motion" if duration < self.motion_start else "during the motion"
-            motion += f" (the run ended at {duration:.2f} s, {stage})"
-            final = "at the end of the run, not the motion's final error"
-        if duration < self.settle_time:
-            window = f"at the last sample: the run ended before the forces settle at {self.settle_time:.2f} s"
-        return "\n".join([
-            f"grasp demo ({self.scene.hand.name}, {self.controller}): box {self.true_mass:.2f} kg, "
-            f"controller told {self.initial_estimate:.2f} kg{estimate}",
-            f"  grasp closed at {self.grasp_time:.3f} s; {motion}",
-            f"  object pose error: {1e3 * self.position_error:.3f} mm, {1e3 * self.rotation_error:.3f} mrad ({final})",
-            f"  contact force error: {100 * self.force_error:.2f} % of the commanded normal force ({window})",
-            f"  slip events: {self.slip_events} (sliding hand-object contact samples after the grasp closed)",
-            f"  commanded forces: min cone margin {self.cone_margin:.3f} N at mu {MU_ASSUMED}, "
-            f"{self.infeasible_samples} infeasible samples",
-            f"  time: {duration:.2f} s simulated in {self.wall_time:.1f} s wall",
-        ])  # fmt: skip
-
-
 def grasp_controller(
-    name: str, hand, nominal_box: Box, distribution: str = "qp", gains: tuple[Any, Any] | None = None
+    name: str,
+    hand,
+    nominal_box: Box,
+    distribution: str = "qp",
+    gains: tuple[Any, Any] | None = None,
+    mu: float = MU_ASSUMED,
 ) -> ObjectGraspController:
     """The object-space controller called ``name`` (one of :data:`CONTROLLERS`) with the demo's gains.
 
-    ``gains`` = (kp, kv) overrides the gains of "ctc", "natural" and "stiffness".
+    ``gains`` = (kp, kv) overrides the gains of "ctc", "natural" and "stiffness"; ``mu`` is the friction
+    coefficient the force distribution assumes.
     """
-    shared = {"mu": MU_ASSUMED, "squeeze": SQUEEZE, "distribution": distribution}
+    shared = {"mu": mu, "squeeze": SQUEEZE, "distribution": distribution}
     if name == "smc-adaptive":
         return SMCAdaptiveGrasp(hand, nominal_box, **shared)
     if name == "pd":
@@ -118,7 +76,7 @@ def grasp_controller(
 
 
 SWEEPABLE = ("mass", "estimate", "controller", "duration", "offset", "distribution", "approach_gains", "gains",
-             "stiffness", "sensor_noise", "hand")  # fmt: skip
+             "stiffness", "sensor_noise", "hand", *UNCERTAINTIES)  # fmt: skip
 """The parameters of :func:`run_grasp_demo` a sweep case may set (the case's seed comes from the sweep)."""
 
 
@@ -149,6 +107,10 @@ def check_demo_arguments(**arguments: Any) -> None:
         sigma = as_vector(noise, "sensor_noise", 2)
         if (sigma < 0.0).any():
             raise InputError(f"`sensor_noise` (sigma_q, sigma_v) must be >= 0, got {sigma.tolist()}")
+    uncertainty = {name: arguments[name] for name in UNCERTAINTIES if name in arguments}
+    if uncertainty and arguments.get("hand", "barrett") != "barrett":
+        raise InputError(f"the uncertainties {sorted(uncertainty)} apply to the Barrett scene, not {arguments['hand']}")
+    check_uncertainty(**uncertainty)
 
 
 def run_grasp_demo(
@@ -166,6 +128,7 @@ def run_grasp_demo(
     sensor_noise: tuple[float, float] | None = None,
     seed: int = 0,
     hand: str = "barrett",
+    **uncertainty: Any,
 ) -> GraspDemoResult:
     """Grasp, lift and turn the box; see the module docstring.
 
@@ -194,15 +157,23 @@ def run_grasp_demo(
             middle finger, :func:`~bhgrasp.experiments.allegro_grasp.allegro_box_grasp`).  The controllers are
             the same; where the scene asks for it (the Allegro) the commands also cancel the joints' viscous
             damping (known to the controller), which dominates its light links' inertia.
+        uncertainty: What the controller does not know (:data:`UNCERTAINTIES`, Barrett scene only):
+            ``pose_noise`` (sigma [m], sigma [rad]) on the object pose, ``twist_noise`` (sigma [m/s], sigma
+            [rad/s]) on its twist, ``force_noise`` sigma [N] on the contact forces, ``delay`` [s] of every reading,
+            ``joint_friction`` Coulomb [N m] and ``joint_damping`` viscous [N m s/rad] on the joints,
+            ``torque_limit`` [N m] on each joint torque, ``friction`` the true friction coefficient (0.8) and
+            ``mu`` the one the force distribution assumes (0.6).
     """
     check_demo_arguments(mass=mass, estimate=estimate, controller=controller, duration=duration, offset=offset,
                          distribution=distribution, approach_gains=approach_gains, stiffness=stiffness,
-                         sensor_noise=sensor_noise, hand=hand)  # fmt: skip
+                         sensor_noise=sensor_noise, hand=hand, **uncertainty)  # fmt: skip
     mass, estimate, duration, offset = float(mass), float(estimate), float(duration), as_vector(offset, "offset", 6)
-    setup = grasp_scene(hand, mass, float(stiffness))
+    plant = {name: uncertainty[name] for name in PLANT if name in uncertainty}
+    setup = grasp_scene(hand, mass, float(stiffness), **plant)
     setup.manipulable_space().check(offset)  # a motion the grasp cannot make is refused before simulating
     nominal_box = Box(size=setup.box.size, mass=estimate)
-    grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains)
+    grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains,
+                             float(uncertainty.get("mu", MU_ASSUMED)))  # fmt: skip
     kp, kv = approach_gains
     supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=offset, kp=kp, kv=kv,
                                  q_close=setup.q_close, fingers=setup.fingers)  # fmt: skip
@@ -212,17 +183,19 @@ def run_grasp_demo(
 
         law = LiveView(law, viewer, every=20)
     start = time.perf_counter()
-    traj = setup.simulator.run(
-        law, duration, state=setup.state, progress=progress, sensor_noise=sensor_noise, seed=seed
-    )
+    sensors = sensor_model(sensor_noise, **{name: uncertainty[name] for name in SENSED if name in uncertainty})
+    traj = setup.simulator.run(law, duration, state=setup.state, progress=progress, sensors=sensors, seed=seed)
     wall = time.perf_counter() - start
     return _evaluate(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
 
 
-def grasp_scene(hand: str, mass: float, stiffness: float = STIFFNESS) -> BoxGrasp:
-    """The demo's scene for ``hand`` (one of :data:`HANDS`) with a box of ``mass`` [kg]."""
+def grasp_scene(hand: str, mass: float, stiffness: float = STIFFNESS, **plant: Any) -> BoxGrasp:
+    """The demo's scene for ``hand`` (one of :data:`HANDS`) with a box of ``mass`` [kg].
+
+    ``plant``: the Barrett scene's true friction, joint friction and damping and torque limit (:data:`PLANT`).
+    """
     if hand == "barrett":
-        return box_grasp(mass=mass, stiffness=stiffness)
+        return box_grasp(mass=mass, stiffness=stiffness, **plant)
     if hand == "allegro":
         return allegro_box_grasp(mass=mass, stiffness=stiffness)
     raise InputError(f"`hand` must be one of {HANDS}, got {hand!r}")
@@ -241,6 +214,7 @@ def _evaluate(traj, hand, controller, mass, estimate, supervisor, wall, scene) -
     commanded = traj.log["commanded_normal"][settled]
     force_error = float(np.max(np.abs(measured - commanded) / np.maximum(commanded, 1e-9)))
     error = traj.log["object_error"][-1]
+    true_error = final_pose_error(traj, supervisor)
     grasping = phase >= 1
     estimate_log = traj.log.get("mass_estimate")
     final_estimate = None if estimate_log is None else float(np.ravel(estimate_log[-1])[0])
@@ -263,6 +237,8 @@ def _evaluate(traj, hand, controller, mass, estimate, supervisor, wall, scene) -
         wall_time=wall,
         q_contact=supervisor.q_contact,
         scene=scene,
+        true_position_error=float(np.linalg.norm(true_error[:3])),
+        true_rotation_error=float(np.linalg.norm(true_error[3:])),
     )
 
 

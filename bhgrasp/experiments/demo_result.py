@@ -1,0 +1,73 @@
+"""The grasp demo's result: the run and its figures of merit (of :mod:`bhgrasp.experiments.grasp_demo`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.state import Trajectory
+
+MU_ASSUMED = 0.6  # the true friction is 0.8
+
+
+@dataclass
+class GraspDemoResult:
+    """The run and its figures of merit (errors at the end; force error over the settled window).
+
+    Times [s] are absolute: the grasp closes at ``grasp_time``, the object moves from ``motion_start`` to
+    ``motion_end``, and the force error is taken from ``settle_time`` on.  ``q_contact`` is the IK contact
+    configuration the approach aimed at; ``scene`` the simulated scene (for :mod:`bhgrasp.viz`).
+    ``position_error`` and ``rotation_error`` are the controller's own (its last logged error, from what it sensed);
+    ``true_position_error`` and ``true_rotation_error`` compare the object's true final pose with the reference's
+    final pose (they differ when the sensors are noisy or late, :class:`~bhgrasp.sim.sensor_model.SensorModel`).
+    """
+
+    trajectory: Trajectory
+    controller: str
+    true_mass: float
+    initial_estimate: float
+    mass_estimate: float | None
+    grasp_time: float
+    motion_start: float
+    motion_end: float
+    settle_time: float
+    position_error: float
+    rotation_error: float
+    force_error: float
+    slip_events: int
+    cone_margin: float
+    infeasible_samples: int
+    wall_time: float
+    q_contact: np.ndarray
+    scene: Scene
+    true_position_error: float = float("nan")
+    true_rotation_error: float = float("nan")
+
+    def summary(self) -> str:
+        """A few lines for the terminal."""
+        duration = float(self.trajectory.t[-1])
+        estimate = "" if self.mass_estimate is None else f", estimated {self.mass_estimate:.3f} kg"
+        motion = f"motion {self.motion_start:.2f}-{self.motion_end:.2f} s"
+        final, window = "final", f"max over fingers from {self.settle_time:.2f} s"
+        if duration < self.motion_end:  # a short run: say what the numbers are
+            stage = "before the motion" if duration < self.motion_start else "during the motion"
+            motion += f" (the run ended at {duration:.2f} s, {stage})"
+            final = "at the end of the run, not the motion's final error"
+        if duration < self.settle_time:
+            window = f"at the last sample: the run ended before the forces settle at {self.settle_time:.2f} s"
+        return "\n".join([
+            f"grasp demo ({self.scene.hand.name}, {self.controller}): box {self.true_mass:.2f} kg, "
+            f"controller told {self.initial_estimate:.2f} kg{estimate}",
+            f"  grasp closed at {self.grasp_time:.3f} s; {motion}",
+            f"  object pose error: {1e3 * self.position_error:.3f} mm, {1e3 * self.rotation_error:.3f} mrad ({final})",
+            f"  contact force error: {100 * self.force_error:.2f} % of the commanded normal force ({window})",
+            f"  slip events: {self.slip_events} (sliding hand-object contact samples after the grasp closed)",
+            f"  commanded forces: min cone margin {self.cone_margin:.3f} N at mu {MU_ASSUMED}, "
+            f"{self.infeasible_samples} infeasible samples",
+            f"  time: {duration:.2f} s simulated in {self.wall_time:.1f} s wall",
+        ])  # fmt: skip
+
+
+__all__ = ["MU_ASSUMED", "GraspDemoResult"]
