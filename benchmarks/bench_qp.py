@@ -16,8 +16,7 @@ import time
 import numpy as np
 import quadprog
 
-from bhgrasp.grasp import friction_pyramid, grasp_map
-from bhgrasp.grasp_forces import ContactForceQP
+from bhgrasp.grasp import ContactForceQP, friction_pyramid, grasp_map
 
 MU, FACETS, F_MIN = 0.5, 8, 1.0
 

@@ -12,8 +12,18 @@ from bhgrasp.errors import (
     SimulationDiverged,
     UnreachableError,
 )
-from bhgrasp.grasp import GraspQuality, ferrari_canny, grasp_map, grasp_quality, hand_jacobian, is_force_closure
-from bhgrasp.grasp_forces import ContactForceQP, ContactForceResult, internal_forces, pseudo_inverse_forces
+from bhgrasp.grasp import (
+    ContactForceQP,
+    ContactForceResult,
+    GraspQuality,
+    ferrari_canny,
+    grasp_map,
+    grasp_quality,
+    hand_jacobian,
+    internal_forces,
+    is_force_closure,
+    pseudo_inverse_forces,
+)
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.ik import FingerIKResult, IKResult, Workspace, finger_ik, ik, workspace
 from bhgrasp.objects import Box, Capsule, Cylinder, FixedBox, Plane, Sphere, SpringMounted, table, wall

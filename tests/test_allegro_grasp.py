@@ -11,7 +11,7 @@ from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.experiments.allegro_grasp import FINGERTIPS, GRASPING, allegro_box_grasp
 from bhgrasp.experiments.grasp_demo import OFFSET, run_grasp_demo
-from bhgrasp.grasp_metrics import finger_normal_forces
+from bhgrasp.grasp.metrics import finger_normal_forces
 from bhgrasp.objects import Box
 
 GRAVITY = np.array([0.0, 0.0, -9.81])

@@ -1,5 +1,5 @@
 """The BH8-280's sensors (issue 16, item 2) against independent truths: the gear train's closed forms and libbarrett's
-published numbers (encoders), the Jacobian reaction torques of bhgrasp.sensing and r x F (fingertip torque), force
+published numbers (encoders), the Jacobian reaction torques of bhgrasp.grasp.sensing and r x F (fingertip torque), force
 conservation, symmetry and the hand's collision geometry (tactile pads), and a simulated grasp of a box."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import bhgrasp as bh
 from bhgrasp.barrett import BarrettSensors, encoder_counts, finger_pad, link_positions, motor_angles, palm_pad
 from bhgrasp.errors import InputError
 from bhgrasp.experiments.box_grasp import box_grasp
-from bhgrasp.sensing import ContactSensing
+from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.sim.state import State
 
 COUNT = 2 * np.pi / 4096  # [rad] one motor count (libbarrett MotorPuck: rpc = 2 pi / CTS, CTS = 4096)

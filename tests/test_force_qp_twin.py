@@ -1,4 +1,4 @@
-"""The compiled internal-force QP (``src/force_qp.cpp``) against its Python twin (``bhgrasp/_force_qp.py``).
+"""The compiled internal-force QP (``src/force_qp.cpp``) against its Python twin (``bhgrasp/grasp/_force_qp.py``).
 
 Both run the same three proxsuite dense problems with the same settings and the same state machine; only the
 arithmetic of proxsuite differs.  The twin calls proxsuite's Python module, which on an x86 CPU with AVX2 or AVX-512
@@ -36,10 +36,9 @@ import numpy as np
 import pytest
 
 import bhgrasp
-import bhgrasp.grasp_forces as grasp_forces
+import bhgrasp.grasp.forces as grasp_forces
 from bhgrasp.errors import CompiledEngineUnavailable, InputError
-from bhgrasp.grasp import default_torque_scale, friction_cone_edges, grasp_map
-from bhgrasp.grasp_forces import ContactForceQP
+from bhgrasp.grasp import ContactForceQP, default_torque_scale, friction_cone_edges, grasp_map
 
 core = pytest.importorskip("bhgrasp._core")
 

@@ -8,7 +8,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.experiments.hold import reference_hold
-from bhgrasp.grasp_dynamics import ObjectState, grasp_dynamics, grasp_mobility
+from bhgrasp.grasp import ObjectState, grasp_dynamics, grasp_mobility
 
 
 @pytest.fixture(scope="module")

@@ -14,8 +14,16 @@ import quadprog
 from scipy.optimize import linprog, lsq_linear
 
 import bhgrasp as bh
-from bhgrasp.grasp import default_torque_scale, friction_cone_edges, friction_pyramid, grasp_map
-from bhgrasp.grasp_forces import NEAREST_WEIGHT, ContactForceQP, cone_violations, pseudo_inverse_forces
+from bhgrasp.grasp import (
+    ContactForceQP,
+    cone_violations,
+    default_torque_scale,
+    friction_cone_edges,
+    friction_pyramid,
+    grasp_map,
+    pseudo_inverse_forces,
+)
+from bhgrasp.grasp.forces import NEAREST_WEIGHT
 
 GRAVITY_WRENCH = np.array([0.0, 0.0, 0.2 * 9.81, 0.0, 0.0, 0.0])  # what the contacts must exert to hold 0.2 kg
 

@@ -21,11 +21,10 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-import bhgrasp.grasp_dynamics as dynamics
+import bhgrasp.grasp.kinematics as kinematics_module
 from bhgrasp.experiments.allegro_grasp import allegro_hand
 from bhgrasp.experiments.hold import reference_hold
-from bhgrasp.grasp import contact_frames
-from bhgrasp.grasp_dynamics import ObjectState, contact_kinematics, contact_kinematics_python, grasp_kinematics
+from bhgrasp.grasp import ObjectState, contact_frames, contact_kinematics, contact_kinematics_python, grasp_kinematics
 
 STEP = 1e-6  # [s] of the central differences
 EPS = np.finfo(float).eps
@@ -146,7 +145,7 @@ MAPS = ("joint_map", "joint_map_rate", "grasp_map", "hand_jacobian", "hand_jacob
 
 def assert_twins_agree(hand, q, obj, points, frames, joints):
     """The compiled kernel and its Python twin agree on all five maps (tolerance: module docstring)."""
-    assert dynamics._kernel(hand) is not None, "bhgrasp._core does not load: nothing compiled to compare"
+    assert kinematics_module._kernel(hand) is not None, "bhgrasp._core does not load: nothing compiled to compare"
     compiled = contact_kinematics(hand, q, obj, points, frames, joints)
     python = contact_kinematics_python(hand, q, obj, points, frames, joints)
     singular = np.linalg.svd(python.hand_jacobian, compute_uv=False)
@@ -167,7 +166,7 @@ def world_grasp(hand, links, rng, count=3):
         size=(count, 3))  # fmt: skip
     com = points.mean(axis=0) + 0.01 * rng.normal(size=3)
     obj = ObjectState(0.3, np.diag([1e-4, 2e-4, 3e-4]), com, pin.exp3(rng.normal(size=3)), random_twist(rng))
-    return q, obj, points, contact_frames(rng.normal(size=(count, 3))), dynamics.parent_joints(hand, links)
+    return q, obj, points, contact_frames(rng.normal(size=(count, 3))), kinematics_module.parent_joints(hand, links)
 
 
 @pytest.mark.parametrize("fingers", [("F1", "F2", "F3"), ("F1", "F2")])
@@ -179,7 +178,8 @@ def test_compiled_kernel_agrees_with_its_python_twin_on_the_hold(held, fingers, 
                       random_twist(np.random.default_rng(seed)))  # fmt: skip
     points_world = pose.translation + points[keep] @ pose.rotation.T
     frames = contact_frames(normals[keep] @ pose.rotation.T)
-    assert_twins_agree(hand, q, obj, points_world, frames, dynamics.parent_joints(hand, [links[i] for i in keep]))
+    joints = kinematics_module.parent_joints(hand, [links[i] for i in keep])
+    assert_twins_agree(hand, q, obj, points_world, frames, joints)
 
 
 @pytest.mark.filterwarnings("ignore:URDF .* no rigid body has these inertias")
@@ -199,11 +199,11 @@ def test_compiled_kernel_reads_the_base_placement_of_each_call():
     rng = np.random.default_rng(7)
     grasp = world_grasp(hand, list(hand.fingertip_frames.values()), rng)
     assert_twins_agree(hand, *grasp)
-    kernel = dynamics._kernel(hand)
+    kernel = kinematics_module._kernel(hand)
     before = contact_kinematics(hand, *grasp)
     hand.base_placement = pin.SE3(pin.exp3(np.array([0.3, -0.5, 0.8])), np.array([0.1, -0.2, 0.05]))
     assert_twins_agree(hand, *grasp)
-    assert dynamics._kernel(hand) is kernel
+    assert kinematics_module._kernel(hand) is kernel
     assert not np.allclose(contact_kinematics(hand, *grasp).joint_map, before.joint_map)
 
 
@@ -212,7 +212,7 @@ def test_contact_kinematics_falls_back_to_the_python_twin_without_the_compiled_c
     monkeypatch.delattr(bh, "_core", raising=False)
     hand = bh.BarrettHand()
     grasp = world_grasp(hand, list(hand.fingertip_frames.values()), np.random.default_rng(3))
-    assert dynamics._kernel(hand) is None
+    assert kinematics_module._kernel(hand) is None
     fallback, python = contact_kinematics(hand, *grasp), contact_kinematics_python(hand, *grasp)
     for name in MAPS:
         np.testing.assert_array_equal(getattr(fallback, name), getattr(python, name))
@@ -222,7 +222,7 @@ def test_compiled_kernel_rejects_arrays_of_the_wrong_size():
     """The binding's own checks (the Python callers validate first): a wrong call raises, it does not read astray."""
     hand = bh.BarrettHand()
     q, obj, points, frames, joints = world_grasp(hand, list(hand.fingertip_frames.values()), np.random.default_rng(0))
-    kernel = dynamics._kernel(hand)
+    kernel = kinematics_module._kernel(hand)
     args = (np.eye(3), np.zeros(3), q, obj.com, obj.twist, points, frames.reshape(-1, 3), joints)
     kernel.compute(*args)
     for index, wrong in ((2, q[:-1]), (5, points[:0]), (6, frames.reshape(-1, 3)[:-3]), (7, joints[:-1]),

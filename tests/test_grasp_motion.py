@@ -10,7 +10,7 @@ import pytest
 from bhgrasp.errors import UnreachableError
 from bhgrasp.experiments.box_grasp import box_grasp
 from bhgrasp.experiments.grasp_demo import OFFSET, run_grasp_demo
-from bhgrasp.grasp_motion import describe
+from bhgrasp.grasp import describe
 from bhgrasp.sim import Simulator
 
 

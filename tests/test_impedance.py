@@ -20,7 +20,7 @@ from bhgrasp.controllers.impedance import (
 )
 from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter, critical_damping
 from bhgrasp.experiments import chapter4
-from bhgrasp.sensing import ContactSensing, FingerContact
+from bhgrasp.grasp.sensing import ContactSensing, FingerContact
 from bhgrasp.trajectories import Constant, SmoothStep
 
 

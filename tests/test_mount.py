@@ -11,6 +11,7 @@ import bhgrasp as bh
 from bhgrasp.barrett.transmission import BarrettTransmission
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.errors import InputError, ModelError
+from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.mount import (
     MOUNT_JOINTS,
     MountReference,
@@ -21,7 +22,6 @@ from bhgrasp.mount import (
     mounted,
 )
 from bhgrasp.objects import Box
-from bhgrasp.sensing import ContactSensing
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
 from bhgrasp.sim.batch import BatchSimulator

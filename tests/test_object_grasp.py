@@ -13,7 +13,7 @@ from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
 from bhgrasp.experiments.box_grasp import box_grasp
 from bhgrasp.experiments.grasp_demo import grasp_controller, run_grasp_demo
 from bhgrasp.experiments.hold import reference_hold
-from bhgrasp.grasp_metrics import finger_normal_forces, slip_events
+from bhgrasp.grasp.metrics import finger_normal_forces, slip_events
 from bhgrasp.objects import Box
 
 GRAVITY = np.array([0.0, 0.0, -9.81])

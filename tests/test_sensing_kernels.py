@@ -1,6 +1,6 @@
 """The compiled sensing, contact-frame and object-regressor kernels (src/sensing.cpp) against their NumPy twins.
 
-Truths: the twins (bhgrasp.sensing.ContactSensing._fingers_python, adaptive_grasp.object_regressor_python), and
+Truths: the twins (bhgrasp.grasp.sensing.ContactSensing._fingers_python, adaptive_grasp.object_regressor_python), and
 for the regressor also its defining identity Y_o sigma_o = M_o a_r + C_o(omega) v_r + N_o written out with the
 world inertia.  The kernels sum in another order than NumPy's einsum and BLAS, so they agree to a few ulps:
 1e-14 relative to the largest magnitude involved.
@@ -19,8 +19,8 @@ from bhgrasp._native import optional_core
 from bhgrasp.controllers.adaptive_grasp import object_parameters, object_regressor, object_regressor_python
 from bhgrasp.errors import InputError
 from bhgrasp.experiments.hold import reference_hold
-from bhgrasp.grasp import _frames, _unit_normals, contact_frames
-from bhgrasp.sensing import ContactSensing
+from bhgrasp.grasp.frames import _frames, _unit_normals, contact_frames
+from bhgrasp.grasp.sensing import ContactSensing
 
 RELATIVE = 1e-14
 

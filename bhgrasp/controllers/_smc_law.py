@@ -22,10 +22,10 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_array, as_vector
 from bhgrasp.errors import InputError
-from bhgrasp.grasp import TANGENT_SWITCH, ZERO_NORMAL, _grasp_map, contact_frames
-from bhgrasp.grasp_dynamics import _hand_index
-from bhgrasp.grasp_dynamics import _kernel as _kinematics_kernel
-from bhgrasp.grasp_forces import solver_arguments
+from bhgrasp.grasp.forces import solver_arguments
+from bhgrasp.grasp.frames import TANGENT_SWITCH, ZERO_NORMAL, _grasp_map, contact_frames
+from bhgrasp.grasp.kinematics import _hand_index
+from bhgrasp.grasp.kinematics import _kernel as _kinematics_kernel
 
 _ROW_CACHE = 256  # contact-body tuples whose finger and joint rows are kept (a run meets a handful)
 

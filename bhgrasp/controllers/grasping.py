@@ -2,11 +2,11 @@
 
 :class:`GraspForceController` holds or moves a grasped object: an object-space PD law (plus feed-forward of the
 object's weight and of the reference acceleration) gives the wrench w the contacts must exert on the object; the
-:class:`~bhgrasp.grasp_forces.ContactForceQP` distributes it over the contacts inside their friction cones,
+:class:`~bhgrasp.grasp.forces.ContactForceQP` distributes it over the contacts inside their friction cones,
 closest to a desired squeeze (internal force); the joints apply tau = g(q) + J_h^T f.  This is the structure of the
 thesis' object computed torque (5.32), tau = J^T G^+ F + J^T F_n, with the pseudo-inverse and the hand-made internal
 force replaced by the QP so that the commanded forces never leave the cones.  The fingers' own inertia is not
-compensated (the BH8-280's links weigh tens of grams); :mod:`bhgrasp.grasp_dynamics` has the full reduced model.
+compensated (the BH8-280's links weigh tens of grams); :mod:`bhgrasp.grasp.dynamics` has the full reduced model.
 
 The controller reads the object pose and twist from the state (a simulator provides them; on a real hand they come
 from vision or tactile estimation) and the contacts grouped by finger; with fewer than two touching fingers it
@@ -25,10 +25,10 @@ import pinocchio as pin
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.controllers.base import Controller
 from bhgrasp.errors import InputError
-from bhgrasp.grasp import _grasp_map, contact_frames, hand_jacobian
-from bhgrasp.grasp_forces import ContactForceQP, cone_violations, pseudo_inverse_forces
+from bhgrasp.grasp.forces import ContactForceQP, cone_violations, pseudo_inverse_forces
+from bhgrasp.grasp.frames import _grasp_map, contact_frames, hand_jacobian
+from bhgrasp.grasp.sensing import ContactSensing, FingerContact
 from bhgrasp.hand import Hand
-from bhgrasp.sensing import ContactSensing, FingerContact
 from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
@@ -45,9 +45,9 @@ class ObjectGraspController(Controller):
     Logged: ``object_error`` (position [m], rotation vector [rad], world), ``wrench`` (commanded on the object),
     ``commanded_normal`` (normal force per finger of the hand [N], 0 if not touching), ``feasible`` (1 if the
     forces exert the wrench, 0 if no admissible forces do: the QP then returns, and the controller applies, the
-    nearest admissible ones, see :mod:`bhgrasp.grasp_forces`), ``infeasible_cycles`` (how many grasp cycles so far
+    nearest admissible ones, see :mod:`bhgrasp.grasp.forces`), ``infeasible_cycles`` (how many grasp cycles so far
     were infeasible), ``wrench_residual`` (|G f - w| of the applied forces [N, N m]), ``qp_iterations`` (solver
-    iterations of the cycle, at most :attr:`~bhgrasp.grasp_forces.ContactForceQP.iteration_bound`; 0 for
+    iterations of the cycle, at most :attr:`~bhgrasp.grasp.forces.ContactForceQP.iteration_bound`; 0 for
     ``"pinv"``), ``cone_margin`` (smallest mu f_n - |f_t| of the commanded forces [N], negative = outside the
     assumed cone), ``contacts`` (number of touching fingers).
     """
@@ -173,7 +173,7 @@ class ObjectGraspController(Controller):
         """Contact forces (n, 3) (contact frames: t1, t2, n) [N] that exert ``wrench`` about the object's COM.
 
         When no admissible forces exert it, the QP's nearest admissible forces (never an exception, at most
-        :attr:`~bhgrasp.grasp_forces.ContactForceQP.iteration_bound` iterations); ``log["feasible"]`` is then 0.
+        :attr:`~bhgrasp.grasp.forces.ContactForceQP.iteration_bound` iterations); ``log["feasible"]`` is then 0.
         """
         n = len(contacts.fingers)
         gmap = contacts.grasp_map
@@ -221,7 +221,7 @@ class GraspContacts:
 
     @property
     def frames(self) -> np.ndarray:
-        """Contact frames [t1, t2, n] (n, 3, 3) (columns, world) of :func:`~bhgrasp.grasp.contact_frames`."""
+        """Contact frames [t1, t2, n] (n, 3, 3) (columns, world) of :func:`~bhgrasp.grasp.frames.contact_frames`."""
         if self._frames is None:
             self._frames = contact_frames(self.normals)
         return self._frames

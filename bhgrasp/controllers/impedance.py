@@ -36,8 +36,8 @@ from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter, critical_damping
 from bhgrasp.controllers.workspace import WorkspaceComputedTorque
 from bhgrasp.errors import InputError
+from bhgrasp.grasp.sensing import ContactSensing, FingerContact
 from bhgrasp.hand import Hand
-from bhgrasp.sensing import ContactSensing, FingerContact
 from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 

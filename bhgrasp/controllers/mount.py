@@ -7,7 +7,7 @@
     tau_m = [ID(q, v, a_ref)]_m - [tau_contact]_m + kp (c_d - c) + kd (c_dot_d - c_dot),
 
 ID the nominal hand's inverse dynamics with a_ref = (c_dd_d on the mount, 0 on the fingers), tau_contact the joint
-torques of the sensed contact forces (:meth:`~bhgrasp.sensing.ContactSensing.reaction_torques`: what a wrist
+torques of the sensed contact forces (:meth:`~bhgrasp.grasp.sensing.ContactSensing.reaction_torques`: what a wrist
 force-torque sensor gives an arm), so the servo carries the hand and its load and the PD only corrects the rest,
 like an arm's joint servos.  That feedforward closes a loop through the environment when the grasped object also
 rests on a support (squeezing it into a table raises the sensed force, which the servo then pushes harder
@@ -29,9 +29,9 @@ import pinocchio as pin
 from bhgrasp._validation import as_vector
 from bhgrasp.controllers.base import Controller, gain_vector
 from bhgrasp.errors import InputError
+from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.hand import Hand
 from bhgrasp.mount import MOUNT_JOINTS
-from bhgrasp.sensing import ContactSensing
 from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 

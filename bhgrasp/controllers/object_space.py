@@ -28,7 +28,7 @@ from bhgrasp._validation import as_positive
 from bhgrasp.controllers.base import gain_vector
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
 from bhgrasp.errors import InputError
-from bhgrasp.grasp_dynamics import GraspKinematics, ObjectState, contact_kinematics, parent_joints
+from bhgrasp.grasp.kinematics import GraspKinematics, ObjectState, contact_kinematics, parent_joints
 from bhgrasp.hand import Hand
 from bhgrasp.objects import RigidObject
 from bhgrasp.sim.state import State
@@ -60,7 +60,7 @@ def grasp_maps(hand: Hand, state: State, contacts: GraspContacts, obj: RigidObje
     """The controller's model of the grasp now: the object's state and the grasp's maps P, P_dot, G, J_h of (5.25).
 
     The sensed contacts are taken as fixed on the object and on their links (P_dot analytic, see
-    :mod:`bhgrasp.grasp_dynamics`; two kinematics passes).  The laws need only these maps: the fingers' share of
+    :mod:`bhgrasp.grasp.kinematics`; two kinematics passes).  The laws need only these maps: the fingers' share of
     M~, C~, N~ enters through :func:`hand_part`.
     """
     pose = state.object_poses[0]

@@ -29,8 +29,8 @@ from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.joint import ComputedTorque
 from bhgrasp.errors import InputError
+from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.hand import Hand
-from bhgrasp.sensing import ContactSensing
 from bhgrasp.sim.state import State
 from bhgrasp.trajectories import PoseMotion, SmoothStep
 from bhgrasp.transmission import Transmission

@@ -16,7 +16,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive
 from bhgrasp.errors import InputError
-from bhgrasp.grasp_motion import ManipulableSpace, manipulable_space
+from bhgrasp.grasp.manipulability import ManipulableSpace, manipulable_space
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.ik import ik
 from bhgrasp.objects import Box, FixedBox
@@ -57,7 +57,7 @@ class BoxGrasp:
     cancel_damping: bool = False
 
     def manipulable_space(self) -> ManipulableSpace:
-        """The object motions the planned grasp allows (:mod:`bhgrasp.grasp_motion`), before anything is simulated.
+        """The object motions the planned grasp allows (:mod:`bhgrasp.grasp.manipulability`), before simulating.
 
         Each grasping fingertip at ``q_contact`` touches the nearest point of the box's surface.
         """

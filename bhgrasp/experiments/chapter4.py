@@ -46,10 +46,10 @@ from bhgrasp.controllers.impedance import (
 from bhgrasp.controllers.workspace import workspace_dynamics
 from bhgrasp.errors import InputError, SimulationDiverged
 from bhgrasp.experiments import case_progress
+from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.objects import Box, SpringMounted
 from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
-from bhgrasp.sensing import ContactSensing
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.contact import SpringDamper
 from bhgrasp.sim.scene import Scene

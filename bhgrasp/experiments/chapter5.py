@@ -20,7 +20,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.experiments import case_progress
 from bhgrasp.experiments.box_grasp import CONTACT_HEIGHT, STIFFNESS
 from bhgrasp.experiments.grasp_demo import MU_ASSUMED, OFFSET, SQUEEZE, GraspDemoResult, run_grasp_demo
-from bhgrasp.grasp_metrics import finger_normal_forces
+from bhgrasp.grasp.metrics import finger_normal_forces
 from bhgrasp.hand import BarrettHand
 
 DURATION = 3.0  # [s] each run

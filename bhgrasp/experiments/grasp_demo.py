@@ -36,7 +36,7 @@ from bhgrasp.experiments.uncertainty import (
     final_pose_error,
     sensor_model,
 )
-from bhgrasp.grasp_metrics import finger_normal_forces, slip_events
+from bhgrasp.grasp.metrics import finger_normal_forces, slip_events
 from bhgrasp.objects import Box
 
 if TYPE_CHECKING:

@@ -1,11 +1,11 @@
 """The Python twin of the compiled internal-force QP ``bhgrasp._core.ContactForceQP`` (``src/force_qp.cpp``).
 
-:class:`~bhgrasp.grasp_forces.ContactForceQP` checks its inputs and runs one of the two (its ``engine``); the
-docstring of :mod:`bhgrasp.grasp_forces` states the problems, the check of a doubtful certificate, the warm starts
+:class:`~bhgrasp.grasp.forces.ContactForceQP` checks its inputs and runs one of the two (its ``engine``); the
+docstring of :mod:`bhgrasp.grasp.forces` states the problems, the check of a doubtful certificate, the warm starts
 and the iteration bound.  Both classes have one interface on validated arrays: :meth:`~ContactForceQPPython.holds`
 and :meth:`~ContactForceQPPython.set_grasp_map` (the grasp map and its torque scale, when it changes), then
 :meth:`~ContactForceQPPython.solve`, whose answer is the fields of
-:class:`~bhgrasp.grasp_forces.ContactForceResult` in order.  The same three proxsuite dense problems, settings and
+:class:`~bhgrasp.grasp.forces.ContactForceResult` in order.  The same three proxsuite dense problems, settings and
 state machine, line for line; ``tests/test_force_qp_twin.py`` holds the two in lockstep.
 """
 
@@ -28,7 +28,7 @@ class ContactForceQPPython:
     Args:
         n_contacts: n >= 1.
         mu: Friction coefficient >= 0.
-        pyramid: (facets, 3) rows of :func:`~bhgrasp.grasp.friction_pyramid`.
+        pyramid: (facets, 3) rows of :func:`~bhgrasp.grasp.cones.friction_pyramid`.
         inscribed: mu cos(pi / facets), the inscribed cone's slope.
         min_normal_force: f_min [N] >= 0.
         tolerance: proxsuite's eps_abs (and the absolute duality-gap tolerance).

@@ -1,0 +1,101 @@
+"""Grasp analysis (thesis chapter 5): contact geometry, closure and quality, contact forces, grasp dynamics, sensing.
+
+Modules, one concept each: :mod:`~bhgrasp.grasp.frames` (contact frames, the grasp map G, the hand Jacobian J_h,
+the grasp constraint and the conventions they share), :mod:`~bhgrasp.grasp.cones` (friction cones and their inscribed
+pyramids), :mod:`~bhgrasp.grasp.quality` (force closure, Ferrari-Canny epsilon, grasp wrench space volume),
+:mod:`~bhgrasp.grasp.forces` (the contact-force QP; its Python twin of the compiled solver is the private
+``_force_qp``), :mod:`~bhgrasp.grasp.kinematics` (P = J_h^+ G^T and its rate), :mod:`~bhgrasp.grasp.dynamics` (the
+reduced hand-object dynamics, the object motions a grasp allows), :mod:`~bhgrasp.grasp.manipulability` (the
+manipulable space: which offsets a grasp can make before anything is simulated), :mod:`~bhgrasp.grasp.sensing`
+(per-finger contact forces and reaction torques) and :mod:`~bhgrasp.grasp.metrics` (finger forces and slip events
+read back from a trajectory).  Every public name is re-exported here (``from bhgrasp.grasp import grasp_map``); the
+former modules ``bhgrasp.grasp_forces``, ``bhgrasp.grasp_dynamics``, ``bhgrasp.grasp_motion``,
+``bhgrasp.grasp_metrics`` and ``bhgrasp.sensing`` still import, as re-exports of these.
+
+``import bhgrasp.grasp`` does not import scipy: the force-closure LP and the convex hull import it when called.
+"""
+
+from bhgrasp.grasp.cones import friction_cone_edges, friction_pyramid, in_friction_cone
+from bhgrasp.grasp.dynamics import GraspDynamics, grasp_dynamics, grasp_mobility
+from bhgrasp.grasp.forces import (
+    ContactForceQP,
+    ContactForceResult,
+    cone_violations,
+    internal_forces,
+    pseudo_inverse_forces,
+)
+from bhgrasp.grasp.frames import (
+    TANGENT_SWITCH,
+    ZERO_NORMAL,
+    contact_frames,
+    grasp_constraint_residual,
+    grasp_map,
+    hand_jacobian,
+)
+from bhgrasp.grasp.kinematics import (
+    GraspKinematics,
+    ObjectState,
+    contact_kinematics,
+    contact_kinematics_python,
+    grasp_kinematics,
+    parent_joints,
+)
+from bhgrasp.grasp.manipulability import ManipulableSpace, describe, manipulable_space
+from bhgrasp.grasp.metrics import finger_normal_forces, finger_of, slip_events
+from bhgrasp.grasp.quality import (
+    CLOSURE_TOLERANCE,
+    LP_TOLERANCE,
+    GraspQuality,
+    default_torque_scale,
+    ferrari_canny,
+    force_closure_margin,
+    grasp_quality,
+    grasp_wrench_space_volume,
+    is_force_closure,
+    primitive_wrenches,
+)
+from bhgrasp.grasp.sensing import ContactSensing, FingerContact
+
+__all__ = [
+    "CLOSURE_TOLERANCE",
+    "LP_TOLERANCE",
+    "TANGENT_SWITCH",
+    "ZERO_NORMAL",
+    "ContactForceQP",
+    "ContactForceResult",
+    "ContactSensing",
+    "FingerContact",
+    "GraspDynamics",
+    "GraspKinematics",
+    "GraspQuality",
+    "ManipulableSpace",
+    "ObjectState",
+    "cone_violations",
+    "contact_frames",
+    "contact_kinematics",
+    "contact_kinematics_python",
+    "default_torque_scale",
+    "describe",
+    "ferrari_canny",
+    "finger_normal_forces",
+    "finger_of",
+    "force_closure_margin",
+    "friction_cone_edges",
+    "friction_pyramid",
+    "grasp_constraint_residual",
+    "grasp_dynamics",
+    "grasp_kinematics",
+    "grasp_map",
+    "grasp_mobility",
+    "grasp_quality",
+    "grasp_wrench_space_volume",
+    "hand_jacobian",
+    "in_friction_cone",
+    "internal_forces",
+    "is_force_closure",
+    "manipulable_space",
+    "parent_joints",
+    "primitive_wrenches",
+    "pseudo_inverse_forces",
+    "slip_events",
+]
