@@ -101,7 +101,7 @@ NB_MODULE(_core, m) {
       .def_ro("point", &FingerSums::point)
       .def_ro("strongest", &FingerSums::strongest);
   m.def("finger_contacts", &finger_contacts, "finger"_a, "fingers"_a, "points"_a, "normals"_a, "forces"_a,
-        "Per finger, its sensed contacts summed (bhgrasp.sensing.ContactSensing.fingers).");
+        "Per finger, its sensed contacts summed (bhgrasp.grasp.sensing.ContactSensing.fingers).");
   m.def("object_regressor", &object_regressor, "rotation"_a, "omega"_a, "v_r"_a, "a_r"_a, "gravity"_a,
         "Y_o (6, 7) of bhgrasp.controllers.adaptive_grasp.object_regressor.");
   m.def(
@@ -112,7 +112,7 @@ NB_MODULE(_core, m) {
         return std::make_pair(std::move(frames), zero);
       },
       "normals"_a, "zero_length"_a, "switch_x"_a,
-      "Contact frames (3m, 3) of bhgrasp.grasp.contact_frames and the first zero normal's index (-1: none).");
+      "Contact frames (3m, 3) of bhgrasp.grasp.frames.contact_frames and the first zero normal's index (-1: none).");
   m.def("concatenate", &concatenate, "parts"_a, "The contacts of many steps as one Contacts (rows in order).");
 
   nb::class_<Divergence>(m, "Divergence")
@@ -214,7 +214,7 @@ NB_MODULE(_core, m) {
   nb::class_<GraspKinematics>(m, "GraspKinematics")
       .def(nb::init<const std::string&>(), "model"_a)
       // the maps copied out as writable arrays (the kernel's own are overwritten by its next call), in the order of
-      // bhgrasp.grasp_dynamics.GraspKinematics
+      // bhgrasp.grasp.kinematics.GraspKinematics
       .def(
           "compute",
           [](GraspKinematics& kernel, const Eigen::Matrix3d& base_rotation, const Eigen::Vector3d& base_translation,
@@ -237,7 +237,7 @@ NB_MODULE(_core, m) {
            "max_iter_in"_a)
       .def("holds", &ContactForceQP::holds, "grasp"_a)
       .def("set_grasp_map", &ContactForceQP::set_grasp_map, "grasp"_a, "torque_scale"_a)
-      // the fields of bhgrasp.grasp_forces.ContactForceResult in order, arrays copied out
+      // the fields of bhgrasp.grasp.forces.ContactForceResult in order, arrays copied out
       .def(
           "solve",
           [](ContactForceQP& qp, const Vector6& wrench, const ContactForceQP::ConstVector& desired) {

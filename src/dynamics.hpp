@@ -1,6 +1,6 @@
 // A hand's inverse dynamics for its control laws, on Pinocchio's C++ API (bhgrasp/hand.py: Hand).
 // The Python twins are Hand.slotine_li_torque's NumPy path (tests/test_hand_kernels.py holds both to the bit) and
-// ContactSensing._reaction_torques_python in bhgrasp/sensing.py (to round-off, tests/test_sensing_kernels.py).
+// ContactSensing._reaction_torques_python in bhgrasp/grasp/sensing.py (to round-off, tests/test_sensing_kernels.py).
 // Units SI; joint space of the hand's model.
 #pragma once
 

@@ -1,4 +1,4 @@
-// The internal-force QP: see force_qp.hpp.  solve() mirrors bhgrasp.grasp_forces.ContactForceQP.solve line for line;
+// The internal-force QP: see force_qp.hpp.  solve() mirrors bhgrasp.grasp.forces.ContactForceQP.solve line for line;
 // the comments and the module docstring there explain the problems and the state machine.
 #include "force_qp.hpp"
 

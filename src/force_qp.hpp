@@ -1,7 +1,7 @@
 // The internal-force QP of the grasp laws: contact forces f that exert an object wrench w inside the friction
 // pyramids, closest to desired forces f_d, or the nearest admissible forces when none do, on proxsuite's C++ API.
 //
-// The Python twin is bhgrasp.grasp_forces.ContactForceQP (its module docstring states the QP, the nearest problem,
+// The Python twin is bhgrasp.grasp.forces.ContactForceQP (its module docstring states the QP, the nearest problem,
 // the check of a doubtful infeasibility certificate, the warm starts and the iteration bound); solve() mirrors its
 // state machine line for line, named alike, with the same three proxsuite dense problems and settings.
 // tests/test_force_qp_twin.py checks both agree cycle by cycle.  Forces in contact frames (t1, t2, n) [N].
@@ -16,7 +16,7 @@ namespace bhgrasp {
 using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;  // as batch.hpp's
 using Vector6 = Eigen::Matrix<double, 6, 1>;
 
-// The constants of bhgrasp/grasp_forces.py (the bindings expose them; the twin test asserts they are equal).
+// The constants of bhgrasp/grasp/_force_qp.py (the bindings expose them; the twin test asserts they are equal).
 struct ForceQPConstants {
   static constexpr double nearest_weight = 1e4;         // NEAREST_WEIGHT, W of the nearest problem
   static constexpr double primal_infeasibility = 1e-6;  // PRIMAL_INFEASIBILITY, eps_primal_inf of the QP
@@ -27,7 +27,7 @@ struct ForceQPConstants {
   static constexpr int check_iter = 4;                  // ContactForceQP.CHECK_ITER
 };
 
-// One solve (bhgrasp.grasp_forces.ContactForceResult, same fields in the same order).
+// One solve (bhgrasp.grasp.forces.ContactForceResult, same fields in the same order).
 struct ForceResult {
   Rows forces;                   // (n, 3) [N], inside the pyramids and normal bounds
   bool feasible = false;         // the wrench is met
@@ -44,7 +44,7 @@ class ContactForceQP {
   using ConstVector = Eigen::Ref<const Eigen::VectorXd>;
   using ConstRows = Eigen::Ref<const Rows>;
 
-  // n contacts, friction coefficient mu, `pyramid` the (facets, 3) rows of bhgrasp.grasp.friction_pyramid,
+  // n contacts, friction coefficient mu, `pyramid` the (facets, 3) rows of bhgrasp.grasp.cones.friction_pyramid,
   // `inscribed` = mu cos(pi / facets) (the inscribed cone of _admissible), f_min [N], proxsuite's eps_abs, and the
   // outer and inner iteration limits.  Everything is allocated here; solve() allocates nothing of its own.
   ContactForceQP(int n_contacts, double mu, const ConstRows& pyramid, double inscribed, double min_normal_force,
@@ -55,7 +55,7 @@ class ContactForceQP {
 
   // Whether `grasp` (6, 3n) equals, entry for entry, the grasp map last set (the twin's np.array_equal test).
   bool holds(const ConstRows& grasp) const;
-  // A new grasp map and its torque scale r (bhgrasp.grasp.default_torque_scale): the rows of S G f = S w.
+  // A new grasp map and its torque scale r (bhgrasp.grasp.quality.default_torque_scale): the rows of S G f = S w.
   void set_grasp_map(const ConstRows& grasp, double torque_scale);
   // The forces for wrench w (6,) [N, N m] closest to `desired` f_d (3n,), for the grasp map last set.  The result
   // lives in this object until the next call.  Sizes are checked (std::invalid_argument); values are not.

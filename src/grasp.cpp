@@ -1,5 +1,5 @@
 // The grasp kinematics kernel: see grasp.hpp.  compute() mirrors contact_kinematics_python in
-// bhgrasp/grasp_dynamics.py line for line; the comments there and the module docstring explain the maths.
+// bhgrasp/grasp/kinematics.py line for line; the comments there and the module docstring explain the maths.
 #include "grasp.hpp"
 
 #include <algorithm>
@@ -14,7 +14,7 @@ namespace bhgrasp {
 GraspKinematics::GraspKinematics(const std::string& model) {
   model_.loadFromString(model);
   data_ = pinocchio::Data(model_);
-  masks_ = Eigen::MatrixXd::Zero(model_.njoints, model_.nv);  // (_HandIndex.masks of grasp_dynamics.py)
+  masks_ = Eigen::MatrixXd::Zero(model_.njoints, model_.nv);  // (_HandIndex.masks of grasp/kinematics.py)
   for (int joint = 1; joint < model_.njoints; ++joint) {
     const auto& supports = model_.supports[static_cast<std::size_t>(joint)];
     for (std::size_t k = 1; k < supports.size(); ++k) {  // [0] is the universe

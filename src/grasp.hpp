@@ -1,7 +1,7 @@
 // The grasp law's kinematics kernel: P = J_h^+ G^T, its rate P_dot, G, J_h and J_h^+ for contacts fixed on the
 // object and on hand links, on Pinocchio's C++ API.
 //
-// The Python twin is bhgrasp.grasp_dynamics.contact_kinematics_python (its module docstring derives the maths);
+// The Python twin is bhgrasp.grasp.kinematics.contact_kinematics_python (its module docstring derives the maths);
 // compute() mirrors it line for line, named alike, and tests/test_grasp_kernels.py checks both agree to round-off.
 // Units SI, world frame; arrays of points are (n, 3) row-major, as NumPy's.
 #pragma once
@@ -19,7 +19,7 @@ namespace bhgrasp {
 using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;  // as batch.hpp's
 using Vector6 = Eigen::Matrix<double, 6, 1>;
 
-// The maps of a grasp at one instant (bhgrasp.grasp_dynamics.GraspKinematics), n contacts, nv joint velocities.
+// The maps of a grasp at one instant (bhgrasp.grasp.kinematics.GraspKinematics), n contacts, nv joint velocities.
 struct GraspMaps {
   Rows joint_map;           // P = J_h^+ G^T (nv, 6)
   Rows joint_map_rate;      // P_dot (nv, 6) along q_dot = P x_dot and the object twist x_dot [1/s]

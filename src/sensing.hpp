@@ -1,4 +1,4 @@
-// What a grasp controller reads from sensed contacts, per finger (bhgrasp/sensing.py: ContactSensing.fingers):
+// What a grasp controller reads from sensed contacts, per finger (bhgrasp/grasp/sensing.py: ContactSensing.fingers):
 // the contacts of each finger summed, with the force-weighted normal and point of the pressing ones.
 // The Python twin is ContactSensing._fingers_python; tests/test_sensing_kernels.py holds both to round-off.
 // Units SI, world frame; rows of (m, 3) arrays are contacts, as NumPy's.
@@ -45,10 +45,10 @@ Eigen::Matrix<double, 6, 7, Eigen::RowMajor> object_regressor(const Eigen::Matri
                                                                const Eigen::Matrix<double, 6, 1>& a_r,
                                                                const Eigen::Vector3d& gravity);
 
-// Contact frames [t1, t2, n] of bhgrasp.grasp.contact_frames for normals (m, 3) (any length): rows 3i..3i+2 of the
-// result (3m, 3) are frame i (columns t1, t2, n, world).  t1 is the world x-axis (the y-axis when |n_x| > switch_x)
-// projected on the tangent plane, t2 = n x t1.  `zero` is set to the first normal shorter than `zero_length` (-1:
-// none; its frame is then not finite).
+// Contact frames [t1, t2, n] of bhgrasp.grasp.frames.contact_frames for normals (m, 3) (any length): rows 3i..3i+2
+// of the result (3m, 3) are frame i (columns t1, t2, n, world).  t1 is the world x-axis (the y-axis when
+// |n_x| > switch_x) projected on the tangent plane, t2 = n x t1.  `zero` is set to the first normal shorter than
+// `zero_length` (-1: none; its frame is then not finite).
 Points contact_frames(const Points& normals, double zero_length, double switch_x, Eigen::Index& zero);
 // The frame (columns t1, t2, n) of one normal, as a block of contact_frames (not finite for a zero normal).
 Eigen::Matrix3d contact_frame(const Eigen::RowVector3d& normal, double switch_x);

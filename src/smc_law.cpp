@@ -84,7 +84,7 @@ int SMCAdaptiveLaw::sense(const ConstIndices& finger, const ConstIndices& joint,
 
 namespace {
 
-// grasp_forces._torque_scale: the largest lever |d_i| = ||G_i[3:]||_F / sqrt(2), 1 if every lever is 0.
+// bhgrasp.grasp.forces._torque_scale: the largest lever |d_i| = ||G_i[3:]||_F / sqrt(2), 1 if every lever is 0.
 double torque_scale(const Rows& grasp) {
   double largest = 0.0;
   for (Eigen::Index i = 0; 3 * i < grasp.cols(); ++i)

@@ -42,7 +42,7 @@ class SMCAdaptiveLaw {
   SMCAdaptiveLaw& operator=(const SMCAdaptiveLaw&) = delete;
 
   // The gains of SMCAdaptiveGrasp (k_f of size nv), the QP's arguments as ContactForceQP takes them, and
-  // bhgrasp.grasp's ZERO_NORMAL and TANGENT_SWITCH; then reset().
+  // bhgrasp.grasp.frames' ZERO_NORMAL and TANGENT_SWITCH; then reset().
   void configure(double rho, const Vector6& k_o, const Vector7& object_adaptation, double force_gain,
                  double force_integral, const ConstVector& k_f, bool normal_only, double squeeze,
                  const Eigen::Vector3d& gravity, const Vector7& initial_estimate, double mu, const Rows& pyramid,
