@@ -10,7 +10,8 @@ Phases (logged as ``phase``: 0 approach, 1 squeeze, 2 manipulate):
 1. **squeeze** — the object-space grasp controller holds the object where it was caught (its QP brings the
    contact forces to the desired squeeze) for ``squeeze_time``.
 2. **manipulate** — the grasp controller follows a minimum-jerk motion from the caught pose by ``offset``
-   (position [m], rotation vector [rad], world) over ``move_time``.
+   (position [m], rotation vector [rad], world) over ``move_time``; by default the part of it the grasp can make at
+   the contacts sensed then (``planned_offset``, :meth:`GraspSupervisor._plan`).
 
 :class:`MotorCommands` adapts any joint-torque controller to a drive with fewer inputs (the BH8-280's four
 motors, :mod:`bhgrasp.barrett.transmission`): u solves T^T B u = T^T tau, i.e. the motors do the same work as tau
@@ -29,6 +30,7 @@ from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.joint import ComputedTorque
 from bhgrasp.errors import InputError
+from bhgrasp.grasp.manipulability import manipulable_space
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.hand import Hand
 from bhgrasp.sim.state import State
@@ -36,6 +38,7 @@ from bhgrasp.trajectories import PoseMotion, SmoothStep
 from bhgrasp.transmission import Transmission
 
 APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
+PLAN_LENGTH = 0.1  # [m] the plan's metric (dx, L dtheta): 5 mrad weighs as 0.5 mm, the motion targets' ratio
 
 
 class GraspSupervisor(Controller):
@@ -61,6 +64,7 @@ class GraspSupervisor(Controller):
         kv: float = 40.0,
         q_close: Any = None,
         fingers: Sequence[str] | None = None,
+        plan: bool = True,
     ) -> None:
         """Set up the sequence.
 
@@ -80,6 +84,8 @@ class GraspSupervisor(Controller):
                 (for hands whose joint names do not say which joints spread; e.g. from IK with the contact
                 points pushed into the object).
             fingers: The fingers that grasp (default: all); the grasp starts when all of them have arrived.
+            plan: Track the part of ``offset`` the grasp can make at the contacts sensed when the motion starts
+                (:meth:`_plan`; ``planned_offset``), instead of ``offset`` as given.
         """
         super().__init__()
         if not isinstance(grasp, ObjectGraspController):
@@ -98,6 +104,8 @@ class GraspSupervisor(Controller):
         self.approach_timeout = as_positive(approach_timeout, "approach_timeout")
         self.squeeze_time = as_positive(squeeze_time, "squeeze_time")
         self.move_time = as_positive(move_time, "move_time")
+        self.plan = bool(plan)
+        self.planned_offset: np.ndarray | None = None
         self.kp, self.kv = as_positive(kp, "kp"), as_positive(kv, "kv")
         self.sensing = ContactSensing(nominal)
         if q_close is None:
@@ -116,6 +124,7 @@ class GraspSupervisor(Controller):
     def reset(self, state: State) -> None:
         """Start over with the approach from ``state``."""
         self.phase, self.switch_time = APPROACH, None
+        self.planned_offset = None
         self._approach = None
         self._arrived[:] = 0.0
         self.log.clear()
@@ -136,6 +145,8 @@ class GraspSupervisor(Controller):
                 self._start_grasp(t, state)
         if self.phase == SQUEEZE and t >= self.switch_time + self.squeeze_time:
             self.phase = MANIPULATE
+            if self.plan:
+                self._plan(t, state)
         if self.phase == APPROACH:
             tau = self._approach(t, state)
             self.log.update(self._approach.log)
@@ -146,6 +157,30 @@ class GraspSupervisor(Controller):
         self.log["phase"] = np.array(float(self.phase))
         self.log["arrived"] = self._arrived.copy()
         return tau
+
+    def _plan(self, t: float, state: State) -> None:
+        """Track the offset the grasp can make: ``offset`` projected onto its manipulable space at the sensed contacts.
+
+        The first-order space of :func:`~bhgrasp.grasp.manipulability.manipulable_space` at the contacts the fingers
+        sense when the motion starts (not the planned ones: a fingertip's link body may touch a little off its pad,
+        e.g. 1.6 mm below the thesis box's centre, so that a turn about y through the centre would drag F3 along x);
+        the nearest offset the fingers make without sliding, in the metric (dx, :data:`PLAN_LENGTH` dtheta), becomes
+        the motion (``planned_offset``).
+        """
+        touching = self.grasp.touching(state)
+        reference = self.grasp.reference
+        if len(touching) < 2 or reference is None:
+            return
+        contacts = list(touching.values())
+        points, normals, links = ([getattr(c, name) for c in contacts] for name in ("point", "normal", "link"))
+        com = state.object_poses[0].translation
+        space = manipulable_space(self.nominal, state.q, points, normals, links, com, list(touching))
+        planned = space.nearest(self.offset, PLAN_LENGTH)
+        if np.max(np.abs(planned - self.offset)) < 1e-12:  # the fingers make it as asked: track it unchanged
+            self.planned_offset = self.offset.copy()
+            return
+        self.planned_offset = planned
+        self.grasp.reference = PoseMotion(reference.start, planned, self.move_time, reference.delay)
 
     def _start_grasp(self, t: float, state: State) -> None:
         self.grasp.reset(state)
@@ -189,4 +224,4 @@ class MotorCommands(Controller):
         return self.drive.motor_inputs(tau, modes)
 
 
-__all__ = ["APPROACH", "MANIPULATE", "SQUEEZE", "GraspSupervisor", "MotorCommands"]
+__all__ = ["APPROACH", "MANIPULATE", "PLAN_LENGTH", "SQUEEZE", "GraspSupervisor", "MotorCommands"]

@@ -3,6 +3,8 @@
 The box stands on a 20 mm fixed pedestal between the fingers, its 50 mm faces normal to y.  The contact points are
 the centres of those faces, F1 and F2 on the -y face at x = -/+ 25 mm and F3 on the +y face; the contact
 configuration comes from the fingertip IK (thesis 5.4.2) with each fingertip pad (radius 10 mm) touching its face.
+There the spread joints sit on their stop (0): ``finger_spacing`` above 50 mm puts F1 and F2 further apart, the spread
+off its stop (:data:`OFF_STOP_SPACING`), which the object's rotations about y need.
 The hand starts opened by ``opening`` [rad] on every proximal joint.  Contacts are spring-dampers of 10 kN/m
 (the thesis' K_s) with friction 0.8; the joints have 0.05 N m s/rad of damping.
 """
@@ -10,12 +12,14 @@ The hand starts opened by ``opening`` [rad] on every proximal joint.  Contacts a
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_positive
 from bhgrasp.errors import InputError
+from bhgrasp.grasp.clearance import check_clearance
 from bhgrasp.grasp.manipulability import ManipulableSpace, manipulable_space
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.ik import ik
@@ -33,6 +37,8 @@ PEDESTAL = 0.02  # [m] edge of the pedestal cube
 FRICTION = 0.8
 STIFFNESS = 1e4  # [N/m]
 JOINT_DAMPING = 0.05  # [N m s/rad]
+KNUCKLE_SPACING = 0.05  # [m] between F1's and F2's knuckles (spread axes): contacts this far apart put the spread at 0
+OFF_STOP_SPACING = 0.055  # [m] F1 and F2 contacts 2.5 mm outside their knuckles: spread 0.07 rad, off its stop
 
 
 @dataclass
@@ -71,6 +77,10 @@ class BoxGrasp:
         frames = [self.hand.fingertip_frames[f] for f in fingers]
         return manipulable_space(self.hand, self.q_contact, points, normals, frames, pose.translation, fingers)
 
+    def check_clearance(self, offset: Any) -> None:
+        """Refuse an object motion that drives the box into its pedestal (:mod:`bhgrasp.grasp.clearance`)."""
+        check_clearance(self.box.geometry(), self.box.pose, offset, self.simulator.scene.environment)
+
 
 def box_grasp(
     mass: float = 1.0,
@@ -82,6 +92,7 @@ def box_grasp(
     joint_friction: float = 0.0,
     joint_damping: float = JOINT_DAMPING,
     torque_limit: float | None = None,
+    finger_spacing: float = KNUCKLE_SPACING,
 ) -> BoxGrasp:
     """Build the scene.
 
@@ -95,17 +106,25 @@ def box_grasp(
         joint_friction: Coulomb friction [N m] on every joint.
         joint_damping: Viscous joint damping [N m s/rad].
         torque_limit: Each joint torque [N m] is clipped to this (``"full"`` actuation; default: no limit).
+        finger_spacing: Distance [m] between F1's and F2's contact points along x (the thesis' 50 mm, the spread on
+            its stop; up to the box's 60 mm edge).
     """
     mass = as_positive(mass, "mass")
     friction = as_positive(friction, "friction")
+    spacing = as_positive(finger_spacing, "finger_spacing")
+    if not KNUCKLE_SPACING <= spacing <= BOX_SIZE[0]:
+        raise InputError(
+            f"`finger_spacing` must be within [{KNUCKLE_SPACING}, {BOX_SIZE[0]}] m (the knuckles' spacing, where the "
+            f"spread is 0, to the box's edge), got {finger_spacing}"
+        )
     if torque_limit is not None and actuation != "full":
         raise InputError(f"`torque_limit` applies to the 'full' actuation, got actuation {actuation!r}")
     hand = BarrettHand()
     centre = np.array([0.0, 0.0, CONTACT_HEIGHT])
     half = 0.5 * BOX_SIZE[1] + PAD_RADIUS
     targets = {
-        "F1": centre + np.array([-0.025, -half, 0.0]),
-        "F2": centre + np.array([0.025, -half, 0.0]),
+        "F1": centre + np.array([-0.5 * spacing, -half, 0.0]),
+        "F2": centre + np.array([0.5 * spacing, -half, 0.0]),
         "F3": centre + np.array([0.0, half, 0.0]),
     }
     guess = hand.configuration(F1_proximal=1.2, F1_distal=0.5, F2_proximal=1.2, F2_distal=0.5, F3_proximal=1.2,

@@ -301,6 +301,12 @@ def _plots():
     return plots
 
 
+def _motions(scale: float = 1.0) -> Case:
+    from bhgrasp.experiments.motions import motions_case
+
+    return motions_case(scale)
+
+
 def _robustness(scale: float = 1.0) -> Case:
     from bhgrasp.experiments.robustness import robustness
 
@@ -308,7 +314,8 @@ def _robustness(scale: float = 1.0) -> Case:
 
 
 CASES: dict[str, Callable[[float], Case]] = {
-    "pregrasp": pregrasp, "laws": object_laws, "smc": smc_adaptive, "mass": mass_sweep, "robustness": _robustness,
+    "pregrasp": pregrasp, "laws": object_laws, "smc": smc_adaptive, "mass": mass_sweep, "motions": _motions,
+    "robustness": _robustness,
 }  # fmt: skip
 
 

@@ -20,8 +20,10 @@ class GraspDemoResult:
     ``motion_end``, and the force error is taken from ``settle_time`` on.  ``q_contact`` is the IK contact
     configuration the approach aimed at; ``scene`` the simulated scene (for :mod:`bhgrasp.viz`).
     ``position_error`` and ``rotation_error`` are the controller's own (its last logged error, from what it sensed);
-    ``true_position_error`` and ``true_rotation_error`` compare the object's true final pose with the reference's
-    final pose (they differ when the sensors are noisy or late, :class:`~bhgrasp.sim.sensor_model.SensorModel`).
+    ``true_position_error`` and ``true_rotation_error`` compare the object's true final pose with the requested
+    motion's end (they differ when the sensors are noisy or late, :class:`~bhgrasp.sim.sensor_model.SensorModel`, or
+    when the supervisor planned a motion other than the one requested: ``planned_offset``, ``None`` before the move;
+    ``requested_offset`` the request).
     """
 
     trajectory: Trajectory
@@ -44,6 +46,8 @@ class GraspDemoResult:
     scene: Scene
     true_position_error: float = float("nan")
     true_rotation_error: float = float("nan")
+    planned_offset: np.ndarray | None = None
+    requested_offset: np.ndarray | None = None
 
     def summary(self) -> str:
         """A few lines for the terminal."""
@@ -62,12 +66,25 @@ class GraspDemoResult:
             f"controller told {self.initial_estimate:.2f} kg{estimate}",
             f"  grasp closed at {self.grasp_time:.3f} s; {motion}",
             f"  object pose error: {1e3 * self.position_error:.3f} mm, {1e3 * self.rotation_error:.3f} mrad ({final})",
+            *self._plan_lines(),
             f"  contact force error: {100 * self.force_error:.2f} % of the commanded normal force ({window})",
             f"  slip events: {self.slip_events} (sliding hand-object contact samples after the grasp closed)",
             f"  commanded forces: min cone margin {self.cone_margin:.3f} N at mu {MU_ASSUMED}, "
             f"{self.infeasible_samples} infeasible samples",
             f"  time: {duration:.2f} s simulated in {self.wall_time:.1f} s wall",
         ])  # fmt: skip
+
+    def _plan_lines(self) -> list[str]:
+        """The planned motion and the error against the request, when the supervisor changed the motion."""
+        requested = self.requested_offset
+        if self.planned_offset is None or requested is None or np.allclose(self.planned_offset, requested, 0, 1e-12):
+            return []
+        return [
+            f"  planned motion {np.round(self.planned_offset, 5).tolist()} (m, rad) for the requested "
+            f"{np.round(requested, 5).tolist()}: the part the grasp makes without sliding",
+            f"  true pose error against the request: {1e3 * self.true_position_error:.3f} mm, "
+            f"{1e3 * self.true_rotation_error:.3f} mrad",
+        ]
 
 
 __all__ = ["MU_ASSUMED", "GraspDemoResult"]

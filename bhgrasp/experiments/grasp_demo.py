@@ -76,7 +76,7 @@ def grasp_controller(
 
 
 SWEEPABLE = ("mass", "estimate", "controller", "duration", "offset", "distribution", "approach_gains", "gains",
-             "stiffness", "sensor_noise", "hand", *UNCERTAINTIES)  # fmt: skip
+             "stiffness", "sensor_noise", "hand", "finger_spacing", *UNCERTAINTIES)  # fmt: skip
 """The parameters of :func:`run_grasp_demo` a sweep case may set (the case's seed comes from the sweep)."""
 
 
@@ -107,9 +107,12 @@ def check_demo_arguments(**arguments: Any) -> None:
         sigma = as_vector(noise, "sensor_noise", 2)
         if (sigma < 0.0).any():
             raise InputError(f"`sensor_noise` (sigma_q, sigma_v) must be >= 0, got {sigma.tolist()}")
-    uncertainty = {name: arguments[name] for name in UNCERTAINTIES if name in arguments}
+    uncertainty = {name: arguments[name] for name in (*UNCERTAINTIES, "finger_spacing") if name in arguments}
     if uncertainty and arguments.get("hand", "barrett") != "barrett":
         raise InputError(f"the uncertainties {sorted(uncertainty)} apply to the Barrett scene, not {arguments['hand']}")
+    spacing = uncertainty.pop("finger_spacing", None)
+    if spacing is not None:
+        as_positive(spacing, "finger_spacing")
     check_uncertainty(**uncertainty)
 
 
@@ -128,6 +131,7 @@ def run_grasp_demo(
     sensor_noise: tuple[float, float] | None = None,
     seed: int = 0,
     hand: str = "barrett",
+    finger_spacing: float | None = None,
     **uncertainty: Any,
 ) -> GraspDemoResult:
     """Grasp, lift and turn the box; see the module docstring.
@@ -135,7 +139,8 @@ def run_grasp_demo(
     Raises:
         UnreachableError: ``offset`` is outside the planned grasp's manipulable space
             (:meth:`~bhgrasp.experiments.box_grasp.BoxGrasp.manipulable_space`); the message names the missing
-            direction or the joint, and gives the nearest offset the grasp can make.
+            direction or the joint, and gives the nearest offset the grasp can make.  Or its path drives the box
+            into the pedestal: the message gives the lift that clears it.
 
     Args:
         mass: True box mass [kg].
@@ -157,6 +162,8 @@ def run_grasp_demo(
             middle finger, :func:`~bhgrasp.experiments.allegro_grasp.allegro_box_grasp`).  The controllers are
             the same; where the scene asks for it (the Allegro) the commands also cancel the joints' viscous
             damping (known to the controller), which dominates its light links' inertia.
+        finger_spacing: Distance [m] between F1's and F2's contacts (Barrett scene; default the thesis' 50 mm, the
+            spread on its stop; :data:`~bhgrasp.experiments.box_grasp.OFF_STOP_SPACING` takes it off).
         uncertainty: What the controller does not know (:data:`UNCERTAINTIES`, Barrett scene only):
             ``pose_noise`` (sigma [m], sigma [rad]) on the object pose, ``twist_noise`` (sigma [m/s], sigma
             [rad/s]) on its twist, ``force_noise`` sigma [N] on the contact forces, ``delay`` [s] of every reading,
@@ -166,11 +173,15 @@ def run_grasp_demo(
     """
     check_demo_arguments(mass=mass, estimate=estimate, controller=controller, duration=duration, offset=offset,
                          distribution=distribution, approach_gains=approach_gains, stiffness=stiffness,
-                         sensor_noise=sensor_noise, hand=hand, **uncertainty)  # fmt: skip
+                         sensor_noise=sensor_noise, hand=hand, **uncertainty,
+                         **({} if finger_spacing is None else {"finger_spacing": finger_spacing}))  # fmt: skip
     mass, estimate, duration, offset = float(mass), float(estimate), float(duration), as_vector(offset, "offset", 6)
     plant = {name: uncertainty[name] for name in PLANT if name in uncertainty}
+    if finger_spacing is not None:
+        plant["finger_spacing"] = finger_spacing
     setup = grasp_scene(hand, mass, float(stiffness), **plant)
     setup.manipulable_space().check(offset)  # a motion the grasp cannot make is refused before simulating
+    setup.check_clearance(offset)  # so is one that drives the box into its pedestal
     nominal_box = Box(size=setup.box.size, mass=estimate)
     grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains,
                              float(uncertainty.get("mu", MU_ASSUMED)))  # fmt: skip
@@ -192,7 +203,8 @@ def run_grasp_demo(
 def grasp_scene(hand: str, mass: float, stiffness: float = STIFFNESS, **plant: Any) -> BoxGrasp:
     """The demo's scene for ``hand`` (one of :data:`HANDS`) with a box of ``mass`` [kg].
 
-    ``plant``: the Barrett scene's true friction, joint friction and damping and torque limit (:data:`PLANT`).
+    ``plant``: the Barrett scene's true friction, joint friction and damping and torque limit (:data:`PLANT`), and
+    its ``finger_spacing``.
     """
     if hand == "barrett":
         return box_grasp(mass=mass, stiffness=stiffness, **plant)
@@ -239,6 +251,8 @@ def _evaluate(traj, hand, controller, mass, estimate, supervisor, wall, scene) -
         scene=scene,
         true_position_error=float(np.linalg.norm(true_error[:3])),
         true_rotation_error=float(np.linalg.norm(true_error[3:])),
+        planned_offset=None if supervisor.planned_offset is None else supervisor.planned_offset.copy(),
+        requested_offset=supervisor.offset.copy(),
     )
 
 

@@ -335,6 +335,11 @@ README_ROWS: list[tuple[str, str, str, str]] = [
      "outside the cone from {5:mass/pinv/lightest_outside_cone_kg:.1f} kg, "
      "{5:mass/1.0kg/pinv/slip_events:d} slip events at the heaviest box",
      "-"),
+    ("5", "object motions of the thesis' pinch and of a pinch with the spread off its stop (13 requests each: lifts, "
+     "turns of 0.15-0.3 rad about x, y, z, shifts): success = no slip and within 0.5 mm / 5 mrad of the request",
+     "{5:motions/allowed_success_pct:.0f} % of the {5:motions/allowed_motions:.0f} motions not refused succeed; the "
+     "others are refused before simulating, with their reason",
+     "one motion (Table 5.2)"),
     ("5", "robustness Monte-Carlo, 12 boxes of 0.2-1.0 kg per scenario (pose noise 0.5 mm / 5 mrad, force noise 0.2 "
      "N, delay 5 ms, torque limit 0.75 N m, true mu 0.5 for 0.6 assumed): runs within 0.5 mm / 5 mrad, no slip",
      "exact {5:robustness/exact/success_pct:.0f} %; pose noise {5:robustness/pose_noise/success_pct:.0f} %; force "

@@ -18,8 +18,8 @@ Plant (the simulated hand and box, not the controller's model):
 
 Controller: ``mu``, the friction coefficient its force distribution assumes (default 0.6).
 
-The true final error (:func:`final_pose_error`) compares the object's true pose with the controller's reference; the
-controller's own logged error is what it sensed.
+The true final error (:func:`final_pose_error`) compares the object's true pose with the requested motion; the
+controller's own logged error is what it sensed, against the motion it planned.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ import pinocchio as pin
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.errors import InputError
 from bhgrasp.sim.sensor_model import SensorModel
+from bhgrasp.trajectories import PoseMotion
 
 SENSED = ("pose_noise", "twist_noise", "force_noise", "delay")
 PLANT = ("friction", "joint_friction", "joint_damping", "torque_limit")
@@ -76,13 +77,18 @@ def sensor_model(sensor_noise: Any = None, **sensed: Any) -> SensorModel:
 def final_pose_error(trajectory, supervisor) -> np.ndarray:
     """The object's true pose error (x - x_d [m], log(R R_d^T) [rad], world) at the trajectory's last sample.
 
-    The target is the grasp controller's reference at that time (its hold pose before any motion); NaN when the
-    controller never held the object.
+    The target is the *requested* motion (the supervisor's ``offset`` from the pose the grasp caught), not the one
+    it planned and tracked (which drops what the grasp cannot make); NaN when the controller never held the object.
     """
     grasp = supervisor.grasp
-    if grasp.reference is None and not np.any(trajectory.log.get("contacts", np.zeros(1)) >= 2):
+    reference, t = grasp.reference, float(trajectory.t[-1])
+    if reference is None:
         return np.full(6, np.nan)
-    target = grasp.target(float(trajectory.t[-1]))[0]
+    if isinstance(reference, PoseMotion):
+        sample = PoseMotion(reference.start, supervisor.offset, reference.duration, reference.delay)(t)[0]
+        target = pin.SE3(pin.exp3(sample[3:]), sample[:3])
+    else:  # another kind of reference: the one tracked
+        target = grasp.target(t)[0]
     x, y, z, w = trajectory.object_quaternion[-1, 0]
     rotation = pin.Quaternion(w, x, y, z).toRotationMatrix()
     position = trajectory.object_position[-1, 0]

@@ -6,7 +6,8 @@ pyramids), :mod:`~bhgrasp.grasp.quality` (force closure, Ferrari-Canny epsilon, 
 :mod:`~bhgrasp.grasp.forces` (the contact-force QP; its Python twin of the compiled solver is the private
 ``_force_qp``), :mod:`~bhgrasp.grasp.kinematics` (P = J_h^+ G^T and its rate), :mod:`~bhgrasp.grasp.dynamics` (the
 reduced hand-object dynamics, the object motions a grasp allows), :mod:`~bhgrasp.grasp.manipulability` (the
-manipulable space: which offsets a grasp can make before anything is simulated), :mod:`~bhgrasp.grasp.sensing`
+manipulable space: which offsets a grasp can make before anything is simulated), :mod:`~bhgrasp.grasp.clearance`
+(whether an offset's path clears the support and other fixed shapes), :mod:`~bhgrasp.grasp.sensing`
 (per-finger contact forces and reaction torques) and :mod:`~bhgrasp.grasp.metrics` (finger forces and slip events
 read back from a trajectory).  Every public name is re-exported here (``from bhgrasp.grasp import grasp_map``); the
 former modules ``bhgrasp.grasp_forces``, ``bhgrasp.grasp_dynamics``, ``bhgrasp.grasp_motion``,
@@ -15,6 +16,7 @@ former modules ``bhgrasp.grasp_forces``, ``bhgrasp.grasp_dynamics``, ``bhgrasp.g
 ``import bhgrasp.grasp`` does not import scipy: the force-closure LP and the convex hull import it when called.
 """
 
+from bhgrasp.grasp.clearance import check_clearance, path_clearance
 from bhgrasp.grasp.cones import friction_cone_edges, friction_pyramid, in_friction_cone
 from bhgrasp.grasp.dynamics import GraspDynamics, grasp_dynamics, grasp_mobility
 from bhgrasp.grasp.forces import (
@@ -70,6 +72,7 @@ __all__ = [
     "GraspQuality",
     "ManipulableSpace",
     "ObjectState",
+    "check_clearance",
     "cone_violations",
     "contact_frames",
     "contact_kinematics",
@@ -95,6 +98,7 @@ __all__ = [
     "is_force_closure",
     "manipulable_space",
     "parent_joints",
+    "path_clearance",
     "primitive_wrenches",
     "pseudo_inverse_forces",
     "slip_events",

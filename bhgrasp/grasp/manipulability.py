@@ -70,11 +70,22 @@ class ManipulableSpace:
     def _scale(self) -> np.ndarray:
         return np.concatenate((np.ones(3), np.full(3, self.length)))
 
-    def nearest(self, offset: Any) -> np.ndarray:
-        """The allowed offset closest to ``offset`` (dx [m], dtheta [rad]) in the scaled metric."""
+    def nearest(self, offset: Any, length: float | None = None) -> np.ndarray:
+        """The allowed offset closest to ``offset`` (dx [m], dtheta [rad]) in the metric (dx, ``length`` dtheta).
+
+        ``length`` [m] weighs rotations against translations (default: the grasp's size L, the basis' own metric;
+        e.g. 0.1 m when 5 mrad of rotation error matters as much as 0.5 mm of translation).
+        """
+        offset = as_vector(offset, "offset", 6)
         scale = self._scale()
-        scaled = as_vector(offset, "offset", 6) * scale
-        return self.basis @ (self.basis.T @ scaled) / scale
+        if length is not None:  # the same allowed subspace, orthonormal in the other metric
+            other = np.concatenate((np.ones(3), np.full(3, as_positive(length, "length"))))
+            basis, _ = np.linalg.qr(self.basis / scale[:, None] * other[:, None])
+            scale = other
+        else:
+            basis = self.basis
+        scaled = offset * scale
+        return basis @ (basis.T @ scaled) / scale
 
     def sliding(self, offset: Any) -> np.ndarray:
         """Per contact, how far [m] it must slide or roll for ``offset`` (first order): |G_i^T dx - J_i dq|."""
