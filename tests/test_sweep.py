@@ -163,7 +163,7 @@ def test_failed_cases_exit_non_zero_with_a_summary(tmp_path: Path, capsys: pytes
     assert main(["sweep", str(config)]) == 1
     captured = capsys.readouterr()
     assert "2 cases, 2 failed" in captured.out
-    assert "2 case(s) [0, 1] failed: InputError: the fingers did not close on the box within 0.05 s" in captured.err
+    assert "2 case(s) [0, 1] failed: InputError: the fingers did not close on the object within 0.05 s" in captured.err
 
 
 def test_batched_hold_sweep_agrees_with_serial_runs_and_a_weak_squeeze_drops_the_box():

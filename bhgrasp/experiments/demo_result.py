@@ -6,6 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bhgrasp.errors import InputError
+from bhgrasp.experiments.uncertainty import final_pose_error
+from bhgrasp.grasp.metrics import finger_normal_forces, slip_events
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.state import Trajectory
 
@@ -87,4 +90,52 @@ class GraspDemoResult:
         ]
 
 
-__all__ = ["MU_ASSUMED", "GraspDemoResult"]
+def evaluate_demo(traj, hand, controller, mass, estimate, supervisor, wall, scene) -> GraspDemoResult:
+    """A supervised grasp run's figures of merit (the grasp closes when the supervisor's phase first leaves 0).
+
+    Raises:
+        InputError: The fingers never closed on the object (nothing to evaluate).
+    """
+    phase = traj.log["phase"]
+    if not np.any(phase >= 1):
+        raise InputError(f"the fingers did not close on the object within {traj.t[-1]:.2f} s (no grasp to evaluate)")
+    grasp_time = float(traj.t[np.argmax(phase >= 1)])
+    motion_start = grasp_time + supervisor.squeeze_time
+    motion_end = motion_start + supervisor.move_time
+    settle = motion_end + 0.5
+    settled = traj.t >= min(settle, float(traj.t[-1]))
+    measured = finger_normal_forces(hand, traj)[settled]
+    commanded = traj.log["commanded_normal"][settled]
+    force_error = float(np.max(np.abs(measured - commanded) / np.maximum(commanded, 1e-9)))
+    error = traj.log["object_error"][-1]
+    true_error = final_pose_error(traj, supervisor)
+    grasping = phase >= 1
+    estimate_log = traj.log.get("mass_estimate")
+    final_estimate = None if estimate_log is None else float(np.ravel(estimate_log[-1])[0])
+    return GraspDemoResult(
+        trajectory=traj,
+        controller=controller,
+        true_mass=mass,
+        initial_estimate=estimate,
+        mass_estimate=final_estimate if controller in ("smc-adaptive",) else None,
+        grasp_time=grasp_time,
+        motion_start=motion_start,
+        motion_end=motion_end,
+        settle_time=settle,
+        position_error=float(np.linalg.norm(error[:3])),
+        rotation_error=float(np.linalg.norm(error[3:])),
+        force_error=force_error,
+        slip_events=slip_events(hand, traj, grasp_time),
+        cone_margin=float(np.nanmin(traj.log["cone_margin"][grasping])),
+        infeasible_samples=int(np.sum(traj.log["feasible"][grasping] < 1.0)),
+        wall_time=wall,
+        q_contact=supervisor.q_contact,
+        scene=scene,
+        true_position_error=float(np.linalg.norm(true_error[:3])),
+        true_rotation_error=float(np.linalg.norm(true_error[3:])),
+        planned_offset=None if supervisor.planned_offset is None else supervisor.planned_offset.copy(),
+        requested_offset=supervisor.offset.copy(),
+    )
+
+
+__all__ = ["MU_ASSUMED", "GraspDemoResult", "evaluate_demo"]

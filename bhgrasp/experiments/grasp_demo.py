@@ -16,8 +16,6 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.base import Controller
@@ -27,16 +25,15 @@ from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
 from bhgrasp.errors import InputError
 from bhgrasp.experiments.allegro_grasp import allegro_box_grasp
 from bhgrasp.experiments.box_grasp import STIFFNESS, BoxGrasp, box_grasp
-from bhgrasp.experiments.demo_result import MU_ASSUMED, GraspDemoResult
+from bhgrasp.experiments.demo_result import MU_ASSUMED, GraspDemoResult, evaluate_demo
 from bhgrasp.experiments.uncertainty import (
     PLANT,
     SENSED,
     UNCERTAINTIES,
     check_uncertainty,
-    final_pose_error,
     sensor_model,
 )
-from bhgrasp.grasp.metrics import finger_normal_forces, slip_events
+from bhgrasp.grasp.metrics import finger_normal_forces
 from bhgrasp.objects import Box
 
 if TYPE_CHECKING:
@@ -197,7 +194,7 @@ def run_grasp_demo(
     sensors = sensor_model(sensor_noise, **{name: uncertainty[name] for name in SENSED if name in uncertainty})
     traj = setup.simulator.run(law, duration, state=setup.state, progress=progress, sensors=sensors, seed=seed)
     wall = time.perf_counter() - start
-    return _evaluate(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
+    return evaluate_demo(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
 
 
 def grasp_scene(hand: str, mass: float, stiffness: float = STIFFNESS, **plant: Any) -> BoxGrasp:
@@ -211,49 +208,6 @@ def grasp_scene(hand: str, mass: float, stiffness: float = STIFFNESS, **plant: A
     if hand == "allegro":
         return allegro_box_grasp(mass=mass, stiffness=stiffness)
     raise InputError(f"`hand` must be one of {HANDS}, got {hand!r}")
-
-
-def _evaluate(traj, hand, controller, mass, estimate, supervisor, wall, scene) -> GraspDemoResult:
-    phase = traj.log["phase"]
-    if not np.any(phase >= 1):
-        raise InputError(f"the fingers did not close on the box within {traj.t[-1]:.2f} s (no grasp to evaluate)")
-    grasp_time = float(traj.t[np.argmax(phase >= 1)])
-    motion_start = grasp_time + supervisor.squeeze_time
-    motion_end = motion_start + supervisor.move_time
-    settle = motion_end + 0.5
-    settled = traj.t >= min(settle, float(traj.t[-1]))
-    measured = finger_normal_forces(hand, traj)[settled]
-    commanded = traj.log["commanded_normal"][settled]
-    force_error = float(np.max(np.abs(measured - commanded) / np.maximum(commanded, 1e-9)))
-    error = traj.log["object_error"][-1]
-    true_error = final_pose_error(traj, supervisor)
-    grasping = phase >= 1
-    estimate_log = traj.log.get("mass_estimate")
-    final_estimate = None if estimate_log is None else float(np.ravel(estimate_log[-1])[0])
-    return GraspDemoResult(
-        trajectory=traj,
-        controller=controller,
-        true_mass=mass,
-        initial_estimate=estimate,
-        mass_estimate=final_estimate if controller in ("smc-adaptive",) else None,
-        grasp_time=grasp_time,
-        motion_start=motion_start,
-        motion_end=motion_end,
-        settle_time=settle,
-        position_error=float(np.linalg.norm(error[:3])),
-        rotation_error=float(np.linalg.norm(error[3:])),
-        force_error=force_error,
-        slip_events=slip_events(hand, traj, grasp_time),
-        cone_margin=float(np.nanmin(traj.log["cone_margin"][grasping])),
-        infeasible_samples=int(np.sum(traj.log["feasible"][grasping] < 1.0)),
-        wall_time=wall,
-        q_contact=supervisor.q_contact,
-        scene=scene,
-        true_position_error=float(np.linalg.norm(true_error[:3])),
-        true_rotation_error=float(np.linalg.norm(true_error[3:])),
-        planned_offset=None if supervisor.planned_offset is None else supervisor.planned_offset.copy(),
-        requested_offset=supervisor.offset.copy(),
-    )
 
 
 def demo_figure(result: GraspDemoResult, hand) -> Figure:
