@@ -210,15 +210,16 @@ def _tune(args: argparse.Namespace) -> int:
     import numpy as np
 
     from bhgrasp import tuning
-    from bhgrasp.experiments import chapter4
+    from bhgrasp.experiments.chapter4_fitness import impedance_fitness
+    from bhgrasp.experiments.chapter4_tuning import TUNING_BOUNDS, TUNING_TOL_FUN, TUNING_TOL_X
 
-    lower, upper = (np.log10(bound) for bound in chapter4.TUNING_BOUNDS)  # physical bounds, argued in chapter 4
+    lower, upper = (np.log10(bound) for bound in TUNING_BOUNDS)  # physical bounds, argued in chapter 4
     print(f"tuning log10 (M_I [kg], K_I [N/m]) of F3's impedance for f_d = {args.force:g} N within "
           f"M_I {10**lower[0]:g}-{10**upper[0]:g} kg, K_I {10**lower[1]:g}-{10**upper[1]:g} N/m ...")  # fmt: skip
     result = tuning.cma_es(
-        functools.partial(chapter4.impedance_fitness, force=args.force), x0=[-1.0, 1.5], sigma0=0.5,
+        functools.partial(impedance_fitness, force=args.force), x0=[-1.0, 1.5], sigma0=0.5,
         seed=args.seed, max_generations=args.generations, population=args.population, bounds=(lower, upper),
-        tol_fun=chapter4.TUNING_TOL_FUN, tol_x=chapter4.TUNING_TOL_X, executor="serial" if args.serial else None,
+        tol_fun=TUNING_TOL_FUN, tol_x=TUNING_TOL_X, executor="serial" if args.serial else None,
         progress=sys.stderr.isatty(),  # a bar over generations on a terminal; logs stay clean
     )  # fmt: skip
     mass, stiffness = 10.0**result.best

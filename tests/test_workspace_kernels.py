@@ -30,7 +30,7 @@ from bhgrasp.controllers._workspace_terms import (
 )
 from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
 from bhgrasp.errors import InputError
-from bhgrasp.experiments import chapter4
+from bhgrasp.experiments import chapter4, chapter4_fitness, chapter4_setups
 from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
 from bhgrasp.trajectories import Constant
 
@@ -176,12 +176,12 @@ def test_the_controller_gives_the_same_torques_without_the_kernel(monkeypatch: p
 
 def test_the_impedance_controller_gives_the_same_torques_without_the_kernel(monkeypatch: pytest.MonkeyPatch) -> None:
     """In lockstep: the Python twin, fed the states of the compiled controller's run, gives its torques and logs."""
-    setup = chapter4._cached_f3_setup(chapter4.TUNING_SPRING)
+    setup = chapter4_fitness._cached_f3_setup(chapter4_fitness.TUNING_SPRING)
 
     def controller() -> ImpedanceController:
         law = ForceImpedance(Constant(setup.tip0), setup.normal, 6.0, setup.surface_point(), setup.k_e, mass=0.01,
-                             stiffness=100.0, period=chapter4.DT)  # fmt: skip
-        return ImpedanceController(setup.hand, {"F3": law}, *chapter4.F3_GAINS)
+                             stiffness=100.0, period=chapter4_setups.DT)  # fmt: skip
+        return ImpedanceController(setup.hand, {"F3": law}, *chapter4_setups.F3_GAINS)
 
     compiled, steps = controller(), []
 
