@@ -1,5 +1,5 @@
 // The compiled step: see engine.hpp.  Each function mirrors the Python function of the same name in
-// bhgrasp/sim/simulator.py (Simulator); the comments there explain the physics.  This file holds the set-up, the
+// bhgrasp/sim/python_engine.py (PythonStep); the comments there explain the physics.  This file holds the set-up, the
 // step's dispatch, the explicit integrators' accelerations and the joint-space terms; contact detection is in
 // detect.cpp, the contact law in contact_law.cpp, the implicit step in implicit.cpp, the rotation helpers in
 // integrators.cpp.
@@ -24,7 +24,7 @@
 namespace bhgrasp {
 namespace {
 
-constexpr double kFrictionVelocity = 1e-3;  // [rad/s] regularisation of Coulomb joint friction (sim/simulator.py)
+constexpr double kFrictionVelocity = 1e-3;  // [rad/s] regularisation of Coulomb joint friction (sim/python_engine.py)
 
 }  // namespace
 
@@ -86,7 +86,7 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
   frame_jacobian_ = pinocchio::Data::Matrix6x::Zero(6, model_.nv);
 }
 
-// ------------------------------------------------------------------ joint space (sim/simulator.py)
+// ------------------------------------------------------------------ joint space (sim/python_engine.py)
 void Engine::passive(const Vector& q, const Vector& v, const Drive& drive, Passive& result) const {
   const int nvh = settings_.nv_hand;
   result.torque.setZero(model_.nv);
@@ -193,7 +193,7 @@ StepResult Engine::step(const Vector& q, const Vector& v, const Vector& tau_hand
     if (settings_.integrator == 1) {
       result.v = v + dt * first.acceleration;
       result.q = integrate(q, result.v * dt);
-    } else {  // Runge-Kutta-Munthe-Kaas (simulator.py: _explicit)
+    } else {  // Runge-Kutta-Munthe-Kaas (python_engine.py: _explicit)
       const Vector& k1 = first.acceleration;
       const Vector v2 = v + dt / 2 * k1;
       const Vector q2 = integrate(q, v * dt / 2);

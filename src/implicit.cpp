@@ -1,5 +1,5 @@
-// The implicit step: see engine.hpp.  It mirrors bhgrasp/sim/simulator.py (Simulator._implicit, _drive) and the
-// active-set helpers of bhgrasp/sim/contact.py; the comments there explain the linearisation.
+// The implicit step: see engine.hpp.  It mirrors bhgrasp/sim/python_engine.py (PythonStep._implicit, _drive) and
+// the active-set helpers of bhgrasp/sim/contact.py; the comments there explain the linearisation.
 #include <algorithm>
 #include <cmath>
 
@@ -133,7 +133,7 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
   Flags& sliding = result.memory.sliding;
   sliding.resize(m);
   for (Eigen::Index i = 0; i < m; ++i) sliding[i] = status[static_cast<std::size_t>(i)] == 2;
-  // drive: M a + bias - contact - passive + implicit terms, less the motor's own damping (simulator.py: _drive)
+  // drive: M a + bias - contact - passive + implicit terms, less the motor's own damping (python_engine.py: _drive)
   work.acceleration = (v_next - v) / dt;
   work.product.noalias() = mass * work.acceleration;
   Vector& delivered = work.delivered;

@@ -27,8 +27,9 @@ from bhgrasp.errors import InputError
 from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
 from bhgrasp.sim.compiled import barrett_of, contact_set, core_module, drive_of, memory_of, native_memory, settings
 from bhgrasp.sim.contact import ContactMemory, ContactSet
-from bhgrasp.sim.simulator import Simulator, _StepOutput
+from bhgrasp.sim.simulator import Simulator
 from bhgrasp.sim.state import SimulatedState, State
+from bhgrasp.sim.step_output import _StepOutput
 
 _DIVERGED = {1: "joint/object position", 2: "joint/object velocity", 3: "speed", 4: "contact depth"}
 

@@ -1,0 +1,78 @@
+"""What a step makes beside its new state: the :class:`StepInfo` it returns and the source of its state's fields.
+
+Either engine's contacts and contact memory stay as the engine made them (a ``ContactSet``/``ContactMemory`` of the
+Python engine, or the compiled engine's ``Contacts``/``Memory``) and are converted only when first read.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from bhgrasp.sim.compiled import contact_set, memory_of
+from bhgrasp.sim.contact import ContactMemory, ContactSet, empty_contact_set
+from bhgrasp.sim.state import State
+
+if TYPE_CHECKING:
+    from bhgrasp.sim.simulator import Simulator
+
+
+class StepInfo:
+    """What one step computed, beyond the new state: contacts with their forces and the drive torques.
+
+    Attributes:
+        contacts: The step's contacts and forces, a :class:`~bhgrasp.sim.contact.ContactSet` (built when first read).
+        drive_torques: Hand joint torques the drive delivered over the step [N m], (nv_hand,).
+        contact_arrays: The contacts as the engine returned them: a ``ContactSet``, or the compiled engine's
+            ``Contacts``; both carry the arrays ``pair``, ``point``, ``normal``, ``depth``, ``force``, ``sticking``.
+    """
+
+    __slots__ = ("_contacts", "contact_arrays", "drive_torques")
+
+    def __init__(self, contacts: Any, drive_torques: np.ndarray) -> None:
+        self.contact_arrays, self.drive_torques, self._contacts = contacts, drive_torques, None
+
+    @property
+    def contacts(self) -> ContactSet:
+        """The step's contacts as a :class:`~bhgrasp.sim.contact.ContactSet` (built on first read, then kept)."""
+        if self._contacts is None:
+            arrays = self.contact_arrays
+            self._contacts = arrays if isinstance(arrays, ContactSet) else contact_set(arrays)
+        return self._contacts
+
+
+class _StepOutput:
+    """What a step hands to its :class:`~bhgrasp.sim.state.SimulatedState` to build derived fields from.
+
+    ``contacts``: the step's ``ContactSet`` or compiled ``Contacts``; ``memory``: its ``ContactMemory`` or
+    compiled ``Memory``.
+    """
+
+    __slots__ = ("contacts", "memory", "simulator")
+
+    def __init__(self, simulator: Simulator, contacts: Any, memory: Any) -> None:
+        self.simulator, self.contacts, self.memory = simulator, contacts, memory
+
+    def derive(self, name: str, state: State) -> dict[str, Any]:
+        """The derived field ``name`` of ``state`` (and its companions computed on the way)."""
+        simulator = self.simulator
+        if name in ("q", "v"):
+            return {"q": state.scene_q[: simulator.scene.nq_hand].copy(), "v": state.scene_v[: simulator._nvh].copy()}
+        if name in ("object_poses", "object_twists"):
+            poses, twists = simulator._objects(state.scene_q, state.scene_v)
+            return {"object_poses": poses, "object_twists": twists}
+        if name == "contact_memory":
+            memory = self.memory
+            return {"contact_memory": memory if isinstance(memory, ContactMemory) else memory_of(memory)}
+        contacts = self.contacts
+        if not len(contacts):
+            contacts = empty_contact_set()
+        bodies = simulator._pair_bodies
+        return {
+            "contact_points": contacts.point, "contact_normals": contacts.normal, "contact_forces": contacts.force,
+            "contact_bodies": tuple(bodies[k] for k in contacts.pair),
+        }  # fmt: skip
+
+
+__all__ = ["StepInfo"]
