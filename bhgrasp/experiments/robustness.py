@@ -135,8 +135,8 @@ def robustness(scale: float = 1.0, executor: Any = None):
         f"forces (mu {MU_ASSUMED} assumed, 0.8 true unless the scenario says).  Module "
         "`bhgrasp.experiments.robustness`.",
         f"Success: the true final pose within {1e3 * SUCCESS[0]:g} mm and {1e3 * SUCCESS[1]:g} mrad of the "
-        "reference and no sliding contact sample after the grasp closed.  Errors are the object's true pose against "
-        "the controller's reference, not what its sensors report; force error: largest |measured - commanded| / "
+        "requested one and no sliding contact sample after the grasp closed.  Errors are the object's true pose "
+        "against the requested motion, not what the sensors report; force error: largest |measured - commanded| / "
         "commanded normal force over the fingers 0.5 s after the move (true forces).",
         "Noise is Gaussian, independent per reading and control step (1 ms): pose on the object's position and "
         "rotation vector, twist on its linear and angular velocity, force on each contact force component, joint "
