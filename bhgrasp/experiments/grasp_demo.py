@@ -104,13 +104,12 @@ def check_demo_arguments(**arguments: Any) -> None:
         sigma = as_vector(noise, "sensor_noise", 2)
         if (sigma < 0.0).any():
             raise InputError(f"`sensor_noise` (sigma_q, sigma_v) must be >= 0, got {sigma.tolist()}")
-    uncertainty = {name: arguments[name] for name in (*UNCERTAINTIES, "finger_spacing") if name in arguments}
-    if uncertainty and arguments.get("hand", "barrett") != "barrett":
-        raise InputError(f"the uncertainties {sorted(uncertainty)} apply to the Barrett scene, not {arguments['hand']}")
-    spacing = uncertainty.pop("finger_spacing", None)
-    if spacing is not None:
-        as_positive(spacing, "finger_spacing")
-    check_uncertainty(**uncertainty)
+    barrett_only = sorted(name for name in (*UNCERTAINTIES, "finger_spacing") if name in arguments)
+    if barrett_only and arguments.get("hand", "barrett") != "barrett":
+        raise InputError(f"the arguments {barrett_only} apply to the Barrett scene, not {arguments['hand']}")
+    if "finger_spacing" in arguments:
+        as_positive(arguments["finger_spacing"], "finger_spacing")
+    check_uncertainty(**{name: arguments[name] for name in UNCERTAINTIES if name in arguments})
 
 
 def run_grasp_demo(

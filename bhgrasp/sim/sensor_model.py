@@ -105,13 +105,13 @@ class Sensors:
             changes["v"] = state.v + rng.normal(scale=model.joint_velocity, size=state.v.shape)
         if state.object_poses and (model.object_position > 0.0 or model.object_rotation > 0.0):
             changes["object_poses"] = tuple(self._pose(pose) for pose in state.object_poses)
-        twist_noise = np.array([model.object_velocity] * 3 + [model.object_angular_velocity] * 3)
-        if len(state.object_twists) and twist_noise.any():
+        twist_sigmas = ((slice(0, 3), model.object_velocity), (slice(3, 6), model.object_angular_velocity))
+        if len(state.object_twists) and any(sigma > 0.0 for _, sigma in twist_sigmas):
             twists = np.array(state.object_twists, dtype=float)
             for row in twists:
-                for part in (slice(0, 3), slice(3, 6)):
-                    if twist_noise[part][0] > 0.0:
-                        row[part] += rng.normal(scale=twist_noise[part][0], size=3)
+                for part, sigma in twist_sigmas:
+                    if sigma > 0.0:
+                        row[part] += rng.normal(scale=sigma, size=3)
             changes["object_twists"] = twists
         if model.contact_force > 0.0 and len(state.contact_forces):
             forces = state.contact_forces
