@@ -54,6 +54,7 @@ class CompiledSMCLaw:
     def __init__(self, law: Any, core: ModuleType) -> None:
         """Build ``core.SMCAdaptiveLaw`` on the hand's kernels and configure it from ``law``."""
         hand = law.nominal
+        self._regressor = core.object_regressor
         self.kernel = core.SMCAdaptiveLaw(_kinematics_kernel(hand), hand._dynamics(), len(hand.fingers))
         self._finger_of = {link: hand.fingers.index(f) for link, f in law.sensing._finger_of.items()}
         self._joint_of = _hand_index(hand).joints
@@ -72,13 +73,15 @@ class CompiledSMCLaw:
         self._wrench = dict(layout)["wrench"]
         parameters = dict(layout)["object_parameters"]
         self._mass = slice(parameters.start, parameters.start + 1)
+        self._parameters = parameters
         assert parameters.stop == self._size, "the log layout of src/smc_law.hpp and this module differ"
         self.configure(law)
 
     def configure(self, law: Any) -> None:
         """Copy ``law``'s gains, QP settings and initial estimate into the kernel, and reset it."""
         arguments = solver_arguments(1, law.mu, min_normal_force=law.min_normal_force)[1:]
-        self.kernel.configure(law.rho, law.k_o, law.object_adaptation, law.force_gain, law.force_integral, law.k_f,
+        rates = law.object_adaptation if law.identification is None else np.zeros(7)  # then updated in identify()
+        self.kernel.configure(law.rho, law.k_o, rates, law.force_gain, law.force_integral, law.k_f,
                               law.force_error == "normal", law.squeeze, law.gravity, law._initial_object, *arguments,
                               ZERO_NORMAL, TANGENT_SWITCH)  # fmt: skip
 
@@ -131,10 +134,16 @@ class CompiledSMCLaw:
         log.update([(key, out[index]) for key, index in self._flat])
         for key, index, shape in self._blocks:
             log[key] = out[index].reshape(shape)
-        log["mass_estimate"] = out[self._mass]
         tau = out[self._tau]
         if status:
             raise InputError(f"{type(law).__name__} produced non-finite torques {tau} at t = {t} s")
+        if law.identification is not None:
+            sliding = log["object_sliding"]
+            twist = np.asarray(state.object_twists[0], dtype=float)
+            v_r, a_r = twist - sliding, acceleration - law.rho * (twist - velocity)
+            law.identify(dt, state, self._regressor(pose.rotation, twist[3:], v_r, a_r, law.gravity), sliding)
+            log["object_parameters"] = out[self._parameters] = kernel.object_estimate
+        log["mass_estimate"] = out[self._mass]
         return tau
 
     def _approach(self, law: Any, q: np.ndarray, touching: int) -> np.ndarray:

@@ -20,7 +20,9 @@ q_dot_r = P v_r + J_h^+ (c e_fc + h eta), e_fc = F_dc - F_c the contact force er
     tau = Y_f(q, q_dot, q_dot_r, q_dd_r) sigma_f + J_h^T F_dc - k_f s_f        (5.58)
 
 with q_dd_r = P a_r + P_dot v_r (the force terms are not differentiated) and, when ``hand_adaptation`` is given,
-sigma_f_dot = -Gamma_f Y_f^T s_f (5.60) over the hand's Pinocchio inertial parameters (10 per body).
+sigma_f_dot = -Gamma_f Y_f^T s_f (5.60) over the hand's Pinocchio inertial parameters (10 per body), with
+Gamma_f = gamma_f diag(scale^2) relative to each parameter's natural size (chapter 3's
+:func:`~bhgrasp.controllers.sliding.parameter_scales`: one gamma_f suits heavy and light links alike).
 
 Two engines: ``"compiled"`` runs a grasp cycle in one call of ``bhgrasp._core.SMCAdaptiveLaw`` (``src/smc_law.cpp``,
 glued in :mod:`bhgrasp.controllers._smc_law`), ``"python"`` runs the code below (the readable twin;
@@ -33,14 +35,16 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
 from bhgrasp._native import optional_core, required_core
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.controllers._smc_law import CompiledSMCLaw
 from bhgrasp.controllers.base import gain_vector
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
+from bhgrasp.controllers.object_identification import ObjectIdentification
+from bhgrasp.controllers.object_regressors import object_parameters, object_regressor, object_regressor_python
 from bhgrasp.controllers.object_space import grasp_maps, pose_gains
+from bhgrasp.controllers.sliding import parameter_scales
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.objects import RigidObject
@@ -48,46 +52,6 @@ from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 ENGINES = (None, "compiled", "python")
-
-# Body-frame inertia basis matching sigma_o[1:] = (I_xx, I_xy, I_xz, I_yy, I_yz, I_zz).
-_INERTIA_BASIS = np.zeros((6, 3, 3))
-for _k, (_i, _j) in enumerate([(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)]):
-    _INERTIA_BASIS[_k, _i, _j] = _INERTIA_BASIS[_k, _j, _i] = 1.0
-
-
-def object_parameters(mass: float, inertia: Any) -> np.ndarray:
-    """sigma_o = (m, I_xx, I_xy, I_xz, I_yy, I_yz, I_zz) from a mass [kg] and a body inertia [kg m^2]."""
-    inertia = np.asarray(inertia, dtype=float)
-    return np.array([mass, inertia[0, 0], inertia[0, 1], inertia[0, 2], inertia[1, 1], inertia[1, 2], inertia[2, 2]])
-
-
-def object_regressor(rotation: Any, twist: Any, v_r: Any, a_r: Any, gravity: Any) -> np.ndarray:
-    """Y_o (6, 7) with Y_o sigma_o = M_o a_r + C_o(omega) v_r + N_o at the COM (world; see the module docstring).
-
-    Computed by the compiled kernel (``src/sensing.cpp``) when ``bhgrasp._core`` loads, otherwise by
-    :func:`object_regressor_python` (the same sums; tests/test_sensing_kernels.py holds them together).
-    """
-    rotation, omega = np.asarray(rotation, dtype=float), np.asarray(twist, dtype=float)[3:]
-    v_r, a_r = np.asarray(v_r, dtype=float), np.asarray(a_r, dtype=float)
-    core = optional_core()
-    if core is None:
-        return object_regressor_python(rotation, twist, v_r, a_r, gravity)
-    return core.object_regressor(rotation, omega, v_r, a_r, np.asarray(gravity, dtype=float))
-
-
-def object_regressor_python(rotation: Any, twist: Any, v_r: Any, a_r: Any, gravity: Any) -> np.ndarray:
-    """:func:`object_regressor` in NumPy (the readable twin of the compiled kernel)."""
-    rotation, omega = np.asarray(rotation, dtype=float), np.asarray(twist, dtype=float)[3:]
-    v_r, a_r = np.asarray(v_r, dtype=float), np.asarray(a_r, dtype=float)
-    regressor = np.zeros((6, 7))
-    regressor[:3, 0] = a_r[:3] - np.asarray(gravity, dtype=float)
-    inertias = np.einsum("ij,kjl,ml->kim", rotation, _INERTIA_BASIS, rotation)  # R B_k R^T, (6, 3, 3)
-    w, alpha = v_r[3:], a_r[3:]
-    # column k: I_k alpha + C_k w with C_k = (skew(omega) I_k - I_k skew(omega) - skew(I_k omega)) / 2
-    omega_skew = pin.skew(omega)
-    coriolis = (inertias @ w) @ omega_skew.T - inertias @ (omega_skew @ w) + (inertias @ omega) @ pin.skew(w).T
-    regressor[3:, 1:] = (inertias @ alpha + 0.5 * coriolis).T
-    return regressor
 
 
 class SMCAdaptiveGrasp(ObjectGraspController):
@@ -123,6 +87,7 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         gravity: Any = (0.0, 0.0, -9.81),
         distribution: str = "qp",
         engine: str | None = None,
+        identification: ObjectIdentification | None = None,
     ) -> None:
         """Set up the controller.
 
@@ -137,7 +102,8 @@ class SMCAdaptiveGrasp(ObjectGraspController):
             force_gain: c [m/s / N] of (5.57).
             force_integral: h [m/s / (N s)] of (5.57).
             k_f: Joint gain k_f [N m s/rad] of (5.58), scalar or per joint.
-            hand_adaptation: Gamma_f rate of (5.60) (same for every hand parameter), or ``None`` (hand model fixed).
+            hand_adaptation: gamma_f [1/(N m rad)] of (5.60), relative to each parameter's scale (module
+                docstring), or ``None`` (hand model fixed).
             force_error: ``"normal"`` (feed back the normal force errors) or ``"full"`` (all three components, as
                 printed in (5.57)).
             mu, squeeze, min_normal_force, approach_torque, gravity, distribution: As in
@@ -145,6 +111,9 @@ class SMCAdaptiveGrasp(ObjectGraspController):
             engine: ``None`` (default): the compiled law when ``bhgrasp._core`` loads and it covers the options
                 (``hand_adaptation=None``, ``distribution="qp"``, no subclass overriding a step of the law), else
                 the Python one; ``"compiled"`` (raises if it does not load or cover them) or ``"python"``.
+            identification: Composite adaptation of sigma_o
+                (:class:`~bhgrasp.controllers.object_identification.ObjectIdentification`: the measured contact
+                wrench's prediction error joins (5.52), P(0) = Gamma_o); ``None``: the thesis' law (5.52) alone.
 
         Raises:
             InputError: A bad argument, or ``engine="compiled"`` with options it does not cover.
@@ -167,6 +136,7 @@ class SMCAdaptiveGrasp(ObjectGraspController):
             raise InputError(f"`force_gain` and `force_integral` must be >= 0, got {force_gain}, {force_integral}")
         self.k_f = gain_vector(k_f, nominal.nv, "k_f")
         self.hand_adaptation = None if hand_adaptation is None else as_positive(hand_adaptation, "hand_adaptation")
+        self._hand_rates = None if hand_adaptation is None else self.hand_adaptation * parameter_scales(nominal) ** 2
         self.force_error = force_error
         if engine not in ENGINES:
             raise InputError(f"`engine` must be one of {ENGINES}, got {engine!r}")
@@ -175,6 +145,11 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         self.object_estimate = self._initial_object.copy()
         self.hand_estimate = nominal.inertial_parameters()
         self._integral: dict[str, np.ndarray] = {}
+        if identification is not None and not isinstance(identification, ObjectIdentification):
+            raise InputError(f"`identification` must be an ObjectIdentification or None, got {identification!r}")
+        self.identification = identification
+        if identification is not None:
+            identification.bind(nominal, self.object_adaptation)
         uncovered = self._python_only()
         if engine == "compiled" and uncovered:
             raise InputError(f"engine='compiled' does not cover {uncovered}; pass engine='python' (or None)")
@@ -238,6 +213,8 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         self.object_estimate = self._initial_object.copy()
         self.hand_estimate = self.nominal.inertial_parameters()
         self._integral.clear()
+        if self.identification is not None:
+            self.identification.reset()
         if self._compiled is not None:
             self._compiled.configure(self)  # also resets the compiled law's estimate, integrals and QPs
 
@@ -257,13 +234,7 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         hand = self.nominal
         current, maps = grasp_maps(hand, state, contacts, self.nominal_object)
         contacts.reference = current.com
-        error, velocity_error, velocity, acceleration = self.errors(t, state)
-        v_r, a_r = velocity - self.rho * error, acceleration - self.rho * velocity_error
-        s_o = current.twist - v_r
-        regressor = object_regressor(current.rotation, current.twist, v_r, a_r, self.gravity)
-        self.object_estimate = self.object_estimate - dt * self.object_adaptation * (regressor.T @ s_o)
-        self.object_estimate[0] = max(self.object_estimate[0], 1e-3)  # projection: a mass stays positive
-        wrench = regressor @ self.object_estimate - self.k_o * s_o
+        wrench, regressor, s_o, v_r, a_r = self.object_law(t, dt, state)
         desired = self.distribute(contacts, wrench)
 
         force_error = desired - contacts.measured()
@@ -279,10 +250,54 @@ class SMCAdaptiveGrasp(ObjectGraspController):
             model = hand.slotine_li_torque(state.q, state.v, q_dot_r, q_dd_r)
         else:
             y_f = hand.slotine_li_regressor(state.q, state.v, q_dot_r, q_dd_r)
-            self.hand_estimate = self.hand_estimate - dt * self.hand_adaptation * (y_f.T @ s_f)
+            self.hand_estimate = self.hand_estimate - dt * self._hand_rates * (y_f.T @ s_f)
             model = y_f @ self.hand_estimate
+        if self.identification is not None:  # after the cycle, as the compiled engine does it
+            self.identify(dt, state, regressor, s_o)
         self._log(contacts, s_o, s_f, force_error, desired)
         return model + maps.hand_jacobian.T @ desired.ravel() - self.k_f * s_f
+
+    def parameter_information(self) -> np.ndarray:
+        """P^-1 (7, 7) weighing the object estimate's error in V (5.63) (:mod:`bhgrasp.controllers.grasp_lyapunov`).
+
+        Gamma_o^-1 for (5.52), the composite law's information with ``identification``; zero rows and columns for
+        the parameters held fixed.
+        """
+        if self.identification is not None:
+            return self.identification.information_matrix()
+        rates = self.object_adaptation
+        return np.diag(np.divide(1.0, rates, out=np.zeros(7), where=rates > 0.0))
+
+    def object_law(self, t: float, dt: float, state: State) -> tuple[np.ndarray, ...]:
+        """(5.46)-(5.52): the desired object wrench F_do, Y_o, s_o, v_r and a_r (world, COM) of a cycle of ``dt`` [s].
+
+        Updates the estimate by (5.52) first (without ``identification``; with it :meth:`identify` runs after the
+        cycle).  Reads only the object's pose and twist from ``state`` (the ideal-loop tests drive it alone).
+        """
+        rotation, twist = state.object_poses[0].rotation, np.asarray(state.object_twists[0], dtype=float)
+        error, velocity_error, velocity, acceleration = self.errors(t, state)
+        v_r, a_r = velocity - self.rho * error, acceleration - self.rho * velocity_error
+        s_o = twist - v_r
+        regressor = object_regressor(rotation, twist, v_r, a_r, self.gravity)
+        if self.identification is None:
+            self.object_estimate = self.object_estimate - dt * self.object_adaptation * (regressor.T @ s_o)
+            self.object_estimate[0] = max(self.object_estimate[0], 1e-3)  # projection: a mass stays positive
+        return regressor @ self.object_estimate - self.k_o * s_o, regressor, s_o, v_r, a_r
+
+    def identify(self, dt: float, state: State, regressor: np.ndarray, s_o: np.ndarray, measured=None) -> None:
+        """Composite update of the object estimate after a grasp cycle (``identification`` set; both engines).
+
+        ``measured`` = (wrench (6,), free) replaces the wrench and support read from the state's contacts.
+        """
+        if measured is None:
+            estimate = self.identification.update(self.object_estimate, dt, state, regressor, s_o, self.gravity)
+        else:
+            pose, (wrench, free) = state.object_poses[0], measured
+            estimate = self.identification.step(self.object_estimate, dt, pose.rotation, state.object_twists[0],
+                                                wrench, free, regressor, s_o, self.gravity)  # fmt: skip
+        estimate[0] = max(estimate[0], 1e-3)  # projection: a mass stays positive
+        self.object_estimate = estimate
+        self.log.update(self.identification.log())
 
     def _log(self, contacts: GraspContacts, s_o, s_f, force_error, desired) -> None:
         per_finger_error, per_finger_desired = np.zeros((2, len(self.nominal.fingers), 3))

@@ -11,7 +11,8 @@ Phases (logged as ``phase``: 0 approach, 1 squeeze, 2 manipulate):
    contact forces to the desired squeeze) for ``squeeze_time``.
 2. **manipulate** — the grasp controller follows a minimum-jerk motion from the caught pose by ``offset``
    (position [m], rotation vector [rad], world) over ``move_time``; by default the part of it the grasp can make at
-   the contacts sensed then (``planned_offset``, :meth:`GraspSupervisor._plan`).
+   the contacts sensed then (``planned_offset``, :meth:`GraspSupervisor._plan`); or any object ``path`` (e.g. the
+   persistently exciting :class:`~bhgrasp.excitation.PoseExcitation` of an identification run).
 
 :class:`MotorCommands` adapts any joint-torque controller to a drive with fewer inputs (the BH8-280's four
 motors, :mod:`bhgrasp.barrett.transmission`): u solves T^T B u = T^T tau, i.e. the motors do the same work as tau
@@ -24,6 +25,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_vector, require_name
 from bhgrasp.controllers.base import Controller
@@ -34,7 +36,7 @@ from bhgrasp.grasp.manipulability import manipulable_space
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.hand import Hand
 from bhgrasp.sim.state import State
-from bhgrasp.trajectories import PoseMotion, SmoothStep
+from bhgrasp.trajectories import PoseMotion, Reference, SmoothStep
 from bhgrasp.transmission import Transmission
 
 APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
@@ -65,6 +67,7 @@ class GraspSupervisor(Controller):
         q_close: Any = None,
         fingers: Sequence[str] | None = None,
         plan: bool = True,
+        path: Callable[..., Reference] | None = None,
     ) -> None:
         """Set up the sequence.
 
@@ -86,6 +89,10 @@ class GraspSupervisor(Controller):
             fingers: The fingers that grasp (default: all); the grasp starts when all of them have arrived.
             plan: Track the part of ``offset`` the grasp can make at the contacts sensed when the motion starts
                 (:meth:`_plan`; ``planned_offset``), instead of ``offset`` as given.
+            path: The object reference after the squeeze instead of the minimum-jerk ``offset`` (which must then be
+                zero; nothing is planned): called as ``path(pose, delay=start)`` with the pose the grasp caught and
+                the motion's start time [s], e.g. ``functools.partial(PoseExcitation, amplitude=..., frequency=...)``
+                (:class:`~bhgrasp.excitation.PoseExcitation`).
         """
         super().__init__()
         if not isinstance(grasp, ObjectGraspController):
@@ -105,6 +112,10 @@ class GraspSupervisor(Controller):
         self.squeeze_time = as_positive(squeeze_time, "squeeze_time")
         self.move_time = as_positive(move_time, "move_time")
         self.plan = bool(plan)
+        if path is not None and (not callable(path) or np.any(self.offset != 0.0)):
+            raise InputError(f"`path` must be a callable (pose, delay=start) -> Reference, with a zero `offset`; got "
+                             f"{path!r} and offset {self.offset.tolist()}")  # fmt: skip
+        self.path = path
         self.planned_offset: np.ndarray | None = None
         self.kp, self.kv = as_positive(kp, "kp"), as_positive(kv, "kv")
         self.sensing = ContactSensing(nominal)
@@ -145,7 +156,7 @@ class GraspSupervisor(Controller):
                 self._start_grasp(t, state)
         if self.phase == SQUEEZE and t >= self.switch_time + self.squeeze_time:
             self.phase = MANIPULATE
-            if self.plan:
+            if self.plan and self.path is None:
                 self._plan(t, state)
         if self.phase == APPROACH:
             tau = self._approach(t, state)
@@ -184,7 +195,9 @@ class GraspSupervisor(Controller):
 
     def _start_grasp(self, t: float, state: State) -> None:
         self.grasp.reset(state)
-        self.grasp.reference = PoseMotion(state.object_poses[0], self.offset, self.move_time, t + self.squeeze_time)
+        start, pose = t + self.squeeze_time, state.object_poses[0]
+        self.grasp.reference = PoseMotion(pose, self.offset, self.move_time, start) if self.path is None else (
+            self.path(pin.SE3(pose), delay=start))  # fmt: skip
         self.phase, self.switch_time = SQUEEZE, t
 
 
