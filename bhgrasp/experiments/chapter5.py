@@ -313,9 +313,15 @@ def _robustness(scale: float = 1.0) -> Case:
     return robustness(scale)
 
 
+def _adaptation(scale: float = 1.0) -> Case:
+    from bhgrasp.experiments.adaptation_case import adaptation_case
+
+    return adaptation_case(scale)
+
+
 CASES: dict[str, Callable[[float], Case]] = {
     "pregrasp": pregrasp, "laws": object_laws, "smc": smc_adaptive, "mass": mass_sweep, "motions": _motions,
-    "robustness": _robustness,
+    "robustness": _robustness, "adaptation": _adaptation,
 }  # fmt: skip
 
 

@@ -347,6 +347,15 @@ README_ROWS: list[tuple[str, str, str, str]] = [
      "{5:robustness/torque_limit/success_pct:.0f} %; lower true mu {5:robustness/wrong_mu/success_pct:.0f} %; all "
      "combined {5:robustness/all/success_pct:.0f} %",
      "-"),
+    ("5", "learning the object online: a 0.6 kg box told 0.3 kg, lifted and shaken (along y and z, turns about x and "
+     "y), with the robustness table's combined sensor noise over 5 seeds",
+     "composite law: mass within {5:adaptation/grasp/composite/noisy/max_mass_error_pct:.2f} %, inertia about x / y "
+     "within {5:adaptation/grasp/composite/noisy/max_I_xx_error_pct:.1f} / "
+     "{5:adaptation/grasp/composite/noisy/max_I_yy_error_pct:.1f} %; the thesis' law (exact sensing): mass "
+     "{5:adaptation/grasp/thesis/exact/mass_error_pct:.1f} % off, inertia about x "
+     "{5:adaptation/grasp/thesis/exact/I_xx_error_pct:.0f} % off; in the ideal loop the Lyapunov function V_o never "
+     "rises and falls by what the law dissipates, to {5:adaptation/ideal/composite/balance_error_pct:.2f} %",
+     "parameters converge, V_dot <= 0 (5.65)"),
 ]  # fmt: skip
 _FIELD = re.compile(r"\{(\d+):([^:{}]+):([^{}]*)\}")
 README_MARK = "<!-- generated from docs/results/chapterN.json by `bhgrasp experiments readme-table` -->"
