@@ -1,6 +1,6 @@
 // The contact force law: see engine.hpp.  Each function mirrors the Python function of the same name in
-// bhgrasp/sim/contact.py (ContactEngine: linear_parts, start_status, classify, forces); the comments there explain
-// the physics.
+// bhgrasp/sim/contact_law.py (ContactForces: linear_parts, start_status, classify, forces); the comments there
+// explain the physics.
 #include <algorithm>
 #include <cmath>
 
@@ -9,7 +9,7 @@
 
 namespace bhgrasp {
 
-// ------------------------------------------------------------------ force law (sim/contact.py)
+// ------------------------------------------------------------------ force law (sim/contact_law.py)
 // The work arrays the implicit step passes here (parts, status, slide) hold at least m rows or entries (they only
 // grow, engine.hpp: Work); these functions read and write their first m.
 void Engine::linear_parts(const Contacts& contacts, Parts& parts) const {
@@ -103,7 +103,8 @@ void Engine::classify(const Contacts& contacts, const Points& forces, const std:
   }
 }
 
-// Explicit forces on body b at relative point velocities; returns end-of-step displacements (sim/contact.py: forces).
+// Explicit forces on body b at relative point velocities; returns end-of-step displacements
+// (sim/contact_law.py: forces).
 void Engine::contact_forces(Contacts& contacts, const Points& velocity, Points& displacement) const {
   const ContactLaw& law = settings_.law;
   const Eigen::Index m = contacts.size();

@@ -1,9 +1,9 @@
 // The compiled simulation step of bhgrasp: contact detection (coal), the spring-damper + stick-slip contact law,
 // and the implicit, semi-implicit and RK4 integrators of bhgrasp.sim.Simulator, on Pinocchio's C++ API.
 //
-// The Python engine (bhgrasp/sim/python_engine.py, contact.py) is the readable reference: every function here mirrors
-// one there, named alike, and tests/test_compiled.py steps both in lockstep.  Units SI, world frame; arrays of
-// points are (m, 3) row-major, as NumPy's.
+// The Python engine (bhgrasp/sim/python_engine.py, contact.py, contact_law.py) is the readable reference: every
+// function here mirrors one there, named alike, and tests/test_compiled.py steps both in lockstep.  Units SI, world
+// frame; arrays of points are (m, 3) row-major, as NumPy's.
 #pragma once
 
 #include <cstdint>

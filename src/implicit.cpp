@@ -1,5 +1,5 @@
 // The implicit step: see engine.hpp.  It mirrors bhgrasp/sim/python_engine.py (PythonStep._implicit, _drive) and
-// the active-set helpers of bhgrasp/sim/contact.py; the comments there explain the linearisation.
+// the active-set helpers of bhgrasp/sim/contact_law.py; the comments there explain the linearisation.
 #include <algorithm>
 #include <cmath>
 

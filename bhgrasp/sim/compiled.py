@@ -56,7 +56,7 @@ class CompiledStep:
         return drive
 
     def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, memory):
-        """One step from a :class:`~bhgrasp.sim.contact.ContactMemory` or the engine's own ``Memory``.
+        """One step from a :class:`~bhgrasp.sim.contact_set.ContactMemory` or the engine's own ``Memory``.
 
         Returns (q+, v+, contacts with forces, drive torques [N m], memory, divergence) as the C++ engine made them:
         its ``Contacts`` and ``Memory`` objects, converted by :func:`contact_set` and :func:`memory_of` when read.
@@ -149,7 +149,7 @@ def barrett_of(actuation: BarrettActuation):
 
 
 def native_memory(memory: ContactMemory):
-    """A :class:`~bhgrasp.sim.contact.ContactMemory` as the C++ engine's ``Memory`` (its native copy if it has one)."""
+    """A :class:`~bhgrasp.sim.contact_set.ContactMemory` as the C++ engine's ``Memory`` (its native copy, if any)."""
     if memory.native is not None:
         return memory.native
     return core_module().Memory(
@@ -158,7 +158,7 @@ def native_memory(memory: ContactMemory):
 
 
 def memory_of(contacts_memory) -> ContactMemory:
-    """The C++ engine's contact memory as a :class:`~bhgrasp.sim.contact.ContactMemory` (keeping the native one)."""
+    """The C++ engine's contact memory as a :class:`~bhgrasp.sim.contact_set.ContactMemory` (keeping the native one)."""
     return ContactMemory(
         contacts_memory.pair, contacts_memory.local_b, contacts_memory.displacement, contacts_memory.sliding,
         native=contacts_memory,
@@ -166,7 +166,7 @@ def memory_of(contacts_memory) -> ContactMemory:
 
 
 def contact_set(contacts) -> ContactSet:
-    """The C++ engine's contacts as a :class:`~bhgrasp.sim.contact.ContactSet`."""
+    """The C++ engine's contacts as a :class:`~bhgrasp.sim.contact_set.ContactSet`."""
     if len(contacts) == 0:
         return empty_contact_set()
     return ContactSet(

@@ -53,7 +53,7 @@ class PythonStep:
         self._lower_triangle = np.tril_indices(scene.nv, -1)
 
     def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, memory: ContactMemory):
-        """One step from a :class:`~bhgrasp.sim.contact.ContactMemory`.
+        """One step from a :class:`~bhgrasp.sim.contact_set.ContactMemory`.
 
         Returns (q+, v+, contacts with forces, drive torques [N m], memory, divergence), as
         :meth:`~bhgrasp.sim.compiled.CompiledStep.step` does; the divergence is ``None``: the simulator checks.

@@ -37,8 +37,9 @@ class State:
         scene_q: Full scene configuration (hand + objects), for the simulator.
         scene_v: Full scene velocity.
         contact_memory: The simulator's memory of the last step's contacts (tangential spring displacements and
-            stick/slip flags, a :class:`~bhgrasp.sim.contact.ContactMemory`); ``None`` = no contact remembered.  A run
-            from this state continues it exactly; ``dataclasses.replace(state, contact_memory=None)`` clears it.
+            stick/slip flags, a :class:`~bhgrasp.sim.contact_set.ContactMemory`); ``None`` = no contact remembered.
+            A run from this state continues it exactly; ``dataclasses.replace(state, contact_memory=None)`` clears
+            it.
         actuation_modes: The actuation's mode flags (e.g. TorqueSwitch per finger); ``None`` = re-armed.
     """
 
@@ -69,7 +70,7 @@ class SimulatedState(State):
     A step keeps the scene's ``q``, ``v``, its contacts and contact memory as the engine returned them (the compiled
     engine's arrays stay in C++ objects); a simulator's step sets the hand's ``q`` and ``v`` as read-only views of
     the scene's; the object poses and twists, the contact arrays and body names and the
-    :class:`~bhgrasp.sim.contact.ContactMemory` are made from them on first access and kept.
+    :class:`~bhgrasp.sim.contact_set.ContactMemory` are made from them on first access and kept.
     Reading a field gives the same value as an eagerly built :class:`State` would hold; ``dataclasses.replace``
     and pickling build every field first.
     """

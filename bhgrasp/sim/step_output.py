@@ -22,7 +22,8 @@ class StepInfo:
     """What one step computed, beyond the new state: contacts with their forces and the drive torques.
 
     Attributes:
-        contacts: The step's contacts and forces, a :class:`~bhgrasp.sim.contact.ContactSet` (built when first read).
+        contacts: The step's contacts and forces, a :class:`~bhgrasp.sim.contact_set.ContactSet` (built when first
+            read).
         drive_torques: Hand joint torques the drive delivered over the step [N m], (nv_hand,).
         contact_arrays: The contacts as the engine returned them: a ``ContactSet``, or the compiled engine's
             ``Contacts``; both carry the arrays ``pair``, ``point``, ``normal``, ``depth``, ``force``, ``sticking``.
@@ -35,7 +36,7 @@ class StepInfo:
 
     @property
     def contacts(self) -> ContactSet:
-        """The step's contacts as a :class:`~bhgrasp.sim.contact.ContactSet` (built on first read, then kept)."""
+        """The step's contacts as a :class:`~bhgrasp.sim.contact_set.ContactSet` (built on first read, then kept)."""
         if self._contacts is None:
             arrays = self.contact_arrays
             self._contacts = arrays if isinstance(arrays, ContactSet) else contact_set(arrays)
