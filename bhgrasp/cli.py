@@ -13,7 +13,7 @@ import numpy as np
 
 from bhgrasp import _arguments as checked
 from bhgrasp.errors import BhgraspError, InputError
-from bhgrasp.experiments.grasp_demo import CONTROLLERS, HANDS
+from bhgrasp.experiments.grasp_demo import ADAPTATIONS, CONTROLLERS, HANDS
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -36,6 +36,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="the Barrett hand, or the Allegro hand of example-robot-data (the `hands` extra)",
     )
     demo.add_argument("--controller", choices=CONTROLLERS, default="smc-adaptive", help="object-space controller")
+    demo.add_argument(
+        "--adaptation", choices=ADAPTATIONS, default="thesis",
+        help="smc-adaptive's object estimate: the thesis' law (5.52), or composite (+ the measured contact wrench)",
+    )  # fmt: skip
     demo.add_argument("--mass", type=checked.positive_float, default=0.6, help="true box mass [kg]")
     demo.add_argument(
         "--estimate", type=checked.positive_float, default=0.3, help="mass the controller starts from [kg]"
@@ -317,7 +321,8 @@ def _grasp_demo(args: argparse.Namespace) -> int:
         print(f"MeshCat: {viewer.url}", flush=True)
     try:
         result = run_grasp_demo(args.mass, args.estimate, args.controller, args.duration,
-                                distribution=args.distribution, viewer=viewer, hand=args.hand)  # fmt: skip
+                                distribution=args.distribution, viewer=viewer, hand=args.hand,
+                                adaptation=args.adaptation)  # fmt: skip
         print(result.summary())
         if viewer is not None:
             viewer.replay(result.trajectory)

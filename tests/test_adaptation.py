@@ -184,3 +184,15 @@ def test_the_supervisor_takes_a_path_instead_of_an_offset():
         GraspSupervisor(hand, hand.neutral(), law, path="lift")
     with pytest.raises(bh.InputError, match="identification"):
         SMCAdaptiveGrasp(hand, Box(size=(0.06, 0.05, 0.05), mass=0.3), identification="rls")
+
+
+def test_the_demo_takes_the_composite_law_and_names_a_bad_choice():
+    from bhgrasp.experiments.grasp_demo import run_grasp_demo
+
+    result = run_grasp_demo(mass=0.6, estimate=0.3, adaptation="composite")
+    assert abs(result.mass_estimate - 0.6) < 1e-3 and result.slip_events == 0
+    assert result.true_position_error < 5e-4 and result.true_rotation_error < 5e-3
+    with pytest.raises(bh.InputError, match="adaptation"):
+        run_grasp_demo(adaptation="rls")
+    with pytest.raises(bh.InputError, match="'smc-adaptive' controller, not 'pd'"):
+        run_grasp_demo(controller="pd", adaptation="composite")

@@ -20,6 +20,7 @@ from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.grasping import GraspForceController, ObjectGraspController
+from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
 from bhgrasp.errors import InputError
@@ -40,6 +41,11 @@ if TYPE_CHECKING:
     from bhgrasp.plots import Figure
 
 CONTROLLERS = ("smc-adaptive", "ctc", "natural", "stiffness", "pd")
+ADAPTATIONS = (
+    "thesis",
+    "composite",
+)  # the SMC-adaptive law's object estimate: (5.52) alone, or with the measured wrench
+COMPOSITE_RATES = (5.0, 1e-3)  # Gamma_o = P(0) of the composite law: mass, inertia (chapter 5's adaptation case)
 HANDS = ("barrett", "allegro")
 OFFSET = (0.0, 0.0, 0.010, 0.1, 0.0, 0.0)  # [m, rad]: 10 mm up, 0.1 rad about x
 SQUEEZE = 5.0  # [N] desired normal force per contact (the thesis' 5 N)
@@ -52,13 +58,23 @@ def grasp_controller(
     distribution: str = "qp",
     gains: tuple[Any, Any] | None = None,
     mu: float = MU_ASSUMED,
+    adaptation: str = "thesis",
 ) -> ObjectGraspController:
     """The object-space controller called ``name`` (one of :data:`CONTROLLERS`) with the demo's gains.
 
     ``gains`` = (kp, kv) overrides the gains of "ctc", "natural" and "stiffness"; ``mu`` is the friction
-    coefficient the force distribution assumes.
+    coefficient the force distribution assumes; ``adaptation`` (one of :data:`ADAPTATIONS`, "smc-adaptive" only):
+    "composite" adds the measured wrench's prediction error
+    (:class:`~bhgrasp.controllers.object_identification.ObjectIdentification`, Gamma_o = :data:`COMPOSITE_RATES`).
     """
     shared = {"mu": mu, "squeeze": SQUEEZE, "distribution": distribution}
+    if adaptation not in ADAPTATIONS:
+        raise InputError(f"`adaptation` must be one of {ADAPTATIONS}, got {adaptation!r}")
+    if adaptation == "composite" and name != "smc-adaptive":
+        raise InputError(f"`adaptation='composite'` applies to the 'smc-adaptive' controller, not {name!r}")
+    if name == "smc-adaptive" and adaptation == "composite":
+        return SMCAdaptiveGrasp(hand, nominal_box, object_adaptation=COMPOSITE_RATES,
+                                identification=ObjectIdentification(), **shared)  # fmt: skip
     if name == "smc-adaptive":
         return SMCAdaptiveGrasp(hand, nominal_box, **shared)
     if name == "pd":
@@ -72,8 +88,8 @@ def grasp_controller(
     raise InputError(f"`controller` must be one of {CONTROLLERS}, got {name!r}")
 
 
-SWEEPABLE = ("mass", "estimate", "controller", "duration", "offset", "distribution", "approach_gains", "gains",
-             "stiffness", "sensor_noise", "hand", "finger_spacing", *UNCERTAINTIES)  # fmt: skip
+SWEEPABLE = ("mass", "estimate", "controller", "adaptation", "duration", "offset", "distribution", "approach_gains",
+             "gains", "stiffness", "sensor_noise", "hand", "finger_spacing", *UNCERTAINTIES)  # fmt: skip
 """The parameters of :func:`run_grasp_demo` a sweep case may set (the case's seed comes from the sweep)."""
 
 
@@ -89,10 +105,13 @@ def check_demo_arguments(**arguments: Any) -> None:
     for name in ("mass", "estimate", "duration", "stiffness"):
         if name in arguments:
             as_positive(arguments[name], name)
-    choices = {"controller": CONTROLLERS, "distribution": ("qp", "pinv"), "hand": HANDS}
+    choices = {"controller": CONTROLLERS, "adaptation": ADAPTATIONS, "distribution": ("qp", "pinv"), "hand": HANDS}
     for name, allowed in choices.items():
         if name in arguments and arguments[name] not in allowed:
             raise InputError(f"`{name}` must be one of {allowed}, got {arguments[name]!r}")
+    controller = arguments.get("controller", "smc-adaptive")
+    if arguments.get("adaptation") == "composite" and controller != "smc-adaptive":
+        raise InputError(f"`adaptation='composite'` applies to the 'smc-adaptive' controller, not {controller!r}")
     if "offset" in arguments:
         as_vector(arguments["offset"], "offset", 6)
     if "approach_gains" in arguments:
@@ -128,6 +147,7 @@ def run_grasp_demo(
     seed: int = 0,
     hand: str = "barrett",
     finger_spacing: float | None = None,
+    adaptation: str = "thesis",
     **uncertainty: Any,
 ) -> GraspDemoResult:
     """Grasp, lift and turn the box; see the module docstring.
@@ -160,6 +180,10 @@ def run_grasp_demo(
             damping (known to the controller), which dominates its light links' inertia.
         finger_spacing: Distance [m] between F1's and F2's contacts (Barrett scene; default the thesis' 50 mm, the
             spread on its stop; :data:`~bhgrasp.experiments.box_grasp.OFF_STOP_SPACING` takes it off).
+        adaptation: The SMC-adaptive law's object estimate (:data:`ADAPTATIONS`): the thesis' (5.52), or
+            ``"composite"``, which also fits the wrench the hand measures on the object once it is off its pedestal
+            (:mod:`bhgrasp.controllers.object_identification`: not fooled by joint friction, chapter 5's adaptation
+            case).
         uncertainty: What the controller does not know (:data:`UNCERTAINTIES`, Barrett scene only):
             ``pose_noise`` (sigma [m], sigma [rad]) on the object pose, ``twist_noise`` (sigma [m/s], sigma
             [rad/s]) on its twist, ``force_noise`` sigma [N] on the contact forces, ``delay`` [s] of every reading,
@@ -167,7 +191,8 @@ def run_grasp_demo(
             ``torque_limit`` [N m] on each joint torque, ``friction`` the true friction coefficient (0.8) and
             ``mu`` the one the force distribution assumes (0.6).
     """
-    check_demo_arguments(mass=mass, estimate=estimate, controller=controller, duration=duration, offset=offset,
+    check_demo_arguments(mass=mass, estimate=estimate, controller=controller, adaptation=adaptation,
+                         duration=duration, offset=offset,
                          distribution=distribution, approach_gains=approach_gains, stiffness=stiffness,
                          sensor_noise=sensor_noise, hand=hand, **uncertainty,
                          **({} if finger_spacing is None else {"finger_spacing": finger_spacing}))  # fmt: skip
@@ -180,7 +205,7 @@ def run_grasp_demo(
     setup.check_clearance(offset)  # so is one that drives the box into its pedestal
     nominal_box = Box(size=setup.box.size, mass=estimate)
     grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains,
-                             float(uncertainty.get("mu", MU_ASSUMED)))  # fmt: skip
+                             float(uncertainty.get("mu", MU_ASSUMED)), adaptation)  # fmt: skip
     kp, kv = approach_gains
     supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=offset, kp=kp, kv=kv,
                                  q_close=setup.q_close, fingers=setup.fingers)  # fmt: skip
