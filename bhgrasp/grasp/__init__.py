@@ -1,17 +1,18 @@
 """Grasp analysis (thesis chapter 5): contact geometry, closure and quality, contact forces, grasp dynamics, sensing.
 
-Modules, one concept each: :mod:`~bhgrasp.grasp.frames` (contact frames, the grasp map G, the hand Jacobian J_h,
-the grasp constraint and the conventions they share), :mod:`~bhgrasp.grasp.cones` (friction cones and their inscribed
+Modules, one concept each: :mod:`~bhgrasp.grasp.frames` (contact frames, the grasp map G, the hand Jacobian J_h, the
+grasp constraint and the conventions they share), :mod:`~bhgrasp.grasp.cones` (friction cones and their inscribed
 pyramids), :mod:`~bhgrasp.grasp.quality` (force closure, Ferrari-Canny epsilon, grasp wrench space volume),
 :mod:`~bhgrasp.grasp.forces` (the contact-force QP; its Python twin of the compiled solver is the private
 ``_force_qp``), :mod:`~bhgrasp.grasp.kinematics` (P = J_h^+ G^T and its rate), :mod:`~bhgrasp.grasp.dynamics` (the
-reduced hand-object dynamics, the object motions a grasp allows), :mod:`~bhgrasp.grasp.manipulability` (the
-manipulable space: which offsets a grasp can make before anything is simulated), :mod:`~bhgrasp.grasp.clearance`
-(whether an offset's path clears the support and other fixed shapes), :mod:`~bhgrasp.grasp.sensing`
-(per-finger contact forces and reaction torques) and :mod:`~bhgrasp.grasp.metrics` (finger forces and slip events
-read back from a trajectory).  Every public name is re-exported here (``from bhgrasp.grasp import grasp_map``); the
-former modules ``bhgrasp.grasp_forces``, ``bhgrasp.grasp_dynamics``, ``bhgrasp.grasp_motion``,
-``bhgrasp.grasp_metrics`` and ``bhgrasp.sensing`` still import, as re-exports of these.
+reduced hand-object dynamics, the object motions a grasp allows), :mod:`~bhgrasp.grasp.manipulability` (the manipulable
+space: which offsets a grasp can make before anything is simulated), :mod:`~bhgrasp.grasp.clearance` (whether an
+offset's path clears the support and other fixed shapes), :mod:`~bhgrasp.grasp.path_check` (the fingers followed along
+an offset's path: links that meet the object beside the planned contacts, second order), :mod:`~bhgrasp.grasp.sensing`
+(per-finger contact forces and reaction torques) and :mod:`~bhgrasp.grasp.metrics` (finger forces and slip events read
+back from a trajectory).  Every public name is re-exported here (``from bhgrasp.grasp import grasp_map``); the former
+modules ``bhgrasp.grasp_forces``, ``bhgrasp.grasp_dynamics``, ``bhgrasp.grasp_motion``, ``bhgrasp.grasp_metrics`` and
+``bhgrasp.sensing`` still import, as re-exports of these.
 
 ``import bhgrasp.grasp`` does not import scipy: the force-closure LP and the convex hull import it when called.
 """
@@ -44,6 +45,7 @@ from bhgrasp.grasp.kinematics import (
 )
 from bhgrasp.grasp.manipulability import ManipulableSpace, describe, manipulable_space
 from bhgrasp.grasp.metrics import finger_normal_forces, finger_of, slip_events
+from bhgrasp.grasp.path_check import PathContacts, PathTouch, path_contacts, sensed_path_contacts
 from bhgrasp.grasp.quality import (
     CLOSURE_TOLERANCE,
     LP_TOLERANCE,
@@ -72,6 +74,8 @@ __all__ = [
     "GraspQuality",
     "ManipulableSpace",
     "ObjectState",
+    "PathContacts",
+    "PathTouch",
     "check_clearance",
     "cone_violations",
     "contact_frames",
@@ -99,7 +103,9 @@ __all__ = [
     "manipulable_space",
     "parent_joints",
     "path_clearance",
+    "path_contacts",
     "primitive_wrenches",
     "pseudo_inverse_forces",
+    "sensed_path_contacts",
     "slip_events",
 ]

@@ -1,0 +1,285 @@
+"""Second-order (path-level) check of an object motion in a grasp: the fingers followed along the whole path.
+
+:mod:`~bhgrasp.grasp.manipulability` judges an offset at the start of the motion (first order, one contact per
+finger).  Along a long turn the fingers reconfigure, and a link that was clear at the start may meet the object
+beside the planned contact (a fingertip's distal link body beside its spherical pad, a proximal link, the palm): the
+finger then touches at several points, its normal force splits among them and the planned contact's share may no
+longer hold its tangential load.  :func:`path_contacts` foresees that before the motion is made:
+
+1. The object follows the supervisor's path (:class:`~bhgrasp.trajectories.PoseMotion` at blend b in [0, 1]):
+   centre ``c(b) = c_0 + b dx``, rotation ``R(b) = exp(b dtheta) R_0``, so its twist per unit blend is the constant
+   ``(dx, dtheta)`` at the moving centre (world).
+2. The fingers keep their contacts without slipping; a spherical pad rolls, so the contact is re-found at each step
+   (coal's nearest points between the pad's geometry and the object) and the joints take the Euler step
+   ``J dq = (dx + dtheta x (p_i - c)) db + n_i (g_i - g_i0)`` in least squares: J (3n, nv) the stacked world
+   Jacobians of the finger points at the contacts p_i (the first step is the first-order ``J_h^+ G^T`` twist of
+   (5.19)), n_i the normal into the object and the last term holding each pad's signed gap g_i at its start value
+   (the squeeze's penetration).  What the joints cannot make accumulates as a drift [m]: the sliding the path needs.
+3. At each step coal's signed distance between every other hand collision geometry and the object: one that comes
+   within ``tolerance`` is a new contact (:class:`PathTouch`); a joint outside its limits is reported too.
+
+Cost: ``steps + 1`` kinematics passes and (number of hand geometries) distance queries per step, a few milliseconds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp._validation import as_array, as_vector
+from bhgrasp.errors import InputError, UnreachableError
+from bhgrasp.grasp.sensing import ContactSensing
+from bhgrasp.hand import Hand
+from bhgrasp.sim.state import State
+
+TOLERANCE = 0.0  # [m] signed distance below which another geometry touches the object (the contact law's onset)
+LIMIT_TOLERANCE = 1e-6  # [rad] joint motion past a limit that counts as leaving it
+STEPS = 40  # path steps: 0.025 of the blend, 7.5 mrad of a 0.3 rad turn
+
+
+@dataclass(frozen=True)
+class PathTouch:
+    """Where a hand geometry other than a planned contact first meets the object along the path.
+
+    Attributes:
+        fraction: Path blend b in [0, 1] (the minimum-jerk blend, not time) of the first touching step.
+        angle: Object rotation [rad] reached there, b |dtheta|.
+        geometry: The hand collision geometry's name (e.g. ``F3_distal_link_0``: the distal link's body).
+        link: The frame it hangs on.
+        face: The object's face it meets (``"+y"``: the box face normal to its +y axis; "" for another shape).
+        distance: Its signed distance [m] to the object there (negative: penetration).
+        point: (3,) the witness point on the hand geometry [m], world, at that step.
+        spacing: Distance [m] from that point to the nearest planned contact on the same joint (inf if none).
+    """
+
+    fraction: float
+    angle: float
+    geometry: str
+    link: str
+    face: str
+    distance: float
+    point: np.ndarray
+    spacing: float
+
+    def __repr__(self) -> str:
+        where = f"{self.geometry} on {self.face or 'the object'} at b={self.fraction:.3f} ({self.angle:.3f} rad)"
+        return f"PathTouch({where}, {1e3 * self.distance:.2f} mm, {1e3 * self.spacing:.1f} mm from its pad)"
+
+
+@dataclass(frozen=True)
+class PathContacts:
+    """The fingers along an object motion with rolling, non-slipping contacts, and what they meet (world frame).
+
+    Attributes:
+        fractions: (k,) path blends b of the steps, 0 to 1.
+        q: (k, nq) joint positions [rad] at each step.
+        gaps: (k, n) each planned contact's signed gap [m] (held at its start value).
+        drift: (k, n) per contact, the accumulated |J dq - demand| [m]: the sliding the joints leave (second order).
+        clearance: (k, m) signed distance [m] of each other hand geometry to the object.
+        geometries: The m other geometries' names (every hand geometry but the planned contacts').
+        touches: The first touch of each geometry that meets the object (:class:`PathTouch`), in path order.
+        limit: (fraction, joint) where a joint first leaves its limits, ``None`` if none does.
+        offset: The motion (dx [m], dtheta [rad]), world; contacts: a name per contact.
+    """
+
+    fractions: np.ndarray
+    q: np.ndarray
+    gaps: np.ndarray
+    drift: np.ndarray
+    clearance: np.ndarray
+    geometries: tuple[str, ...]
+    touches: tuple[PathTouch, ...]
+    limit: tuple[float, str] | None
+    offset: np.ndarray
+    contacts: tuple[str, ...]
+
+    @property
+    def touch(self) -> PathTouch | None:
+        """The first new contact along the path, ``None`` if the path keeps to the planned ones."""
+        return self.touches[0] if self.touches else None
+
+    @property
+    def ok(self) -> bool:
+        """Whether the path keeps to the planned contacts and inside the joint limits."""
+        return not self.touches and self.limit is None
+
+    def __repr__(self) -> str:
+        drift = 1e3 * float(self.drift.max(initial=0.0))
+        return f"PathContacts(ok={self.ok}, touch={self.touch!r}, limit={self.limit}, max drift {drift:.3f} mm)"
+
+    def check(self) -> None:
+        """Refuse the motion if a link meets the object off its planned contacts or a joint leaves its limits.
+
+        Raises:
+            UnreachableError: The message names the geometry, its link and the object's face (or the joint), where
+                along the path (blend and angle) and how deep at the end; ``result`` is this :class:`PathContacts`.
+        """
+        motion = f"the motion {np.round(self.offset, 6).tolist()} (dx [m], dtheta [rad])"
+        if self.touches:
+            t, column = self.touches[0], self.geometries.index(self.touches[0].geometry)
+            raise UnreachableError(
+                f"{motion}: {t.geometry} ({t.link}) meets the object's {t.face or ''} face {1e3 * t.spacing:.1f} mm "
+                f"from its pad at {100 * t.fraction:.0f} % of the path ({t.angle:.3f} rad) and ends "
+                f"{1e3 * -self.clearance[-1, column]:.2f} mm into it (second order, contacts rolling without slip)",
+                self,
+            )
+        if self.limit is not None:
+            raise UnreachableError(
+                f"{motion}: joint {self.limit[1]} leaves its limits at {100 * self.limit[0]:.0f} % of the path "
+                "(second order, contacts rolling without slip)",
+                self,
+            )
+
+
+def path_contacts(
+    hand: Hand,
+    q: Any,
+    points: Any,
+    links: Sequence[str],
+    shape: coal.CollisionGeometry,
+    pose: pin.SE3,
+    offset: Any,
+    steps: int = STEPS,
+    tolerance: float = TOLERANCE,
+    labels: Sequence[str] | None = None,
+) -> PathContacts:
+    """Follow the object's motion by ``offset`` with the contacts rolling without slip; see the module docstring.
+
+    Args:
+        hand: The hand (its ``collision_model()`` is checked).
+        q: Joint positions [rad] when the motion starts.
+        points: (n, 3) contact points [m], world (e.g. the sensed ones): each picks the geometry on its link's joint
+            nearest to it (the pad) as a planned contact.
+        links: The hand frame carrying each contact.
+        shape: The object's coal shape, placed by ``pose``.
+        pose: The object's pose when the motion starts (world <- object); its origin is the motion's centre.
+        offset: (dx [m], dtheta [rad]), world: the motion the controller will track (e.g. the supervisor's plan).
+        steps: Path steps (blends 0, 1/steps, ..., 1).
+        tolerance: Signed distance [m] below which another geometry touches the object.
+        labels: A name per contact (default: the links).
+    """
+    q = as_vector(q, "q", hand.nq).copy()
+    points = as_array(points, "points", (len(links), 3))
+    offset = as_vector(offset, "offset", 6)
+    if len(points) == 0 or int(steps) < 1:
+        raise InputError(f"need at least one contact and one step, got {len(points)} contacts and steps={steps}")
+    if not isinstance(pose, pin.SE3):
+        raise InputError(f"`pose` must be a pinocchio.SE3, got {type(pose).__name__}")
+    links = list(links)
+    model, data, geometry = hand.model, pin.Data(hand.model), hand.collision_model()
+    geometry_data, items = pin.GeometryData(geometry), geometry.geometryObjects
+    pads = _pads(hand, geometry, q, points, links)
+    others = [g for g in range(len(items)) if g not in pads]
+    fractions = np.linspace(0.0, 1.0, int(steps) + 1)
+    path_q, gaps = np.empty((len(fractions), hand.nq)), np.empty((len(fractions), len(pads)))
+    drift, clearance = np.zeros((len(fractions), len(pads))), np.empty((len(fractions), len(others)))
+    request, result = coal.DistanceRequest(), coal.DistanceResult()
+    touches: dict[int, PathTouch] = {}
+    limit: tuple[float, str] | None = None
+    contacts, normals, centre = np.empty((len(pads), 3)), np.empty((len(pads), 3)), pose.translation
+    for k, b in enumerate(fractions):
+        if k:  # Euler step in b: J dq = (dx + dtheta x (p - c)) db + n (gap - gap_0), least squares
+            demand = (offset[:3] + np.cross(offset[3:], contacts - centre)) * (b - fractions[k - 1])
+            demand += normals * (gaps[k - 1] - gaps[0])[:, None]
+            jacobian = hand.point_jacobians(q, links, contacts).reshape(-1, hand.nv)
+            step = np.linalg.lstsq(jacobian, demand.reshape(-1), rcond=1e-10)[0]
+            q = q + step
+            drift[k] = drift[k - 1] + np.linalg.norm((jacobian @ step).reshape(-1, 3) - demand, axis=1)
+        rotation, centre = pin.exp3(b * offset[3:]) @ pose.rotation, pose.translation + b * offset[:3]
+        placed_object = coal.Transform3s(rotation, centre)
+        pin.updateGeometryPlacements(model, data, geometry, geometry_data, q)
+        placed = [_transform(hand.base_placement * placement) for placement in geometry_data.oMg]
+        for i, g in enumerate(pads):  # the pads' contacts now (they roll: the point moves on both bodies)
+            result.clear()
+            gaps[k, i] = coal.distance(items[g].geometry, placed[g], shape, placed_object, request, result)
+            contacts[i] = 0.5 * (np.asarray(result.getNearestPoint1()) + np.asarray(result.getNearestPoint2()))
+            normals[i] = result.normal
+        path_q[k] = q
+        outside = (q < hand.lower - LIMIT_TOLERANCE) | (q > hand.upper + LIMIT_TOLERANCE)
+        if limit is None and outside.any():
+            limit = (float(b), hand.joint_names[int(np.argmax(outside))])
+        for column, g in enumerate(others):
+            result.clear()
+            distance = coal.distance(items[g].geometry, placed[g], shape, placed_object, request, result)
+            clearance[k, column] = distance
+            if distance < tolerance and g not in touches:
+                witness = np.array(result.getNearestPoint1())
+                same_joint = [i for i, pad in enumerate(pads) if items[pad].parentJoint == items[g].parentJoint]
+                spacing = min((float(np.linalg.norm(witness - contacts[i])) for i in same_joint), default=np.inf)
+                touches[g] = PathTouch(float(b), float(b * np.linalg.norm(offset[3:])), items[g].name,
+                                       model.frames[items[g].parentFrame].name,
+                                       _face(shape, rotation, result.normal), float(distance),
+                                       witness, spacing)  # fmt: skip
+    return PathContacts(fractions, path_q, gaps, drift, clearance, tuple(items[g].name for g in others),
+                        tuple(touches.values()), limit, offset.copy(),
+                        tuple(labels) if labels is not None else tuple(links))  # fmt: skip
+
+
+def sensed_path_contacts(
+    hand: Hand,
+    state: State,
+    shape: coal.CollisionGeometry,
+    offset: Any,
+    steps: int = STEPS,
+    tolerance: float = TOLERANCE,
+) -> PathContacts:
+    """:func:`path_contacts` at the contacts the fingers sense in ``state``, as the grasp supervisor plans from them.
+
+    The contacts are :class:`~bhgrasp.grasp.sensing.ContactSensing`'s per finger (force-weighted point, the link that
+    presses hardest), the object's pose is ``state.object_poses[0]`` (``shape``'s pose).
+
+    Raises:
+        InputError: Fewer than two fingers touch the object.
+    """
+    touching = {finger: c for finger, c in ContactSensing(hand).fingers(state).items() if c.link is not None}
+    if len(touching) < 2:
+        raise InputError(f"a path check needs two or more touching fingers, got {sorted(touching)}")
+    contacts = list(touching.values())
+    return path_contacts(hand, state.q, [c.point for c in contacts], [str(c.link) for c in contacts], shape,
+                         state.object_poses[0], offset, steps, tolerance, list(touching))  # fmt: skip
+
+
+def _transform(placement: pin.SE3) -> coal.Transform3s:
+    return coal.Transform3s(placement.rotation, placement.translation)
+
+
+def _pads(hand: Hand, geometry: pin.GeometryModel, q: np.ndarray, points: np.ndarray, links: list[str]) -> list[int]:
+    """The geometry carrying each contact, in order: on the contact link's joint, the one nearest the contact point."""
+    model = hand.model
+    geometry_data = pin.GeometryData(geometry)
+    pin.updateGeometryPlacements(model, pin.Data(model), geometry, geometry_data, q)
+    probe, request, result = coal.Sphere(1e-9), coal.DistanceRequest(), coal.DistanceResult()
+    pads = []
+    for point, link in zip(points, links):
+        joint = model.frames[model.getFrameId(link)].parentJoint if model.existFrame(link) else -1
+        candidates = [g for g, item in enumerate(geometry.geometryObjects) if item.parentJoint == joint]
+        if not candidates:
+            raise InputError(f"link {link!r} is not a hand frame carrying collision geometry; contacts lie on one")
+        distances = []
+        for g in candidates:
+            result.clear()
+            distances.append(coal.distance(geometry.geometryObjects[g].geometry,
+                                           _transform(hand.base_placement * geometry_data.oMg[g]), probe,
+                                           coal.Transform3s(np.eye(3), point), request, result))  # fmt: skip
+        pads.append(candidates[int(np.argmin(distances))])
+    return pads
+
+
+def _face(shape: coal.CollisionGeometry, rotation: np.ndarray, normal: Any) -> str:
+    """The face of a box ``shape`` (turned by ``rotation``) that a contact of world ``normal`` (into it) presses on.
+
+    The face whose outward normal is closest to -normal: e.g. "+y" (robust where the contact straddles an edge).
+    """
+    if not isinstance(shape, coal.Box):
+        return ""
+    outward = -(rotation.T @ np.asarray(normal, dtype=float))  # object frame
+    axis = int(np.argmax(np.abs(outward)))
+    return f"{'+' if outward[axis] >= 0 else '-'}{'xyz'[axis]}"
+
+
+__all__ = ["STEPS", "TOLERANCE", "PathContacts", "PathTouch", "path_contacts", "sensed_path_contacts"]
