@@ -24,15 +24,17 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
+import coal
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_positive, as_vector, require_name
+from bhgrasp._validation import as_positive, as_real, as_vector, require_name
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.joint import ComputedTorque
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.manipulability import manipulable_space
+from bhgrasp.grasp.path_check import path_contacts
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.hand import Hand
 from bhgrasp.sim.state import State
@@ -68,6 +70,8 @@ class GraspSupervisor(Controller):
         fingers: Sequence[str] | None = None,
         plan: bool = True,
         path: Callable[..., Reference] | None = None,
+        approach_damping: float = 0.0,
+        object_shape: coal.CollisionGeometry | None = None,
     ) -> None:
         """Set up the sequence.
 
@@ -93,6 +97,15 @@ class GraspSupervisor(Controller):
                 zero; nothing is planned): called as ``path(pose, delay=start)`` with the pose the grasp caught and
                 the motion's start time [s], e.g. ``functools.partial(PoseExcitation, amplitude=..., frequency=...)``
                 (:class:`~bhgrasp.excitation.PoseExcitation`).
+            approach_damping: The joints' known viscous damping [N m s/rad] the approach cancels (its computed
+                torque models the links alone, whose inertia is small next to it: at 0.05 N m s/rad a BH8-280
+                distal joint closes with a ~3 s time constant under the default gains); the grasp controller does
+                not add it.
+            object_shape: The object's coal shape (placed by its pose): when the motion starts, the planned motion is
+                also followed to its end with the sensed contacts rolling without slip
+                (:func:`~bhgrasp.grasp.path_check.path_contacts`), and refused with
+                :class:`~bhgrasp.errors.UnreachableError` (naming the link, the face and the angle) if another part
+                of a finger would meet the object or a joint leave its limits; ``None``: first order only.
         """
         super().__init__()
         if not isinstance(grasp, ObjectGraspController):
@@ -116,6 +129,10 @@ class GraspSupervisor(Controller):
             raise InputError(f"`path` must be a callable (pose, delay=start) -> Reference, with a zero `offset`; got "
                              f"{path!r} and offset {self.offset.tolist()}")  # fmt: skip
         self.path = path
+        self.object_shape = object_shape
+        self.approach_damping = as_real(approach_damping, "approach_damping")
+        if self.approach_damping < 0.0:
+            raise InputError(f"`approach_damping` must be >= 0 [N m s/rad], got {approach_damping}")
         self.planned_offset: np.ndarray | None = None
         self.kp, self.kv = as_positive(kp, "kp"), as_positive(kv, "kv")
         self.sensing = ContactSensing(nominal)
@@ -159,7 +176,7 @@ class GraspSupervisor(Controller):
             if self.plan and self.path is None:
                 self._plan(t, state)
         if self.phase == APPROACH:
-            tau = self._approach(t, state)
+            tau = self._approach(t, state) + self.approach_damping * np.asarray(state.v, dtype=float)
             self.log.update(self._approach.log)
         else:
             tau = self.grasp(t, state)
@@ -176,7 +193,11 @@ class GraspSupervisor(Controller):
         sense when the motion starts (not the planned ones: a fingertip's link body may touch a little off its pad,
         e.g. 1.6 mm below the thesis box's centre, so that a turn about y through the centre would drag F3 along x);
         the nearest offset the fingers make without sliding, in the metric (dx, :data:`PLAN_LENGTH` dtheta), becomes
-        the motion (``planned_offset``).
+        the motion (``planned_offset``).  With ``object_shape`` the motion is then checked to its end (second order).
+
+        Raises:
+            UnreachableError: With ``object_shape``: along the motion another part of a finger would meet the object
+                (e.g. a distal link's body beside its pad) or a joint would leave its limits.
         """
         touching = self.grasp.touching(state)
         reference = self.grasp.reference
@@ -187,11 +208,13 @@ class GraspSupervisor(Controller):
         com = state.object_poses[0].translation
         space = manipulable_space(self.nominal, state.q, points, normals, links, com, list(touching))
         planned = space.nearest(self.offset, PLAN_LENGTH)
-        if np.max(np.abs(planned - self.offset)) < 1e-12:  # the fingers make it as asked: track it unchanged
-            self.planned_offset = self.offset.copy()
-            return
-        self.planned_offset = planned
-        self.grasp.reference = PoseMotion(reference.start, planned, self.move_time, reference.delay)
+        unchanged = np.max(np.abs(planned - self.offset)) < 1e-12  # the fingers make it as asked: track it unchanged
+        self.planned_offset = self.offset.copy() if unchanged else planned
+        if self.object_shape is not None:  # second order: the fingers followed to the end of the motion
+            path_contacts(self.nominal, state.q, points, links, self.object_shape, state.object_poses[0],
+                          self.planned_offset, labels=list(touching)).check()  # fmt: skip
+        if not unchanged:
+            self.grasp.reference = PoseMotion(reference.start, planned, self.move_time, reference.delay)
 
     def _start_grasp(self, t: float, state: State) -> None:
         self.grasp.reset(state)

@@ -1,0 +1,302 @@
+"""Grasp synthesis: fingertip contacts, spread and pre-grasp configuration for an object, best quality first.
+
+For a hand and a convex object (:class:`~bhgrasp.objects.Box`, :class:`~bhgrasp.objects.Cylinder`,
+:class:`~bhgrasp.objects.Sphere` ... placed by its ``pose`` in the hand's world), :func:`grasp_candidates` searches
+the spread joints (every joint named ``*spread*`` at one value) and the contact height along the palm normal:
+
+1. **where each finger lands**: a finger closes in a plane; the horizontal line through its fingertip at two
+   flexions (every non-spread joint at 0.6, then 1.4 rad, clipped to the limits) is cast at the contact height
+   toward the object, and its first point on the surface (coal distances, 0.01 mm) is the finger's contact;
+2. **reachability**: the fingertip frames (the pads' centres) go one pad radius out along the surface normal there,
+   and the IK (:func:`~bhgrasp.ik.ik`, 1e-6 m) must reach them inside the joint limits, away from a kinematic
+   singularity (every joint of a grasping finger moves its contact: ``singularity_margin``);
+3. **only the pads touch**: every other collision shape of the hand keeps ``clearance`` from the object (a link
+   body pressing beside the pad makes several contacts whose forces the grasp controller does not distribute), also
+   while the grasp lifts the object by ``lift`` (first order: the joints move by P dx, P = J_h^+ G^T, and the
+   object by dx, checked half-way and at the end), where the contacts must not slide and the flexing joints keep
+   ``joint_margin`` from their limits (a spread joint may rest on its stop).  Fingertips that touch a wall
+   near-parallel to the distal link are close to straight (a 10 mm lift turns the BH8-280's distal links by
+   ~0.25 rad), and their link boxes, which stand 0.4 mm proud of the 10 mm pads and reach 12 mm to either side of
+   them, swing onto the wall: the link then touches at two points, which cannot both stick while it turns, and the
+   pad slides;
+4. **quality**: force closure and the Ferrari-Canny epsilon of the frictional point contacts
+   (:func:`~bhgrasp.grasp.quality.grasp_quality`, torques over the largest contact distance), and whether the
+   contact-force QP holds the object's weight against gravity with ``squeeze`` newtons per contact inside cones
+   of ``mu`` (its margin: the smallest mu f_n - |f_t| over contacts [N]).
+
+Two point contacts never close a grasp (nothing resists a turn about the line between them): their epsilon is 0,
+and whether (and by how much) they hold the weight ranks them.  :func:`synthesize` returns the best candidate or raises
+:class:`~bhgrasp.errors.UnreachableError` naming why none was found.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp._validation import as_positive, require_name
+from bhgrasp.errors import InputError, UnreachableError
+from bhgrasp.grasp.forces import ContactForceQP
+from bhgrasp.grasp.frames import grasp_map
+from bhgrasp.grasp.manipulability import SLIDE_TOLERANCE, manipulable_space
+from bhgrasp.grasp.probes import HandClearance, ObjectProbe
+from bhgrasp.grasp.quality import GraspQuality, grasp_quality
+from bhgrasp.hand import Hand
+from bhgrasp.ik import ik
+
+FLEXIONS = (0.6, 1.4)  # [rad] the two closings that give a finger's line of approach
+
+
+@dataclass(frozen=True)
+class GraspCandidate:
+    """One grasp: contacts (world), the configurations that make it, and its quality.
+
+    Attributes:
+        fingers: The grasping fingers.
+        points: (n, 3) contact points on the object's surface [m]; normals: (n, 3) unit normals into the object.
+        q_contact: Joint positions [rad] with each pad touching its point; q_pregrasp: the same with each finger's
+            first non-spread (proximal) joint opened by ``opening`` (clipped to the limits), where an approach starts.
+            The other joints stay at their contact values, as in the thesis' scene
+            (:func:`~bhgrasp.experiments.box_grasp.box_grasp`): a joint-space approach barely moves the BH8-280's
+            distal joints (3.8e-5 kg m^2 against the drive's 0.05 N m s/rad, a 3 s time constant at Kp = 400 /s^2),
+            so an opened distal joint is still ~0.2 rad short when its pad touches, away from the planned grasp.
+        spread: The spread joints' mean [rad] in ``q_contact`` (the approach lines were cast at a searched spread;
+            the IK then places the pads); height: the contacts' height above the object's centre [m].
+        quality: Force closure, epsilon [N] ...; holds_weight: the QP holds the weight inside the cones;
+            weight_margin: its smallest mu f_n - |f_t| [N] (negative: outside a cone).
+    """
+
+    fingers: tuple[str, ...]
+    points: np.ndarray
+    normals: np.ndarray
+    q_contact: np.ndarray
+    q_pregrasp: np.ndarray
+    spread: float
+    height: float
+    quality: GraspQuality
+    holds_weight: bool
+    weight_margin: float
+
+    @property
+    def score(self) -> tuple[float, bool, float]:
+        """The ranking: epsilon first, then whether the weight is held, then its margin."""
+        return (self.quality.epsilon, self.holds_weight, self.weight_margin)
+
+
+def grasp_candidates(
+    hand: Hand,
+    item: Any,
+    mu: float = 0.6,
+    fingers: Sequence[str] | None = None,
+    spreads: Sequence[float] | None = None,
+    heights: Sequence[float] | None = None,
+    pad_radius: float = 0.010,
+    clearance: float = 1.5e-3,
+    edge_margin: float = 5e-3,
+    joint_margin: float = 0.05,
+    opening: float = 0.3,
+    squeeze: float = 5.0,
+    gravity: Any = (0.0, 0.0, -9.81),
+    lift: float = 0.01,
+    singularity_margin: float = 2e-3,
+) -> list[GraspCandidate]:
+    """Every reachable candidate (module docstring), best first.
+
+    Args:
+        hand: The hand (its world frame: the object's pose is in it).
+        item: A rigid object with ``geometry()``, ``pose`` and ``mass``.
+        mu: Friction coefficient of the quality and the weight test.
+        fingers: The grasping fingers (default: all); every subset of two or more is searched if ``None``.
+        spreads: Values [rad] of the spread joints (default: 0 to 90 deg in 10 deg steps, inside their limits).
+        heights: Contact heights [m] above the object's centre along the world z (default: 5 across the middle
+            half of the object's height).
+        pad_radius: Radius [m] of the fingertip pads (the packaged Barrett URDF's 10 mm).
+        clearance: Least distance [m] of every other collision shape of the hand from the object, at the contact
+            configuration and along the ``lift``: 1 mm beyond the ~0.5 mm the pads sink under a 5 N squeeze in the
+            10 kN/m contacts of the thesis' scene (measured on the box and can: lifts that keep 1.1-1.3 mm put the link
+            bodies on the object, 1.4 mm and more do not).
+        edge_margin: Least distance [m] of a contact from an edge of the surface (a pad rolls; at an edge it rolls
+            off): the normals ``edge_margin`` away on the surface, along both tangents, stay within 30 deg.
+        joint_margin: Least distance [rad] of every flexing joint from its limits at the contact configuration and
+            along the lift (a joint on its stop cannot move one way).  Spread joints may rest on a stop, which then
+            holds them (the thesis' pinch has its spread at 0): the grasp's manipulable space refuses the motions
+            that would need them to move off it.
+        opening: Opening [rad] of the pre-grasp configuration's proximal joints.
+        squeeze: Desired normal force [N] per contact of the weight test.
+        gravity: World gravity [m/s^2] of the weight test.
+        lift: How far [m] against ``gravity`` the grasp must lift the object with its pads alone (module docstring;
+            0: no lift check).
+        singularity_margin: Least smallest singular value [m/rad] of each finger's contact Jacobian on its joints:
+            a fingertip over its spread axis cannot be moved by the spread joint, which is then driven by the pad's
+            friction alone (measured: a cube's T-grasp with F1 and F2 over their knuckles diverges as it closes).
+    """
+    as_positive(mu, "mu")
+    pad_radius, clearance = as_positive(pad_radius, "pad_radius"), float(clearance)
+    down = np.asarray(gravity, dtype=float)
+    lift_offset = np.concatenate((-float(lift) * down / np.linalg.norm(down), np.zeros(3)))
+    sets = _finger_sets(hand, fingers)
+    spread_joints = [i for i, name in enumerate(hand.joint_names) if "spread" in name]
+    spreads = _default_spreads(hand, spread_joints) if spreads is None else [float(s) for s in spreads]
+    shape, pose = item.geometry(), item.pose
+    heights = _default_heights(shape, pose) if heights is None else [float(h) for h in heights]
+    probe = ObjectProbe(shape, pose)
+    shapes = HandClearance(hand)
+    candidates = []
+    for spread, height in itertools.product(spreads, heights):
+        q_spread = _with_spread(hand, spread_joints, spread)
+        landing = {f: probe.landing(*_approach_line(hand, q_spread, f), pose.translation[2] + height) for f in
+                   {f for group in sets for f in group}}  # fmt: skip
+        for group in sets:
+            if any(landing[f] is None for f in group):
+                continue
+            points = np.array([landing[f][0] for f in group])
+            outward = np.array([landing[f][1] for f in group])
+            try:
+                q = ik(hand, {f: p + pad_radius * n for f, p, n in zip(group, points, outward)}, q_spread,
+                       tolerance=1e-6).q  # fmt: skip
+            except UnreachableError:
+                continue
+            if shapes.nearest_other(q, group, shape, pose) < clearance:
+                continue
+            if np.any(np.minimum(q - hand.lower, hand.upper - q)[_flexing(hand, group)] < joint_margin):
+                continue
+            if _least_lever(hand, group, points, q) < singularity_margin:
+                continue
+            if not all(probe.flat_around(p, n, edge_margin) for p, n in zip(points, outward)):
+                continue
+            if lift and not _lifts(hand, group, points, -outward, q, shapes, shape, pose, lift_offset, clearance,
+                                   joint_margin):  # fmt: skip
+                continue
+            candidates.append(_candidate(hand, item, group, points, -outward, q, height, mu, opening,
+                                         squeeze, gravity))  # fmt: skip
+    candidates.sort(key=lambda c: c.score, reverse=True)
+    return candidates
+
+
+def synthesize(hand: Hand, item: Any, mu: float = 0.6, **options: Any) -> GraspCandidate:
+    """The best candidate of :func:`grasp_candidates` (same arguments).
+
+    Raises:
+        UnreachableError: No candidate: no spread and height lets the fingers reach the object with their pads
+            alone; the message gives the object and what was searched.
+    """
+    candidates = grasp_candidates(hand, item, mu, **options)
+    if not candidates:
+        raise UnreachableError(
+            f"no grasp of {type(item).__name__} at {np.round(item.pose.translation, 4).tolist()} m: at no searched "
+            "spread and height do the fingers reach it with their pads alone (move the object toward the fingers, "
+            "or give other `spreads` / `heights`)"
+        )
+    return candidates[0]
+
+
+def _candidate(hand, item, group, points, normals, q, height, mu, opening, squeeze, gravity):
+    quality = grasp_quality(points, normals, item.pose.translation, mu)
+    weight = ContactForceQP(len(group), mu).solve(
+        grasp_map(points, normals, item.pose.translation),
+        np.concatenate((-item.mass * np.asarray(gravity, dtype=float), np.zeros(3))),
+        np.tile([0.0, 0.0, float(squeeze)], (len(group), 1)),
+    )
+    q_pregrasp = np.clip(q - opening * _proximal_mask(hand), hand.lower, hand.upper)
+    spreads = [q[i] for i, name in enumerate(hand.joint_names) if "spread" in name]
+    spread = float(np.mean(spreads)) if spreads else 0.0
+    return GraspCandidate(tuple(group), points, normals, q, q_pregrasp, spread, height, quality, bool(weight.feasible),
+                          float(-weight.cone_violation))  # fmt: skip
+
+
+def _least_lever(hand: Hand, fingers: Sequence[str], points: np.ndarray, q: np.ndarray) -> float:
+    """The smallest singular value [m/rad] over the fingers of their contact point's Jacobian on their own joints."""
+    levers = []
+    for finger, point in zip(fingers, points):
+        jacobian = hand.point_jacobian(q, hand.fingertip_frames[finger], point)[:3][:, hand.finger_indices(finger)]
+        levers.append(np.linalg.svd(jacobian, compute_uv=False).min())
+    return float(min(levers))
+
+
+def _lifts(hand, group, points, normals, q, shapes, shape, pose, offset, clearance, joint_margin) -> bool:
+    """Whether the pads alone move the object by ``offset`` (first order): no sliding, joints off their limits."""
+    space = manipulable_space(hand, q, points, normals, [hand.fingertip_frames[f] for f in group], pose.translation,
+                              group)  # fmt: skip
+    if np.max(space.sliding(offset)) > SLIDE_TOLERANCE:
+        return False
+    step, joints = space.joint_map @ offset, _flexing(hand, group)
+    for fraction in (0.5, 1.0):
+        q_moved = q + fraction * step
+        if np.any(np.minimum(q_moved - hand.lower, hand.upper - q_moved)[joints] < joint_margin):
+            return False
+        moved = pin.SE3(pose.rotation, pose.translation + fraction * offset[:3])
+        if shapes.nearest_other(q_moved, group, shape, moved) < clearance:
+            return False
+    return True
+
+
+def _proximal_mask(hand: Hand) -> np.ndarray:
+    """1.0 at each finger's first non-spread joint (the one a pre-grasp opens), 0.0 elsewhere."""
+    mask = np.zeros(hand.nq)
+    for finger in hand.fingers:
+        flexing = [joint for joint in hand.finger_joints(finger) if "spread" not in joint]
+        if flexing:
+            mask[hand.joint_index(flexing[0])] = 1.0
+    return mask
+
+
+def _flexing(hand: Hand, fingers: Sequence[str]) -> np.ndarray:
+    """Configuration indices of the fingers' flexing joints (a spread joint may rest on its stop, which holds it)."""
+    joints = _joints_of(hand, fingers)
+    return np.array([j for j in joints if "spread" not in hand.joint_names[j]], dtype=int)
+
+
+def _joints_of(hand: Hand, fingers: Sequence[str]) -> np.ndarray:
+    """Configuration indices of the fingers' joints."""
+    return np.concatenate([hand.finger_indices(f) for f in fingers])
+
+
+def _finger_sets(hand: Hand, fingers: Sequence[str] | None) -> list[tuple[str, ...]]:
+    if fingers is not None:
+        chosen = tuple(require_name(f, hand.fingers, "finger") for f in fingers)
+        if len(chosen) < 2:
+            raise InputError(f"`fingers` must name at least two fingers, got {list(fingers)}")
+        return [chosen]
+    return [group for size in range(len(hand.fingers), 1, -1) for group in itertools.combinations(hand.fingers, size)]
+
+
+def _default_spreads(hand: Hand, joints: list[int]) -> list[float]:
+    if not joints:
+        return [0.0]
+    low, high = max(hand.lower[j] for j in joints), min(hand.upper[j] for j in joints)
+    return [s for s in np.radians(np.arange(0.0, 91.0, 10.0)) if low <= s <= high] or [low]
+
+
+def _default_heights(shape: coal.ShapeBase, pose: pin.SE3) -> list[float]:
+    shape.computeLocalAABB()
+    corners = np.array(list(itertools.product(*zip(shape.aabb_local.min_, shape.aabb_local.max_))))
+    z = (corners @ pose.rotation.T)[:, 2]
+    return list(np.linspace(0.25 * z.min(), 0.25 * z.max(), 5))
+
+
+def _with_spread(hand: Hand, joints: list[int], spread: float) -> np.ndarray:
+    q = np.clip(np.full(hand.nq, np.mean(FLEXIONS)), hand.lower, hand.upper)
+    q[joints] = spread
+    return q
+
+
+def _approach_line(hand: Hand, q_spread: np.ndarray, finger: str) -> tuple[np.ndarray, np.ndarray]:
+    """A finger's line of approach: a point and a unit direction in the horizontal (world x-y) plane."""
+    flexing = np.array(["spread" not in name for name in hand.joint_names])
+    tips = []
+    for flexion in FLEXIONS:
+        q = np.where(flexing, flexion, q_spread)
+        tips.append(hand.fingertip_positions(np.clip(q, hand.lower, hand.upper))[hand.fingers.index(finger)])
+    start, end = tips[0].copy(), tips[1].copy()
+    direction = (end - start)[:2]
+    norm = float(np.linalg.norm(direction))
+    return start[:2], (direction / norm if norm > 1e-9 else np.zeros(2))
+
+
+__all__ = ["FLEXIONS", "GraspCandidate", "grasp_candidates", "synthesize"]
