@@ -160,7 +160,7 @@ def test_the_excitation_path_is_consistent_and_checked():
     path = PoseExcitation(start, (0.002, 0.001, 0.003, 0.1, 0.12, 0.05), (1.3, 1.1, 0.9, 2.0, 1.5, 1.7), delay=0.2)
     h = 1e-5
     for t in (0.1, 0.5, 0.75, 1.0, 2.7):
-        sample, velocity, acceleration = path(t)
+        _, velocity, acceleration = path(t)
         ahead, after, _ = path(t + h)
         behind, before, _ = path(t - h)
         np.testing.assert_allclose((ahead[:3] - behind[:3]) / (2 * h), velocity[:3], atol=1e-8)

@@ -78,7 +78,7 @@ def test_a_spread_on_its_stop_leaves_its_limit_on_a_turn_about_y() -> None:
     points, links = planned_contacts(setup)
     offset = (0, 0, 0.01, 0, 0.15, 0)
     path = path_contacts(setup.hand, setup.q_contact, points, links, setup.box.geometry(), setup.box.pose, offset)
-    with pytest.raises(bh.UnreachableError, match=r"joint F\d_spread leaves its limits at 5 % of the path") as caught:
+    with pytest.raises(bh.UnreachableError, match=r"joint F\d_spread leaves its limits at \d+ % of the path") as caught:
         path.check()
     assert caught.value.result is path
 

@@ -319,9 +319,15 @@ def _adaptation(scale: float = 1.0) -> Case:
     return adaptation_case(scale)
 
 
+def _synthesis(scale: float = 1.0) -> Case:
+    from bhgrasp.experiments.synthesis_case import synthesis_case
+
+    return synthesis_case(scale)
+
+
 CASES: dict[str, Callable[[float], Case]] = {
     "pregrasp": pregrasp, "laws": object_laws, "smc": smc_adaptive, "mass": mass_sweep, "motions": _motions,
-    "robustness": _robustness, "adaptation": _adaptation,
+    "robustness": _robustness, "adaptation": _adaptation, "synthesis": _synthesis,
 }  # fmt: skip
 
 

@@ -38,7 +38,8 @@ from bhgrasp.hand import Hand
 from bhgrasp.sim.state import State
 
 TOLERANCE = 0.0  # [m] signed distance below which another geometry touches the object (the contact law's onset)
-LIMIT_TOLERANCE = 1e-6  # [rad] joint motion past a limit that counts as leaving it
+LIMIT_TOLERANCE = 2e-3  # [rad] joint motion past a limit that counts as leaving it: 0.2 mm at a 0.1 m lever, the
+# first-order check's sliding tolerance (a joint held on its stop that far makes its contact slide no more than that)
 STEPS = 40  # path steps: 0.025 of the blend, 7.5 mrad of a 0.3 rad turn
 
 
@@ -152,7 +153,7 @@ def path_contacts(
 
     Args:
         hand: The hand (its ``collision_model()`` is checked).
-        q: Joint positions [rad] when the motion starts.
+        q: Joint positions [rad] when the motion starts (clipped to the limits: a sensed joint past its stop is on it).
         points: (n, 3) contact points [m], world (e.g. the sensed ones): each picks the geometry on its link's joint
             nearest to it (the pad) as a planned contact.
         links: The hand frame carrying each contact.
@@ -163,7 +164,7 @@ def path_contacts(
         tolerance: Signed distance [m] below which another geometry touches the object.
         labels: A name per contact (default: the links).
     """
-    q = as_vector(q, "q", hand.nq).copy()
+    q = np.clip(as_vector(q, "q", hand.nq), hand.lower, hand.upper)  # sensed joints past a stop are on it (noise)
     points = as_array(points, "points", (len(links), 3))
     offset = as_vector(offset, "offset", 6)
     if len(points) == 0 or int(steps) < 1:
