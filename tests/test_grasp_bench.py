@@ -6,22 +6,31 @@ from __future__ import annotations
 
 import json
 
+import coal
 import numpy as np
+import pinocchio as pin
 import pytest
 
+import bhgrasp as bh
 from bhgrasp.errors import InputError
 from bhgrasp.experiments import bench_report
 from bhgrasp.experiments.bench_metrics import evaluate
 from bhgrasp.experiments.bench_objects import OBJECT_SET, BenchObject
+from bhgrasp.experiments.bench_placement import STAND_HEIGHT, STAND_MARGIN, grasp_clearance, stand_clearance
 from bhgrasp.experiments.grasp_bench import (
+    APPROACH,
     CLOSE_AT,
     HELD_AT,
+    KNUCKLE_CLEARANCE,
     LIFT,
+    PRESHAPE,
     SHAKE_TIME,
     Trial,
+    setup,
     shake_force,
     simulate_trial,
 )
+from bhgrasp.grasp.probes import HandClearance
 
 G = 9.81
 
@@ -123,3 +132,31 @@ def test_the_report_compares_outcomes_and_metrics_and_renders_the_rates(tmp_path
     path = tmp_path / "bench.json"
     bench_report.write_json(trials, path)
     assert json.loads(path.read_text())["trials"] == trials
+
+
+def test_the_power_grasp_of_the_box_closes_on_the_box_and_keeps_its_fingers_off_the_stand() -> None:
+    """With the knuckles on its top the closing fingers pass beside the 5 cm box and meet its stand; the placement
+    raises the hand until, in the world frame of the trial's own setup, each finger closing from the pre-shape (distal
+    at a third of the proximal) touches the box while every hand shape keeps STAND_MARGIN from the stand."""
+    box = OBJECT_SET[0]
+    assert stand_clearance(box, 0.0, KNUCKLE_CLEARANCE["power"], PRESHAPE) < 0.0  # the old placement: on the stand
+    clearance = grasp_clearance(box, 0.0, KNUCKLE_CLEARANCE["power"], PRESHAPE)
+    assert 0.0 < clearance <= 0.06
+    _, _, mounted_hand, _ = setup(Trial(box, "power", "barrett"))
+    base = mounted_hand.base_placement
+    grasp_base = pin.SE3(base.rotation, base.translation - np.array([0.0, 0.0, APPROACH]))
+    assert grasp_base.translation[2] == pytest.approx(2 * box.half_extents[2] + clearance + 0.09105, abs=1e-6)
+    hand = bh.BarrettHand(base_placement=grasp_base)
+    probe = HandClearance(hand)
+    stand = (coal.Box(*(2 * box.half_extents[:2]), STAND_HEIGHT), pin.SE3(np.eye(3), np.array([0, 0, -0.1])))
+    shape, pose = box.body(0.8).geometry(), box.body(0.8).pose
+    for finger in hand.fingers:
+        others = {f"{f}_proximal": PRESHAPE for f in hand.fingers if f != finger}
+        touched = False
+        for angle in np.arange(PRESHAPE, 2.4, 0.005):
+            q = hand.configuration(**others, **{f"{finger}_proximal": angle, f"{finger}_distal": angle / 3})
+            assert probe.nearest_other(q, (), *stand) >= STAND_MARGIN - 1e-4, (finger, angle)
+            if probe.nearest_other(q, (), shape, pose) <= 0.0:
+                touched = True
+                break
+        assert touched, finger

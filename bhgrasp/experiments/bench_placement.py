@@ -7,6 +7,13 @@ finger closing at the same rate (the close command), the fingers arrive together
 :func:`grasp_offset` finds the object's offset along the F3 axis (hand y) where F3's touch angle equals F1's, by
 bisection, each touch angle itself a bisection on coal's distance between the finger's collision shapes and the
 object.
+
+The object stands on a stand of its own footprint (:func:`~bhgrasp.experiments.grasp_bench.setup`), whose sides
+continue the object's.  With the knuckles on the 5 cm box's top the closing fingers pass beside the box and meet the
+stand first (coal: 17-30 mm deep at the angle they would reach the box; simulated, the distal links press the stand
+with 122-227 N while the knuckles hold the box with 20 N, and the lifted box lies loose in the fingers).
+:func:`grasp_clearance` raises the hand from a grasp's nominal height until every finger, closing, touches the
+object before the stand, with :data:`STAND_MARGIN` to spare (:func:`stand_clearance`).
 """
 
 from __future__ import annotations
@@ -21,6 +28,10 @@ import bhgrasp as bh
 from bhgrasp.experiments.bench_objects import BenchObject
 
 _FLIP = pin.rpy.rpyToMatrix(np.pi, 0.0, 0.0)  # world <- palm-down hand: an upright object's axes in the hand frame
+STAND_HEIGHT = 0.2  # [m] the stand under the object (its top the table plane z = 0)
+STAND_MARGIN = 0.003  # [m] the fingers' least distance from the stand when they touch the object (~3x the contact's
+# 1 mm penetration under the power close)
+_SWEEP = 0.01  # [rad] the close's proximal steps in :func:`stand_clearance`
 
 
 class _Reach:
@@ -37,19 +48,23 @@ class _Reach:
                                 if g.name.startswith(finger) and "knuckle" not in g.name]
                        for finger in self.hand.fingers}  # fmt: skip
 
-    def distance(self, finger: str, angle: float, centre: np.ndarray) -> float:
-        """Distance [m] from the finger's links to the object at ``centre`` with every finger at ``angle``."""
+    def distance(self, finger: str, angle: float, centre: np.ndarray, shape: coal.ShapeBase | None = None) -> float:
+        """Distance [m] from the finger's links to the object at ``centre`` with every finger at ``angle``.
+
+        ``shape``: another shape placed at ``centre`` (axes as the object's) instead of the object.
+        """
         q = self.hand.configuration(F1_spread=self.spread, F2_spread=self.spread,
                                     **{f"{f}_proximal": angle for f in self.hand.fingers},
                                     **{f"{f}_distal": angle / 3 for f in self.hand.fingers})  # fmt: skip
         pin.updateGeometryPlacements(self.hand.model, self.model_data, self.geometry, self.data, q)
         placement = coal.Transform3s(_FLIP, centre)
+        shape = self.shape if shape is None else shape
         nearest = np.inf
         for i in self.shapes[finger]:
             frame = self.data.oMg[i]
             result = coal.DistanceResult()
             gap = coal.distance(self.geometry.geometryObjects[i].geometry, coal.Transform3s(frame.rotation,
-                                frame.translation), self.shape, placement, coal.DistanceRequest(), result)  # fmt: skip
+                                frame.translation), shape, placement, coal.DistanceRequest(), result)  # fmt: skip
             nearest = min(nearest, gap)
         return nearest
 
@@ -114,4 +129,47 @@ def grasp_offset(item: BenchObject, spread: float, clearance: float, opening: fl
     return 0.5 * (low + high)
 
 
-__all__ = ["grasp_offset", "hand_depth"]
+def stand_clearance(item: BenchObject, spread: float, clearance: float, opening: float) -> float:
+    """The fingers' least distance [m] from the stand up to where each first touches the object (negative: apart).
+
+    The hand as :func:`grasp_offset` places it for ``clearance`` [m] (knuckles to the object's top); each finger
+    closes from ``opening`` [rad] with the distal at a third of the proximal (before the TorqueSwitch breaks away),
+    in :data:`_SWEEP` steps, to its first touch of the object (bisected).  A finger that never touches the object
+    counts as ``-inf``: the hand does not grasp it from there.
+    """
+    reach = _Reach(item, spread, opening)
+    offset = grasp_offset(item, spread, clearance, opening)
+    centre = np.array([0.0, offset, hand_depth(spread, opening) + clearance + item.half_extents[2]])
+    stand = coal.Box(*(2 * item.half_extents[:2]), STAND_HEIGHT)
+    stand_centre = centre + np.array([0.0, 0.0, item.half_extents[2] + 0.5 * STAND_HEIGHT])  # below it: hand +z
+    nearest = np.inf
+    for finger in reach.hand.fingers:
+        angles = np.arange(opening, reach.closed + 1e-9, _SWEEP)
+        touching = [reach.distance(finger, float(a), centre) <= 0.0 for a in angles]
+        if not any(touching) or touching[0]:
+            return -np.inf
+        k = int(np.argmax(touching))
+        low, high = float(angles[k - 1]), float(angles[k])
+        for _ in range(20):
+            middle = 0.5 * (low + high)
+            low, high = (middle, high) if reach.distance(finger, middle, centre) > 0.0 else (low, middle)
+        swept = [*angles[:k], high]  # the stand is met on the way, or at the touch
+        nearest = min(nearest, *(reach.distance(finger, float(a), stand_centre, stand) for a in swept))
+    return nearest
+
+
+def grasp_clearance(item: BenchObject, spread: float, nominal: float, opening: float, highest: float = 0.06) -> float:
+    """The knuckles' height [m] above the object's top: ``nominal`` raised until the fingers keep off the stand.
+
+    The lowest height on a 2 mm grid from ``nominal`` to ``highest`` at which :func:`stand_clearance` is at least
+    :data:`STAND_MARGIN`; ``nominal`` if there is none (the fingers meet the stand at every height, or miss the
+    object: the 3 cm flat box at spread 0, whose side the closing fingertips cross below its bottom up to 44 mm and
+    not at all above).
+    """
+    for clearance in np.arange(nominal, highest + 1e-9, 0.002):
+        if stand_clearance(item, spread, float(clearance), opening) >= STAND_MARGIN:
+            return float(clearance)
+    return nominal
+
+
+__all__ = ["STAND_HEIGHT", "STAND_MARGIN", "grasp_clearance", "grasp_offset", "hand_depth", "stand_clearance"]
