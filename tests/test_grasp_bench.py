@@ -139,7 +139,7 @@ def test_the_power_grasp_of_the_box_closes_on_the_box_and_keeps_its_fingers_off_
     raises the hand until, in the world frame of the trial's own setup, each finger closing from the pre-shape (distal
     at a third of the proximal) touches the box while every hand shape keeps STAND_MARGIN from the stand."""
     box = OBJECT_SET[0]
-    assert stand_clearance(box, 0.0, KNUCKLE_CLEARANCE["power"], PRESHAPE) < 0.0  # the old placement: on the stand
+    assert stand_clearance(box, 0.0, KNUCKLE_CLEARANCE["power"], PRESHAPE) < 0.0  # nominal: on the stand
     clearance = grasp_clearance(box, 0.0, KNUCKLE_CLEARANCE["power"], PRESHAPE)
     assert 0.0 < clearance <= 0.06
     _, _, mounted_hand, _ = setup(Trial(box, "power", "barrett"))
@@ -160,3 +160,23 @@ def test_the_power_grasp_of_the_box_closes_on_the_box_and_keeps_its_fingers_off_
                 touched = True
                 break
         assert touched, finger
+
+
+def _grasp_base_height(trial: Trial) -> float:
+    """The hand base's height [m] at the end of the trial's approach (its setup's wrist path)."""
+    _, _, mounted_hand, _ = setup(trial)
+    return float(mounted_hand.base_placement.translation[2] - APPROACH)
+
+
+def test_the_placement_raises_only_a_power_grasp_whose_fingers_would_meet_the_stand_first() -> None:
+    """The can's power grasp keeps its knuckles on the can: its closing fingers touch the can before the stand,
+    though by less than STAND_MARGIN; the box's precision grasp keeps its 2 cm, though its fingers, closing, would
+    meet the stand first."""
+    can, box = OBJECT_SET[1], OBJECT_SET[0]
+    assert 0.0 <= stand_clearance(can, 0.0, KNUCKLE_CLEARANCE["power"], PRESHAPE) < STAND_MARGIN
+    assert grasp_clearance(can, 0.0, KNUCKLE_CLEARANCE["power"], PRESHAPE) == KNUCKLE_CLEARANCE["power"]
+    assert _grasp_base_height(Trial(can, "power", "full")) == pytest.approx(2 * can.half_extents[2] + 0.09105, abs=1e-6)
+    assert stand_clearance(box, 0.0, KNUCKLE_CLEARANCE["precision"], PRESHAPE) < 0.0
+    assert _grasp_base_height(Trial(box, "precision", "full")) == pytest.approx(
+        2 * box.half_extents[2] + KNUCKLE_CLEARANCE["precision"] + 0.09105, abs=1e-6
+    )

@@ -12,8 +12,9 @@ The object stands on a stand of its own footprint (:func:`~bhgrasp.experiments.g
 continue the object's.  With the knuckles on the 5 cm box's top the closing fingers pass beside the box and meet the
 stand first (coal: 17-30 mm deep at the angle they would reach the box; simulated, the distal links press the stand
 with 122-227 N while the knuckles hold the box with 20 N, and the lifted box lies loose in the fingers).
-:func:`grasp_clearance` raises the hand from a grasp's nominal height until every finger, closing, touches the
-object before the stand, with :data:`STAND_MARGIN` to spare (:func:`stand_clearance`).
+:func:`grasp_clearance` raises the hand from a grasp's nominal height only where a finger, closing, would meet the
+stand before the object (:func:`stand_clearance` below 0), and then until every finger touches the object before
+the stand with :data:`STAND_MARGIN` to spare; the benchmark applies it to power grasps only.
 """
 
 from __future__ import annotations
@@ -159,14 +160,17 @@ def stand_clearance(item: BenchObject, spread: float, clearance: float, opening:
 
 
 def grasp_clearance(item: BenchObject, spread: float, nominal: float, opening: float, highest: float = 0.06) -> float:
-    """The knuckles' height [m] above the object's top: ``nominal`` raised until the fingers keep off the stand.
+    """The knuckles' height [m] above the object's top: ``nominal``, raised only if the fingers would meet the stand.
 
-    The lowest height on a 2 mm grid from ``nominal`` to ``highest`` at which :func:`stand_clearance` is at least
-    :data:`STAND_MARGIN`; ``nominal`` if there is none (the fingers meet the stand at every height, or miss the
-    object: the 3 cm flat box at spread 0, whose side the closing fingertips cross below its bottom up to 44 mm and
-    not at all above).
+    ``nominal`` if there every finger, closing, touches the object before the stand (:func:`stand_clearance` at
+    least 0, however small the gap); otherwise the lowest height on a 2 mm grid above ``nominal`` up to ``highest``
+    at which :func:`stand_clearance` is at least :data:`STAND_MARGIN`, and ``nominal`` if there is none (the fingers
+    meet the stand at every height, or miss the object: the 3 cm flat box at spread 0, whose side the closing
+    fingertips cross below its bottom up to 44 mm and not at all above).
     """
-    for clearance in np.arange(nominal, highest + 1e-9, 0.002):
+    if stand_clearance(item, spread, nominal, opening) >= 0.0:
+        return nominal
+    for clearance in np.arange(nominal + 0.002, highest + 1e-9, 0.002):
         if stand_clearance(item, spread, float(clearance), opening) >= STAND_MARGIN:
             return float(clearance)
     return nominal

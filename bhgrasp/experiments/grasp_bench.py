@@ -10,8 +10,8 @@ shake protocol:
 2. **close** (from 1 s): ``power`` - the hand's own ``close()`` (libbarrett's CMD_CLOSE: each finger runs to a stall,
    then its puck idles and its worm holds it) at full puck torque, the knuckles touching the object's top;
    ``precision`` - the same close force-limited (puck MT lowered to :data:`PRECISION_MT`), the knuckles 2 cm
-   above it; either raised until the closing fingers touch the object before its stand
-   (:func:`~bhgrasp.experiments.bench_placement.grasp_clearance`); spheres take a 30 deg spread
+   above it; a power grasp whose closing fingers would meet the object's stand before the object is raised until
+   they keep clear of it (:func:`~bhgrasp.experiments.bench_placement.grasp_clearance`); spheres take a 30 deg spread
    (:data:`SPHERE_SPREAD`), boxes and cylinders 0 (F1, F2 facing F3);
 3. **lift** (3-4 s): 10 cm up, then 0.5 s at rest; the object's pose in the palm frame at 4.5 s is the held pose;
 4. **shake** (4.5-16.5 s): an external force of 10 m newtons on the object's centre of mass along +x, -x, +y, -y,
@@ -120,7 +120,9 @@ def setup(trial: Trial, dt: float = DT):
     """The simulator, its start state, the mounted hand and the wrist path of a trial."""
     item = trial.item
     top = 2 * item.half_extents[2]
-    clearance = grasp_clearance(item, spread_of(item), KNUCKLE_CLEARANCE[trial.grasp], PRESHAPE)  # off the stand
+    clearance = KNUCKLE_CLEARANCE[trial.grasp]
+    if trial.grasp == "power":  # the fingers off the stand (precision keeps 2 cm: at 46 mm the box slips, full)
+        clearance = grasp_clearance(item, spread_of(item), clearance, PRESHAPE)
     grasp_height = top + clearance + hand_depth(spread_of(item), PRESHAPE)  # the hand base
     rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
     offset = np.array([0.0, grasp_offset(item, spread_of(item), clearance, PRESHAPE), 0.0])
