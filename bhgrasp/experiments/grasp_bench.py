@@ -51,7 +51,7 @@ from bhgrasp.barrett.transmission import PROXIMAL_RATIO, WORM_EFFICIENCY, Barret
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.errors import InputError
 from bhgrasp.experiments.bench_objects import BenchObject
-from bhgrasp.experiments.bench_placement import grasp_clearance, grasp_offset, hand_depth
+from bhgrasp.experiments.bench_placement import STAND_HEIGHT, grasp_clearance, grasp_offset, hand_depth
 from bhgrasp.mount import MountReference, mounted
 from bhgrasp.objects import FixedBox
 from bhgrasp.sim import Simulator
@@ -129,7 +129,7 @@ def setup(trial: Trial, dt: float = DT):
     base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + APPROACH]) - rotation @ offset)  # fingers together
     hand = mounted(bh.BarrettHand(base_placement=base))
     width = 2 * item.half_extents[:2]  # the stand: the object's footprint
-    pedestal = FixedBox(size=(*width, 0.2), pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.1])),
+    pedestal = FixedBox(size=(*width, STAND_HEIGHT), pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.5 * STAND_HEIGHT])),
                         friction=FRICTION, name="pedestal")  # fmt: skip
     scene = Scene(hand, [item.body(FRICTION)], environment=[pedestal])
     if trial.actuation == "barrett":
