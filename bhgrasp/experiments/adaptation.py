@@ -10,7 +10,6 @@ and how the Lyapunov function V_o of (5.63) evolves (:mod:`bhgrasp.controllers.g
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 from functools import partial
 from typing import Any
@@ -48,8 +47,8 @@ RISE = 1e-6  # a step of V_o counts as a rise above this fraction of V_o(0)
 class IdentificationRun:
     """One identification run: the estimate over time and what it says.
 
-    Samples from the grasp's start: ``estimate`` sigma_hat (N, 7), ``truth`` sigma (7,), ``lyapunov`` V_o [J],
-    ``dissipation`` s_o^T k_o s_o [W].  Errors are in % of the true value.
+    Samples from the grasp's start: ``estimate`` sigma_hat (N, 7), ``truth`` sigma (7,), ``lyapunov`` V_o [J];
+    ``slip_events`` the sliding contact samples.  Errors are in % of the true value.
     """
 
     law: str
@@ -58,11 +57,7 @@ class IdentificationRun:
     estimate: np.ndarray
     truth: np.ndarray
     lyapunov: np.ndarray
-    dissipation: np.ndarray
     slip_events: int
-    rotation_rms: float
-    position_rms: float
-    wall_time: float
 
     def mass_error(self, index: int = -1) -> float:
         """|m_hat - m| / m [%] at sample ``index``."""
@@ -110,8 +105,8 @@ def identification_run(
         plant: Extra :func:`~bhgrasp.experiments.box_grasp.box_grasp` arguments (e.g. ``joint_friction``).
         controller: Extra :class:`~bhgrasp.controllers.adaptive_grasp.SMCAdaptiveGrasp` arguments.
     """
-    traj, setup, grasp, wall = _simulate(law, noisy, duration, seed, hand_scale, plant or {}, controller)
-    return summarise(traj, setup, grasp, law, noisy, wall)
+    traj, setup, grasp = _simulate(law, noisy, duration, seed, hand_scale, plant or {}, controller)
+    return summarise(traj, setup, grasp, law, noisy)
 
 
 def hand_model_error(duration: float, hand_scale: float, rate: float) -> dict[str, float]:
@@ -121,7 +116,7 @@ def hand_model_error(duration: float, hand_scale: float, rate: float) -> dict[st
     Y(q, v, a) sigma of the true hand along the run's motion (a by central differences) against those of the nominal
     and of the learnt model: rms [N m] of the true torques and of both errors.
     """
-    traj, setup, grasp, _ = _simulate("composite", False, duration, 0, hand_scale, {}, {"hand_adaptation": rate})
+    traj, setup, grasp = _simulate("composite", False, duration, 0, hand_scale, {}, {"hand_adaptation": rate})
     hand, dt = setup.hand, float(traj.t[1] - traj.t[0])
     true, nominal, learnt = hand.inertial_parameters(), grasp.nominal.inertial_parameters(), grasp.hand_estimate
     torques = []
@@ -148,12 +143,11 @@ def _simulate(law: str, noisy: bool, duration: float, seed: int, hand_scale: flo
         space.check(offset)
     supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, path=path)
     sensors = sensor_model(**NOISE) if noisy else None
-    start = time.perf_counter()
     traj = setup.simulator.run(supervisor, duration, state=setup.state, sensors=sensors, seed=seed)
-    return traj, setup, grasp, time.perf_counter() - start
+    return traj, setup, grasp
 
 
-def summarise(traj, setup, grasp: SMCAdaptiveGrasp, law: str, noisy: bool, wall: float) -> IdentificationRun:
+def summarise(traj, setup, grasp: SMCAdaptiveGrasp, law: str, noisy: bool) -> IdentificationRun:
     """The run's :class:`IdentificationRun` from the trajectory (true object state, the law's log)."""
     logged = [traj.log[key] for key in ("object_sliding", "parameter_information") if key in traj.log]
     finite = np.all([np.isfinite(value.reshape(len(value), -1)).all(axis=1) for value in logged], axis=0)
@@ -163,22 +157,15 @@ def summarise(traj, setup, grasp: SMCAdaptiveGrasp, law: str, noisy: bool, wall:
     fixed = grasp.parameter_information()
     information = log.get("parameter_information", np.broadcast_to(fixed, (len(t), 7, 7)))
     lyapunov = np.zeros(len(t))
-    sliding = log["object_sliding"]
-    dissipation = np.einsum("ij,j,ij->i", sliding, grasp.k_o, sliding)
     for i, k in enumerate(held):
         x, y, z, w = traj.object_quaternion[k, 0]
         rotation = pin.Quaternion(w, x, y, z).toRotationMatrix()
         kinetic, parameter = object_lyapunov(setup.box.mass, setup.box.inertia, rotation, log["object_sliding"][i],
                                              log["object_parameters"][i], information[i])  # fmt: skip
         lyapunov[i] = kinetic + parameter
-    moving = t >= grasp.reference.delay if grasp.reference is not None else np.zeros(len(t), bool)
-    error = log["object_error"][moving]
     return IdentificationRun(
         law=law, noisy=noisy, t=t, estimate=log["object_parameters"], truth=truth, lyapunov=lyapunov,
         slip_events=slip_events(setup.hand, traj, float(t[0])),
-        rotation_rms=float(np.sqrt(np.mean(np.sum(error[:, 3:] ** 2, axis=1)))),
-        position_rms=float(np.sqrt(np.mean(np.sum(error[:, :3] ** 2, axis=1)))), wall_time=wall,
-        dissipation=dissipation,
     )  # fmt: skip
 
 

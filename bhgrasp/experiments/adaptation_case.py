@@ -23,6 +23,7 @@ from bhgrasp.experiments.adaptation import (
     hand_model_error,
     identification_run,
 )
+from bhgrasp.experiments.box_grasp import BOX_SIZE
 from bhgrasp.experiments.object_loop import ObjectLoopRun, ideal_object_loop
 from bhgrasp.hand import BarrettHand
 from bhgrasp.objects import Box
@@ -36,8 +37,7 @@ BALANCE_FROM = 0.05  # [s] the composite law's first least-squares steps are lar
 
 def ideal_run(law: str, duration: float = IDEAL_DURATION, dt: float = IDEAL_DT) -> tuple[ObjectLoopRun, np.ndarray]:
     """The ideal loop with ``law`` on the 0.6 kg box told 0.3 kg, along :data:`EXCITATION`: the run and k_o."""
-    size = (0.06, 0.05, 0.05)
-    true, nominal = Box(size=size, mass=MASS), Box(size=size, mass=ESTIMATE)
+    true, nominal = Box(size=BOX_SIZE, mass=MASS), Box(size=BOX_SIZE, mass=ESTIMATE)
     identification = ObjectIdentification() if law == "composite" else None
     grasp = SMCAdaptiveGrasp(BarrettHand(), nominal, object_adaptation=RATES, identification=identification,
                              engine="python")  # fmt: skip
@@ -65,8 +65,7 @@ def adaptation_case(scale: float = 1.0):
         start = np.searchsorted(run.t, BALANCE_FROM)
         spent = _integral(run.t[start:], (run.dissipation(k_o) + run.prediction_power)[start:])
         balance = 100.0 * abs((lyapunov[start] - lyapunov[-1]) - spent) / (lyapunov[start] - lyapunov[-1])
-        summary = IdentificationRun(law, False, run.t, run.estimate, _truth(), lyapunov, run.dissipation(k_o), 0, 0.0,
-                                    0.0, 0.0)  # fmt: skip
+        summary = IdentificationRun(law, False, run.t, run.estimate, _truth(), lyapunov, 0)
         _row(case, f"ideal/{law}", "ideal loop", summary, "exact")
         case.values.update({f"ideal/{law}/largest_rise_rel": rise, f"ideal/{law}/balance_error_pct": balance})
     settings = [("thesis", False, {}), ("composite", False, {}), ("thesis", True, {}), ("thesis", False, FRICTION),
@@ -93,7 +92,7 @@ def adaptation_case(scale: float = 1.0):
 def _truth() -> np.ndarray:
     from bhgrasp.controllers.object_regressors import object_parameters
 
-    box = Box(size=(0.06, 0.05, 0.05), mass=MASS)
+    box = Box(size=BOX_SIZE, mass=MASS)
     return object_parameters(box.mass, box.inertia)
 
 
