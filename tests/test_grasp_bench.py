@@ -14,7 +14,7 @@ import pytest
 import bhgrasp as bh
 from bhgrasp.errors import InputError
 from bhgrasp.experiments import bench_report
-from bhgrasp.experiments.bench_metrics import evaluate
+from bhgrasp.experiments.bench_metrics import evaluate, failure_reason
 from bhgrasp.experiments.bench_objects import OBJECT_SET, BenchObject
 from bhgrasp.experiments.bench_placement import STAND_HEIGHT, STAND_MARGIN, grasp_clearance, stand_clearance
 from bhgrasp.experiments.grasp_bench import (
@@ -117,7 +117,7 @@ def test_the_report_compares_outcomes_and_metrics_and_renders_the_rates(tmp_path
     trial = {"object": "box", "spec": "box:0.06x0.05x0.05:0.3", "grasp": "power", "actuation": "barrett",
              "success": True, "strict_success": True, "placed": True, "failure": "", "lifted": 0.1,
              "max_displacement": 1e-4, "max_rotation": 1e-3, "slip_samples": 0, "peak_contact_force": 150.0,
-             "peak_motor_torque": 0.11}  # fmt: skip
+             "peak_motor_torque": 0.11, "peak_stand_force": 0.0}  # fmt: skip
     failed = {**trial, "grasp": "precision", "success": False, "strict_success": False, "placed": False,
               "failure": "moved 5 mm / 15 deg under the +x push"}  # fmt: skip
     trials = [trial, failed]
@@ -132,6 +132,18 @@ def test_the_report_compares_outcomes_and_metrics_and_renders_the_rates(tmp_path
     path = tmp_path / "bench.json"
     bench_report.write_json(trials, path)
     assert json.loads(path.read_text())["trials"] == trials
+
+
+def test_a_trial_not_lifted_names_the_fingers_force_on_the_stand_when_they_pressed_it() -> None:
+    record = {"lifted": 0.045, "success": False, "peak_stand_force": 322.6}
+    args = (np.zeros(1), np.zeros(1), np.zeros(1), 18.0)
+    assert failure_reason(record, *args) == (
+        "not lifted: the object rose 45 mm of the wrist's 100; the fingers pressed the stand with up to 323 N"
+    )
+    assert (
+        failure_reason({**record, "peak_stand_force": 0.0}, *args)
+        == "not lifted: the object rose 45 mm of the wrist's 100"
+    )
 
 
 def test_the_power_grasp_of_the_box_closes_on_the_box_and_keeps_its_fingers_off_the_stand() -> None:
@@ -180,3 +192,15 @@ def test_the_placement_raises_only_a_power_grasp_whose_fingers_would_meet_the_st
     assert _grasp_base_height(Trial(box, "precision", "full")) == pytest.approx(
         2 * box.half_extents[2] + KNUCKLE_CLEARANCE["precision"] + 0.09105, abs=1e-6
     )
+
+
+def test_the_readme_states_the_committed_benchmark_success_rates() -> None:
+    """The README's success table says what the committed report (regenerated and compared in CI) counts."""
+    from bhgrasp.experiments.results import REFERENCE
+
+    trials = json.loads((REFERENCE / "grasp_benchmark.json").read_text())["trials"]
+    readme = (REFERENCE.parents[1] / "README.md").read_text()
+    labels = {"barrett": "BH8-280 (pucks, TorqueSwitch, worms)", "full": "idealised (8 joint torques)"}
+    for actuation, (good, strict, total) in bench_report.success_rates(trials).items():
+        rates = f"{good} ({100 * good / total:.0f} %) | {strict} ({100 * strict / total:.0f} %)"
+        assert f"| {labels[actuation]} | {rates} | {total} |" in readme

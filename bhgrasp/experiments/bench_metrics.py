@@ -13,7 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 import bhgrasp as bh
-from bhgrasp.experiments.grasp_bench import DIRECTIONS, HELD_AT, LIFT, LOOSE, SHAKE_TIME, STRICT, Trial
+from bhgrasp.experiments.grasp_bench import DIRECTIONS, HELD_AT, LIFT, LOOSE, SHAKE_TIME, STAND, STRICT, Trial
 
 
 def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
@@ -59,18 +59,21 @@ def relative_poses(hand: bh.Hand, trajectory) -> tuple[np.ndarray, np.ndarray]:
 
 
 def contact_summary(trajectory, hand: bh.Hand, held: int, shaken: int) -> dict:
-    """The hand's peak contact force [N] on the object, and its sliding contact samples while held.
+    """The hand's peak force [N] on the object, its sliding contact samples while held, its peak force on the stand.
 
-    Contacts of a hand link (body a) on the object (body b) count, not the table's; "held" is the lift's end to the
+    Contacts of a hand link (body a) on the object (body b) count, not the stand's; "held" is the lift's end to the
     shake's end.
     """
     links = {frame.name for frame in hand.model.frames}
     bodies = trajectory.pair_bodies[trajectory.contact_pair]
     on_object = np.array([a in links and b == trajectory.object_names[0] for a, b in bodies], dtype=bool)
-    forces = np.linalg.norm(trajectory.contact_force, axis=1) * on_object
+    on_stand = np.array([STAND in (a, b) and (a in links or b in links) for a, b in bodies], dtype=bool)
+    magnitudes = np.linalg.norm(trajectory.contact_force, axis=1)
+    forces = magnitudes * on_object
     rows = slice(trajectory.contact_offsets[held], trajectory.contact_offsets[shaken + 1])
     loaded = (forces[rows] > 0.1) & ~trajectory.contact_sticking[rows]
-    return {"peak_contact_force": float(forces.max(initial=0.0)), "slip_samples": int(loaded.sum())}
+    return {"peak_contact_force": float(forces.max(initial=0.0)), "slip_samples": int(loaded.sum()),
+            "peak_stand_force": float((magnitudes * on_stand).max(initial=0.0))}  # fmt: skip
 
 
 def failure_reason(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.ndarray, end: float) -> str:
@@ -80,7 +83,10 @@ def failure_reason(record: dict, offsets: np.ndarray, turns: np.ndarray, times: 
     ``end`` [s] before the shake's).
     """
     if record["lifted"] <= 0.5 * LIFT:
-        return f"not lifted: the object rose {1e3 * record['lifted']:.0f} mm of the wrist's {1e3 * LIFT:.0f}"
+        reason = f"not lifted: the object rose {1e3 * record['lifted']:.0f} mm of the wrist's {1e3 * LIFT:.0f}"
+        if record["peak_stand_force"] > 0.0:
+            reason += f"; the fingers pressed the stand with up to {record['peak_stand_force']:.0f} N"
+        return reason
     if record["success"]:
         return ""
     moved = np.flatnonzero((offsets >= LOOSE[0]) | (turns >= LOOSE[1]))

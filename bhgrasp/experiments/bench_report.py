@@ -20,7 +20,15 @@ from typing import Any
 from bhgrasp.experiments.bench_objects import BenchObject
 from bhgrasp.experiments.grasp_bench import ACTUATIONS, DIRECTIONS, GRASPS, LOOSE, STRICT, Trial, run_trial
 
-METRICS = ("lifted", "max_displacement", "max_rotation", "slip_samples", "peak_contact_force", "peak_motor_torque")
+METRICS = (
+    "lifted",
+    "max_displacement",
+    "max_rotation",
+    "slip_samples",
+    "peak_contact_force",
+    "peak_motor_torque",
+    "peak_stand_force",
+)
 
 
 def bench_rollout(parameters: dict[str, Any], seed: int) -> dict[str, Any]:

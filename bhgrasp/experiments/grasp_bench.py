@@ -11,8 +11,9 @@ shake protocol:
    then its puck idles and its worm holds it) at full puck torque, the knuckles touching the object's top;
    ``precision`` - the same close force-limited (puck MT lowered to :data:`PRECISION_MT`), the knuckles 2 cm
    above it; a power grasp whose closing fingers would meet the object's stand before the object is raised until
-   they keep clear of it (:func:`~bhgrasp.experiments.bench_placement.grasp_clearance`); spheres take a 30 deg spread
-   (:data:`SPHERE_SPREAD`), boxes and cylinders 0 (F1, F2 facing F3);
+   they keep clear of it (:func:`~bhgrasp.experiments.bench_placement.grasp_clearance`); spheres, and cylinders in
+   the precision grasp, take a 0.45 rad spread (:data:`ROUND_SPREAD`), boxes and the cylinders' power grasp 0 (F1,
+   F2 facing F3);
 3. **lift** (3-4 s): 10 cm up, then 0.5 s at rest; the object's pose in the palm frame at 4.5 s is the held pose;
 4. **shake** (4.5-16.5 s): an external force of 10 m newtons on the object's centre of mass along +x, -x, +y, -y,
    +z, -z (world), 2 s each;
@@ -65,9 +66,13 @@ ACTUATIONS = ("barrett", "full")
 FRICTION = 0.8
 APPROACH, CLOSE_AT, LIFT_AT, HELD_AT, SHAKE_TIME = 0.05, 1.0, 3.0, 4.5, 2.0  # [m], [s], [s], [s], [s]
 PRESHAPE = 0.8  # [rad] proximal angle of the open hand (the distal follows at a third)
-# [rad] spread for spheres, measured on both balls and both grasps: 0 and 30 deg hold all four; at 60 deg (the
-# spherical grasp) the 35 mm ball slips out between F1 and F2 in the precision grasp, at 90 deg three of four fail
-SPHERE_SPREAD = math.pi / 6
+# [rad] the spread of round objects' fingertip grasps, measured under the real drive (barrett, precision): at spread 0
+# F1 and F2 pinch a cylinder 27 deg either side of its back, its wedge opens the back-drivable spread (0 -> 0.07 rad
+# on the can as the grip closes), and under a +-x push the can turns 17 deg about the pinch axis; the can and the
+# bottle hold at 0.3-0.6 rad, the 45 mm ball at 0.3-0.6, the 35 mm ball only at 0.4-0.5 (at 0.3 it is not lifted,
+# from 0.52 it turns out between F1 and F2 under the +x push).  Spheres take it in the power grasp too (both balls
+# hold there); the cylinders' power grasp keeps spread 0, the hand's cylindrical wrap
+ROUND_SPREAD = 0.45
 LIFT = 0.10  # [m]
 RELEASE = 0.5  # [s] of open() after the place
 DROP = 0.005  # [m] the place stops this far above the lift's start: a stiff wrist setting the held object onto the
@@ -82,6 +87,7 @@ DIRECTIONS = ("+x", "-x", "+y", "-y", "+z", "-z")
 PRECISION_MT = 600.0  # puck torque units (0.03 N m at the motor): the force-limited close
 LOOSE, STRICT = (0.05, math.radians(15.0)), (0.01, math.radians(5.0))  # [m], [rad]
 KNUCKLE_CLEARANCE = {"power": 0.0, "precision": 0.02}  # [m] the knuckles above the object's top
+STAND = "pedestal"  # the stand's body name
 
 
 @dataclass(frozen=True)
@@ -99,9 +105,13 @@ class Trial:
             raise InputError(f"`actuation` must be one of {ACTUATIONS}, got {self.actuation!r}")
 
 
-def spread_of(item: BenchObject) -> float:
-    """The pre-shape spread [rad]: :data:`SPHERE_SPREAD` for spheres, 0 (F1, F2 facing F3) otherwise."""
-    return SPHERE_SPREAD if item.kind == "sphere" else 0.0
+def spread_of(item: BenchObject, grasp: str) -> float:
+    """The pre-shape spread [rad]: :data:`ROUND_SPREAD` for spheres and for cylinders' ``precision`` grasp, else 0.
+
+    At 0, F1 and F2 face F3.
+    """
+    round_grasp = item.kind == "sphere" or (item.kind == "cylinder" and grasp == "precision")
+    return ROUND_SPREAD if round_grasp else 0.0
 
 
 def idealised_damping(hand: bh.Hand) -> np.ndarray:
@@ -120,17 +130,17 @@ def setup(trial: Trial, dt: float = DT):
     """The simulator, its start state, the mounted hand and the wrist path of a trial."""
     item = trial.item
     top = 2 * item.half_extents[2]
-    clearance = KNUCKLE_CLEARANCE[trial.grasp]
+    clearance, spread = KNUCKLE_CLEARANCE[trial.grasp], spread_of(item, trial.grasp)
     if trial.grasp == "power":  # the fingers off the stand (precision keeps 2 cm: at 46 mm the box slips, full)
-        clearance = grasp_clearance(item, spread_of(item), clearance, PRESHAPE)
-    grasp_height = top + clearance + hand_depth(spread_of(item), PRESHAPE)  # the hand base
+        clearance = grasp_clearance(item, spread, clearance, PRESHAPE)
+    grasp_height = top + clearance + hand_depth(spread, PRESHAPE)  # the hand base
     rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
-    offset = np.array([0.0, grasp_offset(item, spread_of(item), clearance, PRESHAPE), 0.0])
+    offset = np.array([0.0, grasp_offset(item, spread, clearance, PRESHAPE), 0.0])
     base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + APPROACH]) - rotation @ offset)  # fingers together
     hand = mounted(bh.BarrettHand(base_placement=base))
     width = 2 * item.half_extents[:2]  # the stand: the object's footprint
     pedestal = FixedBox(size=(*width, STAND_HEIGHT), pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.5 * STAND_HEIGHT])),
-                        friction=FRICTION, name="pedestal")  # fmt: skip
+                        friction=FRICTION, name=STAND)  # fmt: skip
     scene = Scene(hand, [item.body(FRICTION)], environment=[pedestal])
     if trial.actuation == "barrett":
         actuation = BarrettActuation(hand, saturate=True)
@@ -142,7 +152,6 @@ def setup(trial: Trial, dt: float = DT):
     )  # fmt: skip
     simulator = Simulator(scene, dt=dt, contact=law, actuation=actuation)
     q = hand.neutral()
-    spread = spread_of(item)
     for finger in hand.fingers:
         q[hand.joint_index(f"{finger}_proximal")], q[hand.joint_index(f"{finger}_distal")] = PRESHAPE, PRESHAPE / 3
     q[[hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]] = spread
@@ -237,6 +246,6 @@ def gone(state: bh.State) -> bool:
 
 
 __all__ = [
-    "ACTUATIONS", "DIRECTIONS", "GRASPS", "BenchController", "Trial", "gone", "run_trial", "setup", "shake_force",
-    "simulate_trial", "spread_of",
+    "ACTUATIONS", "DIRECTIONS", "GRASPS", "STAND", "BenchController", "Trial", "gone", "run_trial", "setup",
+    "shake_force", "simulate_trial", "spread_of",
 ]  # fmt: skip
