@@ -99,3 +99,38 @@ def test_finger_spacing_is_checked() -> None:
         box_grasp(finger_spacing=0.07)
     with pytest.raises(bh.InputError, match="apply to the Barrett scene"):
         run_grasp_demo(hand="allegro", finger_spacing=0.055)
+
+
+def _can_turn(plan_tolerance):
+    """The synthesised can grasp told to turn 0.1 rad about y after a lift (its sensed contacts make part of it)."""
+    from dataclasses import replace
+
+    from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
+    from bhgrasp.controllers.supervisor import GraspSupervisor
+    from bhgrasp.experiments.demo_result import evaluate_demo
+    from bhgrasp.experiments.object_grasp import object_grasp
+    from bhgrasp.experiments.synthesis_case import OBJECTS
+
+    setup = object_grasp(OBJECTS["can"][1])
+    grasp = SMCAdaptiveGrasp(setup.hand, replace(setup.item, density=None), mu=0.6, squeeze=5.0,
+                             object_adaptation=(0.0, 0.0))  # fmt: skip
+    offset = np.array([0.0, 0.0, 0.01, 0.0, 0.1, 0.0])
+    supervisor = GraspSupervisor(setup.hand, setup.candidate.q_contact, grasp, offset=offset,
+                                 fingers=setup.candidate.fingers, plan_tolerance=plan_tolerance)  # fmt: skip
+    traj = setup.simulator.run(supervisor, 3.0, state=setup.state, progress=False)
+    return offset, evaluate_demo(traj, setup.hand, "smc-adaptive", setup.item.mass, setup.item.mass, supervisor, 0.0,
+                                 setup.simulator.scene)  # fmt: skip
+
+
+def test_a_request_the_sensed_contacts_make_only_in_part_is_refused_and_run_anyway_misses_by_that_part() -> None:
+    with pytest.raises(bh.UnreachableError, match=r"only to within 0\.\d\d mm and \d\.\d\d mrad") as caught:
+        _can_turn((5e-4, 5e-3))  # the default, issue 17's final-pose tolerance
+    offset, planned = np.array([0.0, 0.0, 0.01, 0.0, 0.1, 0.0]), caught.value.result
+    shortfall = np.linalg.norm((offset - planned)[:3])
+    assert f"only to within {1e3 * shortfall:.2f} mm" in str(caught.value) and shortfall > 5e-4
+    assert short_reason(str(caught.value)).startswith("the sensed contacts make it only to 0.")
+    _, result = _can_turn((2e-3, 2e-2))  # looser: it runs, tracks the plan, and ends off the request by the part
+    np.testing.assert_allclose(result.planned_offset, planned, atol=1e-12)
+    assert result.true_position_error == pytest.approx(shortfall, rel=0.15)
+    with pytest.raises(bh.InputError, match="plan_tolerance"):
+        _can_turn((0.0, 5e-3))

@@ -103,7 +103,10 @@ def test_the_motion_table_flags_the_turns_whose_link_bodies_meet_the_box(started
             continue
         touch = path.touch
         assert (touch.geometry, touch.link, touch.face) == ("F3_distal_link_0", "F3_distal_link", "+y")
-        assert 0.75 <= touch.fraction <= 0.85 and touch.spacing > 5e-3  # beside the pad, not at it
+        assert 0.7 <= touch.fraction <= 0.8 and touch.spacing > 5e-3  # beside the pad, not at it
+        k, column = int(np.searchsorted(path.fractions, touch.fraction)), path.geometries.index(touch.geometry)
+        assert path.clearance[k, column] < path.tolerance <= path.clearance[k - 1, column]  # first within it
+        assert path.clearance[-1, column] < 0.0  # and into the face at the end
         with pytest.raises(bh.UnreachableError, match=r"F3_distal_link_0 \(F3_distal_link\) meets the object's \+y"):
             path.check()
     expected = {"on_stop": 5, "off_stop": 9}[grasp]  # the table's motions that run: 5 + 9 = 14

@@ -98,3 +98,16 @@ def test_the_demo_refuses_a_turn_that_brings_a_link_body_onto_the_box():
 
     with pytest.raises(bh.UnreachableError, match=r"F3_distal_link_0 \(F3_distal_link\) meets the object's \+y face"):
         run_grasp_demo(offset=(0.0, 0.0, 0.01, 0.3, 0.0, 0.0))
+
+
+def test_slip_is_counted_from_the_sample_after_the_grasp_controller_took_over():
+    """The can's F3 pad skids in the switching sample (the approach's contacts, 0.18 N); nothing slides after it."""
+    from bhgrasp.experiments.object_grasp import run_object_grasp
+    from bhgrasp.experiments.synthesis_case import OBJECTS
+
+    setup = object_grasp(OBJECTS["can"][1])
+    result = run_object_grasp(setup, offset=LIFT)
+    traj = result.trajectory
+    assert slip_events(setup.hand, traj, result.grasp_time) == 1 and result.slip_events == 0
+    k = int(np.searchsorted(traj.t, result.grasp_time))
+    assert traj.log["phase"][k] == 1.0 and traj.log["phase"][k - 1] == 0.0  # the switching sample

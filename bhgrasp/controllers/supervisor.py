@@ -32,7 +32,7 @@ from bhgrasp._validation import as_positive, as_real, as_vector, require_name
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.joint import ComputedTorque
-from bhgrasp.errors import InputError
+from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.grasp.manipulability import manipulable_space
 from bhgrasp.grasp.path_check import path_contacts
 from bhgrasp.grasp.sensing import ContactSensing
@@ -43,6 +43,8 @@ from bhgrasp.transmission import Transmission
 
 APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
 PLAN_LENGTH = 0.1  # [m] the plan's metric (dx, L dtheta): 5 mrad weighs as 0.5 mm, the motion targets' ratio
+PLAN_TOLERANCE = (5e-4, 5e-3)  # [m], [rad] the most the plan may differ from the request: issue 17's final-pose
+# tolerance (a request the sensed contacts make only worse than that is refused, not approximated)
 
 
 class GraspSupervisor(Controller):
@@ -72,6 +74,7 @@ class GraspSupervisor(Controller):
         path: Callable[..., Reference] | None = None,
         approach_damping: float = 0.0,
         object_shape: coal.CollisionGeometry | None = None,
+        plan_tolerance: tuple[float, float] = PLAN_TOLERANCE,
     ) -> None:
         """Set up the sequence.
 
@@ -106,6 +109,9 @@ class GraspSupervisor(Controller):
                 (:func:`~bhgrasp.grasp.path_check.path_contacts`), and refused with
                 :class:`~bhgrasp.errors.UnreachableError` (naming the link, the face and the angle) if another part
                 of a finger would meet the object or a joint leave its limits; ``None``: first order only.
+            plan_tolerance: The largest position [m] and rotation [rad] differences between the plan and ``offset``
+                (with ``plan``): a request the sensed contacts make only worse than that is refused with
+                :class:`~bhgrasp.errors.UnreachableError`, naming the part of it the fingers cannot make.
         """
         super().__init__()
         if not isinstance(grasp, ObjectGraspController):
@@ -134,6 +140,10 @@ class GraspSupervisor(Controller):
         if self.approach_damping < 0.0:
             raise InputError(f"`approach_damping` must be >= 0 [N m s/rad], got {approach_damping}")
         self.planned_offset: np.ndarray | None = None
+        tolerance = as_vector(plan_tolerance, "plan_tolerance", 2)
+        if not np.all(tolerance > 0.0):
+            raise InputError(f"`plan_tolerance` must be two positive numbers [m], [rad], got {tolerance.tolist()}")
+        self.plan_tolerance = tolerance
         self.kp, self.kv = as_positive(kp, "kp"), as_positive(kv, "kv")
         self.sensing = ContactSensing(nominal)
         if q_close is None:
@@ -196,8 +206,9 @@ class GraspSupervisor(Controller):
         the motion (``planned_offset``).  With ``object_shape`` the motion is then checked to its end (second order).
 
         Raises:
-            UnreachableError: With ``object_shape``: along the motion another part of a finger would meet the object
-                (e.g. a distal link's body beside its pad) or a joint would leave its limits.
+            UnreachableError: The plan differs from ``offset`` by more than ``plan_tolerance``; with
+                ``object_shape``: along the motion another part of a finger would meet the object (e.g. a distal
+                link's body beside its pad) or a joint would leave its limits.
         """
         touching = self.grasp.touching(state)
         reference = self.grasp.reference
@@ -209,6 +220,17 @@ class GraspSupervisor(Controller):
         space = manipulable_space(self.nominal, state.q, points, normals, links, com, list(touching))
         planned = space.nearest(self.offset, PLAN_LENGTH)
         unchanged = np.max(np.abs(planned - self.offset)) < 1e-12  # the fingers make it as asked: track it unchanged
+        missing = self.offset - planned
+        shortfall = np.array([np.linalg.norm(missing[:3]), np.linalg.norm(missing[3:])])
+        if np.any(shortfall > self.plan_tolerance):
+            raise UnreachableError(
+                f"at the contacts the fingers sense ({', '.join(touching)}) the grasp makes the motion "
+                f"{np.round(self.offset, 6).tolist()} (dx [m], dtheta [rad]) only to within "
+                f"{1e3 * shortfall[0]:.2f} mm and {1e3 * shortfall[1]:.2f} mrad (tolerance "
+                f"{1e3 * self.plan_tolerance[0]:g} mm, {1e3 * self.plan_tolerance[1]:g} mrad): it cannot make "
+                f"{np.round(missing, 6).tolist()}",
+                planned,
+            )
         self.planned_offset = self.offset.copy() if unchanged else planned
         if self.object_shape is not None:  # second order: the fingers followed to the end of the motion
             path_contacts(self.nominal, state.q, points, links, self.object_shape, state.object_poses[0],

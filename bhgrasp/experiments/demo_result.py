@@ -93,13 +93,17 @@ class GraspDemoResult:
 def evaluate_demo(traj, hand, controller, mass, estimate, supervisor, wall, scene) -> GraspDemoResult:
     """A supervised grasp run's figures of merit (the grasp closes when the supervisor's phase first leaves 0).
 
+    Slip samples are counted from the sample after that one: the contacts of the switching sample are the approach's
+    (a pad that has just touched may skid for that millisecond, as the can's F3 does at 0.18 N).
+
     Raises:
         InputError: The fingers never closed on the object (nothing to evaluate).
     """
     phase = traj.log["phase"]
     if not np.any(phase >= 1):
         raise InputError(f"the fingers did not close on the object within {traj.t[-1]:.2f} s (no grasp to evaluate)")
-    grasp_time = float(traj.t[np.argmax(phase >= 1)])
+    closed = int(np.argmax(phase >= 1))
+    grasp_time, after_switch = float(traj.t[closed]), float(traj.t[min(closed + 1, len(traj.t) - 1)])
     motion_start = grasp_time + supervisor.squeeze_time
     motion_end = motion_start + supervisor.move_time
     settle = motion_end + 0.5
@@ -125,7 +129,7 @@ def evaluate_demo(traj, hand, controller, mass, estimate, supervisor, wall, scen
         position_error=float(np.linalg.norm(error[:3])),
         rotation_error=float(np.linalg.norm(error[3:])),
         force_error=force_error,
-        slip_events=slip_events(hand, traj, grasp_time),
+        slip_events=slip_events(hand, traj, after_switch),
         cone_margin=float(np.nanmin(traj.log["cone_margin"][grasping])),
         infeasible_samples=int(np.sum(traj.log["feasible"][grasping] < 1.0)),
         wall_time=wall,

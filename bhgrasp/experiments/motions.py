@@ -87,6 +87,9 @@ def short_reason(message: str) -> str:
     if meets:
         face = f"the {meets.group(2)} face" if meets.group(2) else "the object"
         return f"{meets.group(1).replace('_', ' ')} link body meets {face} at {meets.group(3)} rad"
+    short = re.search(r"only to within ([\d.]+) mm and ([\d.]+) mrad", message)
+    if short:
+        return f"the sensed contacts make it only to {short.group(1)} mm / {short.group(2)} mrad"
     leaves = re.search(r"joint (\S+) leaves its limits at (\d+) % of the path", message)
     if leaves:
         return f"joint {leaves.group(1)} leaves its limits {leaves.group(2)} % along the path"
@@ -150,15 +153,17 @@ def _notes(allowed: int, succeeded: int, failed: list[str]) -> list[str]:
         "into its pedestal (a turn without a lift; the message gives the lift that clears it).",
         "Refused when the move starts (the supervisor's second-order check, `bhgrasp.grasp.path_check`: the planned "
         "motion followed to its end with the sensed contacts rolling without slip): one along which another part of "
-        "a finger meets the box.  The 0.3 rad turns about x end where F3's distal link body, beside its spherical "
-        "pad, meets the tilted face; run anyway, the finger then touches at several points, its normal force splits "
-        "among them and the pad's share no longer holds its tangential load, so it slides (before this check they "
-        "ran and slid; with the link bodies taken out of the collision model they succeed).  "
+        "a finger comes within 0.2 mm of the box.  The 0.3 rad turns about x end where F3's distal link body, beside "
+        "its spherical pad, meets the tilted face; run anyway, the finger then touches at several points, its "
+        "normal force splits among them and the pad's share no longer holds its tangential load, so it slides "
+        "(before this check they ran and slid; with the link bodies taken out of the collision model they succeed).  "
         "The check is conservative: a 0.25 rad turn grazes the face at its end and would be refused, though it "
         "still succeeds when run.",
         "(planned): the supervisor tracked the part of the request the fingers make at the contacts they sense when "
         "the move starts (`GraspSupervisor._plan`): the fingertips touch a little below the pads' centres, so a turn "
-        "about y through the box's centre would drag F3 along x; the error is still measured against the request.",
+        "about y through the box's centre would drag F3 along x; the error is still measured against the request.  "
+        "A plan more than 0.5 mm or 5 mrad from the request would be refused (here at most 0.32 mm and 0.78 mrad, "
+        "the 0.3 rad turn about y).",
         f"Scene and run: the chapter-5 box ({MASS} kg, the controller told {ESTIMATE} kg), SMC-adaptive law with QP "
         f"forces, {DURATION:g} s per run (move 1 s after a 0.3 s squeeze); module `bhgrasp.experiments.motions`.",
     ]

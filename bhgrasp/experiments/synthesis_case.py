@@ -106,12 +106,17 @@ def _notes(allowed: int, succeeded: int, failed: list[str]) -> list[str]:
         "by the Ferrari-Canny epsilon (mu 0.6), then by the force QP's margin holding the weight with 5 N per "
         "contact.  The pre-grasp opens the proximal joints by 0.3 rad; the approach cancels the drive's known "
         "joint damping.  Module `bhgrasp.experiments.synthesis_case`.",
-        "Refusals come from the grasp's manipulable space at the planned contacts (before simulating) and from the "
-        "supervisor's second-order check at the sensed ones when the move starts (`bhgrasp.grasp.path_check`).  "
-        "A single sliding sample counts as a failure: the can's pads skid for a millisecond as the grasp closes.",
+        "Refusals come from the grasp's manipulable space at the planned contacts (before simulating) and, when the "
+        "move starts, from the supervisor's checks at the contacts the fingers sense: a request they make only to "
+        "worse than 0.5 mm or 5 mrad (`GraspSupervisor(plan_tolerance=...)`; the can's turn of 0.1 rad about y, "
+        "0.81 mm short: run anyway, it ends 0.87 mm off) and the second-order path check (`bhgrasp.grasp.path_check`: "
+        "another hand shape within 0.2 mm of the object along the path; the ball's turn of 0.15 rad about y, run "
+        "anyway, brings F1's distal link body onto the ball, where it slides for 148 samples).",
+        "A single sliding sample counts as a failure, from the sample after the grasp controller took over (in the "
+        "switching sample the approach's contacts are recorded: the can's F3 pad, just touched, skids at 0.18 N).",
         "Errors are the true final pose against the requested motion; the supervisor tracks the part of it the "
         "grasp makes at the contacts it senses (the planned motion), so a request the sensed contacts cannot make "
-        "exactly ends off by the difference.",
+        "exactly ends off by the difference (at most the plan tolerance).",
     ]
 
 

@@ -16,7 +16,8 @@ longer hold its tangential load.  :func:`path_contacts` foresees that before the
    (5.19)), n_i the normal into the object and the last term holding each pad's signed gap g_i at its start value
    (the squeeze's penetration).  What the joints cannot make accumulates as a drift [m]: the sliding the path needs.
 3. At each step coal's signed distance between every other hand collision geometry and the object: one that comes
-   within ``tolerance`` is a new contact (:class:`PathTouch`); a joint outside its limits is reported too.
+   within ``tolerance`` (:data:`TOLERANCE`) is a new contact (:class:`PathTouch`); a joint outside its limits is
+   reported too.
 
 Cost: ``steps + 1`` kinematics passes and (number of hand geometries) distance queries per step, a few milliseconds.
 """
@@ -37,7 +38,10 @@ from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.hand import Hand
 from bhgrasp.sim.state import State
 
-TOLERANCE = 0.0  # [m] signed distance below which another geometry touches the object (the contact law's onset)
+TOLERANCE = 2e-4  # [m] signed distance below which another geometry counts as touching the object: the path holds
+# each pad's gap at its start, but the pads sink by their force change over the contact stiffness (0.2 mm for 2 N at
+# the chapter-5 scene's 10 kN/m); measured: a 0.15 rad turn of the synthesised ball grasp about y kept 0.036 mm here
+# and F1's distal link body touched the ball (0.27 N, sliding), the closest that ran clean kept 0.30 mm
 LIMIT_TOLERANCE = 2e-3  # [rad] joint motion past a limit that counts as leaving it: 0.2 mm at a 0.1 m lever, the
 # first-order check's sliding tolerance (a joint held on its stop that far makes its contact slide no more than that)
 STEPS = 40  # path steps: 0.025 of the blend, 7.5 mrad of a 0.3 rad turn
@@ -86,6 +90,7 @@ class PathContacts:
         touches: The first touch of each geometry that meets the object (:class:`PathTouch`), in path order.
         limit: (fraction, joint) where a joint first leaves its limits, ``None`` if none does.
         offset: The motion (dx [m], dtheta [rad]), world; contacts: a name per contact.
+        tolerance: The signed distance [m] below which a geometry counted as meeting the object.
     """
 
     fractions: np.ndarray
@@ -98,6 +103,7 @@ class PathContacts:
     limit: tuple[float, str] | None
     offset: np.ndarray
     contacts: tuple[str, ...]
+    tolerance: float = TOLERANCE
 
     @property
     def touch(self) -> PathTouch | None:
@@ -123,10 +129,12 @@ class PathContacts:
         motion = f"the motion {np.round(self.offset, 6).tolist()} (dx [m], dtheta [rad])"
         if self.touches:
             t, column = self.touches[0], self.geometries.index(self.touches[0].geometry)
+            end = self.clearance[-1, column]
+            ending = f"{1e3 * -end:.2f} mm into it" if end < 0.0 else f"{1e3 * end:.2f} mm from it"
             raise UnreachableError(
                 f"{motion}: {t.geometry} ({t.link}) meets the object's {t.face or ''} face {1e3 * t.spacing:.1f} mm "
-                f"from its pad at {100 * t.fraction:.0f} % of the path ({t.angle:.3f} rad) and ends "
-                f"{1e3 * -self.clearance[-1, column]:.2f} mm into it (second order, contacts rolling without slip)",
+                f"from its pad at {100 * t.fraction:.0f} % of the path ({t.angle:.3f} rad) and ends {ending} (second "
+                f"order, contacts rolling without slip; meeting: closer than {1e3 * self.tolerance:g} mm)",
                 self,
             )
         if self.limit is not None:
@@ -218,7 +226,7 @@ def path_contacts(
                                        witness, spacing)  # fmt: skip
     return PathContacts(fractions, path_q, gaps, drift, clearance, tuple(items[g].name for g in others),
                         tuple(touches.values()), limit, offset.copy(),
-                        tuple(labels) if labels is not None else tuple(links))  # fmt: skip
+                        tuple(labels) if labels is not None else tuple(links), float(tolerance))  # fmt: skip
 
 
 def sensed_path_contacts(
