@@ -86,14 +86,14 @@ def test_experiments_ch4_writes_the_report_and_figures(tmp_path: Path, capsys: p
 def test_experiments_ch5_writes_the_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     """A shortened run (1.2 s per run: grasp and the start of the move) of `bhgrasp experiments ch5`."""
     assert main(["experiments", "ch5", "--output", str(tmp_path), "--scale", "0.4"]) == 0
-    assert "ch5: 8 cases, 17 runs" in capsys.readouterr().out
+    assert "ch5: 9 cases, 17 runs" in capsys.readouterr().out
     report = (tmp_path / "chapter5.md").read_text()
     headings = ("Pre-grasp", "Object CTC, natural and stiffness", "SMC-adaptive", "Unknown object mass",
-                "Object motions", "Robustness", "Adaptation", "Grasp synthesis")  # fmt: skip
+                "Object motions", "Robustness", "Adaptation", "Grasp synthesis", "Continuous paths")  # fmt: skip
     for heading in headings:
         assert heading in report
     figures = sorted(tmp_path.glob("*.png"))
-    assert len(figures) == 3 and all(f"]({f.name})" in report for f in figures)
+    assert len(figures) == 4 and all(f"]({f.name})" in report for f in figures)
 
 
 def test_demo_reports_a_bad_mass_in_one_line(capsys: pytest.CaptureFixture) -> None:

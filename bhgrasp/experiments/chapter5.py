@@ -325,9 +325,15 @@ def _synthesis(scale: float = 1.0) -> Case:
     return synthesis_case(scale)
 
 
+def _paths(scale: float = 1.0) -> Case:
+    from bhgrasp.experiments.path_case import path_case
+
+    return path_case(scale)
+
+
 CASES: dict[str, Callable[[float], Case]] = {
     "pregrasp": pregrasp, "laws": object_laws, "smc": smc_adaptive, "mass": mass_sweep, "motions": _motions,
-    "robustness": _robustness, "adaptation": _adaptation, "synthesis": _synthesis,
+    "robustness": _robustness, "adaptation": _adaptation, "synthesis": _synthesis, "paths": _paths,
 }  # fmt: skip
 
 

@@ -362,6 +362,12 @@ README_ROWS: list[tuple[str, str, str, str]] = [
      "{5:synthesis/can/epsilon:.3f}; {5:synthesis/allowed_success_pct:.0f} % of the "
      "{5:synthesis/allowed_motions:.0f} motions not refused succeed",
      "-"),
+    ("5", "continuous paths: the thesis' pinch and the synthesised ball grasp lift their object, then carry it once "
+     "around a 4 mm circle in the vertical y-z plane in 2 s (told half the mass)",
+     "box: at most {5:paths/box/max_deviation_mm:.2f} mm from the path, ball {5:paths/ball/max_deviation_mm:.2f} mm; "
+     "slip samples {5:paths/box/slip_events:.0f} and {5:paths/ball/slip_events:.0f}; final errors "
+     "{5:paths/box/final_error_mm:.2f} and {5:paths/ball/final_error_mm:.2f} mm",
+     "-"),
 ]  # fmt: skip
 _FIELD = re.compile(r"\{(\d+):([^:{}]+):([^{}]*)\}")
 README_MARK = "<!-- generated from docs/results/chapterN.json by `bhgrasp experiments readme-table` -->"

@@ -1,0 +1,91 @@
+"""Continuous object paths (:mod:`bhgrasp.paths`) and the chapter-5 circle: closed forms against finite differences
+and plane geometry, and a grasped box carried around the circle without slip."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import bhgrasp as bh
+from bhgrasp.experiments.object_grasp import object_grasp
+from bhgrasp.experiments.path_case import PLANES, run_circle
+from bhgrasp.experiments.synthesis_case import OBJECTS
+from bhgrasp.paths import PoseCircle
+
+START = pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.2, 0.3), np.array([0.01, -0.02, 0.17]))
+TILTED = (np.array([0.0, 1.0, 1.0]) / np.sqrt(2.0), np.array([1.0, 0.0, 0.0]))
+
+
+@pytest.mark.parametrize("turns", [1.0, 2.5])
+def test_velocity_and_acceleration_are_the_derivatives_of_the_pose(turns) -> None:
+    circle = PoseCircle(START, 0.004, TILTED, duration=1.5, delay=0.2, turns=turns)
+    h = 1e-6
+    for t in np.linspace(0.0, circle.end_time + 0.1, 41):
+        x, v, a = circle(t)
+        x_minus, v_minus, _ = circle(t - h)
+        x_plus, v_plus, _ = circle(t + h)
+        np.testing.assert_allclose(v[:3], (x_plus[:3] - x_minus[:3]) / (2 * h), atol=2e-7)
+        np.testing.assert_allclose(a[:3], (v_plus[:3] - v_minus[:3]) / (2 * h), atol=5e-5)
+        np.testing.assert_allclose(x[3:], pin.log3(START.rotation), atol=1e-15)  # the orientation is held
+        assert not v[3:].any() and not a[3:].any()
+
+
+def test_the_path_lies_on_its_circle_and_closes_at_rest() -> None:
+    radius, lift = 0.004, np.array([0.0, 0.0, 0.01])
+    circle = PoseCircle(START, radius, TILTED, duration=2.0, delay=0.3, lift=lift, lift_time=0.5)
+    lifted = START.translation + lift
+    centre = lifted + radius * TILTED[0]
+    normal = np.cross(*TILTED)
+    for t in np.linspace(circle.delay + circle.lift_time, circle.end_time, 50):
+        x = circle(t)[0][:3]
+        assert np.linalg.norm(x - centre) == pytest.approx(radius, abs=1e-15)  # on the circle
+        assert abs((x - centre) @ normal) < 1e-16  # in its plane
+    end, velocity, acceleration = circle(circle.end_time + 1.0)
+    np.testing.assert_allclose(end[:3], lifted, atol=1e-15)  # once around: back at the lifted point
+    assert not velocity.any() and not acceleration.any()
+    np.testing.assert_allclose(circle(circle.delay + circle.lift_time + 1.0)[0][:3], lifted + 2 * radius * TILTED[0],
+                               atol=1e-15)  # halfway (the blend's midpoint): across the centre  # fmt: skip
+    assert circle(0.29)[0][:3] == pytest.approx(START.translation, abs=1e-15)  # before the delay: at the start
+
+
+def test_extremes_are_points_of_the_path() -> None:
+    circle = PoseCircle(pin.SE3.Identity(), 0.004, PLANES["y-z"])
+    extremes = circle.extremes()
+    assert extremes.shape == (8, 6) and not extremes[:, 3:].any()
+    np.testing.assert_allclose(extremes[0, :3], circle.lift)
+    for row in extremes[1:]:
+        assert np.linalg.norm(row[:3] - circle.lift - [0.0, 0.004, 0.0]) == pytest.approx(0.004)
+
+
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        ({"radius": 0.0}, "radius"),
+        ({"radius": 0.004, "plane": ((0, 1, 0), (0, 1, 0))}, "orthonormal"),
+        ({"radius": 0.004, "plane": ((0, 2, 0), (0, 0, 1))}, "orthonormal"),
+        ({"radius": 0.004, "turns": -1.0}, "turns"),
+        ({"radius": 0.004, "duration": np.nan}, "duration"),
+    ],
+)
+def test_bad_circles_are_refused_with_the_value(arguments, message) -> None:
+    with pytest.raises(bh.InputError, match=message):
+        PoseCircle(START, **arguments)
+
+
+@pytest.fixture(scope="module")
+def box_setup():
+    return object_grasp(OBJECTS["box"][1])
+
+
+def test_the_thesis_pinch_carries_the_box_around_a_vertical_circle_without_slip(box_setup) -> None:
+    run = run_circle(box_setup, "y-z")
+    assert run.slip_events == 0 and run.cone_margin > 0.0  # the commanded forces inside the assumed cones
+    assert run.success and run.max_deviation < 0.5e-3  # [m] from the path, all the way around
+    centre = run.reference[0] + [0.0, 0.004, 0.0]
+    assert np.abs(np.linalg.norm(run.position - centre, axis=1) - 0.004).max() < 0.5e-3  # the object's own circle
+
+
+def test_a_horizontal_circle_is_refused_before_simulating(box_setup) -> None:
+    with pytest.raises(bh.UnreachableError, match="missing: translation along x"):
+        run_circle(box_setup, "x-y")
