@@ -196,3 +196,21 @@ def test_the_demo_takes_the_composite_law_and_names_a_bad_choice():
         run_grasp_demo(adaptation="rls")
     with pytest.raises(bh.InputError, match="'smc-adaptive' controller, not 'pd'"):
         run_grasp_demo(controller="pd", adaptation="composite")
+
+
+def test_the_force_integrals_rebuilt_from_the_log_are_the_laws_own():
+    """eta of (5.57), rebuilt offline for V's finger part, equals the Python law's integrals at the end of a run."""
+    from bhgrasp.controllers.grasp_lyapunov import force_integrals
+    from bhgrasp.experiments.box_grasp import box_grasp
+
+    setup = box_grasp(mass=0.6)
+    grasp = SMCAdaptiveGrasp(setup.hand, Box(size=setup.box.size, mass=0.3), engine="python")
+    supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=(0.0, 0.0, 0.005, 0.0, 0.0, 0.0))
+    traj = setup.simulator.run(supervisor, 0.8, state=setup.state, progress=False)
+    held = np.flatnonzero(traj.log["phase"] >= 1)
+    steps = np.diff(traj.t, prepend=traj.t[0])[held]
+    steps[0] = steps[-1] = 0.0  # the law's clock starts with its first cycle; the last sample repeats the last log
+    eta = force_integrals(traj.log["desired_force"][held], traj.log["force_error"][held], steps)
+    own = np.array([grasp._integral[finger] for finger in setup.hand.fingers])
+    assert np.abs(own).max() > 1e-3  # the errors have integrated to something
+    np.testing.assert_allclose(eta[-1], own, rtol=1e-12, atol=1e-15)

@@ -11,8 +11,12 @@ V_o_dot = -s_o^T k_o s_o (- 1/2 |W Delta sigma|_Q^2 for the composite law).  In 
 wrench F_c, and V_o_dot gains s_o^T (F_c - F_do), the power of the wrench the fingers fail to deliver, which the
 thesis' proof drops (its (5.61) keeps it as Delta F_o).
 
-Only the object part is evaluated: the finger part of (5.63), 1/2 s_f^T M_f s_f + 1/2 eta^T h_o eta (+ the hand
-parameters' term), needs the force integrals eta, which the compiled law keeps to itself.
+Its finger part, 1/2 s_f^T M_f s_f + 1/2 h |eta|^2 (+ 1/2 Delta sigma_f^T Gamma_f^-1 Delta sigma_f, constant
+without hand adaptation), with the integrals eta of the contact force errors rebuilt from the law's log
+(:func:`force_integrals`).  With rigid rolling contacts (J_h q_dot = G^T X_dot), J_h J_h^+ e = e and an exact hand
+model, (5.62) (whose J^T G e_fc is J_h^T e_fc) gives V_f_dot = s_o^T G e_fc - c |e_fc|^2 - s_f^T k_f s_f: the
+first term cancels the object part's s_o^T (F_c - F_do) = -s_o^T G e_fc, and V_dot = -s_o^T k_o s_o - s_f^T k_f s_f
+- c |e_fc|^2 <= 0, the corrected (5.65).  A contact simulation has compliant contacts and unmodelled joint damping.
 """
 
 from __future__ import annotations
@@ -51,4 +55,36 @@ def object_lyapunov(
     return float(kinetic), float(0.5 * error @ np.asarray(information, dtype=float) @ error)
 
 
-__all__ = ["object_inertia_matrix", "object_lyapunov"]
+def force_integrals(desired_force: Any, force_error: Any, dt: Any) -> np.ndarray:
+    """The force integrals eta (N, F, 3) [N s] per sample and finger, integrated as the SMC-adaptive law does.
+
+    From its log (``desired_force`` and ``force_error``, (N, F, 3) per finger, zero rows for fingers not touching)
+    of a trajectory recorded every control cycle (``dt`` (N,) [s] the cycles' lengths, 0 for the first after the
+    law's reset): eta_k = eta_(k-1) + dt_k e_k for a finger touching (a nonzero desired force); a finger not
+    touching loses its integral.
+    """
+    desired, error = np.asarray(desired_force, dtype=float), np.asarray(force_error, dtype=float)
+    steps = np.broadcast_to(np.asarray(dt, dtype=float), desired.shape[:1])
+    integrals, current = np.zeros_like(error), np.zeros(error.shape[1:])
+    for k in range(len(error)):
+        touching = np.any(desired[k] != 0.0, axis=1)[:, None]
+        current = np.where(touching, current + steps[k] * error[k], 0.0)
+        integrals[k] = current
+    return integrals
+
+
+def finger_lyapunov(mass_matrix: Any, sliding: Any, integrals: Any, force_integral: float) -> tuple[float, float]:
+    """(1/2 s_f^T M_f s_f [J], 1/2 h |eta|^2 [J]): the finger part of V (5.63) at one instant.
+
+    Args:
+        mass_matrix: M_f (nv, nv) of the true hand at q [kg m^2].
+        sliding: s_f (nv,) [rad/s].
+        integrals: eta (F, 3) [N s] (:func:`force_integrals`).
+        force_integral: h [m/s / (N s)] of (5.57).
+    """
+    sliding = np.asarray(sliding, dtype=float)
+    kinetic = 0.5 * sliding @ np.asarray(mass_matrix, dtype=float) @ sliding
+    return float(kinetic), float(0.5 * force_integral * np.sum(np.square(integrals)))
+
+
+__all__ = ["finger_lyapunov", "force_integrals", "object_inertia_matrix", "object_lyapunov"]

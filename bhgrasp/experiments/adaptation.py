@@ -18,7 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
-from bhgrasp.controllers.grasp_lyapunov import object_lyapunov
+from bhgrasp.controllers.grasp_lyapunov import finger_lyapunov, force_integrals, object_lyapunov
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_regressors import object_parameters
 from bhgrasp.controllers.supervisor import GraspSupervisor
@@ -47,7 +47,8 @@ RISE = 1e-6  # a step of V_o counts as a rise above this fraction of V_o(0)
 class IdentificationRun:
     """One identification run: the estimate over time and what it says.
 
-    Samples from the grasp's start: ``estimate`` sigma_hat (N, 7), ``truth`` sigma (7,), ``lyapunov`` V_o [J];
+    Samples from the grasp's start: ``estimate`` sigma_hat (N, 7), ``truth`` sigma (7,), ``lyapunov`` V_o [J],
+    ``finger_lyapunov`` the finger part of V (5.63) [J] (without the hand parameters' constant term);
     ``slip_events`` the sliding contact samples.  Errors are in % of the true value.
     """
 
@@ -58,6 +59,7 @@ class IdentificationRun:
     truth: np.ndarray
     lyapunov: np.ndarray
     slip_events: int
+    finger_lyapunov: np.ndarray | None = None
 
     def mass_error(self, index: int = -1) -> float:
         """|m_hat - m| / m [%] at sample ``index``."""
@@ -77,6 +79,12 @@ class IdentificationRun:
     def rising(self) -> float:
         """Fraction of samples where V_o rises by more than :data:`RISE` V_o(0) (round-off aside)."""
         return float(np.mean(np.diff(self.lyapunov) > RISE * self.lyapunov[0]))
+
+    @property
+    def total_rising(self) -> float:
+        """Fraction of samples where V = V_o + V_f rises by more than :data:`RISE` V(0)."""
+        total = self.lyapunov + self.finger_lyapunov
+        return float(np.mean(np.diff(total) > RISE * total[0]))
 
 
 def _tensor(sigma: np.ndarray) -> np.ndarray:
@@ -163,9 +171,16 @@ def summarise(traj, setup, grasp: SMCAdaptiveGrasp, law: str, noisy: bool) -> Id
         kinetic, parameter = object_lyapunov(setup.box.mass, setup.box.inertia, rotation, log["object_sliding"][i],
                                              log["object_parameters"][i], information[i])  # fmt: skip
         lyapunov[i] = kinetic + parameter
+    steps = np.diff(traj.t, prepend=traj.t[0])[held]  # each grasp cycle's length; the first has none (its clock
+    steps[0] = 0.0  # starts there), nor the run's last sample (no control call: it repeats the last cycle's log)
+    if held[-1] == len(traj.t) - 1:
+        steps[-1] = 0.0
+    integrals = force_integrals(log["desired_force"], log["force_error"], steps)
+    fingers = np.array([sum(finger_lyapunov(setup.hand.mass_matrix(traj.q[k]), log["joint_sliding"][i], integrals[i],
+                                            grasp.force_integral)) for i, k in enumerate(held)])  # fmt: skip
     return IdentificationRun(
         law=law, noisy=noisy, t=t, estimate=log["object_parameters"], truth=truth, lyapunov=lyapunov,
-        slip_events=slip_events(setup.hand, traj, float(t[0])),
+        slip_events=slip_events(setup.hand, traj, float(t[0])), finger_lyapunov=fingers,
     )  # fmt: skip
 
 
