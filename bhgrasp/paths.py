@@ -8,6 +8,11 @@ held.  The arc angle follows a minimum-jerk blend, so the path starts and ends a
 
 b_l and b the minimum-jerk blends of the lift and of the circle (0 -> 1).  The centre is x_0 + l + r u; the path
 first heads along +v.  Velocity and acceleration are in closed form (world twist, omega = 0).
+
+:class:`PoseWaypoints` joins moves between waypoints with minimum-jerk blends: each move (a world offset, as
+:class:`~bhgrasp.trajectories.PoseMotion` makes it) starts ``overlap`` seconds before the previous one ends, and the
+moves add up (Flash & Hogan 1985's superposition of minimum-jerk strokes): the object passes by the inner waypoints
+without stopping and ends at rest at the last one.
 """
 
 from __future__ import annotations
@@ -110,4 +115,69 @@ class PoseCircle(Reference):
         return np.array(rows)
 
 
-__all__ = ["PoseCircle"]
+class PoseWaypoints(Reference):
+    """Moves by world offsets, each a minimum-jerk blend, overlapping by ``overlap``: a path through waypoints.
+
+    With move i's blend b_i(t) (0 -> 1 over its duration d_i from its start t_i = delay + sum_(j<i) (d_j -
+    overlap)): x(t) = x_0 + sum_i b_i dx_i and R(t) = E_n ... E_1 R_0, E_i = exp(b_i dtheta_i) (each a turn about
+    a fixed world axis).  The world twist is omega = sum_i P_i b_i' dtheta_i with P_i = E_n ... E_(i+1), and its
+    derivative sum_i (P_i b_i'' dtheta_i + omega_(>i) x P_i b_i' dtheta_i), omega_(>i) the part of omega from the
+    moves after i.  ``overlap`` 0 gives :class:`~bhgrasp.trajectories.PosePath` (waypoints joined at rest).
+    """
+
+    def __init__(self, start: pin.SE3, moves: Any, overlap: float = 0.0, delay: float = 0.0) -> None:
+        """Build the path.
+
+        Args:
+            start: Initial pose (world <- body).
+            moves: Sequence of (offset (6,): dx [m], dtheta [rad], world; duration [s] > ``overlap``).
+            overlap: How long [s] each move starts before the previous one ends (>= 0).
+            delay: Start time of the first move [s].
+        """
+        if not isinstance(start, pin.SE3):
+            raise InputError(f"`start` must be a pinocchio.SE3, got {type(start).__name__}")
+        moves = list(moves)
+        if not moves or any(len(move) != 2 for move in moves):
+            raise InputError(f"`moves` must be one or more (offset (6,), duration [s]) pairs, got {moves!r}")
+        self.start, self.overlap = pin.SE3(start), as_real(overlap, "overlap")
+        self.offsets = np.array([as_vector(move[0], f"moves[{i}] offset", 6) for i, move in enumerate(moves)])
+        self.durations = np.array([as_positive(move[1], f"moves[{i}] duration") for i, move in enumerate(moves)])
+        if self.overlap < 0.0 or np.any(self.durations <= self.overlap):
+            raise InputError(f"`overlap` must be >= 0 and shorter than every move, got {overlap} for durations "
+                             f"{self.durations.tolist()} [s]")  # fmt: skip
+        self.starts = as_real(delay, "delay") + np.concatenate(([0.0], np.cumsum(self.durations[:-1] - self.overlap)))
+
+    @property
+    def size(self) -> int:
+        """Six: position and rotation vector."""
+        return 6
+
+    @property
+    def end_time(self) -> float:
+        """When the last move ends [s] (at rest)."""
+        return float(self.starts[-1] + self.durations[-1])
+
+    def __call__(self, t: float) -> Sample:
+        """Pose (x, log R), world twist and its derivative at time ``t`` [s]."""
+        t = _time(t)
+        blends = [minimum_jerk(min(max((t - t0) / d, 0.0), 1.0)) for t0, d in zip(self.starts, self.durations)]
+        b = np.array([blend for blend, _, _ in blends])
+        rate = np.array([r / d for (_, r, _), d in zip(blends, self.durations)])
+        curvature = np.array([c / d**2 for (_, _, c), d in zip(blends, self.durations)])
+        dx, dtheta = self.offsets[:, :3], self.offsets[:, 3:]
+        rotation, omega, alpha = self.start.rotation, np.zeros(3), np.zeros(3)
+        for i in range(len(b)):  # R_i = E_i R_(i-1): the later turns carry the earlier ones' rates
+            turn = pin.exp3(b[i] * dtheta[i])
+            rotation = turn @ rotation
+            alpha = turn @ alpha + np.cross(rate[i] * dtheta[i], turn @ omega) + curvature[i] * dtheta[i]
+            omega = turn @ omega + rate[i] * dtheta[i]
+        position = self.start.translation + b @ dx
+        return (np.concatenate((position, pin.log3(rotation))), np.concatenate((rate @ dx, omega)),
+                np.concatenate((curvature @ dx, alpha)))  # fmt: skip
+
+    def extremes(self) -> np.ndarray:
+        """(n, 6) offsets from ``start`` at each waypoint (the moves' sums; rotation vectors added, first order)."""
+        return np.cumsum(self.offsets, axis=0)
+
+
+__all__ = ["PoseCircle", "PoseWaypoints"]

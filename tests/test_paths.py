@@ -9,9 +9,10 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.experiments.object_grasp import object_grasp
-from bhgrasp.experiments.path_case import PLANES, run_circle
+from bhgrasp.experiments.path_case import PLANES, WAYPOINTS, circle, run_path, waypoints
 from bhgrasp.experiments.synthesis_case import OBJECTS
-from bhgrasp.paths import PoseCircle
+from bhgrasp.paths import PoseCircle, PoseWaypoints
+from bhgrasp.trajectories import PosePath
 
 START = pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.2, 0.3), np.array([0.01, -0.02, 0.17]))
 TILTED = (np.array([0.0, 1.0, 1.0]) / np.sqrt(2.0), np.array([1.0, 0.0, 0.0]))
@@ -79,7 +80,7 @@ def box_setup():
 
 
 def test_the_thesis_pinch_carries_the_box_around_a_vertical_circle_without_slip(box_setup) -> None:
-    run = run_circle(box_setup, "y-z")
+    run = run_path(box_setup, circle())
     assert run.slip_events == 0 and run.cone_margin > 0.0  # the commanded forces inside the assumed cones
     assert run.success and run.max_deviation < 0.5e-3  # [m] from the path, all the way around
     centre = run.reference[0] + [0.0, 0.004, 0.0]
@@ -88,4 +89,47 @@ def test_the_thesis_pinch_carries_the_box_around_a_vertical_circle_without_slip(
 
 def test_a_horizontal_circle_is_refused_before_simulating(box_setup) -> None:
     with pytest.raises(bh.UnreachableError, match="missing: translation along x"):
-        run_circle(box_setup, "x-y")
+        run_path(box_setup, circle(plane="x-y"))
+
+
+MOVES = [((0.0, 0.0, 0.01, 0.0, 0.0, 0.0), 0.6), ((0.0, 0.003, 0.0, 0.15, 0.0, 0.0), 0.8),
+         ((0.0, -0.003, 0.0, 0.0, 0.15, 0.0), 0.8), ((0.0, 0.0, 0.0, -0.15, -0.15, 0.0), 1.0)]  # fmt: skip
+
+
+def _rotation(sample: np.ndarray) -> np.ndarray:
+    return pin.exp3(sample[3:])
+
+
+def test_blended_waypoints_have_the_derivatives_of_their_pose() -> None:
+    path = PoseWaypoints(START, MOVES, overlap=0.3, delay=0.1)
+    h = 1e-6
+    for t in np.linspace(0.0, path.end_time + 0.1, 61):
+        _, v, a = path(t)
+        (x_minus, v_minus, _), (x_plus, v_plus, _) = path(t - h), path(t + h)
+        np.testing.assert_allclose(v[:3], (x_plus[:3] - x_minus[:3]) / (2 * h), atol=2e-7)
+        omega = pin.log3(_rotation(x_plus) @ _rotation(x_minus).T) / (2 * h)  # world angular velocity
+        np.testing.assert_allclose(v[3:], omega, atol=2e-6)
+        np.testing.assert_allclose(a, (v_plus - v_minus) / (2 * h), atol=5e-4)
+
+
+def test_without_overlap_the_waypoints_are_the_pose_path_and_with_it_the_path_never_stops() -> None:
+    joined, rest = PoseWaypoints(START, MOVES), PosePath(START, MOVES)
+    for t in np.linspace(0.0, rest.end_time, 37):
+        for ours, theirs in zip(joined(t), rest(t)):
+            np.testing.assert_allclose(ours, theirs, atol=1e-12)
+    blended = PoseWaypoints(START, MOVES, overlap=0.3)
+    assert blended.end_time == pytest.approx(rest.end_time - 3 * 0.3)
+    end = blended(blended.end_time + 1.0)
+    np.testing.assert_allclose(end[0][:3], rest.end.translation, atol=1e-15)  # the same last waypoint
+    np.testing.assert_allclose(_rotation(end[0]), rest.end.rotation, atol=1e-12)
+    assert not end[1].any() and not end[2].any()  # at rest there
+    inner = np.linspace(0.05, blended.end_time - 0.05, 200)
+    assert min(np.linalg.norm(blended(t)[1]) for t in inner) > 1e-4  # never at rest on the way
+    with pytest.raises(bh.InputError, match="overlap"):
+        PoseWaypoints(START, MOVES, overlap=0.6)
+
+
+def test_the_thesis_pinch_follows_blended_waypoints_without_slipping(box_setup) -> None:
+    run = run_path(box_setup, waypoints(WAYPOINTS["box"]))
+    assert run.slip_events == 0 and run.cone_margin > 0.0 and run.success
+    assert run.max_deviation < 0.5e-3 and run.max_rotation < 10e-3  # [m], [rad] from the path all along

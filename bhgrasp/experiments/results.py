@@ -363,10 +363,13 @@ README_ROWS: list[tuple[str, str, str, str]] = [
      "{5:synthesis/allowed_motions:.0f} motions not refused succeed",
      "-"),
     ("5", "continuous paths: the thesis' pinch and the synthesised ball grasp lift their object, then carry it once "
-     "around a 4 mm circle in the vertical y-z plane in 2 s (told half the mass)",
-     "box: at most {5:paths/box/max_deviation_mm:.2f} mm from the path, ball {5:paths/ball/max_deviation_mm:.2f} mm; "
-     "slip samples {5:paths/box/slip_events:.0f} and {5:paths/ball/slip_events:.0f}; final errors "
-     "{5:paths/box/final_error_mm:.2f} and {5:paths/ball/final_error_mm:.2f} mm",
+     "around a 4 mm circle in the vertical y-z plane in 2 s, or through turns joined by overlapping minimum-jerk "
+     "blends (told half the mass)",
+     "circles: at most {5:paths/box/circle/max_deviation_mm:.2f} (box) and {5:paths/ball/circle/max_deviation_mm:.2f} "
+     "mm from the path; waypoints: {5:paths/box/waypoints/max_deviation_mm:.2f} and "
+     "{5:paths/ball/waypoints/max_deviation_mm:.2f} mm; slip samples {5:paths/box/circle/slip_events:.0f}, "
+     "{5:paths/ball/circle/slip_events:.0f}, {5:paths/box/waypoints/slip_events:.0f}, "
+     "{5:paths/ball/waypoints/slip_events:.0f}",
      "-"),
 ]  # fmt: skip
 _FIELD = re.compile(r"\{(\d+):([^:{}]+):([^{}]*)\}")
