@@ -70,7 +70,8 @@ PRESHAPE = 0.8  # [rad] proximal angle of the open hand (the distal follows at a
 # F1 and F2 pinch a cylinder 27 deg either side of its back, its wedge opens the back-drivable spread (0 -> 0.07 rad
 # on the can as the grip closes), and under a +-x push the can turns 17 deg about the pinch axis; the can and the
 # bottle hold at 0.3-0.6 rad, the 45 mm ball at 0.3-0.6, the 35 mm ball only at 0.4-0.5 (at 0.3 it is not lifted,
-# from 0.52 it turns out between F1 and F2 under the +x push).  Spheres take it in the power grasp too (both balls
+# from 0.52 it turns out between F1 and F2 under the +x push; at 60 deg, the spherical grasp, it slips out between
+# them, and at 90 deg three of the four sphere trials failed).  Spheres take it in the power grasp too (both balls
 # hold there); the cylinders' power grasp keeps spread 0, the hand's cylindrical wrap
 ROUND_SPREAD = 0.45
 LIFT = 0.10  # [m]
