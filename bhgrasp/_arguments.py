@@ -53,6 +53,14 @@ def nonnegative_float(text: str) -> float:
     return value
 
 
+def spread_angle(text: str) -> float:
+    """A BH8-280 spread angle [rad], 0 to pi."""
+    value = _number(text, "an angle in [0, pi] rad")
+    if not 0.0 <= value <= math.pi:
+        raise argparse.ArgumentTypeError(f"must be an angle in [0, pi] rad (the spread's range), got {text!r}")
+    return value
+
+
 def output_folder(text: str) -> Path:
     """A folder to write into: an existing writable folder, or a new one inside an existing writable folder."""
     path = Path(text)

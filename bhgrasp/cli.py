@@ -110,6 +110,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                              help="repeatable (default: both)")  # fmt: skip
     bench_grasp.add_argument("--actuation", dest="actuations", action="append", choices=("barrett", "full"),
                              default=None, help="repeatable (default: barrett, the real 4-motor hand)")  # fmt: skip
+    bench_grasp.add_argument("--spread", dest="spreads", action="append", type=checked.spread_angle, default=None,
+                             metavar="RAD", help="run every trial at this pre-shape spread [rad, 0 to pi] instead of "
+                             "its grasp's own (0 for boxes and the cylinders' power grasp, 0.45 for the rest); "
+                             "repeatable")  # fmt: skip
     bench_grasp.add_argument("--json", type=checked.output_file, default=None, help="write the trials here")
     bench_grasp.add_argument("--report", type=checked.output_file, default=None, help="write the markdown report")
     bench_grasp.add_argument("--compare", type=checked.existing_file, default=None,
@@ -285,20 +289,22 @@ def _grasp_bench(args: argparse.Namespace) -> int:
 
     objects = args.objects or list(OBJECT_SET)
     grasps, actuations = args.grasps or ["power", "precision"], args.actuations or ["barrett"]
-    count = len(objects) * len(grasps) * len(actuations)
-    print(f"grasp benchmark: {count} trials ({len(objects)} objects x {grasps} x {actuations}), 18 s each ...")
+    spreads = f" x spreads {args.spreads}" if args.spreads else ""
+    count = len(objects) * len(grasps) * len(actuations) * len(args.spreads or [None])
+    print(f"grasp benchmark: {count} trials ({len(objects)} objects x {grasps} x {actuations}{spreads}), 18 s each ...")
     trials, walls = bench_report.run_bench(objects, grasps, actuations, workers=args.workers,
-                                           progress=sys.stderr.isatty())  # fmt: skip
+                                           progress=sys.stderr.isatty(), spreads=args.spreads)  # fmt: skip
     for actuation, (ok, strict, total) in bench_report.success_rates(trials).items():
         print(f"{actuation}: {ok}/{total} succeed ({strict} strict)")
     for trial in trials:
         if not trial["success"]:
-            print(f"  {trial['object']} {trial['grasp']} {trial['actuation']}: {trial['failure']}")
+            at = f" at spread {trial['spread']:g} rad" if args.spreads else ""
+            print(f"  {trial['object']} {trial['grasp']} {trial['actuation']}{at}: {trial['failure']}")
     print(f"wall time per trial: {min(walls):.1f}-{max(walls):.1f} s")
     if args.json is not None:
         bench_report.write_json(trials, args.json)
     if args.report is not None:
-        args.report.write_text(bench_report.markdown(trials))
+        args.report.write_text(bench_report.markdown(trials, _bench_command(args)))
     if args.compare is not None:
         reference = json.loads(args.compare.read_text())["trials"]
         problems = bench_report.compare(trials, reference)
@@ -307,6 +313,16 @@ def _grasp_bench(args: argparse.Namespace) -> int:
         print(f"compared {len(trials)} trials with {args.compare}: {len(problems)} difference(s)")
         return 1 if problems else 0
     return 0
+
+
+def _bench_command(args: argparse.Namespace) -> str:
+    """The ``bhgrasp grasp-bench`` command line that makes this report (without ``--workers`` and ``--compare``)."""
+    parts = ["bhgrasp grasp-bench", *(f"--object {item.spec}" for item in args.objects or []),
+             *(f"--grasp {grasp}" for grasp in args.grasps or []),
+             *(f"--actuation {actuation}" for actuation in args.actuations or []),
+             *(f"--spread {spread:g}" for spread in args.spreads or [])]  # fmt: skip
+    parts += [f"--{name} {getattr(args, name)}" for name in ("json", "report") if getattr(args, name) is not None]
+    return " ".join(parts)
 
 
 def _grasp_demo(args: argparse.Namespace) -> int:

@@ -1,4 +1,4 @@
-"""Continuous object paths for the grasp supervisor (issue 17, item 3): a circle after a lift.
+"""Continuous object paths for the grasp supervisor (issue 17, item 3): a circle, and waypoints with blends.
 
 :class:`PoseCircle` lifts the object clear of its support, then carries its centre of mass ``turns`` times around a
 circle of radius ``radius`` in the plane of two world directions (u, v) through the lifted point, the orientation
@@ -58,13 +58,13 @@ class PoseCircle(Reference):
         """
         if not isinstance(start, pin.SE3):
             raise InputError(f"`start` must be a pinocchio.SE3, got {type(start).__name__}")
-        axes = np.asarray(plane, dtype=float)
-        if (
-            axes.shape != (2, 3)
-            or not np.all(np.isfinite(axes))
-            or not np.allclose(axes @ axes.T, np.eye(2), atol=1e-9)
-        ):
-            raise InputError(f"`plane` must be two orthonormal 3-vectors (u, v), got {np.asarray(plane).tolist()}")
+        try:
+            axes = np.asarray(plane, dtype=float)
+        except (TypeError, ValueError):
+            axes = np.empty(0)
+        orthonormal = axes.shape == (2, 3) and np.all(np.isfinite(axes))
+        if not (orthonormal and np.allclose(axes @ axes.T, np.eye(2), atol=1e-9)):
+            raise InputError(f"`plane` must be two orthonormal 3-vectors (u, v), got {plane!r}")
         self.start, self.u, self.v = pin.SE3(start), axes[0].copy(), axes[1].copy()
         self.radius, self.duration = as_positive(radius, "radius"), as_positive(duration, "duration")
         self.delay, self.turns = as_real(delay, "delay"), as_positive(turns, "turns")
@@ -136,8 +136,9 @@ class PoseWaypoints(Reference):
         """
         if not isinstance(start, pin.SE3):
             raise InputError(f"`start` must be a pinocchio.SE3, got {type(start).__name__}")
-        moves = list(moves)
-        if not moves or any(len(move) != 2 for move in moves):
+        pairs = isinstance(moves, (list, tuple)) and len(moves) > 0
+        pairs = pairs and all(isinstance(move, (list, tuple)) and len(move) == 2 for move in moves)
+        if not pairs:
             raise InputError(f"`moves` must be one or more (offset (6,), duration [s]) pairs, got {moves!r}")
         self.start, self.overlap = pin.SE3(start), as_real(overlap, "overlap")
         self.offsets = np.array([as_vector(move[0], f"moves[{i}] offset", 6) for i, move in enumerate(moves)])

@@ -214,3 +214,19 @@ def test_the_force_integrals_rebuilt_from_the_log_are_the_laws_own():
     own = np.array([grasp._integral[finger] for finger in setup.hand.fingers])
     assert np.abs(own).max() > 1e-3  # the errors have integrated to something
     np.testing.assert_allclose(eta[-1], own, rtol=1e-12, atol=1e-15)
+
+
+def test_the_force_integrals_integrate_while_touching_and_restart_after_a_release():
+    """Closed form: a constant error integrates linearly; a finger that lets go loses its integral, then restarts."""
+    from bhgrasp.controllers.grasp_lyapunov import force_integrals
+
+    steps, error = 10, np.array([0.0, 0.0, 2.0])  # [N]
+    desired = np.zeros((steps, 2, 3))
+    desired[:, :, 2] = 5.0
+    desired[4, 1] = 0.0  # finger 1 lets go at sample 4
+    errors = np.where(desired != 0.0, error, 0.0)
+    eta = force_integrals(desired, errors, 1e-3)
+    np.testing.assert_allclose(eta[:, 0, 2], 2e-3 * np.arange(1, steps + 1), rtol=1e-13)
+    np.testing.assert_allclose(eta[:, 1, 2], 2e-3 * np.array([1, 2, 3, 4, 0, 1, 2, 3, 4, 5]), rtol=1e-13)
+    with pytest.raises(bh.InputError, match=r"\(N, F, 3\)"):
+        force_integrals(desired[:, :, :2], errors[:, :, :2], 1e-3)

@@ -121,6 +121,7 @@ BAD_ARGUMENTS = {
     "got 'cube'",
     "grasp-bench --object box:0.3x0.05x0.05:0.3": "argument --object: object dimensions must be at most 0.15 m",
     "grasp-bench --grasp pinch": "argument --grasp: invalid choice: 'pinch'",
+    "grasp-bench --spread 4": "argument --spread: must be an angle in [0, pi] rad (the spread's range), got '4'",
     "grasp-bench --compare /nonexistent/bench.json": "argument --compare: no such file: '/nonexistent/bench.json'",
 }
 

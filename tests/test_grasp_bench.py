@@ -117,14 +117,15 @@ def test_the_report_compares_outcomes_and_metrics_and_renders_the_rates(tmp_path
     trial = {"object": "box", "spec": "box:0.06x0.05x0.05:0.3", "grasp": "power", "actuation": "barrett",
              "success": True, "strict_success": True, "placed": True, "failure": "", "lifted": 0.1,
              "max_displacement": 1e-4, "max_rotation": 1e-3, "slip_samples": 0, "peak_contact_force": 150.0,
-             "peak_motor_torque": 0.11, "peak_stand_force": 0.0}  # fmt: skip
+             "peak_motor_torque": 0.11, "peak_stand_force": 0.0, "spread": 0.0}  # fmt: skip
     failed = {**trial, "grasp": "precision", "success": False, "strict_success": False, "placed": False,
               "failure": "moved 5 mm / 15 deg under the +x push"}  # fmt: skip
     trials = [trial, failed]
     assert bench_report.compare(trials, trials) == []
     moved = [{**trial, "peak_contact_force": 150.001}, failed]
-    assert bench_report.compare(moved, trials) == [f"{('box:0.06x0.05x0.05:0.3', 'power', 'barrett')} "
+    assert bench_report.compare(moved, trials) == [f"{('box:0.06x0.05x0.05:0.3', 'power', 'barrett', 0.0)} "
                                                    "peak_contact_force: 150.001, reference 150.0"]  # fmt: skip
+    assert "not in the reference" in bench_report.compare([{**trial, "spread": 0.45}], trials)[0]
     assert len(bench_report.compare([{**trial, "success": False}], trials)) == 1
     assert "not in the reference" in bench_report.compare([{**trial, "actuation": "full"}], trials)[0]
     assert bench_report.success_rates(trials) == {"barrett": (1, 1, 2)}

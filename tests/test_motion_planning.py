@@ -128,7 +128,7 @@ def test_a_request_the_sensed_contacts_make_only_in_part_is_refused_and_run_anyw
     offset, planned = np.array([0.0, 0.0, 0.01, 0.0, 0.1, 0.0]), caught.value.result
     shortfall = np.linalg.norm((offset - planned)[:3])
     assert f"only to within {1e3 * shortfall:.2f} mm" in str(caught.value) and shortfall > 5e-4
-    assert short_reason(str(caught.value)).startswith("the sensed contacts make it only to 0.")
+    assert short_reason(str(caught.value)).startswith("the sensed contacts miss it by 0.")
     _, result = _can_turn((2e-3, 2e-2))  # looser: it runs, tracks the plan, and ends off the request by the part
     np.testing.assert_allclose(result.planned_offset, planned, atol=1e-12)
     assert result.true_position_error == pytest.approx(shortfall, rel=0.15)

@@ -93,10 +93,12 @@ def test_a_fingertip_over_its_spread_axis_is_refused_and_no_grasp_is_named():
 
 
 def test_the_demo_refuses_a_turn_that_brings_a_link_body_onto_the_box():
-    """The supervisor's second-order check, wired in: F3's distal link meets the +y face during a 0.3 rad turn."""
+    """The supervisor's second-order check, wired in: F3's distal link nears the +y face in a 0.3 rad turn."""
     from bhgrasp.experiments.grasp_demo import run_grasp_demo
 
-    with pytest.raises(bh.UnreachableError, match=r"F3_distal_link_0 \(F3_distal_link\) meets the object's \+y face"):
+    with pytest.raises(
+        bh.UnreachableError, match=r"F3_distal_link_0 \(F3_distal_link\) comes within 0\.2 mm of the object's \+y face"
+    ):
         run_grasp_demo(offset=(0.0, 0.0, 0.01, 0.3, 0.0, 0.0))
 
 

@@ -12,11 +12,14 @@ wrench F_c, and V_o_dot gains s_o^T (F_c - F_do), the power of the wrench the fi
 thesis' proof drops (its (5.61) keeps it as Delta F_o).
 
 Its finger part, 1/2 s_f^T M_f s_f + 1/2 h |eta|^2 (+ 1/2 Delta sigma_f^T Gamma_f^-1 Delta sigma_f, constant
-without hand adaptation), with the integrals eta of the contact force errors rebuilt from the law's log
-(:func:`force_integrals`).  With rigid rolling contacts (J_h q_dot = G^T X_dot), J_h J_h^+ e = e and an exact hand
-model, (5.62) (whose J^T G e_fc is J_h^T e_fc) gives V_f_dot = s_o^T G e_fc - c |e_fc|^2 - s_f^T k_f s_f: the
-first term cancels the object part's s_o^T (F_c - F_do) = -s_o^T G e_fc, and V_dot = -s_o^T k_o s_o - s_f^T k_f s_f
-- c |e_fc|^2 <= 0, the corrected (5.65).  A contact simulation has compliant contacts and unmodelled joint damping.
+without hand adaptation), with c and h the force gains of (5.57) and eta the integrals of the contact force errors
+e_fc, rebuilt from the law's log (:func:`force_integrals`).  Under the proof's premises: rigid rolling contacts
+(J_h q_dot = G^T X_dot), J_h J_h^+ the identity on e_fc, eta and G^T v_r, an exact hand model, a q_dd_r that also
+differentiates J_h^+ (c e_fc + h eta) (the law leaves it out), all three force components fed back
+(``force_error="full"``) and contact forces whose wrench G F_dc is F_do, (5.62) (whose J^T G e_fc is J_h^T e_fc)
+gives V_f_dot = s_o^T G e_fc - c |e_fc|^2 - s_f^T k_f s_f; its first term cancels the object part's s_o^T (F_c -
+F_do) = -s_o^T G e_fc, and V_dot = -s_o^T k_o s_o - s_f^T k_f s_f - c |e_fc|^2 <= 0, the corrected (5.65).  A
+contact simulation meets none of these exactly.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from bhgrasp.controllers.object_regressors import object_parameters
+from bhgrasp.errors import InputError
 
 
 def object_inertia_matrix(mass: float, inertia: Any, rotation: Any) -> np.ndarray:
@@ -60,10 +64,14 @@ def force_integrals(desired_force: Any, force_error: Any, dt: Any) -> np.ndarray
 
     From its log (``desired_force`` and ``force_error``, (N, F, 3) per finger, zero rows for fingers not touching)
     of a trajectory recorded every control cycle (``dt`` (N,) [s] the cycles' lengths, 0 for the first after the
-    law's reset): eta_k = eta_(k-1) + dt_k e_k for a finger touching (a nonzero desired force); a finger not
-    touching loses its integral.
+    law's reset): eta_k = eta_(k-1) + dt_k e_k for a finger touching (a nonzero desired force: the law asks a
+    touching finger for at least its ``min_normal_force``); a finger not touching loses its integral.
     """
     desired, error = np.asarray(desired_force, dtype=float), np.asarray(force_error, dtype=float)
+    if desired.ndim != 3 or desired.shape != error.shape or desired.shape[2] != 3:
+        raise InputError(
+            f"`desired_force` and `force_error` must both be (N, F, 3), got {desired.shape}, {error.shape}"
+        )
     steps = np.broadcast_to(np.asarray(dt, dtype=float), desired.shape[:1])
     integrals, current = np.zeros_like(error), np.zeros(error.shape[1:])
     for k in range(len(error)):

@@ -28,7 +28,7 @@ from bhgrasp.experiments.box_grasp import OFF_STOP_SPACING, box_grasp
 from bhgrasp.experiments.demo_result import MU_ASSUMED
 from bhgrasp.experiments.grasp_demo import SQUEEZE
 from bhgrasp.experiments.uncertainty import sensor_model
-from bhgrasp.grasp.metrics import slip_events
+from bhgrasp.grasp.metrics import slip_events_after
 from bhgrasp.objects import Box
 
 MASS, ESTIMATE = 0.6, 0.3  # [kg] true box, and the box the controller is told (its inertia too)
@@ -180,7 +180,7 @@ def summarise(traj, setup, grasp: SMCAdaptiveGrasp, law: str, noisy: bool) -> Id
                                             grasp.force_integral)) for i, k in enumerate(held)])  # fmt: skip
     return IdentificationRun(
         law=law, noisy=noisy, t=t, estimate=log["object_parameters"], truth=truth, lyapunov=lyapunov,
-        slip_events=slip_events(setup.hand, traj, float(t[0])), finger_lyapunov=fingers,
+        slip_events=slip_events_after(setup.hand, traj, int(held[0])), finger_lyapunov=fingers,
     )  # fmt: skip
 
 

@@ -32,6 +32,7 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
     held_through = lifted > 0.5 * LIFT and t[-1] >= HELD_AT + 6 * SHAKE_TIME - 1e-9  # not stopped: still in the scene
     record = {
         "object": trial.item.name, "spec": trial.item.spec, "grasp": trial.grasp, "actuation": trial.actuation,
+        "spread": trial.preshape_spread,
         "lifted": lifted, "max_displacement": float(offsets.max()), "max_rotation": float(turns.max()),
         "success": bool(held_through and offsets.max() < LOOSE[0] and turns.max() < LOOSE[1]),
         "strict_success": bool(held_through and offsets.max() < STRICT[0] and turns.max() < STRICT[1]),

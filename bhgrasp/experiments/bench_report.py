@@ -34,7 +34,7 @@ METRICS = (
 def bench_rollout(parameters: dict[str, Any], seed: int) -> dict[str, Any]:
     """One trial as a sweep rollout (deterministic: ``seed`` is unused)."""
     item = dataclasses.replace(BenchObject.parse(parameters["spec"]), name=parameters["name"])
-    record = run_trial(Trial(item, parameters["grasp"], parameters["actuation"]))
+    record = run_trial(Trial(item, parameters["grasp"], parameters["actuation"], parameters.get("spread")))
     return {key: value for key, value in record.items() if key not in parameters and key != "object"}
 
 
@@ -45,27 +45,33 @@ def run_bench(
     workers: int | None = None,
     progress: bool = False,
     executor: Any = None,
+    spreads: Sequence[float] | None = None,
 ) -> tuple[list[dict[str, Any]], list[float]]:
     """Every trial of ``objects`` x ``grasps`` x ``actuations`` (a process pool of ``workers``).
 
-    Returns the trial records and each trial's wall time [s] (kept apart: records repeat bit for bit, times not).
+    ``spreads`` [rad]: run every trial at each of these pre-shape spreads instead of its grasp's own
+    (:attr:`~bhgrasp.experiments.grasp_bench.Trial.spread`).  Returns the trial records and each trial's wall time
+    [s] (kept apart: records repeat bit for bit, times not).
     """
     from bhgrasp.sweep import run_sweep
 
     design = [{"name": o.name, "spec": o.spec, "grasp": g, "actuation": a}
               for a in actuations for o in objects for g in grasps]  # fmt: skip
-    for case in design:
-        Trial(BenchObject.parse(case["spec"]), case["grasp"], case["actuation"])  # refuse bad cases before running
+    if spreads:
+        design = [{**case, "spread": float(spread)} for case in design for spread in spreads]
+    for case in design:  # refuse bad cases before running
+        Trial(BenchObject.parse(case["spec"]), case["grasp"], case["actuation"], case.get("spread"))
     table = run_sweep(bench_rollout, design, executor=executor or ("serial" if workers == 1 else None),
                       workers=workers, progress=progress)  # fmt: skip
     trials, walls = [], []
     for row in table.to_dict("records"):
         trial = {"object": row["name"], "spec": row["spec"], "grasp": row["grasp"], "actuation": row["actuation"]}
         if row["status"] == "ok":
-            trial.update({key: row[key] for key in ("success", "strict_success", "placed", *METRICS, "failure")})
+            trial.update({key: row[key] for key in ("spread", "success", "strict_success", "placed", *METRICS,
+                                                     "failure")})  # fmt: skip
         else:
-            trial.update(success=False, strict_success=False, placed=False, failure=row["error"],
-                         **dict.fromkeys(METRICS))  # fmt: skip
+            trial.update(spread=row.get("spread"), success=False, strict_success=False, placed=False,
+                         failure=row["error"], **dict.fromkeys(METRICS))  # fmt: skip
         trials.append({key: _plain(value) for key, value in trial.items()})
         walls.append(row["wall_time"])
     return trials, walls
@@ -100,11 +106,16 @@ def success_rates(trials: list[dict[str, Any]]) -> dict[str, tuple[int, int, int
     return rates
 
 
-def markdown(trials: list[dict[str, Any]]) -> str:
-    """The report: success per actuation, then one table row per trial (mm, deg, N, N m)."""
+COMMAND = (
+    "bhgrasp grasp-bench --actuation barrett --actuation full --json docs/results/grasp_benchmark.json "
+    "--report docs/results/grasp_benchmark.md"
+)  # the committed report's
+
+
+def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
+    """The report: success per actuation, then one table row per trial (mm, deg, N, N m); ``command`` made it."""
     lines = ["# Grasp benchmark (issue 16)", "",
-             "Regenerate: `bhgrasp grasp-bench --actuation barrett --actuation full --json "
-             "docs/results/grasp_benchmark.json --report docs/results/grasp_benchmark.md`. Protocol: approach, close, "
+             f"Regenerate: `{command}`. Protocol: approach, close, "
              "lift 10 cm, push 10 m N on the object along +x, -x, +y, -y, +z, -z (2 s each), place "
              "(`bhgrasp/experiments/grasp_bench.py`). Success: within 5 cm and 15 deg of the held pose in the palm "
              "frame through the pushes; strict: 1 cm and 5 deg.", "",
@@ -112,13 +123,14 @@ def markdown(trials: list[dict[str, Any]]) -> str:
     for actuation, (ok, strict, total) in success_rates(trials).items():
         lines.append(f"| {actuation} | {ok} ({100 * ok / total:.0f} %) | {strict} ({100 * strict / total:.0f} %) "
                      f"| {total} |")  # fmt: skip
-    lines += ["", "| object | grasp | actuation | success | strict | placed | max disp. [mm] | max rot. [deg] | "
-              "slip samples | peak contact [N] | peak torque [N m] | failure |",
-              "|---|---|---|---|---|---|---:|---:|---:|---:|---:|---|"]  # fmt: skip
+    lines += ["", "| object | grasp | spread [deg] | actuation | success | strict | placed | max disp. [mm] | "
+              "max rot. [deg] | slip samples | peak contact [N] | peak torque [N m] | failure |",
+              "|---|---|---:|---|---|---|---|---:|---:|---:|---:|---:|---|"]  # fmt: skip
     for t in trials:
         number = functools.partial(_number, t)
         lines.append(
-            f"| {t['object']} (`{t['spec']}`) | {t['grasp']} | {t['actuation']} | {_mark(t['success'])} | "
+            f"| {t['object']} (`{t['spec']}`) | {t['grasp']} | {number('spread', 180 / math.pi, '.0f')} | "
+            f"{t['actuation']} | {_mark(t['success'])} | "
             f"{_mark(t['strict_success'])} | {_mark(t['placed'])} | {number('max_displacement', 1e3)} | "
             f"{number('max_rotation', 180 / math.pi)} | {number('slip_samples', fmt='.0f')} | "
             f"{number('peak_contact_force')} | {number('peak_motor_torque', fmt='.3f')} | {t['failure'] or ''} |"
@@ -132,10 +144,10 @@ def compare(trials: list[dict[str, Any]], reference: list[dict[str, Any]], rel: 
     A difference: a trial missing from the reference, another outcome or failure, or a metric off by more than
     ``rel`` (relative; 1e-9 absolute).
     """
-    index = {(t["spec"], t["grasp"], t["actuation"]): t for t in reference}
+    index = {(t["spec"], t["grasp"], t["actuation"], t.get("spread")): t for t in reference}
     problems = []
     for trial in trials:
-        key = (trial["spec"], trial["grasp"], trial["actuation"])
+        key = (trial["spec"], trial["grasp"], trial["actuation"], trial.get("spread"))
         known = index.get(key)
         if known is None:
             problems.append(f"{key}: not in the reference")

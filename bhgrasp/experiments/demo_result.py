@@ -8,7 +8,7 @@ import numpy as np
 
 from bhgrasp.errors import InputError
 from bhgrasp.experiments.uncertainty import final_pose_error
-from bhgrasp.grasp.metrics import finger_normal_forces, slip_events
+from bhgrasp.grasp.metrics import finger_normal_forces, slip_events_after
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.state import Trajectory
 
@@ -103,7 +103,7 @@ def evaluate_demo(traj, hand, controller, mass, estimate, supervisor, wall, scen
     if not np.any(phase >= 1):
         raise InputError(f"the fingers did not close on the object within {traj.t[-1]:.2f} s (no grasp to evaluate)")
     closed = int(np.argmax(phase >= 1))
-    grasp_time, after_switch = float(traj.t[closed]), float(traj.t[min(closed + 1, len(traj.t) - 1)])
+    grasp_time = float(traj.t[closed])
     motion_start = grasp_time + supervisor.squeeze_time
     motion_end = motion_start + supervisor.move_time
     settle = motion_end + 0.5
@@ -129,7 +129,7 @@ def evaluate_demo(traj, hand, controller, mass, estimate, supervisor, wall, scen
         position_error=float(np.linalg.norm(error[:3])),
         rotation_error=float(np.linalg.norm(error[3:])),
         force_error=force_error,
-        slip_events=slip_events(hand, traj, after_switch),
+        slip_events=slip_events_after(hand, traj, closed),
         cone_margin=float(np.nanmin(traj.log["cone_margin"][grasping])),
         infeasible_samples=int(np.sum(traj.log["feasible"][grasping] < 1.0)),
         wall_time=wall,

@@ -93,20 +93,31 @@ STAND = "pedestal"  # the stand's body name
 
 @dataclass(frozen=True)
 class Trial:
-    """One benchmark case: an object, a grasp ('power' or 'precision') and an actuation ('barrett' or 'full')."""
+    """One benchmark case: an object, a grasp ('power' or 'precision') and an actuation ('barrett' or 'full').
+
+    ``spread`` [rad] replaces the grasp's pre-shape spread (:func:`spread_of`), e.g. to measure how much it matters.
+    """
 
     item: BenchObject
     grasp: str
     actuation: str = "barrett"
+    spread: float | None = None
 
     def __post_init__(self) -> None:
         if self.grasp not in GRASPS:
             raise InputError(f"`grasp` must be one of {GRASPS}, got {self.grasp!r}")
         if self.actuation not in ACTUATIONS:
             raise InputError(f"`actuation` must be one of {ACTUATIONS}, got {self.actuation!r}")
+        if self.spread is not None and not (math.isfinite(self.spread) and 0.0 <= self.spread <= math.pi):
+            raise InputError(f"`spread` must be in [0, pi] rad (the BH8-280's spread range), got {self.spread!r}")
+
+    @property
+    def preshape_spread(self) -> float:
+        """The spread [rad] the hand takes before closing: ``spread``, or the grasp's own (:func:`spread_of`)."""
+        return spread_of(self.item, self.grasp) if self.spread is None else float(self.spread)
 
 
-def spread_of(item: BenchObject, grasp: str) -> float:
+def spread_of(item: BenchObject, grasp: str = "power") -> float:
     """The pre-shape spread [rad]: :data:`ROUND_SPREAD` for spheres and for cylinders' ``precision`` grasp, else 0.
 
     At 0, F1 and F2 face F3.
@@ -131,7 +142,7 @@ def setup(trial: Trial, dt: float = DT):
     """The simulator, its start state, the mounted hand and the wrist path of a trial."""
     item = trial.item
     top = 2 * item.half_extents[2]
-    clearance, spread = KNUCKLE_CLEARANCE[trial.grasp], spread_of(item, trial.grasp)
+    clearance, spread = KNUCKLE_CLEARANCE[trial.grasp], trial.preshape_spread
     if trial.grasp == "power":  # the fingers off the stand (precision keeps 2 cm: at 46 mm the box slips, full)
         clearance = grasp_clearance(item, spread, clearance, PRESHAPE)
     grasp_height = top + clearance + hand_depth(spread, PRESHAPE)  # the hand base

@@ -64,7 +64,10 @@ def run_motion(spacing: float, offset: Any, duration: float = DURATION) -> dict[
     moving = traj.t >= result.motion_start
     tracking = traj.log["object_error"][moving]
     position, rotation = result.true_position_error, result.true_rotation_error
+    missing = np.asarray(offset, dtype=float) - result.planned_offset  # what the plan leaves out of the request
     return {
+        "plan_shortfall_mm": 1e3 * float(np.linalg.norm(missing[:3])),
+        "plan_shortfall_mrad": 1e3 * float(np.linalg.norm(missing[3:])),
         "refused": False, "reason": "",
         "success": bool(result.slip_events == 0 and position < SUCCESS[0] and rotation < SUCCESS[1]),
         "final_error_mm": 1e3 * position, "final_rotation_mrad": 1e3 * rotation,
@@ -83,13 +86,16 @@ def short_reason(message: str) -> str:
     slide = re.search(r"contact (\S+) would slide or roll ([\d.]+) mm", message)
     if slide:
         return f"{slide.group(1)} would slide {slide.group(2)} mm"
-    meets = re.search(r"(\w+?)_link_\d+ \(\S+\) meets the object's (\S*) ?face .*? \(([\d.]+) rad\)", message)
+    meets = re.search(r"(\w+?)_link_\d+ \(\S+\) comes within ([\d.]+) mm of the object's (\S*) ?face .*? "
+                      r"\(([\d.]+) rad\)", message)  # fmt: skip
     if meets:
-        face = f"the {meets.group(2)} face" if meets.group(2) else "the object"
-        return f"{meets.group(1).replace('_', ' ')} link body meets {face} at {meets.group(3)} rad"
+        face = f"the {meets.group(3)} face" if meets.group(3) else "the object"
+        return (
+            f"{meets.group(1).replace('_', ' ')} link body within {meets.group(2)} mm of {face} at {meets.group(4)} rad"
+        )
     short = re.search(r"only to within ([\d.]+) mm and ([\d.]+) mrad", message)
     if short:
-        return f"the sensed contacts make it only to {short.group(1)} mm / {short.group(2)} mrad"
+        return f"the sensed contacts miss it by {short.group(1)} mm / {short.group(2)} mrad"
     leaves = re.search(r"joint (\S+) leaves its limits at (\d+) % of the path", message)
     if leaves:
         return f"joint {leaves.group(1)} leaves its limits {leaves.group(2)} % along the path"
@@ -128,16 +134,18 @@ def motions_case(scale: float = 1.0):
                 f"{row['force_error_pct']:.2f}",
             ])  # fmt: skip
             for name in ("final_error_mm", "final_rotation_mrad", "max_error_mm", "max_rotation_mrad", "slip_events",
-                         "force_error_pct"):  # fmt: skip
+                         "force_error_pct", "plan_shortfall_mm", "plan_shortfall_mrad"):  # fmt: skip
                 case.values[f"{key}/{name}"] = float(row[name])
             case.values[f"{key}/success"] = float(row["success"])
     case.values["allowed_motions"] = float(allowed)
     case.values["allowed_success_pct"] = 100.0 * succeeded / allowed if allowed else float("nan")
-    case.notes += _notes(allowed, succeeded, failed)
+    shortfall = tuple(max((v for k, v in case.values.items() if k.endswith(f"plan_shortfall_{unit}")), default=0.0)
+                      for unit in ("mm", "mrad"))  # fmt: skip
+    case.notes += _notes(allowed, succeeded, failed, shortfall)
     return case
 
 
-def _notes(allowed: int, succeeded: int, failed: list[str]) -> list[str]:
+def _notes(allowed: int, succeeded: int, failed: list[str], shortfall: tuple[float, ...]) -> list[str]:
     share = f"{100 * succeeded / allowed:.0f} %" if allowed else "-"
     failures = f"Failed: {'; '.join(failed)}." if failed else "No motion that ran failed."
     return [
@@ -162,8 +170,8 @@ def _notes(allowed: int, succeeded: int, failed: list[str]) -> list[str]:
         "(planned): the supervisor tracked the part of the request the fingers make at the contacts they sense when "
         "the move starts (`GraspSupervisor._plan`): the fingertips touch a little below the pads' centres, so a turn "
         "about y through the box's centre would drag F3 along x; the error is still measured against the request.  "
-        "A plan more than 0.5 mm or 5 mrad from the request would be refused (here at most 0.32 mm and 0.78 mrad, "
-        "the 0.3 rad turn about y).",
+        f"A plan more than 0.5 mm or 5 mrad from the request would be refused (here at most {shortfall[0]:.2f} mm "
+        f"and {shortfall[1]:.2f} mrad).",
         f"Scene and run: the chapter-5 box ({MASS} kg, the controller told {ESTIMATE} kg), SMC-adaptive law with QP "
         f"forces, {DURATION:g} s per run (move 1 s after a 0.3 s squeeze); module `bhgrasp.experiments.motions`.",
     ]

@@ -80,13 +80,15 @@ README_ROWS: list[tuple[str, str, str, str]] = [
      "turns about x, y and z)",
      "box: the thesis' pinch, epsilon {5:synthesis/box/epsilon:.3f}; ball epsilon {5:synthesis/ball/epsilon:.3f}, can "
      "{5:synthesis/can/epsilon:.3f}; {5:synthesis/allowed_success_pct:.0f} % of the "
-     "{5:synthesis/allowed_motions:.0f} motions not refused succeed",
+     "{5:synthesis/allowed_motions:.0f} motions not refused succeed ({5:synthesis/refused_motions:.0f} of the "
+     "{5:synthesis/requested_motions:.0f} requested for the three grasps found are refused)",
      "-"),
     ("5", "continuous paths: the thesis' pinch and the synthesised ball grasp lift their object, then carry it once "
      "around a 4 mm circle in the vertical y-z plane in 2 s, or through turns joined by overlapping minimum-jerk "
      "blends (told half the mass)",
-     "circles: at most {5:paths/box/circle/max_deviation_mm:.2f} (box) and {5:paths/ball/circle/max_deviation_mm:.2f} "
-     "mm from the path; waypoints: {5:paths/box/waypoints/max_deviation_mm:.2f} and "
+     "after the lift, circles: at most {5:paths/box/circle/max_deviation_mm:.2f} (box) and "
+     "{5:paths/ball/circle/max_deviation_mm:.2f} mm from the path; waypoints: "
+     "{5:paths/box/waypoints/max_deviation_mm:.2f} and "
      "{5:paths/ball/waypoints/max_deviation_mm:.2f} mm; slip samples {5:paths/box/circle/slip_events:.0f}, "
      "{5:paths/ball/circle/slip_events:.0f}, {5:paths/box/waypoints/slip_events:.0f}, "
      "{5:paths/ball/waypoints/slip_events:.0f}",

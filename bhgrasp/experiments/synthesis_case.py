@@ -47,7 +47,7 @@ def synthesis_case(scale: float = 1.0):
     header = ["object", "synthesised grasp", "motion", "outcome", "final error [mm] / [mrad]", "slip samples"]
     case = Case("synthesis", "Grasp synthesis (issue 17): the planner's grasps of boxes, cylinders and spheres, moved",
                 "-", header)  # fmt: skip
-    allowed = succeeded = 0
+    requested = allowed = succeeded = 0
     failed: list[str] = []
     for object_key, (label, item) in OBJECTS.items():
         start = time.perf_counter()
@@ -68,6 +68,7 @@ def synthesis_case(scale: float = 1.0):
         case.notes.append(f"{label}: synthesised in {planning:.1f} s (wall, this machine).")
         for motion_key, (motion, offset) in MOTIONS.items():
             key = f"{object_key}/{motion_key}"
+            requested += 1
             try:
                 result = run_object_grasp(setup, offset=offset, duration=DURATION * scale)
             except UnreachableError as error:
@@ -86,6 +87,8 @@ def synthesis_case(scale: float = 1.0):
             case.values.update({f"{key}/refused": 0.0, f"{key}/success": float(success),
                                 f"{key}/final_error_mm": 1e3 * position, f"{key}/final_rotation_mrad": 1e3 * rotation,
                                 f"{key}/slip_events": float(result.slip_events)})  # fmt: skip
+    case.values["requested_motions"] = float(requested)
+    case.values["refused_motions"] = float(requested - allowed)
     case.values["allowed_motions"] = float(allowed)
     case.values["allowed_success_pct"] = 100.0 * succeeded / allowed if allowed else float("nan")
     case.notes += _notes(allowed, succeeded, failed)
@@ -107,16 +110,19 @@ def _notes(allowed: int, succeeded: int, failed: list[str]) -> list[str]:
         "contact.  The pre-grasp opens the proximal joints by 0.3 rad; the approach cancels the drive's known "
         "joint damping.  Module `bhgrasp.experiments.synthesis_case`.",
         "Refusals come from the grasp's manipulable space at the planned contacts (before simulating) and, when the "
-        "move starts, from the supervisor's checks at the contacts the fingers sense: a request they make only to "
-        "worse than 0.5 mm or 5 mrad (`GraspSupervisor(plan_tolerance=...)`; the can's turn of 0.1 rad about y, "
-        "0.81 mm short: run anyway, it ends 0.87 mm off) and the second-order path check (`bhgrasp.grasp.path_check`: "
-        "another hand shape within 0.2 mm of the object along the path; the ball's turn of 0.15 rad about y, run "
-        "anyway, brings F1's distal link body onto the ball, where it slides for 148 samples).",
-        "A single sliding sample counts as a failure, from the sample after the grasp controller took over (in the "
-        "switching sample the approach's contacts are recorded: the can's F3 pad, just touched, skids at 0.18 N).",
+        "move starts, from the supervisor's checks at the contacts the fingers sense: a request they miss by more "
+        "than 0.5 mm or 5 mrad (`GraspSupervisor(plan_tolerance=...)`; the can's turn of 0.1 rad about y: run "
+        "anyway, it ends off the request by about what the plan misses, `tests/test_motion_planning.py`) and the "
+        "second-order path check (`bhgrasp.grasp.path_check`: another hand shape within 0.2 mm of the object along "
+        "the path; the ball's turn of 0.15 rad about y, run anyway, brings F1's distal link body "
+        "onto the ball, where it slides).  Both rules came with this table: before them, these two motions ran and "
+        "failed.",
+        "A single sliding sample counts as a failure, from the sample after the grasp controller took over (the "
+        "switching sample records the contacts of the approach's last step: there the can's F3 pad, just touched, "
+        "skids; counted from the switch, the can's lift and turn about x failed on that one sample).",
         "Errors are the true final pose against the requested motion; the supervisor tracks the part of it the "
         "grasp makes at the contacts it senses (the planned motion), so a request the sensed contacts cannot make "
-        "exactly ends off by the difference (at most the plan tolerance).",
+        "exactly ends off by what the plan misses (at most the plan tolerance) plus the tracking error.",
     ]
 
 

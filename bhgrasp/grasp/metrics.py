@@ -42,4 +42,13 @@ def slip_events(hand: Hand, traj: Trajectory, start_time: float = 0.0) -> int:
     return int(np.sum(on_object & ~traj.contact_sticking[rows]))
 
 
-__all__ = ["finger_normal_forces", "finger_of", "slip_events"]
+def slip_events_after(hand: Hand, traj: Trajectory, index: int) -> int:
+    """:func:`slip_events` from the sample after ``index``.
+
+    E.g. after the sample where a grasp controller took over: a sample's contacts come from the step the previous
+    input drove (the approach's), so a pad that has just touched may still skid there.
+    """
+    return slip_events(hand, traj, float(traj.t[min(int(index) + 1, len(traj.t) - 1)]))
+
+
+__all__ = ["finger_normal_forces", "finger_of", "slip_events", "slip_events_after"]

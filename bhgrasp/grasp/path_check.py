@@ -32,16 +32,18 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_array, as_vector
+from bhgrasp._validation import as_array, as_real, as_vector
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.hand import Hand
 from bhgrasp.sim.state import State
 
-TOLERANCE = 2e-4  # [m] signed distance below which another geometry counts as touching the object: the path holds
-# each pad's gap at its start, but the pads sink by their force change over the contact stiffness (0.2 mm for 2 N at
-# the chapter-5 scene's 10 kN/m); measured: a 0.15 rad turn of the synthesised ball grasp about y kept 0.036 mm here
-# and F1's distal link body touched the ball (0.27 N, sliding), the closest that ran clean kept 0.30 mm
+TOLERANCE = 2e-4  # [m] signed distance below which another geometry counts as meeting the object: a margin for
+# what the path model leaves out (it holds each pad's gap at its start, while the pads sink further as their forces
+# change: 0.1 mm per newton at the chapter-5 scene's 10 kN/m).  Chosen between two measurements in that scene: a
+# 0.15 rad turn of the synthesised ball grasp about y kept 0.036 mm here and F1's distal link body touched the ball
+# (0.27 N, sliding); the closest path that then ran clean kept 0.30 mm.  A stiffer scene may take less
+# (GraspSupervisor(path_tolerance=...))
 LIMIT_TOLERANCE = 2e-3  # [rad] joint motion past a limit that counts as leaving it: 0.2 mm at a 0.1 m lever, the
 # first-order check's sliding tolerance (a joint held on its stop that far makes its contact slide no more than that)
 STEPS = 40  # path steps: 0.025 of the blend, 7.5 mrad of a 0.3 rad turn
@@ -49,7 +51,7 @@ STEPS = 40  # path steps: 0.025 of the blend, 7.5 mrad of a 0.3 rad turn
 
 @dataclass(frozen=True)
 class PathTouch:
-    """Where a hand geometry other than a planned contact first meets the object along the path.
+    """Where a hand geometry other than a planned contact first comes within the tolerance of the object.
 
     Attributes:
         fraction: Path blend b in [0, 1] (the minimum-jerk blend, not time) of the first touching step.
@@ -87,7 +89,8 @@ class PathContacts:
         drift: (k, n) per contact, the accumulated |J dq - demand| [m]: the sliding the joints leave (second order).
         clearance: (k, m) signed distance [m] of each other hand geometry to the object.
         geometries: The m other geometries' names (every hand geometry but the planned contacts').
-        touches: The first touch of each geometry that meets the object (:class:`PathTouch`), in path order.
+        touches: Where each geometry first comes within ``tolerance`` of the object (:class:`PathTouch`), in path
+            order.
         limit: (fraction, joint) where a joint first leaves its limits, ``None`` if none does.
         offset: The motion (dx [m], dtheta [rad]), world; contacts: a name per contact.
         tolerance: The signed distance [m] below which a geometry counted as meeting the object.
@@ -120,7 +123,9 @@ class PathContacts:
         return f"PathContacts(ok={self.ok}, touch={self.touch!r}, limit={self.limit}, max drift {drift:.3f} mm)"
 
     def check(self) -> None:
-        """Refuse the motion if a link meets the object off its planned contacts or a joint leaves its limits.
+        """Refuse the motion if a link comes near the object off its planned contacts, or a joint leaves its limits.
+
+        Near: within ``tolerance``.
 
         Raises:
             UnreachableError: The message names the geometry, its link and the object's face (or the joint), where
@@ -132,9 +137,9 @@ class PathContacts:
             end = self.clearance[-1, column]
             ending = f"{1e3 * -end:.2f} mm into it" if end < 0.0 else f"{1e3 * end:.2f} mm from it"
             raise UnreachableError(
-                f"{motion}: {t.geometry} ({t.link}) meets the object's {t.face or ''} face {1e3 * t.spacing:.1f} mm "
-                f"from its pad at {100 * t.fraction:.0f} % of the path ({t.angle:.3f} rad) and ends {ending} (second "
-                f"order, contacts rolling without slip; meeting: closer than {1e3 * self.tolerance:g} mm)",
+                f"{motion}: {t.geometry} ({t.link}) comes within {1e3 * self.tolerance:g} mm of the object's "
+                f"{t.face or ''} face {1e3 * t.spacing:.1f} mm from its pad at {100 * t.fraction:.0f} % of the path "
+                f"({t.angle:.3f} rad) and ends {ending} (second order, contacts rolling without slip)",
                 self,
             )
         if self.limit is not None:
@@ -169,10 +174,11 @@ def path_contacts(
         pose: The object's pose when the motion starts (world <- object); its origin is the motion's centre.
         offset: (dx [m], dtheta [rad]), world: the motion the controller will track (e.g. the supervisor's plan).
         steps: Path steps (blends 0, 1/steps, ..., 1).
-        tolerance: Signed distance [m] below which another geometry touches the object.
+        tolerance: Signed distance [m] below which another geometry counts as meeting the object (:data:`TOLERANCE`).
         labels: A name per contact (default: the links).
     """
     q = np.clip(as_vector(q, "q", hand.nq), hand.lower, hand.upper)  # sensed joints past a stop are on it (noise)
+    tolerance = as_real(tolerance, "tolerance")
     points = as_array(points, "points", (len(links), 3))
     offset = as_vector(offset, "offset", 6)
     if len(points) == 0 or int(steps) < 1:
