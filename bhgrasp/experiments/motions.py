@@ -78,30 +78,30 @@ def run_motion(spacing: float, offset: Any, duration: float = DURATION) -> dict[
     }  # fmt: skip
 
 
+def _face(match: re.Match) -> str:
+    face = f"the {match.group(3)} face" if match.group(3) else "the object"
+    return f"{match.group(1).replace('_', ' ')} link body within {match.group(2)} mm of {face} at {match.group(4)} rad"
+
+
+_REASONS = (  # (pattern in a refusal's message, its few words), first match wins
+    (r"joint (\S+) reaches its limit", lambda m: f"joint {m.group(1)} at its limit"),
+    (r"contact (\S+) would slide or roll ([\d.]+) mm", lambda m: f"{m.group(1)} would slide {m.group(2)} mm"),
+    (r"(\w+?)_link_\d+ \(\S+\) comes within ([\d.]+) mm of the object's (\S*) ?face .*? \(([\d.]+) rad\)", _face),
+    (r"only to within ([\d.]+) mm and ([\d.]+) mrad",
+     lambda m: f"the sensed contacts miss it by {m.group(1)} mm / {m.group(2)} mrad"),
+    (r"joint (\S+) leaves its limits at (\d+) % of the path",
+     lambda m: f"joint {m.group(1)} leaves its limits {m.group(2)} % along the path"),
+    (r"([\d.]+) mm into (\S+) at .*?lift the object by ([\d.]+) mm",
+     lambda m: f"{m.group(1)} mm into {m.group(2)}: lift {m.group(3)} mm first"),
+)  # fmt: skip
+
+
 def short_reason(message: str) -> str:
     """A refusal in a few words: the joint at its limit, the contact that would slide, or the shape in the way."""
-    joint = re.search(r"joint (\S+) reaches its limit", message)
-    if joint:
-        return f"joint {joint.group(1)} at its limit"
-    slide = re.search(r"contact (\S+) would slide or roll ([\d.]+) mm", message)
-    if slide:
-        return f"{slide.group(1)} would slide {slide.group(2)} mm"
-    meets = re.search(r"(\w+?)_link_\d+ \(\S+\) comes within ([\d.]+) mm of the object's (\S*) ?face .*? "
-                      r"\(([\d.]+) rad\)", message)  # fmt: skip
-    if meets:
-        face = f"the {meets.group(3)} face" if meets.group(3) else "the object"
-        return (
-            f"{meets.group(1).replace('_', ' ')} link body within {meets.group(2)} mm of {face} at {meets.group(4)} rad"
-        )
-    short = re.search(r"only to within ([\d.]+) mm and ([\d.]+) mrad", message)
-    if short:
-        return f"the sensed contacts miss it by {short.group(1)} mm / {short.group(2)} mrad"
-    leaves = re.search(r"joint (\S+) leaves its limits at (\d+) % of the path", message)
-    if leaves:
-        return f"joint {leaves.group(1)} leaves its limits {leaves.group(2)} % along the path"
-    into = re.search(r"([\d.]+) mm into (\S+) at .*?lift the object by ([\d.]+) mm", message)
-    if into:
-        return f"{into.group(1)} mm into {into.group(2)}: lift {into.group(3)} mm first"
+    for pattern, words in _REASONS:
+        match = re.search(pattern, message)
+        if match:
+            return words(match)
     return message.split(";")[0][:80]
 
 
