@@ -33,7 +33,9 @@ import bhgrasp as bh
 from bhgrasp.errors import SimulationDiverged
 from bhgrasp.experiments.hold import JOINT_DAMPING, POSTURE_GAIN, SQUEEZE, reference_hold
 from bhgrasp.sim import Simulator
-from bhgrasp.sim.compiled import native_memory
+from bhgrasp.sim.compiled import core_module, engine_settings
+from bhgrasp.sim.engine import DriveTerms
+from bhgrasp.sim.simulator import MATCH_RADIUS
 from bhgrasp.sim.state import State
 
 
@@ -96,26 +98,30 @@ def fixed_input(simulator: Simulator, state: State, u: np.ndarray, steps: int) -
 def compiled_layers(simulator: Simulator, state: State, u: np.ndarray, steps: int) -> dict[str, float]:
     """Wall time [s] of ``steps`` fixed-input steps of the compiled engine, peeled layer by layer.
 
-    ``CompiledStep.step`` skips the Simulator's shell (input checks, actuation calls, ``_check``, the State);
-    ``_core Engine.step`` is the bare C++ call (no ContactMemory or ContactSet built in Python either).  These are
-    private layers: if they change, the breakdown is skipped with the reason.
+    ``CompiledEngine.step`` is the engine protocol's step (no Simulator shell: input and state checks, actuation
+    calls, the State); ``_core Engine.step`` is the bare C++ call (no StepResult built in Python either).
     """
-    compiled = simulator._compiled
+    engine = simulator.engine
     tau = simulator.actuation.joint_torques(u)
+    drive = engine.drive(DriveTerms.of(simulator.actuation))
     start = time.perf_counter()
     for chunk in chunks(steps):
-        q, v, memory = state.scene_q, state.scene_v, state.contact_memory
+        q, v, memory = state.scene_q, state.scene_v, engine.memory(state.contact_memory)
         for _ in range(chunk):
-            q, v, _, _, memory, _ = compiled.step(q, v, tau, memory)
+            q, v, _, _, memory, _ = engine.step(q, v, tau, drive, memory)
     wrapped = time.perf_counter() - start
-    drive, engine = compiled._drive(), compiled._engine
+    bare = core_module().Engine(
+        simulator.scene.model.saveToString(),
+        simulator.scene.geometry.saveToString(),
+        engine_settings(simulator.scene, simulator.layout, simulator.law, simulator.settings, MATCH_RADIUS),
+    )
     start = time.perf_counter()
     for chunk in chunks(steps):
-        q, v, memory = state.scene_q, state.scene_v, native_memory(state.contact_memory)
+        q, v, memory = state.scene_q, state.scene_v, engine.memory(state.contact_memory)
         for _ in range(chunk):
-            result = engine.step(q, v, tau, drive, memory, simulator.max_speed, simulator.max_penetration)
+            result = bare.step(q, v, tau, drive, memory, simulator.max_speed, simulator.max_penetration)
             q, v, memory = result.q, result.v, result.memory
-    return {"CompiledStep.step": wrapped, "_core Engine.step": time.perf_counter() - start}
+    return {"CompiledEngine.step": wrapped, "_core Engine.step": time.perf_counter() - start}
 
 
 def mujoco_hold(dt: float):
@@ -232,7 +238,7 @@ def head_to_head(duration: float, rounds: int, with_mujoco: bool) -> None:
             best[key] = min(best.get(key, np.inf), wall / steps * 1e6)
     labels = {
         "step compiled": "step only: bhgrasp compiled, Simulator.step",
-        "step compiled CompiledStep.step": "  of which CompiledStep.step (no State)",
+        "step compiled CompiledEngine.step": "  of which CompiledEngine.step (no State)",
         "step compiled _core Engine.step": "  of which _core Engine.step (bare C++)",
         "step python": "step only: bhgrasp python, Simulator.step",
         "step mujoco": "step only: mujoco mj_step",
@@ -256,7 +262,7 @@ def head_to_head(duration: float, rounds: int, with_mujoco: bool) -> None:
             drop = f"{drops[key] * 1e3:15.3f}" if key in drops else ""
             print(f"{label:<48}{best[key]:10.1f}{drop}")
     if "step compiled _core Engine.step" in best:
-        bare, wrapped, full = (best[f"step compiled{k}"] for k in (" _core Engine.step", " CompiledStep.step", ""))
+        bare, wrapped, full = (best[f"step compiled{k}"] for k in (" _core Engine.step", " CompiledEngine.step", ""))
         print(
             f"compiled step: C++ call {bare:.1f} us, ContactMemory/ContactSet in Python {wrapped - bare:.1f} us, "
             f"Simulator shell (input checks, actuation, State) {full - wrapped:.1f} us: "

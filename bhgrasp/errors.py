@@ -34,6 +34,10 @@ class UnreachableError(BhgraspError, ValueError):
         self.result = result
 
 
+class FrozenSettingError(BhgraspError, AttributeError):
+    """A setting that is fixed once its object is built was assigned (e.g. ``Simulator.dt``): build a new one."""
+
+
 class CompiledEngineUnavailable(BhgraspError, ImportError):
     """The compiled core ``bhgrasp._core`` does not load (the package was installed without building it)."""
 

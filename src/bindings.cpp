@@ -61,6 +61,7 @@ NB_MODULE(_core, m) {
       .def_rw("nq_hand", &Settings::nq_hand).def_rw("nv_hand", &Settings::nv_hand)
       .def_rw("lower", &Settings::lower).def_rw("upper", &Settings::upper)
       .def_rw("limit_stiffness", &Settings::limit_stiffness).def_rw("limit_damping", &Settings::limit_damping)
+      .def_rw("max_coordinate", &Settings::max_coordinate)
       .def_rw("joint_stiffness", &Settings::joint_stiffness).def_rw("joint_damping", &Settings::joint_damping)
       .def_rw("spring_q", &Settings::spring_q).def_rw("spring_v", &Settings::spring_v)
       .def_rw("spinning", &Settings::spinning).def_rw("pairs", &Settings::pairs)

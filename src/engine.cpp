@@ -215,11 +215,14 @@ StepResult Engine::step(const Vector& q, const Vector& v, const Vector& tau_hand
     result.memory = Memory{result.contacts.pair, result.contacts.local_b, first.displacement,
                            (!result.contacts.sticking.array()).matrix()};
   }
-  // divergence (simulator.py: _check)
+  // divergence (python_engine.py: divergence)
   Divergence& divergence = result.divergence;
   const bool finite_q = result.q.allFinite(), finite_v = result.v.allFinite();
   if (!finite_q || !finite_v) {
-    divergence.kind = !finite_q ? 1 : 2;
+    const Vector& values = !finite_q ? result.q : result.v;
+    Eigen::Index index = 0;
+    while (std::isfinite(values[index])) ++index;
+    divergence = Divergence{!finite_q ? 1 : 2, static_cast<int>(index), values[index]};
   } else if (model_.nv > 0) {
     Eigen::Index index;
     const double speed = result.v.cwiseAbs().maxCoeff(&index);
@@ -227,6 +230,11 @@ StepResult Engine::step(const Vector& q, const Vector& v, const Vector& tau_hand
   }
   if (divergence.kind == 0 && result.contacts.size() && result.contacts.depth.maxCoeff() > max_penetration)
     divergence = Divergence{4, -1, result.contacts.depth.maxCoeff()};
+  if (divergence.kind == 0 && model_.nq > 0) {
+    Eigen::Index index;
+    const double largest = result.q.cwiseAbs().maxCoeff(&index);
+    if (!(largest <= settings_.max_coordinate)) divergence = Divergence{5, static_cast<int>(index), result.q[index]};
+  }
   return result;
 }
 

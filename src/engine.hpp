@@ -72,6 +72,7 @@ struct Settings {
   Vector lower, upper;                // hand joint limits [rad]
   double limit_stiffness = 1e3;       // [N m/rad]
   double limit_damping = 0.05;        // [N m s/rad]
+  double max_coordinate = 0.0;        // largest |q_i| [m or rad] (SimulatorSettings.max_coordinate sets it)
   Vector joint_stiffness;             // (nv,) springs of spring-mounted objects [N/m]
   Vector joint_damping;               // (nv,) [N s/m]
   std::vector<int> spring_q, spring_v;  // coordinates of spring-mounted objects
@@ -113,9 +114,11 @@ struct Contacts {
 
 // Why a step was declared diverged (0: it was not); Python raises SimulationDiverged with these.
 struct Divergence {
-  int kind = 0;  // 1 position not finite, 2 velocity not finite, 3 speed above max_speed, 4 depth above max
-  int index = -1;
-  double value = 0.0;
+  // 1 position not finite, 2 velocity not finite, 3 speed above max_speed, 4 depth above max_penetration,
+  // 5 coordinate beyond max_coordinate
+  int kind = 0;
+  int index = -1;     // the first offending coordinate (-1: a contact depth)
+  double value = 0.0; // what it held
 };
 
 struct StepResult {

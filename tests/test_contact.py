@@ -63,10 +63,11 @@ def test_signed_distances_agree_with_coal(shape: str) -> None:
         ),
     }
     engine, scene = engine_for(items.get(shape, items["sphere"]))
-    pin.updateGeometryPlacements(scene.model, scene.data, scene.geometry, scene.geometry_data, scene.initial_state()[0])
+    q = scene.initial_state()[0]
+    pin.updateGeometryPlacements(scene.model, engine.data, scene.geometry, engine.geometry_data, q)
     geom = scene.environment_geometries[0] if shape == "halfspace" else scene.object_geometries[0]
     points = np.random.default_rng(1).uniform(-0.08, 0.2, size=(200, 3))
-    placement = scene.geometry_data.oMg[geom]
+    placement = engine.geometry_data.oMg[geom]
     transform = coal.Transform3s(placement.rotation, placement.translation)
     probe, result = coal.Sphere(1e-12), coal.DistanceResult()
     expected = []

@@ -48,9 +48,6 @@ def test_an_unconverged_epa_is_asked_again_and_both_engines_find_the_distance_de
     for engine in ("python", "compiled"):
         simulator = Simulator(scene, engine=engine)
         q = simulator.initial_state().scene_q
-        if engine == "python":
-            contacts = simulator.engine.detect(q)
-        else:
-            contacts = simulator._compiled.detect(q, ContactMemory.empty())
+        contacts = simulator.engine.detect(q, ContactMemory.empty())
         assert len(contacts.depth) == 1, engine
         assert contacts.depth[0] == pytest.approx(depth, rel=2e-3), engine  # EPA at 1e-6 m on 0.53 mm

@@ -21,7 +21,7 @@ from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Box, Plane, Sphere
 from bhgrasp.sim import INTEGRATORS, Simulator
 from bhgrasp.sim.actuation import BarrettActuation
-from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact import ContactMemory, SpringDamper
 from bhgrasp.sim.scene import Scene
 
 G = 9.81
@@ -237,13 +237,15 @@ def test_grasp_rerun_with_the_same_controller_repeats_to_round_off() -> None:
         np.testing.assert_allclose(first.log[name], second.log[name], rtol=1e-9, atol=1e-9, err_msg=name)
 
 
-def test_contact_detection_does_not_depend_on_what_was_detected_before() -> None:
+@pytest.mark.parametrize("engine_name", ["compiled", "python"])
+def test_contact_detection_does_not_depend_on_what_was_detected_before(engine_name: str) -> None:
     """A box flush on its pedestal gave a 4-corner patch, or a 1-point patch after another configuration had been
     queried (coal's GJK guesses, stored in Pinocchio's collision requests, carried from call to call)."""
     from bhgrasp.experiments.box_grasp import box_grasp
 
     setup = box_grasp(mass=0.6)
-    engine, scene = setup.simulator.engine, setup.simulator.scene
+    simulator = setup.simulator.with_settings(engine=engine_name)
+    engine, scene = simulator.engine, simulator.scene
     box = scene.object_q_slice(0)
 
     def placed(q, tilt: float, lift: float) -> np.ndarray:
@@ -253,24 +255,27 @@ def test_contact_detection_does_not_depend_on_what_was_detected_before() -> None
         return q
 
     def detect(q):
-        contacts = engine.detect(q)
+        contacts = engine.detect(q, ContactMemory.empty())
         return np.concatenate((contacts.pair, contacts.point.ravel(), contacts.normal.ravel(), contacts.depth))
 
     resting = placed(setup.state.scene_q, 0.0, -2e-5)  # 20 um into the pedestal
     fresh = detect(resting)
     assert len(fresh) == 4 * 8  # one patch: the 4 corners of the box's bottom face
     for tilt, lift in ((0.05, 1e-3), (0.1, 0.0), (0.0, 1e-4), (0.3, 5e-3), (0.01, -1e-4)):
-        engine.detect(placed(setup.state.scene_q, tilt, lift))  # any other configuration in between
+        other = placed(setup.state.scene_q, tilt, lift)  # any other configuration in between
+        engine.detect(other, ContactMemory.empty())
         np.testing.assert_array_equal(detect(resting), fresh)
 
 
-def test_flush_box_contact_normal_is_the_face_normal() -> None:
+@pytest.mark.parametrize("engine_name", ["compiled", "python"])
+def test_flush_box_contact_normal_is_the_face_normal(engine_name: str) -> None:
     """Coal's default GJK/EPA tolerance (1e-6) tilted the normal of a box flush on its pedestal by up to 0.027;
     the narrow phase now runs to 1e-10: over random sub-micrometre offsets the normal is +z to 1e-8."""
     from bhgrasp.experiments.box_grasp import box_grasp
 
     setup = box_grasp(mass=0.6)
-    engine, scene = setup.simulator.engine, setup.simulator.scene
+    simulator = setup.simulator.with_settings(engine=engine_name)
+    engine, scene = simulator.engine, simulator.scene
     box = scene.object_q_slice(0)
     rng = np.random.default_rng(3)
     errors = []
@@ -280,7 +285,7 @@ def test_flush_box_contact_normal_is_the_face_normal() -> None:
         tilt = pin.rpy.rpyToMatrix(*(1e-9 * rng.standard_normal(3)))
         shift = np.append(1e-4 * rng.standard_normal(2), -2e-5)  # sideways, and 20 um into the pedestal
         q[box] = pin.SE3ToXYZQUAT(pin.SE3(tilt @ pose.rotation, pose.translation + shift))
-        contacts = engine.detect(q)
+        contacts = engine.detect(q, ContactMemory.empty())
         assert len(contacts) == 4
         errors.append(np.abs(contacts.normal - Z).max())
     assert max(errors) < 1e-8

@@ -291,7 +291,7 @@ def test_bad_run_arguments_name_the_argument(tmp_path) -> None:
         sim.run(hold, 0.01, disturbance=lambda t: np.zeros((2, 8)), progress=False)
     with pytest.raises(bh.InputError, match="`disturbance` must be finite"):
         sim.run(hold, 0.01, disturbance=np.full(8, np.nan), progress=False)
-    with pytest.raises(bh.InputError, match="`state` must be a state of this simulator's scene"):
+    with pytest.raises(bh.InputError, match="`state` is a state of another scene"):
         sim.run(hold, 0.01, state=Simulator(Scene(hand, [Sphere(radius=0.02, mass=0.1)])).initial_state())
 
 

@@ -1,20 +1,25 @@
-"""Simulation: the scene, contacts, actuation, integrators, the Simulator and its two engines, states and batches.
+"""Simulation: the scene, contacts, actuation, the Simulator over its engine protocol, and batches.
 
-Modules, one concept each: :mod:`~bhgrasp.sim.scene` (hand, objects and environment as one Pinocchio model and coal
-geometry), :mod:`~bhgrasp.sim.contact` (detection: the contact engine), :mod:`~bhgrasp.sim.contact_law` (the
-spring-damper + Coulomb law), :mod:`~bhgrasp.sim.contact_set` (contacts as data: ContactSet, Contact,
-ContactMemory), :mod:`~bhgrasp.sim.actuation` (full actuation; the Barrett hand's four motors and TorqueSwitch),
-:mod:`~bhgrasp.sim.integrators` (free-body rotation: gyroscopic torque and Munthe-Kaas increments),
-:mod:`~bhgrasp.sim.simulator` (the Simulator: options, input and divergence checks, a step's dispatch to its
-engine), :mod:`~bhgrasp.sim.python_engine` (the Python reference step and its integrators),
-:mod:`~bhgrasp.sim.compiled` (the C++ engine of ``bhgrasp._core``), :mod:`~bhgrasp.sim.step_output` (what a step
-returns: StepInfo, the source of its state's fields), :mod:`~bhgrasp.sim.run_loop` (the loop of ``Simulator.run``:
-controller, sensors, disturbances, recording), :mod:`~bhgrasp.sim.sensor_model` (what the sensors get wrong),
-:mod:`~bhgrasp.sim.batch` (batched rollouts), :mod:`~bhgrasp.sim.state` (State, Trajectory) and
-:mod:`~bhgrasp.sim.recorder`.  ``from bhgrasp.sim import Simulator`` keeps working; the package's public names are
-re-exported from :mod:`bhgrasp` as well.
+Modules, one concept each:
+
+- the scene: :mod:`~bhgrasp.sim.scene` (hand, objects and environment as one Pinocchio model and coal geometry),
+  :mod:`~bhgrasp.sim.scene_layout` (what a step reads of it: free bodies' spin, springs, quaternions, its signature);
+- contacts: :mod:`~bhgrasp.sim.contact` (detection), :mod:`~bhgrasp.sim.contact_law` (the spring-damper + Coulomb
+  law), :mod:`~bhgrasp.sim.contact_set` (contacts as data: ContactSet, Contact, ContactMemory);
+- actuation: :mod:`~bhgrasp.sim.actuation` (full actuation; the Barrett hand's four motors and TorqueSwitch);
+- the Simulator: :mod:`~bhgrasp.sim.settings` (its frozen settings), :mod:`~bhgrasp.sim.simulator` (its contract and
+  a step's dispatch), :mod:`~bhgrasp.sim.state_check` (a state checked against the scene; divergences in words),
+  :mod:`~bhgrasp.sim.inputs` (inputs checked), :mod:`~bhgrasp.sim.step_output` (what a step returns),
+  :mod:`~bhgrasp.sim.run_loop` (``Simulator.run``: controller, sensors, disturbances, recording),
+  :mod:`~bhgrasp.sim.recorder`, :mod:`~bhgrasp.sim.sensor_model` (what the sensors get wrong);
+- the engines: :mod:`~bhgrasp.sim.engine` (the protocol over plain data), :mod:`~bhgrasp.sim.python_engine` (the
+  readable reference step) with :mod:`~bhgrasp.sim.integrators`, :mod:`~bhgrasp.sim.compiled` (the C++ step of
+  ``bhgrasp._core``), :mod:`~bhgrasp.sim.batch` (batched rollouts);
+- data: :mod:`~bhgrasp.sim.state` (State, Trajectory).
 """
 
-from bhgrasp.sim.simulator import ENGINES, INTEGRATORS, Simulator, StepInfo
+from bhgrasp.sim.settings import ENGINES, INTEGRATORS, SimulatorSettings
+from bhgrasp.sim.simulator import Simulator
+from bhgrasp.sim.step_output import StepInfo
 
-__all__ = ["ENGINES", "INTEGRATORS", "Simulator", "StepInfo"]
+__all__ = ["ENGINES", "INTEGRATORS", "Simulator", "SimulatorSettings", "StepInfo"]

@@ -25,13 +25,20 @@ import numpy as np
 from bhgrasp._validation import as_positive
 from bhgrasp.errors import InputError
 from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
-from bhgrasp.sim.compiled import barrett_of, contact_set, core_module, drive_of, memory_of, native_memory, settings
-from bhgrasp.sim.contact import ContactMemory, ContactSet
-from bhgrasp.sim.simulator import Simulator
+from bhgrasp.sim.compiled import (
+    barrett_of,
+    contact_set,
+    core_module,
+    drive_of,
+    engine_settings,
+    memory_of,
+    native_memory,
+)
+from bhgrasp.sim.contact import ContactSet
+from bhgrasp.sim.simulator import MATCH_RADIUS, Simulator
 from bhgrasp.sim.state import SimulatedState, State
-from bhgrasp.sim.step_output import _StepOutput
-
-_DIVERGED = {1: "joint/object position", 2: "joint/object velocity", 3: "speed", 4: "contact depth"}
+from bhgrasp.sim.state_check import check_state, divergence_text
+from bhgrasp.sim.step_output import StepOutput
 
 
 class BatchSimulator:
@@ -48,8 +55,9 @@ class BatchSimulator:
             threads: Worker threads per step (>= 1).
 
         Raises:
-            InputError: No states, a state of another scene, states at different times, an actuation whose
-                transmission changes (Barrett), or ``threads`` < 1.
+            InputError: No states, a state of another scene or a malformed one (as
+                :meth:`~bhgrasp.sim.Simulator.check_state` finds them), states at different times, an actuation
+                whose transmission changes (Barrett), or ``threads`` < 1.
         """
         if not isinstance(simulator.actuation, FullyActuated | BarrettActuation):
             raise InputError(
@@ -62,9 +70,12 @@ class BatchSimulator:
         if not states:
             raise InputError("`states` must hold at least one start state (one per environment)")
         scene = simulator.scene
+        memories = []
         for i, state in enumerate(states):
-            if state.scene_q is None or state.scene_v is None or state.scene_q.shape != (scene.nq,):
-                raise InputError(f"`states[{i}]` is not a state of the simulator's scene (nq = {scene.nq})")
+            try:
+                memories.append(check_state(state, scene, simulator.layout, simulator.settings))
+            except InputError as error:
+                raise InputError(f"`states[{i}]`: {error}") from error
         times = {state.t for state in states}
         if len(times) > 1:
             raise InputError(f"the start states must share one time, got {sorted(times)}")
@@ -72,10 +83,9 @@ class BatchSimulator:
         self.simulator = simulator
         self.threads = int(threads)
         self.t = states[0].t
-        self._batch = core.Batch(scene.model.saveToString(), scene.geometry.saveToString(), settings(simulator),
-                                 len(states))  # fmt: skip
-        for i, state in enumerate(states):
-            memory = state.contact_memory if state.contact_memory is not None else ContactMemory.empty()
+        native = engine_settings(scene, simulator.layout, simulator.law, simulator.settings, MATCH_RADIUS)
+        self._batch = core.Batch(scene.model.saveToString(), scene.geometry.saveToString(), native, len(states))
+        for i, (state, memory) in enumerate(zip(states, memories)):
             self._batch.set_state(i, state.scene_q, state.scene_v, native_memory(memory))
         self._barrett = isinstance(simulator.actuation, BarrettActuation)
         if self._barrett and simulator.actuation.n_inputs != 4:
@@ -142,11 +152,7 @@ class BatchSimulator:
 
     def divergence(self, env: int) -> str:
         """Why environment ``env`` diverged ("" if it did not)."""
-        record = self._batch.divergence(self._env(env))
-        if record.kind == 0:
-            return ""
-        where = f" (coordinate {record.index})" if record.index >= 0 else ""
-        return f"{_DIVERGED[record.kind]}{where} = {record.value:.4g}"
+        return divergence_text(self._batch.divergence(self._env(env)))
 
     # ------------------------------------------------------------------ kernels for vectorised controllers
     def gravity_torques(self) -> np.ndarray:
@@ -197,8 +203,9 @@ class BatchSimulator:
         env = self._env(env)
         memory = memory_of(self._batch.memory(env))
         modes = self.modes[env]
-        return SimulatedState.lazy(self.t, self._batch.q[env], self._batch.v[env], modes,
-                                   _StepOutput(self.simulator, self.contacts(env), memory))  # fmt: skip
+        source = StepOutput(self.simulator, self.contacts(env), memory)
+        scene_q, scene_v = self._batch.q[env].copy(), self._batch.v[env].copy()
+        return SimulatedState.lazy(self.t, scene_q, scene_v, modes, source, None, self.simulator.layout.signature)
 
     def _env(self, env: int) -> int:
         if isinstance(env, bool) or not isinstance(env, int | np.integer) or not 0 <= env < self.size:

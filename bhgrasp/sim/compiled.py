@@ -1,25 +1,28 @@
-"""The compiled engine: the C++ step of ``bhgrasp._core`` set up from a :class:`~bhgrasp.sim.Simulator`.
+"""The compiled engine: the C++ step of ``bhgrasp._core`` on one scene, contact law and settings.
 
 The C++ step (``src/engine.cpp``) mirrors the Python one line for line: contact detection with coal on every
 collision pair, contact patches and per-point depths, matching to the last step's contacts, the stick-slip
 linearisation with its active set, joint stops, springs, damping and friction, the implicit-midpoint gyroscopic
 torque, and the implicit, semi-implicit and RK4 integrators.  The actuation model stays in Python: each step
-passes its current transmission and damping (cached per actuation mode).  ``tests/test_compiled.py`` steps both
-engines in lockstep.
+passes its current transmission and damping (:class:`~bhgrasp.sim.engine.DriveTerms`, built once per mode).
+``tests/test_compiled.py`` steps both engines in lockstep.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from bhgrasp._native import optional_core, required_core
-from bhgrasp.sim.contact import ContactMemory, ContactSet, empty_contact_set
+from bhgrasp.sim.contact import ContactMemory, ContactSet, SpringDamper, empty_contact_set
+from bhgrasp.sim.engine import DriveTerms, StepResult
+from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.scene_layout import SceneLayout
+from bhgrasp.sim.settings import SimulatorSettings
 
 if TYPE_CHECKING:
     from bhgrasp.sim.actuation import Actuation, BarrettActuation
-    from bhgrasp.sim.simulator import Simulator
 
 _INTEGRATORS = {"implicit": 0, "semi-implicit": 1, "rk4": 2}
 
@@ -33,62 +36,67 @@ def core_module():
     return required_core("the compiled engine")
 
 
-class CompiledStep:
-    """A simulator's scene, contact law and options in the C++ engine; one :meth:`step` per physics step."""
+class CompiledEngine:
+    """The C++ step on one scene, contact law and settings (the :class:`~bhgrasp.sim.engine.Engine` protocol)."""
 
-    def __init__(self, simulator: Simulator) -> None:
-        """Copy the scene (Pinocchio's serialisation), the contact law and the simulator's options into C++."""
-        model, geometry = simulator.scene.model.saveToString(), simulator.scene.geometry.saveToString()
-        self._engine = core_module().Engine(model, geometry, settings(simulator))
-        self._simulator = simulator
-        self._drives: dict[tuple, object] = {}
+    name = "compiled"
 
-    def _drive(self):
-        """The actuation's transmission and damping in its current mode and parameters (built once for each)."""
-        actuation = self._simulator.actuation
-        key = (
-            actuation.modes().tobytes(), actuation.damping.tobytes(), actuation.friction.tobytes(),
-            getattr(actuation, "motor_damping", None), getattr(actuation, "saturate", None),
-        )  # fmt: skip
-        drive = self._drives.get(key)
-        if drive is None:
-            drive = self._drives[key] = drive_of(actuation)
-        return drive
+    def __init__(
+        self, scene: Scene, layout: SceneLayout, law: SpringDamper, settings: SimulatorSettings, match_radius: float
+    ) -> None:
+        """Copy the scene (Pinocchio's serialisation), the contact law and the settings into C++."""
+        model, geometry = scene.model.saveToString(), scene.geometry.saveToString()
+        native = engine_settings(scene, layout, law, settings, match_radius)
+        self._engine = core_module().Engine(model, geometry, native)
+        self._limits = (settings.max_speed, settings.max_penetration)
 
-    def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, memory):
-        """One step from a :class:`~bhgrasp.sim.contact_set.ContactMemory` or the engine's own ``Memory``.
+    def drive(self, terms: DriveTerms):
+        """``terms`` as the C++ engine's ``Drive``."""
+        return native_drive(terms)
 
-        Returns (q+, v+, contacts with forces, drive torques [N m], memory, divergence) as the C++ engine made them:
-        its ``Contacts`` and ``Memory`` objects, converted by :func:`contact_set` and :func:`memory_of` when read.
+    def memory(self, memory: ContactMemory):
+        """A :class:`~bhgrasp.sim.contact_set.ContactMemory` as the C++ engine's ``Memory``."""
+        return native_memory(memory)
+
+    def contact_set(self, contacts) -> ContactSet:
+        """A step's ``Contacts`` as a :class:`~bhgrasp.sim.contact_set.ContactSet`."""
+        return contact_set(contacts)
+
+    def contact_memory(self, memory) -> ContactMemory:
+        """A step's ``Memory`` as a :class:`~bhgrasp.sim.contact_set.ContactMemory` (keeping the native one)."""
+        return memory_of(memory)
+
+    def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, drive: Any, memory: Any) -> StepResult:
+        """One step from the engine's own ``Memory`` with a ``Drive`` of :meth:`drive`.
+
+        Returns the :class:`~bhgrasp.sim.engine.StepResult` with the C++ engine's ``Contacts`` and ``Memory``
+        objects (converted by :func:`contact_set` and :func:`memory_of` when read).
         """
-        simulator = self._simulator
-        native = memory.native if isinstance(memory, ContactMemory) else memory
-        if native is None:
-            native = native_memory(memory)
-        result = self._engine.step(q, v, tau_hand, self._drive(), native, simulator.max_speed,
-                                   simulator.max_penetration)  # fmt: skip
-        return result.q, result.v, result.contacts, result.drive, result.memory, result.divergence
+        result = self._engine.step(q, v, tau_hand, drive, memory, *self._limits)
+        return StepResult(result.q, result.v, result.contacts, result.drive, result.memory, result.divergence)
 
     def detect(self, q: np.ndarray, memory: ContactMemory) -> ContactSet:
         """The contacts at ``q`` matched to ``memory`` (no forces)."""
         return contact_set(self._engine.detect(q, native_memory(memory)))
 
 
-def settings(simulator: Simulator):
-    """A simulator's scene sizes, options, contact law and collision queries as the C++ engine's ``Settings``."""
+def engine_settings(
+    scene: Scene, layout: SceneLayout, law: SpringDamper, settings: SimulatorSettings, match_radius: float
+):
+    """A scene's sizes, the settings, the contact law and the collision queries as the C++ engine's ``Settings``."""
     core = core_module()
-    scene, law = simulator.scene, simulator.law
     result = core.Settings()
-    result.dt = simulator.dt
-    result.integrator = _INTEGRATORS[simulator.integrator]
+    result.dt = settings.dt
+    result.integrator = _INTEGRATORS[settings.integrator]
     result.nq_hand, result.nv_hand = scene.nq_hand, scene.nv_hand
     result.lower, result.upper = scene.hand.lower, scene.hand.upper
-    result.limit_stiffness, result.limit_damping = simulator.limit_stiffness, simulator.limit_damping
+    result.limit_stiffness, result.limit_damping = settings.joint_limit_stiffness, settings.joint_limit_damping
+    result.max_coordinate = settings.max_coordinate
     result.joint_stiffness, result.joint_damping = scene.joint_stiffness, scene.joint_damping
-    result.spring_q = [int(i) for i in simulator._spring_q]
-    result.spring_v = [int(i) for i in simulator._spring_v]
+    result.spring_q = [int(i) for i in layout.spring_q]
+    result.spring_v = [int(i) for i in layout.spring_v]
     spinning = []
-    for angular, axes, moments in simulator._spinning:
+    for angular, axes, moments in layout.spinning_bodies:
         body = core.Spinning()
         body.angular, body.axes, body.moments = angular.start, axes, np.array(moments)
         spinning.append(body)
@@ -98,7 +106,7 @@ def settings(simulator: Simulator):
     contact.tangential_stiffness, contact.tangential_damping = law.k_t, law.c_t
     contact.hunt_crossley, contact.exponent = law.normal_law == "hunt-crossley", law.exponent
     contact.tanh_friction, contact.slip_velocity = law.friction_law == "tanh", law.slip_velocity
-    contact.match_radius = simulator.engine.match_radius
+    contact.match_radius = match_radius
     result.law = contact
     pairs, queries = [], []
     for pair in scene.pairs:
@@ -119,14 +127,19 @@ def settings(simulator: Simulator):
     return result
 
 
+def native_drive(terms: DriveTerms):
+    """A drive's terms as the C++ engine's ``Drive``."""
+    drive = core_module().Drive()
+    drive.transmission = terms.transmission
+    drive.joint_damping = terms.joint_damping
+    drive.friction = terms.friction
+    drive.motor_damping = terms.motor_damping
+    return drive
+
+
 def drive_of(actuation: Actuation):
     """An actuation model's transmission and damping in its current mode as the C++ engine's ``Drive``."""
-    drive = core_module().Drive()
-    drive.transmission = actuation.transmission()
-    drive.joint_damping = actuation.joint_damping()
-    drive.friction = actuation.friction
-    drive.motor_damping = actuation.joint_damping() - actuation.damping
-    return drive
+    return native_drive(DriveTerms.of(actuation))
 
 
 def barrett_of(actuation: BarrettActuation):
@@ -152,17 +165,13 @@ def native_memory(memory: ContactMemory):
     """A :class:`~bhgrasp.sim.contact_set.ContactMemory` as the C++ engine's ``Memory`` (its native copy, if any)."""
     if memory.native is not None:
         return memory.native
-    return core_module().Memory(
-        memory.pair.astype(np.int64), memory.local_b, memory.displacement, memory.sliding.astype(bool)
-    )
+    arrays = (memory.pair, memory.local_b, memory.displacement, memory.sliding)
+    return core_module().Memory(*(array.copy() for array in arrays))  # (writable copies of the read-only arrays)
 
 
-def memory_of(contacts_memory) -> ContactMemory:
+def memory_of(native) -> ContactMemory:
     """The C++ engine's contact memory as a :class:`~bhgrasp.sim.contact_set.ContactMemory` (keeping the native one)."""
-    return ContactMemory(
-        contacts_memory.pair, contacts_memory.local_b, contacts_memory.displacement, contacts_memory.sliding,
-        native=contacts_memory,
-    )  # fmt: skip
+    return ContactMemory.with_native(native)
 
 
 def contact_set(contacts) -> ContactSet:
@@ -176,6 +185,14 @@ def contact_set(contacts) -> ContactSet:
 
 
 __all__ = [
-    "CompiledStep", "barrett_of", "contact_set", "core_module", "drive_of", "memory_of", "native_memory",
-    "optional_core", "settings",
-]  # fmt: skip
+    "CompiledEngine",
+    "barrett_of",
+    "contact_set",
+    "core_module",
+    "drive_of",
+    "engine_settings",
+    "memory_of",
+    "native_drive",
+    "native_memory",
+    "optional_core",
+]

@@ -28,6 +28,7 @@ _NARROW_TOLERANCE = 1e-10  # GJK/EPA: coal's default 1e-6 tilts a box-on-box nor
 # asked again at coal's default tolerance, which converged there (depth 0.53 mm, as coal.distance gives).
 _FALLBACK_TOLERANCE = 1e-6
 _MAX_DEPTH = 1.0  # [m] a reported penetration beyond this is a failed query, not a contact
+_NO_MEMORY = ContactMemory.empty()
 
 
 def _converged(result: coal.CollisionResult) -> bool:
@@ -61,15 +62,22 @@ class ContactEngine(ContactForces):
     ``match_radius``), so that a sticking contact keeps its tangential spring.
     """
 
-    def __init__(self, scene: Scene, law: SpringDamper, match_radius: float = 3e-3) -> None:
-        """Prepare detection for every collision pair of ``scene``."""
+    def __init__(
+        self, scene: Scene, law: SpringDamper, match_radius: float = 3e-3, data: pin.Data | None = None
+    ) -> None:
+        """Prepare detection for every collision pair of ``scene``.
+
+        ``data``: the Pinocchio data that detection runs forward kinematics in (and that :meth:`jacobians` reads);
+        default a new one, so that engines on one scene share no work space.
+        """
         self.scene = scene
+        self.data = scene.model.createData() if data is None else data
+        self.geometry_data = pin.GeometryData(scene.geometry)
         super().__init__(law)
         self.match_radius = as_positive(match_radius, "match_radius")
         self._pair_friction = np.array([pair.friction(law.friction) for pair in scene.pairs])
         self._joint_a = np.array([pair.joint_a for pair in scene.pairs], dtype=int)
         self._joint_b = np.array([pair.joint_b for pair in scene.pairs], dtype=int)
-        self.memory = ContactMemory.empty()  # the contacts of the last step (restored from each step's State)
         # Every pair is tested by coal's free functions with requests of our own: Pinocchio's per-pair collision
         # functors keep GJK state from call to call (at a degenerate contact, two faces flush, the witness and with
         # it the patch depended on the configurations queried before: a box resting flat on its pedestal gave a
@@ -89,20 +97,18 @@ class ContactEngine(ContactForces):
         self._probe_placement = coal.Transform3s()
         self._distance_request, self._distance_result = coal.DistanceRequest(), coal.DistanceResult()
 
-    def reset(self) -> None:
-        """Forget every contact (a new run)."""
-        self.memory = ContactMemory.empty()
-
     # ------------------------------------------------------------------ detection
-    def detect(self, q: np.ndarray) -> ContactSet:
-        """Contact points at configuration ``q`` (runs forward kinematics and coal), matched to the last step's.
+    def detect(self, q: np.ndarray, memory: ContactMemory | None = None) -> ContactSet:
+        """Contact points at configuration ``q`` (runs forward kinematics and coal), matched to ``memory``'s.
+
+        ``memory``: the contacts of the last step (default none: every contact starts sticking, unstretched).
 
         Each coal contact patch (e.g. the 4 corners of a box face on a plane) shares the law's stiffness and
         damping among its points, so a body's contact stiffness does not depend on how many points coal reports.
         """
         scene = self.scene
-        pin.updateGeometryPlacements(scene.model, scene.data, scene.geometry, scene.geometry_data, q)
-        placements = scene.geometry_data.oMg
+        pin.updateGeometryPlacements(scene.model, self.data, scene.geometry, self.geometry_data, q)
+        placements = self.geometry_data.oMg
         pairs, points, normals, depths, weights = [], [], [], [], []
         for k in range(len(self._narrow)):
             shape_a, shape_b, geom_a, geom_b, request, patch_request, result, patches = self._narrow[k]
@@ -138,7 +144,7 @@ class ContactEngine(ContactForces):
         point, normal = np.concatenate(points)[keep], np.array(normals)[keep]
         pair = np.array(pairs, dtype=int)[keep]
         local = self._in_frame_b(pair, point)
-        displacement, was_sliding = self._recall(pair, local, normal)
+        displacement, was_sliding = self._recall(pair, local, normal, memory or _NO_MEMORY)
         weight = np.array(weights)[keep]
         return ContactSet(
             pair, point, normal, depth[keep], self._pair_friction[pair], displacement, weight, local,
@@ -167,7 +173,7 @@ class ContactEngine(ContactForces):
 
         Closed form for boxes, half-spaces and spheres; coal's GJK/EPA for other shapes.
         """
-        placement = self.scene.geometry_data.oMg[geom]
+        placement = self.geometry_data.oMg[geom]
         shape = self.scene.geometry.geometryObjects[geom].geometry
         local = (points - placement.translation) @ placement.rotation
         if isinstance(shape, coal.Box):
@@ -197,10 +203,12 @@ class ContactEngine(ContactForces):
 
     def _in_frame_b(self, pair: np.ndarray, point: np.ndarray) -> np.ndarray:
         """Contact points expressed in the joint frame of their body b."""
-        placements = self.scene.data.oMi
+        placements = self.data.oMi
         return np.array([placements[int(j)].actInv(p) for j, p in zip(self._joint_b[pair], point)])
 
-    def _recall(self, pair: np.ndarray, local: np.ndarray, normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _recall(
+        self, pair: np.ndarray, local: np.ndarray, normal: np.ndarray, memory: ContactMemory
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Tangential displacement and sliding flag of each contact carried over from the last step.
 
         A contact matches the nearest remembered point of the same pair within ``match_radius`` (on body b); a point
@@ -208,7 +216,6 @@ class ContactEngine(ContactForces):
         pair, so that a sticking patch keeps its anchor, and slides if any point of its pair slid.  A new contact
         starts with no displacement, sticking.
         """
-        memory = self.memory
         old_pair, old_local, old_u, old_sliding = memory.pair, memory.local_b, memory.displacement, memory.sliding
         if len(old_pair) == 0:
             return np.zeros_like(local), np.zeros(len(pair), dtype=bool)
@@ -228,17 +235,18 @@ class ContactEngine(ContactForces):
         length, new_length = np.sqrt((u * u).sum(axis=1)), np.sqrt((projected * projected).sum(axis=1))
         return projected * (length / np.maximum(new_length, 1e-300))[:, None], sliding  # ... keeping its length
 
-    def remember(self, contacts: ContactSet, displacement: np.ndarray, sliding: np.ndarray) -> None:
-        """Store the end-of-step tangential displacements and slide flags (once per step, forces final)."""
-        self.memory = ContactMemory(contacts.pair.copy(), contacts.local_b.copy(), displacement.copy(), sliding.copy())
+    @staticmethod
+    def remember(contacts: ContactSet, displacement: np.ndarray, sliding: np.ndarray) -> ContactMemory:
+        """The memory a step leaves: its contacts' end-of-step tangential displacements and slide flags."""
+        return ContactMemory(contacts.pair, contacts.local_b, displacement, sliding)
 
     # ------------------------------------------------------------------ kinematics of the contact points
     def jacobians(self, contacts: ContactSet) -> np.ndarray:
         """Relative point Jacobians J_b(p) - J_a(p), shape (m, 3, nv), world-aligned.
 
-        Needs ``pin.computeJointJacobians`` at the current ``q`` (the simulator calls it once per step).
+        Needs ``pin.computeJointJacobians`` at the current ``q`` in :attr:`data` (the engine calls it once per step).
         """
-        model, data = self.scene.model, self.scene.data
+        model, data = self.scene.model, self.data
         jacobians = np.zeros((len(contacts), 3, model.nv))
         identity = _IDENTITY3
         for i, k in enumerate(contacts.pair):

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from bhgrasp.errors import InputError
 from bhgrasp.sim.scene import Scene
 
 
@@ -56,32 +57,72 @@ class Contact:
         return self.point - 0.5 * self.depth * self.normal
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ContactMemory:
     """What a run carries from one step to the next about its contacts (part of :class:`~bhgrasp.sim.state.State`).
+
+    An immutable value: its arrays are read-only copies, and ``dataclasses.replace(memory, displacement=...)`` makes
+    a new memory that every engine reads as given.  The compiled engine's copy of the same arrays (kept so that a
+    compiled run hands its memory on without converting it back and forth) is private to the instance it was made
+    with: it is neither copied by ``replace`` nor pickled, so it cannot go stale.
 
     Attributes:
         pair: (m,) collision-pair index of each remembered contact.
         local_b: (m, 3) the contact point in its body b's joint frame [m] (contacts are matched by position on b).
         displacement: (m, 3) end-of-step tangential spring displacement u [m].
         sliding: (m,) whether the contact ended the step sliding (the next step starts it sliding).
-        native: The compiled engine's copy of the same memory (``None`` when built in Python), so that a run of
-            the compiled engine hands it on without converting the arrays back and forth.
     """
 
     pair: np.ndarray
     local_b: np.ndarray
     displacement: np.ndarray
     sliding: np.ndarray
-    native: Any = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        """Keep read-only copies of the arrays, checked for matching lengths."""
+        m = len(self.pair)
+        for name, dtype, shape in (
+            ("pair", np.int64, (m,)),
+            ("local_b", np.float64, (m, 3)),
+            ("displacement", np.float64, (m, 3)),
+            ("sliding", np.bool_, (m,)),
+        ):
+            array = np.array(getattr(self, name), dtype=dtype)  # a copy: the caller's array stays its own
+            if array.shape != shape:
+                raise InputError(f"`ContactMemory.{name}` must have shape {shape} for {m} contacts, got {array.shape}")
+            array.flags.writeable = False
+            object.__setattr__(self, name, array)
+        object.__setattr__(self, "_native", None)
 
     @classmethod
     def empty(cls) -> ContactMemory:
         """No contact remembered (the start of a run, or contacts cleared)."""
         return cls(np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, bool))
 
+    @classmethod
+    def with_native(cls, native: Any) -> ContactMemory:
+        """The compiled engine's ``Memory`` as a ContactMemory that keeps it (for the engine that made it)."""
+        memory = cls(native.pair, native.local_b, native.displacement, native.sliding)
+        object.__setattr__(memory, "_native", native)
+        return memory
+
+    @property
+    def native(self) -> Any:
+        """The compiled engine's copy this memory was made from (``None``: made in Python)."""
+        return self._native
+
     def __len__(self) -> int:
         return len(self.pair)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, ContactMemory):
+            return NotImplemented
+        return all(
+            np.array_equal(getattr(self, name), getattr(other, name))
+            for name in ("pair", "local_b", "displacement", "sliding")
+        )
+
+    __hash__ = None  # type: ignore[assignment]  (a value of arrays)
 
     def __reduce__(self) -> tuple:
         """Copies and pickles keep the arrays; the compiled engine rebuilds its native copy from them."""

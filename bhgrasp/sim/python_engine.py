@@ -21,50 +21,79 @@ Actuation couplings (:class:`~bhgrasp.sim.actuation.BarrettActuation`) enter as 
 done for the driven coordinates ``w`` with ``v_hand = T w``.  Contact forces enter the dynamics as generalised
 forces ``J^T f``, the same as Pinocchio's ``f_ext`` (tests/test_hand.py checks the identity).
 
-:class:`PythonStep` is the twin of :class:`~bhgrasp.sim.compiled.CompiledStep`: the C++ step (``src/engine.cpp``,
+:class:`PythonEngine` is the twin of :class:`~bhgrasp.sim.compiled.CompiledEngine`: the C++ step (``src/engine.cpp``,
 ``src/implicit.cpp``) mirrors it function by function, and tests/test_compiled.py steps both in lockstep.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.sim.contact import ContactMemory
+from bhgrasp.sim.contact import ContactEngine, ContactMemory, ContactSet, SpringDamper
+from bhgrasp.sim.engine import DriveTerms, StepResult, divergence
 from bhgrasp.sim.integrators import gyroscopic_torque, spin_midpoint
-
-if TYPE_CHECKING:
-    from bhgrasp.sim.simulator import Simulator
+from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.scene_layout import SceneLayout
+from bhgrasp.sim.settings import SimulatorSettings
 
 _FRICTION_VELOCITY = 1e-3  # [rad/s] regularisation of Coulomb joint friction
 
 
-class PythonStep:
-    """A simulator's physics step in Python, on its scene, contact engine, actuation and options (read live)."""
+class PythonEngine:
+    """The physics step in Python on one scene, contact law and settings (the engine protocol).
 
-    def __init__(self, simulator: Simulator) -> None:
-        """Step ``simulator``'s scene; what only this engine needs (joint limits, index arrays) is kept here."""
-        self._simulator = simulator
-        scene = simulator.scene
+    Its Pinocchio and coal work space is its own: engines of one scene share nothing.
+    """
+
+    name = "python"
+
+    def __init__(
+        self, scene: Scene, layout: SceneLayout, law: SpringDamper, settings: SimulatorSettings, match_radius: float
+    ) -> None:
+        """Prepare the step: a Pinocchio data of its own, the contact engine, what the step reads every time."""
+        self.scene, self.settings = scene, settings
+        self.data = scene.model.createData()
+        self.contacts = ContactEngine(scene, law, match_radius, data=self.data)
         self._lower, self._upper = scene.hand.lower, scene.hand.upper
         self._object_identity = np.eye(scene.nv - scene.nv_hand)
         self._lower_triangle = np.tril_indices(scene.nv, -1)
+        self._spinning = layout.spinning_bodies
+        self._spring_q, self._spring_v = layout.spring_q, layout.spring_v
 
-    def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, memory: ContactMemory):
-        """One step from a :class:`~bhgrasp.sim.contact_set.ContactMemory`.
+    def drive(self, terms: DriveTerms) -> DriveTerms:
+        """The drive's terms, as this engine's step takes them (unchanged)."""
+        return terms
 
-        Returns (q+, v+, contacts with forces, drive torques [N m], memory, divergence), as
-        :meth:`~bhgrasp.sim.compiled.CompiledStep.step` does; the divergence is ``None``: the simulator checks.
+    def memory(self, memory: ContactMemory) -> ContactMemory:
+        """A contact memory, as this engine's step takes it (unchanged)."""
+        return memory
+
+    def contact_set(self, contacts: ContactSet) -> ContactSet:
+        """A step's contacts (already a ContactSet)."""
+        return contacts
+
+    def contact_memory(self, memory: ContactMemory) -> ContactMemory:
+        """A step's memory (already a ContactMemory)."""
+        return memory
+
+    def detect(self, q: np.ndarray, memory: ContactMemory) -> ContactSet:
+        """The contacts at ``q`` matched to ``memory`` (no forces)."""
+        return self.contacts.detect(q, memory)
+
+    def step(
+        self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, drive: DriveTerms, memory: ContactMemory
+    ) -> StepResult:
+        """One step from a :class:`~bhgrasp.sim.contact_set.ContactMemory`, with the drive's current terms.
+
+        Returns the :class:`~bhgrasp.sim.engine.StepResult`, its divergence checked as the compiled step checks it.
         """
-        simulator = self._simulator
-        simulator.engine.memory = memory
-        if simulator.integrator == "implicit":
-            q_next, v_next, contacts, drive = self._implicit(q, v, tau_hand)
+        if self.settings.integrator == "implicit":
+            q_next, v_next, contacts, torques, memory = self._implicit(q, v, tau_hand, drive, memory)
         else:
-            q_next, v_next, contacts, drive = self._explicit(q, v, tau_hand)
-        return q_next, v_next, contacts, drive, simulator.engine.memory, None
+            q_next, v_next, contacts, torques, memory = self._explicit(q, v, tau_hand, drive, memory)
+        checked = divergence(q_next, v_next, contacts, self.settings)
+        return StepResult(q_next, v_next, contacts, torques, memory, checked)
 
     # ------------------------------------------------------------------ joint space
     def _implicit_gyroscopic(self, v: np.ndarray, bias: np.ndarray) -> None:
@@ -75,12 +104,12 @@ class PythonStep:
         ``w.I w / 2`` and the body angular momentum's length ``|I w|`` exactly, at any step (explicit ``w x I w``
         gains energy at every step).  The step then uses ``m x I m`` as the body's gyroscopic torque.
         """
-        for angular, axes, moments in self._simulator._spinning:
+        for angular, axes, moments in self._spinning:
             w = axes.T @ v[angular]  # in the principal axes
             if moments[0] == moments[1] == moments[2] or not w.any():
                 continue  # a sphere's (or a resting body's) gyroscopic torque is 0
             explicit = gyroscopic_torque(moments, w)
-            middle = spin_midpoint(moments, w, 0.5 * self._simulator.dt)
+            middle = spin_midpoint(moments, w, 0.5 * self.settings.dt)
             bias[angular] += axes @ (gyroscopic_torque(moments, middle) - explicit)
 
     def _increment_rate(self, increment: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -91,46 +120,40 @@ class PythonStep:
         joints and translations are vector spaces, whose increments change at ``v``.
         """
         rate = v.copy()
-        for angular, _, _ in self._simulator._spinning:
+        for angular, _, _ in self._spinning:
             theta, w = increment[angular], v[angular]
             half = np.cross(theta, w)
             rate[angular] = w + 0.5 * half + np.cross(theta, half) / 12.0
         return rate
 
-    def _motor_damping(self) -> np.ndarray:
-        """The drive's own damping (joint damping of the actuation minus the passive joints')."""
-        actuation = self._simulator.actuation
-        return actuation.joint_damping() - actuation.damping
-
     def _mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        mass = pin.crba(self._simulator.model, self._simulator.data, q).copy()
+        mass = pin.crba(self.scene.model, self.data, q).copy()
         mass[self._lower_triangle] = mass.T[self._lower_triangle]
         return mass
 
-    def _transmission(self) -> np.ndarray:
-        hand = self._simulator.actuation.transmission()
+    def _transmission(self, drive: DriveTerms) -> np.ndarray:
+        hand = drive.transmission
         rows, cols = hand.shape
-        full = np.zeros((self._simulator.scene.nv, cols + len(self._object_identity)))
+        full = np.zeros((self.scene.nv, cols + len(self._object_identity)))
         full[:rows, :cols] = hand
         full[rows:, cols:] = self._object_identity
         return full
 
-    def _passive(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _passive(self, q: np.ndarray, v: np.ndarray, drive: DriveTerms) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Joint-space springs/dampers: explicit torque, implicit stiffness K and damping C (diagonals).
 
         Object springs (spring-mounted objects, rest at 0), joint stops (only while penetrated), joint damping and
         regularised joint friction (linearised about ``v``).
         """
-        simulator = self._simulator
-        scene = simulator.scene
-        nvh, nqh = simulator._nvh, scene.nq_hand
+        scene, settings = self.scene, self.settings
+        nvh, nqh = scene.nv_hand, scene.nq_hand
         stiffness = scene.joint_stiffness.copy()
         damping = scene.joint_damping.copy()
         torque = np.zeros(scene.nv)
-        if len(simulator._spring_v):
-            torque[simulator._spring_v] = -scene.joint_stiffness[simulator._spring_v] * q[simulator._spring_q]
-        damping[:nvh] += simulator.actuation.joint_damping()
-        friction = simulator.actuation.friction
+        if len(self._spring_v):
+            torque[self._spring_v] = -scene.joint_stiffness[self._spring_v] * q[self._spring_q]
+        damping[:nvh] += drive.joint_damping
+        friction = drive.friction
         if friction.any():
             ratio = v[:nvh] / _FRICTION_VELOCITY
             decay = np.exp(-2.0 * np.abs(ratio))  # sech^2 = 4 e^-2|x| / (1 + e^-2|x|)^2: cosh overflows past 0.7 rad/s
@@ -141,37 +164,36 @@ class PythonStep:
         stop = np.clip(q_hand, self._lower, self._upper)
         active = stop != q_hand
         if active.any():
-            torque[:nvh] -= simulator.limit_stiffness * (q_hand - stop)
-            stiffness[:nvh] += active * simulator.limit_stiffness
-            damping[:nvh] += active * simulator.limit_damping
+            torque[:nvh] -= settings.joint_limit_stiffness * (q_hand - stop)
+            stiffness[:nvh] += active * settings.joint_limit_stiffness
+            damping[:nvh] += active * settings.joint_limit_damping
         return torque, stiffness, damping
 
     # ------------------------------------------------------------------ the implicit step
-    def _implicit(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray):
-        simulator = self._simulator
-        dt, model, data = simulator.dt, simulator.model, simulator.data
-        engine, nv = simulator.engine, simulator.scene.nv
-        contacts = engine.detect(q)
+    def _implicit(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, drive: DriveTerms, memory: ContactMemory):
+        dt, model, data = self.settings.dt, self.scene.model, self.data
+        engine, nv = self.contacts, self.scene.nv
+        contacts = engine.detect(q, memory)
         pin.computeJointJacobians(model, data, q)
         mass = self._mass_matrix(q)
         bias = pin.nonLinearEffects(model, data, q, v).copy()
         self._implicit_gyroscopic(v, bias)
-        passive, stiffness, damping = self._passive(q, v)
+        passive, stiffness, damping = self._passive(q, v, drive)
         tau = np.zeros(nv)
         tau[: len(tau_hand)] = tau_hand  # hand joint torques, or with external forces on the objects' coordinates
         # Springs acting on joint coordinates (limits, object springs): the explicit torque is in `passive`;
         # their stiffness acts on the displacement dt v+ of this step.
         matrix = mass + dt * np.diag(dt * stiffness + damping)
         rhs = mass @ v + dt * (tau - bias + passive)
-        transmission = self._transmission()
+        transmission = self._transmission(drive)
         m = len(contacts)
         if m == 0:  # free motion: one linear solve, no contact bookkeeping
             reduced = transmission.T @ matrix @ transmission
             v_next = transmission @ np.linalg.solve(reduced, transmission.T @ rhs)
             contacts.force, contacts.sticking = np.zeros((0, 3)), np.zeros(0, dtype=bool)
-            engine.remember(contacts, np.zeros((0, 3)), np.zeros(0, dtype=bool))
-            drive = self._drive(mass, v, v_next, bias - passive, dt * stiffness + damping)
-            return pin.integrate(model, q, v_next * dt), v_next, contacts, drive
+            memory = engine.remember(contacts, np.zeros((0, 3)), np.zeros(0, dtype=bool))
+            torques = self._drive(mass, v, v_next, bias - passive, dt * stiffness + damping, drive)
+            return pin.integrate(model, q, v_next * dt), v_next, contacts, torques, memory
         jacobians = engine.jacobians(contacts)
         start_velocity = jacobians @ v
         stacked = jacobians.reshape(-1, nv)  # (3m, nv)
@@ -196,79 +218,89 @@ class PythonStep:
         forces[status == 0] = 0.0
         displacement = engine.end_displacement(contacts, relative, forces, status, dt)
         contacts.force, contacts.sticking = forces, status == 1
-        engine.remember(contacts, displacement, status == 2)
+        memory = engine.remember(contacts, displacement, status == 2)
         generalized = stacked.T @ forces.ravel()
-        drive = self._drive(mass, v, v_next, bias - generalized - passive, dt * stiffness + damping)
-        return pin.integrate(model, q, v_next * dt), v_next, contacts, drive
+        torques = self._drive(mass, v, v_next, bias - generalized - passive, dt * stiffness + damping, drive)
+        return pin.integrate(model, q, v_next * dt), v_next, contacts, torques, memory
 
-    def _drive(self, mass, v, v_next, forces, implicit_damping) -> np.ndarray:
+    def _drive(self, mass, v, v_next, forces, implicit_damping, drive: DriveTerms) -> np.ndarray:
         """Hand joint torques the drive delivered over the step (M a + bias - contact - passive + implicit terms).
 
         ``forces`` is bias - contact - passive torques, ``implicit_damping`` the diagonal (dt K + C) acting on v+.
         """
-        nvh = self._simulator._nvh
-        drive = (mass @ ((v_next - v) / self._simulator.dt) + forces + implicit_damping * v_next)[:nvh]
-        return drive - self._motor_damping() * v_next[:nvh]  # the clutch passes what the motor's losses leave
+        nvh = self.scene.nv_hand
+        torques = (mass @ ((v_next - v) / self.settings.dt) + forces + implicit_damping * v_next)[:nvh]
+        return torques - drive.motor_damping * v_next[:nvh]  # the clutch passes what the motor's losses leave
 
     # ------------------------------------------------------------------ the explicit steps
-    def _explicit(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray):
-        simulator = self._simulator
-        dt, model = simulator.dt, simulator.model
-        tau = np.zeros(simulator.scene.nv)
+    def _explicit(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, drive: DriveTerms, memory: ContactMemory):
+        dt, model = self.settings.dt, self.scene.model
+        tau = np.zeros(self.scene.nv)
         tau[: len(tau_hand)] = tau_hand
-        transmission = self._transmission()
-        if simulator.integrator == "semi-implicit":
-            acceleration, contacts, forces, sticking, displacement, drive = self._acceleration(q, v, tau, transmission)
+        transmission = self._transmission(drive)
+        if self.settings.integrator == "semi-implicit":
+            acceleration, contacts, forces, sticking, displacement, torques = self._acceleration(
+                q, v, tau, transmission, drive, memory
+            )
             v_next = v + dt * acceleration
             q_next = pin.integrate(model, q, v_next * dt)
         else:
             # Runge-Kutta-Munthe-Kaas: each stage's configuration is q (+) theta, and a body's rotation increment
             # theta grows at dexp^-1_{-theta}(w), not w (adding the stages' w is second order on SO(3)).
-            k1, contacts, forces, sticking, displacement, drive = self._acceleration(q, v, tau, transmission)
+            k1, contacts, forces, sticking, displacement, torques = self._acceleration(
+                q, v, tau, transmission, drive, memory
+            )
             v2 = v + dt / 2 * k1
             q2 = pin.integrate(model, q, v * dt / 2)
             rate2 = self._increment_rate(v * dt / 2, v2)
-            k2 = self._acceleration(q2, v2, tau, transmission)[0]
+            k2 = self._acceleration(q2, v2, tau, transmission, drive, memory)[0]
             v3 = v + dt / 2 * k2
             q3 = pin.integrate(model, q, rate2 * dt / 2)
             rate3 = self._increment_rate(rate2 * dt / 2, v3)
-            k3 = self._acceleration(q3, v3, tau, transmission)[0]
+            k3 = self._acceleration(q3, v3, tau, transmission, drive, memory)[0]
             v4 = v + dt * k3
             q4 = pin.integrate(model, q, rate3 * dt)
             rate4 = self._increment_rate(rate3 * dt, v4)
-            k4 = self._acceleration(q4, v4, tau, transmission)[0]
+            k4 = self._acceleration(q4, v4, tau, transmission, drive, memory)[0]
             v_next = v + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
             q_next = pin.integrate(model, q, dt / 6 * (v + 2 * rate2 + 2 * rate3 + rate4))
         contacts.force, contacts.sticking = forces, sticking
-        simulator.engine.remember(contacts, displacement, ~sticking)
-        return q_next, v_next, contacts, drive
+        memory = self.contacts.remember(contacts, displacement, ~sticking)
+        return q_next, v_next, contacts, torques, memory
 
-    def _acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, transmission: np.ndarray):
+    def _acceleration(
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        tau: np.ndarray,
+        transmission: np.ndarray,
+        drive: DriveTerms,
+        memory: ContactMemory,
+    ):
         """Explicit accelerations at (q, v) (contacts detected at q), with the step's contact bookkeeping."""
-        simulator = self._simulator
-        model, data, engine, nvh = simulator.model, simulator.data, simulator.engine, simulator._nvh
-        contacts = engine.detect(q)
+        model, data, engine, nvh = self.scene.model, self.data, self.contacts, self.scene.nv_hand
+        contacts = engine.detect(q, memory)
         pin.computeJointJacobians(model, data, q)
-        passive, _, damping = self._passive(q, v)
+        passive, _, damping = self._passive(q, v, drive)
         total = tau + passive - damping * v
         forces, sticking, displacement = np.zeros((len(contacts), 3)), np.zeros(len(contacts), bool), None
-        generalized = np.zeros(simulator.scene.nv)
+        generalized = np.zeros(self.scene.nv)
         if len(contacts):
             jacobians = engine.jacobians(contacts)
             relative = np.einsum("mij,j->mi", jacobians, v)
-            forces, sticking, displacement = engine.forces(contacts, relative, simulator.dt)
+            forces, sticking, displacement = engine.forces(contacts, relative, self.settings.dt)
             generalized = np.einsum("mij,mi->j", jacobians, forces)
         mass = self._mass_matrix(q)
         bias = pin.nonLinearEffects(model, data, q, v).copy()
-        if simulator.integrator == "semi-implicit":  # RK4's explicit stages are accurate to O(dt^4) as they are
+        if self.settings.integrator == "semi-implicit":  # RK4's explicit stages are accurate to O(dt^4) as they are
             self._implicit_gyroscopic(v, bias)
         reduced = transmission.T @ mass @ transmission
         acceleration = transmission @ np.linalg.solve(reduced, transmission.T @ (total + generalized - bias))
-        drive = (mass @ acceleration + bias - generalized - passive + damping * v)[:nvh]
-        drive -= self._motor_damping() * v[:nvh]
+        torques = (mass @ acceleration + bias - generalized - passive + damping * v)[:nvh]
+        torques -= drive.motor_damping * v[:nvh]
         if displacement is None:
             displacement = np.zeros((0, 3))
-        return acceleration, contacts, forces, sticking, displacement, drive
+        return acceleration, contacts, forces, sticking, displacement, torques
 
 
-__all__ = ["PythonStep"]
+__all__ = ["PythonEngine"]

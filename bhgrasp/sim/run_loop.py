@@ -1,8 +1,9 @@
-"""The run loop of :meth:`Simulator.run <bhgrasp.sim.simulator.Simulator.run>`: a controller closed on the simulation.
+"""The run loop, :meth:`Simulator.run <bhgrasp.sim.simulator.Simulator.run>`: a controller closed on the simulation.
 
 Each physics step: the controller reads the sensed state every ``control_dt`` (inputs held in between), a sample is
 recorded every ``record_every`` steps, the disturbance torques and object forces of the step's start time are added,
-and the run stops early at the first state ``until`` accepts.
+and the run stops early at the first state ``until`` accepts.  The loop steps through the Simulator's public
+:meth:`~bhgrasp.sim.simulator.Simulator.step`, and the function is the Simulator's ``run`` method (one signature).
 """
 
 from __future__ import annotations
@@ -14,7 +15,8 @@ import numpy as np
 
 from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.errors import InputError
-from bhgrasp.sim.contact import empty_contact_set
+from bhgrasp.sim.contact_set import empty_contact_set
+from bhgrasp.sim.inputs import joint_torques
 from bhgrasp.sim.recorder import Recorder
 from bhgrasp.sim.sensor_model import SensorModel, Sensors
 from bhgrasp.sim.state import State, Trajectory
@@ -39,9 +41,27 @@ def run(
     until: Callable[[State], bool] | None = None,
     sensors: SensorModel | None = None,
 ) -> Trajectory:
-    """Simulate ``duration`` [s] of ``simulator`` under ``controller`` and record everything.
+    """Simulate ``duration`` [s] under ``controller`` and record everything.
 
-    The arguments are those of :meth:`~bhgrasp.sim.simulator.Simulator.run`, which documents them.
+    Args:
+        simulator: The simulator (``self`` of :meth:`Simulator.run <bhgrasp.sim.simulator.Simulator.run>`).
+        controller: ``(t, state) -> u`` callable or object with ``reset(state)``; an optional ``log`` dict
+            (name -> latest value) is recorded at every sample.
+        duration: Simulated time [s].
+        state: Start state (default :meth:`~bhgrasp.sim.simulator.Simulator.initial_state`).
+        control_dt: Controller period [s] (a multiple of ``dt``; inputs held in between); default ``dt``.
+        sensor_noise: (sigma_q [rad], sigma_v [rad/s]) Gaussian noise on the hand state the controller sees:
+            short for ``sensors=SensorModel(joint_position=sigma_q, joint_velocity=sigma_v)``.
+        disturbance: Joint torques [N m] added to the actuators': an array, or a callable ``t -> array``.
+        seed: Seed of the sensor noise (required with noisy ``sensor_noise`` or ``sensors``).
+        progress: Show a tqdm progress bar for runs of more than 20 000 steps.
+        record_every: Record one sample every this many physics steps.
+        object_forces: ``t -> (n_objects, 3)`` forces [N, world frame] on the objects' centres of mass (e.g. a
+            shake test), or ``None``.
+        until: ``state -> bool`` checked after every step: the run stops early at the first state it accepts
+            (e.g. an object that left the hand); the trajectory ends there.
+        sensors: What the controller's sensors get wrong (:class:`~bhgrasp.sim.sensor_model.SensorModel`: noise
+            on the joints, the object's pose and twist and the contact forces, and a delay).
     """
     duration = as_positive(duration, "duration")
     steps = round(duration / simulator.dt)
@@ -59,13 +79,9 @@ def run(
     if isinstance(record_every, bool) or not isinstance(record_every, int | np.integer) or record_every < 1:
         raise InputError(f"`record_every` must be a positive integer (physics steps per sample), got {record_every!r}")
     if disturbance is not None and not callable(disturbance):
-        disturbance = simulator._disturbance(disturbance, "disturbance")
+        disturbance = joint_torques(disturbance, simulator.scene.nv_hand, "disturbance")
     state = simulator.initial_state() if state is None else state
-    if state.scene_q is None or state.scene_q.shape != (simulator.scene.nq,):
-        raise InputError(
-            f"`state` must be a state of this simulator's scene (nq = {simulator.scene.nq}); use "
-            "Simulator.initial_state() or a state a run of this simulator returned"
-        )
+    simulator.check_state(state)  # before anything runs
     simulator.actuation.restore(state.actuation_modes, state.scene_q[: simulator.scene.nq_hand])
     if isinstance(getattr(controller, "log", None), dict):
         controller.log.clear()  # each run records its own internals, never the last run's
@@ -73,7 +89,7 @@ def run(
         controller.reset(state)
     recorder = Recorder(simulator.scene, simulator.actuation)
     u = np.zeros(simulator.actuation.n_inputs)
-    info = StepInfo(empty_contact_set(), np.zeros(simulator._nvh))
+    info = StepInfo(empty_contact_set(), np.zeros(simulator.scene.nv_hand))
     iterator = range(steps)
     if progress and steps > 20_000:
         from tqdm import tqdm
@@ -82,19 +98,27 @@ def run(
     for k in iterator:
         if k % hold == 0:
             sensed = reader.read(state)
-            u = simulator._input(np.array(controller(state.t, sensed), dtype=float), state.t)
+            u = _control(controller, state.t, sensed)
         if k % record_every == 0:
             recorder.add(state, u, info, getattr(controller, "log", None))
-        torque = (
-            simulator._disturbance(disturbance(state.t), "disturbance(t)") if callable(disturbance) else disturbance
-        )
-        if object_forces is not None:
-            torque = simulator._with_object_forces(torque, object_forces(state.t))
-        state, info = simulator._advance(state, u, torque)
+        torque = disturbance
+        if callable(disturbance):
+            torque = joint_torques(disturbance(state.t), simulator.scene.nv_hand, "disturbance(t)")
+        forces = None if object_forces is None else object_forces(state.t)
+        state, info = simulator.step(state, u, torque, forces)
         if until is not None and until(state):
             break
     recorder.add(state, u, info, getattr(controller, "log", None))
     return recorder.trajectory()
+
+
+def _control(controller: Callable[[float, State], Any], t: float, sensed: State) -> np.ndarray:
+    """The controller's input at ``t`` as a new float array (the recorder keeps it)."""
+    u = controller(t, sensed)
+    try:
+        return np.array(u, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise InputError(f"the controller must return numbers (the inputs u), got {u!r} at t = {t:.6g} s") from error
 
 
 __all__ = ["run"]

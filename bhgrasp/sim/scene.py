@@ -256,6 +256,10 @@ class Scene:
             return self.model.frames[geometry_object.parentFrame].name
         return geometry_object.name
 
+    def __reduce__(self) -> tuple:
+        """Pickles and copies rebuild the scene from its hand, objects and environment."""
+        return Scene, (self.hand, self.objects, self.environment, self.environment_touches_hand)
+
     def __repr__(self) -> str:
         return (
             f"Scene({self.hand.name!r}, objects={self.object_names}, environment={self.environment_names}, "

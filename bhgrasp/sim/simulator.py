@@ -3,46 +3,56 @@
 Integrators (``integrator=``): ``"implicit"`` (default: linearly-implicit Euler, the stiffness and damping of
 contacts, joint stops, object springs and joint damping folded into the velocity solve, so stiff contacts stay stable
 at millisecond steps), ``"semi-implicit"`` (symplectic Euler with explicit forces) and ``"rk4"`` (Runge-Kutta on the
-manifold, contacts re-detected at each stage); :mod:`~bhgrasp.sim.python_engine` states their equations.  A run
-depends only on its inputs: the :class:`~bhgrasp.sim.state.State` carries the contact memory (tangential springs,
-stick/slip) and the actuation modes, so a step depends only on its state and inputs, never on the steps or runs
-before it.
+manifold, contacts re-detected at each stage); :mod:`~bhgrasp.sim.python_engine` states their equations.
 
-Two engines run this physics: ``engine="compiled"`` (the default; the step in C++, ``src/engine.cpp``, through
-:mod:`bhgrasp.sim.compiled`) and ``engine="python"`` (:mod:`bhgrasp.sim.python_engine`, the readable reference);
-tests/test_compiled.py steps both in lockstep.  This module holds the Simulator: its options and states, the checks
-of its inputs, the dispatch of a step to its engine and the divergence check; :mod:`~bhgrasp.sim.step_output` holds
-what a step returns, :mod:`~bhgrasp.sim.run_loop` the loop of :meth:`Simulator.run`.
+The contract of a Simulator:
+
+- **Its settings are frozen** (:class:`~bhgrasp.sim.settings.SimulatorSettings`): assigning ``sim.dt`` raises;
+  :meth:`Simulator.with_settings` builds a new Simulator.
+- **A step depends only on its inputs**: the :class:`~bhgrasp.sim.state.State` carries the contact memory (an
+  immutable :class:`~bhgrasp.sim.contact_set.ContactMemory`) and the actuation modes, never the steps or runs before.
+- **A step checks the state it is given** belongs to its scene (the scene's signature, sizes, finite values, unit
+  quaternions, coordinates within ``max_coordinate``) and raises an :class:`~bhgrasp.errors.InputError` naming the
+  field; a state that this Simulator's own step made is trusted (its arrays are read-only).
+- **It may be shared by threads**: steps from several threads run one at a time (a lock), each as if alone.  For
+  parallel speed give each thread its own Simulator (or use :class:`~bhgrasp.sim.batch.BatchSimulator`).
+- **It pickles** (rebuilt from its scene, contact law, actuation and settings), so it travels to a process or a Dask
+  worker.
+- **Every divergence names the value it saw** (:class:`~bhgrasp.errors.SimulationDiverged`).
+
+Two engines run this physics behind the :class:`~bhgrasp.sim.engine.Engine` protocol: ``engine="compiled"`` (the
+default; the step in C++, ``src/engine.cpp``) and ``engine="python"`` (the readable reference); tests/test_compiled.py
+steps both in lockstep.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable
+import threading
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
-from bhgrasp._validation import as_array, as_positive, as_vector
-from bhgrasp.errors import InputError, SimulationDiverged
-from bhgrasp.objects import RigidObject
+from bhgrasp.errors import FrozenSettingError, InputError
 from bhgrasp.sim import run_loop
 from bhgrasp.sim.actuation import Actuation, FullyActuated
-from bhgrasp.sim.compiled import CompiledStep, memory_of
-from bhgrasp.sim.contact import ContactEngine, ContactMemory, ContactSet, SpringDamper
-from bhgrasp.sim.python_engine import PythonStep
+from bhgrasp.sim.compiled import CompiledEngine
+from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact_set import ContactMemory
+from bhgrasp.sim.engine import DriveTerms, drive_key
+from bhgrasp.sim.inputs import control_input, generalized_forces, joint_torques
+from bhgrasp.sim.python_engine import PythonEngine
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.sensor_model import SensorModel
-from bhgrasp.sim.state import SimulatedState, State, Trajectory
-from bhgrasp.sim.step_output import StepInfo, _StepOutput
+from bhgrasp.sim.scene_layout import SceneLayout
+from bhgrasp.sim.settings import SimulatorSettings
+from bhgrasp.sim.state import SimulatedState, State
+from bhgrasp.sim.state_check import check_state, describe_divergence
+from bhgrasp.sim.step_output import StepInfo, StepOutput
 
-INTEGRATORS = ("implicit", "semi-implicit", "rk4")
-ENGINES = ("compiled", "python")
+MATCH_RADIUS = 3e-3  # [m] a contact matches the last step's nearest point of its pair within this distance on body b
 
 
 class Simulator:
-    """Fixed-step simulator of a :class:`~bhgrasp.sim.scene.Scene`."""
+    """Fixed-step simulator of a :class:`~bhgrasp.sim.scene.Scene` (its settings frozen once built)."""
 
     def __init__(
         self,
@@ -56,6 +66,7 @@ class Simulator:
         max_penetration: float = 0.02,
         max_speed: float = 100.0,
         engine: str = "compiled",
+        max_coordinate: float = 1e4,
     ) -> None:
         """Set up the simulation.
 
@@ -71,79 +82,122 @@ class Simulator:
             max_speed: Joint or object speed [m/s or rad/s] beyond which the run is declared diverged.
             engine: ``"compiled"`` (the C++ step of ``bhgrasp._core``) or ``"python"`` (the readable reference
                 implementation; the same physics, tests/test_compiled.py holds them in lockstep).
+            max_coordinate: Largest |coordinate| [m or rad] of a state: beyond it a state is refused and a step
+                has diverged.
 
         Raises:
+            InputError: A setting out of range, or an actuation built for another hand.
             CompiledEngineUnavailable: ``engine="compiled"`` but the C++ core was not built.
         """
-        if integrator not in INTEGRATORS:
-            raise InputError(f"`integrator` must be one of {INTEGRATORS}, got {integrator!r}")
-        if engine not in ENGINES:
-            raise InputError(f"`engine` must be one of {ENGINES}, got {engine!r}")
-        self.scene = scene
-        self.dt = as_positive(dt, "dt")
-        self.law = contact if contact is not None else SpringDamper()
-        self.actuation = actuation if actuation is not None else FullyActuated(scene.hand)
-        if self.actuation.hand is not scene.hand:
+        settings = SimulatorSettings(
+            dt=dt,
+            integrator=integrator,
+            joint_limit_stiffness=joint_limit_stiffness,
+            joint_limit_damping=joint_limit_damping,
+            max_penetration=max_penetration,
+            max_speed=max_speed,
+            max_coordinate=max_coordinate,
+            engine=engine,
+        )
+        self._build(scene, contact, actuation, settings)
+
+    @classmethod
+    def from_settings(
+        cls,
+        scene: Scene,
+        settings: SimulatorSettings,
+        contact: SpringDamper | None = None,
+        actuation: Actuation | None = None,
+    ) -> Simulator:
+        """A Simulator of ``scene`` with frozen ``settings`` (the contact law and actuation as in the constructor)."""
+        if not isinstance(settings, SimulatorSettings):
+            raise InputError(f"`settings` must be a SimulatorSettings, got {type(settings).__name__}")
+        simulator = cls.__new__(cls)
+        simulator._build(scene, contact, actuation, settings)
+        return simulator
+
+    def _build(
+        self, scene: Scene, contact: SpringDamper | None, actuation: Actuation | None, settings: SimulatorSettings
+    ) -> None:
+        if not isinstance(scene, Scene):
+            raise InputError(f"`scene` must be a Scene, got {type(scene).__name__}")
+        actuation = actuation if actuation is not None else FullyActuated(scene.hand)
+        if actuation.hand is not scene.hand:
             raise InputError("`actuation` must be built for the scene's hand (`Actuation(scene.hand, ...)`)")
-        self.integrator = integrator
-        self.limit_stiffness = as_positive(joint_limit_stiffness, "joint_limit_stiffness")
-        self.limit_damping = float(joint_limit_damping)
-        self.max_penetration = as_positive(max_penetration, "max_penetration")
-        self.max_speed = as_positive(max_speed, "max_speed")
-        self.engine = ContactEngine(scene, self.law)
-        self.model, self.data = scene.model, scene.data
-        self._nvh = scene.nv_hand
-        self._hand_sizes = (scene.nq_hand, scene.nv_hand)
-        kind = type(self.actuation)  # an actuation without modes needs no restore or update around each step
-        self._modal = not (kind.restore is Actuation.restore and kind.reset is Actuation.reset
-                           and kind.update is Actuation.update and kind.begin is Actuation.begin)  # fmt: skip
-        self._pair_bodies = [(pair.body_a, pair.body_b) for pair in scene.pairs]
-        # free bodies: angular velocity coordinates, principal axes (columns, body frame) and moments [kg m^2]
-        self._spinning = []
-        for i, item in enumerate(scene.objects):
-            if isinstance(item, RigidObject):
-                moments, axes = np.linalg.eigh(item.spatial_inertia().inertia)
-                angular = slice(scene.object_v_slice(i).start + 3, scene.object_v_slice(i).stop)
-                self._spinning.append((angular, axes, tuple(float(x) for x in moments)))
-        springs = [i for i, item in enumerate(scene.objects) if hasattr(item, "stiffness")]
-        self._spring_q = np.array([scene.object_q_slice(i).start for i in springs], dtype=int)
-        self._spring_v = np.array([scene.object_v_slice(i).start for i in springs], dtype=int)
-        self.engine_name = engine
-        self._compiled = CompiledStep(self) if engine == "compiled" else None
-        self._stepper = self._compiled if self._compiled is not None else PythonStep(self)  # the engine's step
+        law = contact if contact is not None else SpringDamper()
+        layout = SceneLayout.of(scene)
+        kind = CompiledEngine if settings.engine == "compiled" else PythonEngine
+        values = {
+            "scene": scene,
+            "law": law,
+            "actuation": actuation,
+            "settings": settings,
+            "layout": layout,
+            "engine": kind(scene, layout, law, settings, MATCH_RADIUS),
+            "_drives": {},
+            "_lock": threading.Lock(),
+            "_modal": _modal(actuation),
+        }
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+    def with_settings(self, **changes: Any) -> Simulator:
+        """A new Simulator of the same scene, contact law and actuation with some settings changed (e.g. ``dt``)."""
+        unknown = sorted(set(changes) - set(SimulatorSettings.__dataclass_fields__))
+        if unknown:
+            raise InputError(f"unknown settings {unknown}; valid: {sorted(SimulatorSettings.__dataclass_fields__)}")
+        settings = SimulatorSettings(**{**vars(self.settings), **changes})
+        return Simulator.from_settings(self.scene, settings, self.law, self.actuation)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        setting = name in SimulatorSettings.__dataclass_fields__
+        cure = f"simulator.with_settings({name}=...)" if setting else "Simulator(scene, contact=..., actuation=...)"
+        raise FrozenSettingError(
+            f"Simulator.{name} cannot change after the Simulator is built (its engine was set up with it); build a "
+            f"new one: {cure}"
+        )
+
+    def __reduce__(self) -> tuple:
+        """Pickles and copies rebuild the Simulator from its scene, contact law, actuation and settings."""
+        return Simulator.from_settings, (self.scene, self.settings, self.law, self.actuation)
+
+    # ------------------------------------------------------------------ settings (read-only)
+    dt = property(lambda self: self.settings.dt, doc="Physics step [s].")
+    integrator = property(lambda self: self.settings.integrator, doc="The integrator's name.")
+    engine_name = property(lambda self: self.settings.engine, doc='``"compiled"`` or ``"python"``.')
+    limit_stiffness = property(lambda self: self.settings.joint_limit_stiffness, doc="Joint stops [N m/rad].")
+    limit_damping = property(lambda self: self.settings.joint_limit_damping, doc="Joint stops [N m s/rad].")
+    max_penetration = property(lambda self: self.settings.max_penetration, doc="Divergence depth [m].")
+    max_speed = property(lambda self: self.settings.max_speed, doc="Divergence speed [m/s or rad/s].")
 
     # ------------------------------------------------------------------ states
     def initial_state(self, q_hand: Any = None) -> State:
         """The scene at rest with the hand at ``q_hand`` (default neutral) and objects as described."""
+        from bhgrasp._validation import as_vector
+
         q_hand = None if q_hand is None else as_vector(q_hand, "q_hand", self.scene.nq_hand)
         q, v = self.scene.initial_state(q_hand)
-        self.engine.reset()
-        self.actuation.reset(q[: self.scene.nq_hand])
         memory = ContactMemory.empty()
-        contacts = self.engine.detect(q) if self._compiled is None else self._compiled.detect(q, memory)
-        return self._state(0.0, q, v, contacts, memory)
+        with self._lock:
+            self.actuation.reset(q[: self.scene.nq_hand])
+            contacts = self.engine.detect(q, memory)
+            return self._state(0.0, q, v, contacts, memory)
 
     def _state(self, t: float, q: np.ndarray, v: np.ndarray, contacts: Any, memory: Any) -> SimulatedState:
         """The state at ``t``: ``contacts`` and ``memory`` as the engine made them (converted when first read)."""
-        return SimulatedState.lazy(t, q, v, self.actuation.modes(), _StepOutput(self, contacts, memory),
-                                   self._hand_sizes)  # fmt: skip
-
-    def _objects(self, q: np.ndarray, v: np.ndarray) -> tuple[tuple[pin.SE3, ...], np.ndarray]:
-        """Object poses (COM frames, world) and twists (n_objects, 6) (COM velocity, angular velocity; world)."""
         scene = self.scene
-        n = len(scene.objects)
-        poses = tuple(scene.object_pose(q, i) for i in range(n))
-        return poses, np.array([scene.object_twist(q, v, i) for i in range(n)]).reshape(n, 6)
+        source = StepOutput(self, contacts, memory)
+        sizes = (scene.nq_hand, scene.nv_hand)
+        return SimulatedState.lazy(t, q, v, self.actuation.modes(), source, sizes, self.layout.signature)
 
-    def _memory(self, state: State) -> Any:
-        """The contact memory a step from ``state`` starts with, as its engine needs it."""
-        source = getattr(state, "_source", None) if isinstance(state, SimulatedState) else None
-        memory = source.memory if source is not None else state.contact_memory
-        if memory is None:
-            return ContactMemory.empty()
-        if self._compiled is None and not isinstance(memory, ContactMemory):
-            return memory_of(memory)  # a compiled run's state continued by the Python engine
-        return memory
+    def check_state(self, state: State) -> State:
+        """``state`` if this simulator can step it (see :func:`~bhgrasp.sim.state_check.check_state`).
+
+        Raises:
+            InputError: A state of another scene, or a malformed one; the message names the field.
+        """
+        self._start_memory(state)
+        return state
 
     # ------------------------------------------------------------------ one step
     def step(self, state: State, u: Any, disturbance: Any = None, object_forces: Any = None) -> tuple[State, StepInfo]:
@@ -153,130 +207,71 @@ class Simulator:
         centre of mass [N, world frame].
 
         Raises:
-            SimulationDiverged: Non-finite input or state, runaway speed or penetration.
+            InputError: A state of another scene or a malformed one (the message names the field), an input or a
+                disturbance of the wrong shape or type.
+            SimulationDiverged: Non-finite input, or a step whose result is not finite, too fast, too deep or too
+                far out (the message names the value).
         """
-        disturbance = self._disturbance(disturbance, "disturbance")
+        memory = self._start_memory(state)
+        u = control_input(u, self.actuation.n_inputs, state.t)
+        forces = joint_torques(disturbance, self.scene.nv_hand, "disturbance")
         if object_forces is not None:
-            disturbance = self._with_object_forces(disturbance, object_forces)
-        return self._advance(state, self._input(u, state.t), disturbance)
+            forces = generalized_forces(self.scene, forces, object_forces)
+        with self._lock:
+            return self._advance(state, u, forces, memory)
 
-    def _with_object_forces(self, disturbance: np.ndarray | None, forces: Any) -> np.ndarray:
-        """Generalized forces on the whole scene: hand joint torques, then world forces at the objects' COMs.
+    def _start_memory(self, state: State) -> Any:
+        """The contact memory a step from ``state`` starts with, as the engine takes it (the state checked)."""
+        source = getattr(state, "_source", None) if type(state) is SimulatedState else None
+        if source is not None and source.simulator is self:  # made by this simulator's step: read-only, trusted
+            memory = source.memory
+            return self.engine.memory(memory) if isinstance(memory, ContactMemory) else memory
+        memory = check_state(state, self.scene, self.layout, self.settings)
+        return self.engine.memory(memory)
 
-        A free object's first three velocity coordinates translate its COM along the world axes
-        (:meth:`~bhgrasp.sim.scene.Scene.object_twist`), so a world force F enters as it is; a spring-mounted
-        object's slide takes F . direction.
-        """
-        forces = as_array(forces, "object_forces", (len(self.scene.objects), 3))
-        total = np.zeros(self.scene.nv)
-        if disturbance is not None:
-            total[: self._nvh] = disturbance
-        for index, force in enumerate(forces):
-            rows = self.scene.object_v_slice(index)
-            if rows.stop - rows.start == 6:
-                total[rows.start : rows.start + 3] = force
-            else:
-                total[rows] = force @ self.scene.objects[index].direction
-        return total
-
-    def _input(self, u: Any, t: float) -> np.ndarray:
-        """The control input as a finite float array of shape (n_inputs,)."""
-        u = np.asarray(u, dtype=float)
-        if u.shape != (self.actuation.n_inputs,):
-            raise InputError(f"`u` must have shape ({self.actuation.n_inputs},), got shape {u.shape}")
-        if not math.isfinite(u.dot(u)) and not np.isfinite(u).all():  # the dot product: one cheap test per step
-            raise SimulationDiverged(t, "control input u", u.tolist(), "the controller returned NaN/inf")
-        return u
-
-    def _advance(self, state: State, u: np.ndarray, disturbance: np.ndarray | None) -> tuple[State, StepInfo]:
-        """:meth:`step` with the input and disturbance already checked (``None`` or finite joint torques)."""
+    def _advance(
+        self, state: State, u: np.ndarray, disturbance: np.ndarray | None, memory: Any
+    ) -> tuple[State, StepInfo]:
+        """:meth:`step` with the input, disturbance and state checked (under the lock)."""
         q, v = state.scene_q, state.scene_v
-        # The step depends only on the state: its contact memory and actuation modes, not the last run's.
-        memory = self._memory(state)
-        if self._modal:
-            self.actuation.restore(state.actuation_modes, q[: self.scene.nq_hand])
-            self.actuation.begin(u)
-        tau_hand = self.actuation.joint_torques(u)
-        if disturbance is not None and len(disturbance) > self._nvh:  # external forces on the objects too
+        actuation, nqh, nvh = self.actuation, self.scene.nq_hand, self.scene.nv_hand
+        if self._modal:  # the step depends only on the state's actuation modes, not the last run's
+            actuation.restore(state.actuation_modes, q[:nqh])
+            actuation.begin(u)
+        tau_hand = actuation.joint_torques(u)
+        if disturbance is not None and len(disturbance) > nvh:  # external forces on the objects too
             disturbance = disturbance.copy()
-            disturbance[: self._nvh] += tau_hand
+            disturbance[:nvh] += tau_hand
             tau_hand = disturbance
         elif disturbance is not None:
             tau_hand = tau_hand + disturbance
-        q_next, v_next, contacts, drive, memory, divergence = self._stepper.step(q, v, tau_hand, memory)
-        t = round(state.t / self.dt + 1) * self.dt  # k dt exactly: no accumulated rounding
-        if divergence is None or divergence.kind:  # the compiled step checked the same conditions
-            self._check(t, q_next, v_next, contacts)
+        result = self.engine.step(q, v, tau_hand, self._drive(), memory)
+        t = round(state.t / self.settings.dt + 1) * self.settings.dt  # k dt exactly: no accumulated rounding
+        if result.divergence.kind:
+            raise describe_divergence(t, result.divergence, self.settings)
         if self._modal:
-            self.actuation.update(q_next[: self.scene.nq_hand], v_next[: self._nvh], u, drive)
-        return self._state(t, q_next, v_next, contacts, memory), StepInfo(contacts, drive)
+            actuation.update(result.q[:nqh], result.v[:nvh], u, result.drive)
+        return self._state(t, result.q, result.v, result.contacts, result.memory), StepInfo(
+            result.contacts, result.drive, self.engine
+        )
 
-    def _disturbance(self, torque: Any, name: str) -> np.ndarray | None:
-        """A disturbance as finite joint torques of shape (nv_hand,) [N m] (``None``: none)."""
-        if torque is None:
-            return None
-        array = np.asarray(torque, dtype=float)
-        if array.shape != (self._nvh,):
-            raise InputError(
-                f"`{name}` must be {self._nvh} joint torques [N m] (one per hand joint), got shape {array.shape}"
-            )
-        if not np.isfinite(array).all():
-            raise InputError(f"`{name}` must be finite, got {array.tolist()}")
-        return array
-
-    def _check(self, t: float, q: np.ndarray, v: np.ndarray, contacts: ContactSet) -> None:
-        speed = float(np.abs(v).max(initial=0.0))
-        if not (speed <= self.max_speed and np.isfinite(q).all()):  # NaN fails every comparison
-            if not np.isfinite(q).all() or not np.isfinite(v).all():
-                name = "joint/object position" if not np.isfinite(q).all() else "joint/object velocity"
-                raise SimulationDiverged(t, name, "NaN/inf", "reduce dt or the controller gains")
-            index = int(np.argmax(np.abs(v)))
-            raise SimulationDiverged(t, f"speed of velocity coordinate {index}", f"{speed:.3g}", "reduce dt or gains")
-        if len(contacts) and contacts.depth.max() > self.max_penetration:
-            raise SimulationDiverged(
-                t, "contact depth", f"{contacts.depth.max():.4g} m", "stiffen the contact or reduce dt/forces"
-            )
+    def _drive(self) -> Any:
+        """The actuation's terms in its current mode, as the engine takes them (built once for each mode)."""
+        key = drive_key(self.actuation)
+        drive = self._drives.get(key)
+        if drive is None:
+            drive = self._drives[key] = self.engine.drive(DriveTerms.of(self.actuation))
+        return drive
 
     # ------------------------------------------------------------------ runs
-    def run(
-        self,
-        controller: Callable[[float, State], Any],
-        duration: float,
-        state: State | None = None,
-        control_dt: float | None = None,
-        sensor_noise: tuple[float, float] | None = None,
-        disturbance: Callable[[float], Any] | Any = None,
-        seed: int | None = None,
-        progress: bool = True,
-        record_every: int = 1,
-        object_forces: Callable[[float], Any] | None = None,
-        until: Callable[[State], bool] | None = None,
-        sensors: SensorModel | None = None,
-    ) -> Trajectory:
-        """Simulate ``duration`` [s] under ``controller`` and record everything.
-
-        Args:
-            controller: ``(t, state) -> u`` callable or object with ``reset(state)``; an optional ``log`` dict
-                (name -> latest value) is recorded at every sample.
-            duration: Simulated time [s].
-            state: Start state (default :meth:`initial_state`).
-            control_dt: Controller period [s] (a multiple of ``dt``; inputs held in between); default ``dt``.
-            sensor_noise: (sigma_q [rad], sigma_v [rad/s]) Gaussian noise on the hand state the controller sees:
-                short for ``sensors=SensorModel(joint_position=sigma_q, joint_velocity=sigma_v)``.
-            disturbance: Joint torques [N m] added to the actuators': an array, or a callable ``t -> array``.
-            seed: Seed of the sensor noise (required with noisy ``sensor_noise`` or ``sensors``).
-            progress: Show a tqdm progress bar for runs of more than 20 000 steps.
-            record_every: Record one sample every this many physics steps.
-            object_forces: ``t -> (n_objects, 3)`` forces [N, world frame] on the objects' centres of mass (e.g. a
-                shake test), or ``None``.
-            until: ``state -> bool`` checked after every step: the run stops early at the first state it accepts
-                (e.g. an object that left the hand); the trajectory ends there.
-            sensors: What the controller's sensors get wrong (:class:`~bhgrasp.sim.sensor_model.SensorModel`:
-                noise on the joints, the object's pose and twist and the contact forces, and a delay).
-        """
-        return run_loop.run(self, controller, duration, state=state, control_dt=control_dt, sensor_noise=sensor_noise,
-                            disturbance=disturbance, seed=seed, progress=progress, record_every=record_every,
-                            object_forces=object_forces, until=until, sensors=sensors)  # fmt: skip
+    run = run_loop.run
 
 
-__all__ = ["ENGINES", "INTEGRATORS", "Simulator", "StepInfo"]
+def _modal(actuation: Actuation) -> bool:
+    """Whether an actuation has modes to restore and update around each step (else its hooks are skipped)."""
+    kind = type(actuation)
+    hooks = ("restore", "reset", "update", "begin")
+    return any(getattr(kind, hook) is not getattr(Actuation, hook) for hook in hooks)
+
+
+__all__ = ["MATCH_RADIUS", "Simulator"]

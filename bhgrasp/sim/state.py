@@ -41,6 +41,8 @@ class State:
             A run from this state continues it exactly; ``dataclasses.replace(state, contact_memory=None)`` clears
             it.
         actuation_modes: The actuation's mode flags (e.g. TorqueSwitch per finger); ``None`` = re-armed.
+        scene_signature: The signature of the scene whose ``scene_q`` and ``scene_v`` these are (a simulator
+            refuses a state of another scene); ``None`` = not known (checked by sizes and values alone).
     """
 
     t: float
@@ -56,6 +58,7 @@ class State:
     scene_v: np.ndarray | None = None
     contact_memory: Any = None
     actuation_modes: np.ndarray | None = None
+    scene_signature: str | None = None
 
 
 DERIVED_FIELDS = frozenset(
@@ -69,7 +72,8 @@ class SimulatedState(State):
 
     A step keeps the scene's ``q``, ``v``, its contacts and contact memory as the engine returned them (the compiled
     engine's arrays stay in C++ objects); a simulator's step sets the hand's ``q`` and ``v`` as read-only views of
-    the scene's; the object poses and twists, the contact arrays and body names and the
+    the scene's (and the scene's arrays read-only: a state is a value); the object poses and twists, the contact
+    arrays and body names and the
     :class:`~bhgrasp.sim.contact_set.ContactMemory` are made from them on first access and kept.
     Reading a field gives the same value as an eagerly built :class:`State` would hold; ``dataclasses.replace``
     and pickling build every field first.
@@ -98,6 +102,7 @@ class SimulatedState(State):
         modes: np.ndarray,
         source: Any,
         hand_sizes: tuple[int, int] | None = None,
+        scene_signature: str | None = None,
     ) -> SimulatedState:
         """A state with its time, scene ``q``, ``v`` and actuation modes, the rest built by ``source.derive``.
 
@@ -108,12 +113,14 @@ class SimulatedState(State):
         it computed on the way, e.g. twists with poses).
         """
         state = object.__new__(cls)
-        set_t, set_scene_q, set_scene_v, set_modes, set_source, set_q, set_v = _SETTERS
+        set_t, set_scene_q, set_scene_v, set_modes, set_source, set_q, set_v, set_signature = _SETTERS
+        scene_q.flags.writeable = scene_v.flags.writeable = False
         set_t(state, t)
         set_scene_q(state, scene_q)
         set_scene_v(state, scene_v)
         set_modes(state, modes)
         set_source(state, source)
+        set_signature(state, scene_signature)
         if hand_sizes is not None:  # the hand's q and v: read-only views of the scene's (built for every state)
             q, v = scene_q[: hand_sizes[0]], scene_v[: hand_sizes[1]]
             q.flags.writeable = v.flags.writeable = False
@@ -125,9 +132,17 @@ class SimulatedState(State):
 # the slots' own setters (a frozen dataclass refuses attribute assignment; these bypass it, as its __init__ does)
 _SETTERS = tuple(
     owner.__dict__[name].__set__
-    for owner, name in ((State, "t"), (State, "scene_q"), (State, "scene_v"), (State, "actuation_modes"),
-                        (SimulatedState, "_source"), (State, "q"), (State, "v"))
-)  # fmt: skip
+    for owner, name in (
+        (State, "t"),
+        (State, "scene_q"),
+        (State, "scene_v"),
+        (State, "actuation_modes"),
+        (SimulatedState, "_source"),
+        (State, "q"),
+        (State, "v"),
+        (State, "scene_signature"),
+    )
+)
 
 
 _ARRAYS = (

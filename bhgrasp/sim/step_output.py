@@ -10,11 +10,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from bhgrasp.sim.compiled import contact_set, memory_of
-from bhgrasp.sim.contact import ContactMemory, ContactSet, empty_contact_set
+from bhgrasp.sim.contact_set import ContactMemory, ContactSet, empty_contact_set
+from bhgrasp.sim.scene_layout import object_states
 from bhgrasp.sim.state import State
 
 if TYPE_CHECKING:
+    from bhgrasp.sim.engine import Engine
     from bhgrasp.sim.simulator import Simulator
 
 
@@ -29,25 +30,25 @@ class StepInfo:
             ``Contacts``; both carry the arrays ``pair``, ``point``, ``normal``, ``depth``, ``force``, ``sticking``.
     """
 
-    __slots__ = ("_contacts", "contact_arrays", "drive_torques")
+    __slots__ = ("_contacts", "_engine", "contact_arrays", "drive_torques")
 
-    def __init__(self, contacts: Any, drive_torques: np.ndarray) -> None:
-        self.contact_arrays, self.drive_torques, self._contacts = contacts, drive_torques, None
+    def __init__(self, contacts: Any, drive_torques: np.ndarray, engine: Engine | None = None) -> None:
+        self.contact_arrays, self.drive_torques, self._engine, self._contacts = contacts, drive_torques, engine, None
 
     @property
     def contacts(self) -> ContactSet:
         """The step's contacts as a :class:`~bhgrasp.sim.contact_set.ContactSet` (built on first read, then kept)."""
         if self._contacts is None:
             arrays = self.contact_arrays
-            self._contacts = arrays if isinstance(arrays, ContactSet) else contact_set(arrays)
+            self._contacts = arrays if isinstance(arrays, ContactSet) else self._engine.contact_set(arrays)
         return self._contacts
 
 
-class _StepOutput:
+class StepOutput:
     """What a step hands to its :class:`~bhgrasp.sim.state.SimulatedState` to build derived fields from.
 
-    ``contacts``: the step's ``ContactSet`` or compiled ``Contacts``; ``memory``: its ``ContactMemory`` or
-    compiled ``Memory``.
+    ``simulator``: the Simulator whose step made the state; ``contacts``: the step's ``ContactSet`` or compiled
+    ``Contacts``; ``memory``: its ``ContactMemory`` or compiled ``Memory``.
     """
 
     __slots__ = ("contacts", "memory", "simulator")
@@ -57,23 +58,27 @@ class _StepOutput:
 
     def derive(self, name: str, state: State) -> dict[str, Any]:
         """The derived field ``name`` of ``state`` (and its companions computed on the way)."""
-        simulator = self.simulator
+        scene = self.simulator.scene
         if name in ("q", "v"):
-            return {"q": state.scene_q[: simulator.scene.nq_hand].copy(), "v": state.scene_v[: simulator._nvh].copy()}
+            return {"q": state.scene_q[: scene.nq_hand].copy(), "v": state.scene_v[: scene.nv_hand].copy()}
         if name in ("object_poses", "object_twists"):
-            poses, twists = simulator._objects(state.scene_q, state.scene_v)
+            poses, twists = object_states(scene, state.scene_q, state.scene_v)
             return {"object_poses": poses, "object_twists": twists}
         if name == "contact_memory":
             memory = self.memory
-            return {"contact_memory": memory if isinstance(memory, ContactMemory) else memory_of(memory)}
-        contacts = self.contacts
+            if not isinstance(memory, ContactMemory):
+                memory = self.simulator.engine.contact_memory(memory)
+            return {"contact_memory": memory}
+        contacts = self.contacts  # a ContactSet or the compiled Contacts: both carry the arrays read here
         if not len(contacts):
             contacts = empty_contact_set()
-        bodies = simulator._pair_bodies
+        bodies = self.simulator.layout.pair_bodies
         return {
-            "contact_points": contacts.point, "contact_normals": contacts.normal, "contact_forces": contacts.force,
+            "contact_points": contacts.point,
+            "contact_normals": contacts.normal,
+            "contact_forces": contacts.force,
             "contact_bodies": tuple(bodies[k] for k in contacts.pair),
-        }  # fmt: skip
+        }
 
 
-__all__ = ["StepInfo"]
+__all__ = ["StepInfo", "StepOutput"]

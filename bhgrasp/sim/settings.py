@@ -1,0 +1,56 @@
+"""A simulator's settings: the step, the integrator, the joint stops and the divergence bounds, frozen once built.
+
+A :class:`~bhgrasp.sim.simulator.Simulator` reads its settings once, when it is built, and gives them to its engine;
+changing one means building a new Simulator (``Simulator(scene, dt=2e-3, ...)``), so the engine and the simulator
+can never disagree about them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from bhgrasp._validation import as_positive, as_real
+from bhgrasp.errors import InputError
+
+INTEGRATORS = ("implicit", "semi-implicit", "rk4")
+ENGINES = ("compiled", "python")
+
+
+@dataclass(frozen=True)
+class SimulatorSettings:
+    """What a Simulator steps with, beside its scene, contact law and actuation (immutable).
+
+    Attributes:
+        dt: Physics step [s].
+        integrator: ``"implicit"``, ``"semi-implicit"`` or ``"rk4"``.
+        joint_limit_stiffness: Stiffness [N m/rad] of the hand's joint stops.
+        joint_limit_damping: Damping [N m s/rad] of the stops (acts only while a stop is penetrated).
+        max_penetration: Contact depth [m] beyond which a run is declared diverged.
+        max_speed: Joint or object speed [m/s or rad/s] beyond which a run is declared diverged.
+        max_coordinate: Largest |coordinate| [m or rad] of a scene configuration: a state beyond it is refused
+            and a step that reaches it has diverged (collision queries lose all precision far out, and coal's
+            narrow phase crashes near 1e155 m).
+        engine: ``"compiled"`` (the C++ step of ``bhgrasp._core``) or ``"python"`` (the readable reference).
+    """
+
+    dt: float = 1e-3
+    integrator: str = "implicit"
+    joint_limit_stiffness: float = 1e3
+    joint_limit_damping: float = 0.05
+    max_penetration: float = 0.02
+    max_speed: float = 100.0
+    max_coordinate: float = 1e4
+    engine: str = "compiled"
+
+    def __post_init__(self) -> None:
+        """Check every setting and store it as a float (or one of the allowed names)."""
+        if self.integrator not in INTEGRATORS:
+            raise InputError(f"`integrator` must be one of {INTEGRATORS}, got {self.integrator!r}")
+        if self.engine not in ENGINES:
+            raise InputError(f"`engine` must be one of {ENGINES}, got {self.engine!r}")
+        for name in ("dt", "joint_limit_stiffness", "max_penetration", "max_speed", "max_coordinate"):
+            object.__setattr__(self, name, as_positive(getattr(self, name), name))
+        object.__setattr__(self, "joint_limit_damping", as_real(self.joint_limit_damping, "joint_limit_damping"))
+
+
+__all__ = ["ENGINES", "INTEGRATORS", "SimulatorSettings"]
