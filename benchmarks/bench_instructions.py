@@ -83,10 +83,10 @@ def grasp_law(state_file: Path):
     import pinocchio as pin
 
     from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
+    from bhgrasp.data import State
     from bhgrasp.experiments.box_grasp import BOX_SIZE
     from bhgrasp.hand import BarrettHand
     from bhgrasp.objects import Box
-    from bhgrasp.sim.state import State
 
     data = np.load(state_file)
     state = State(float(data["t"]), data["q"], data["v"], (pin.SE3(data["pose"]),), data["twists"], data["points"],

@@ -30,13 +30,13 @@ import numpy as np
 import pinocchio as pin
 
 import bhgrasp as bh
+from bhgrasp.data import State
 from bhgrasp.errors import SimulationDiverged
 from bhgrasp.experiments.hold import JOINT_DAMPING, POSTURE_GAIN, SQUEEZE, reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.compiled import core_module, engine_settings
 from bhgrasp.sim.engine import DriveTerms
 from bhgrasp.sim.simulator import MATCH_RADIUS
-from bhgrasp.sim.state import State
 
 
 def run_bhgrasp(duration: float, dt: float, stiffness: float = 1e4, engine: str = "compiled") -> dict:

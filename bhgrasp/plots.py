@@ -15,8 +15,8 @@ from typing import Any
 import matplotlib.figure
 import numpy as np
 
+from bhgrasp.data import Trajectory
 from bhgrasp.errors import InputError
-from bhgrasp.sim.state import Trajectory
 
 
 class Figure(matplotlib.figure.Figure):

@@ -10,7 +10,7 @@ TorqueSwitch states, :mod:`bhgrasp.barrett.transmission`):
 
 These are properties of the hand, not of a simulator: :class:`~bhgrasp.sim.actuation.Actuation` simulates a drive
 with them, and a controller that commands the inputs (:class:`~bhgrasp.controllers.supervisor.MotorCommands`) reads
-the same model. Modes are numeric flags as a :class:`~bhgrasp.sim.state.State` carries them (``actuation_modes``);
+the same model. Modes are numeric flags as a :class:`~bhgrasp.data.state.State` carries them (``actuation_modes``);
 ``None`` or an empty array means the drive's initial mode.
 """
 

@@ -11,8 +11,8 @@ first object.  Overlays:
 - the object's desired pose (a translucent ghost) from a grasp controller's logged ``object_error``;
 - fingertip references (small spheres) from a joint controller's logged ``q_d``.
 
-:meth:`SceneViewer.replay` turns a recorded :class:`~bhgrasp.sim.state.Trajectory` into a MeshCat animation decimated to
-at most 60 frames per second that loops endlessly (in the live viewer and in the exported page alike);
+:meth:`SceneViewer.replay` turns a recorded :class:`~bhgrasp.data.trajectory.Trajectory` into a MeshCat animation
+decimated to at most 60 frames per second that loops endlessly (in the live viewer and in the exported page alike);
 :meth:`SceneViewer.save_html` writes the scene and its animation as one HTML file that works offline (meshcat's
 ``static_html``: the JavaScript is inlined).  ``bhgrasp.viz`` is not imported by ``import bhgrasp``.
 """
@@ -35,10 +35,10 @@ from pinocchio.visualize import MeshcatVisualizer
 
 from bhgrasp._validation import as_positive
 from bhgrasp.controllers.base import Controller
+from bhgrasp.data import State, Trajectory
 from bhgrasp.errors import InputError
 from bhgrasp.objects import Box, Capsule, Cylinder, RigidObject, Sphere
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import State, Trajectory
 
 MAX_FPS = 60.0
 LOOP_FOREVER = float("inf")  # replay repetitions (msgpack float64 inf: JavaScript's Infinity)

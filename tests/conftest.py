@@ -2,11 +2,20 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 import bhgrasp as bh
+from bhgrasp._native import optional_core
 
 ALLEGRO = "allegro_hand_description/urdf/allegro_right_hand.urdf"
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """With ``BHGRASP_REQUIRE_CORE=1`` (CI) a missing compiled core fails the run: its twin tests never skip."""
+    if os.environ.get("BHGRASP_REQUIRE_CORE") == "1" and optional_core() is None:
+        raise pytest.UsageError("BHGRASP_REQUIRE_CORE=1 but bhgrasp._core does not load (rebuild: pip install -e .)")
 
 
 @pytest.fixture(scope="module")

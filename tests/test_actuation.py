@@ -10,7 +10,7 @@ import bhgrasp as bh
 from bhgrasp.objects import Box, SpringMounted
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import MAX_MOTOR_TORQUE, PROXIMAL_RATIO, BarrettActuation, FullyActuated
-from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 
 PAIRS = ((1, 2), (4, 5), (6, 7))  # (proximal, distal) indices of F1, F2, F3

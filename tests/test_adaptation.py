@@ -18,11 +18,11 @@ from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.object_identification import ObjectIdentification, contact_wrench
 from bhgrasp.controllers.object_regressors import momentum_regressor, object_parameters, object_regressor
 from bhgrasp.controllers.supervisor import GraspSupervisor
+from bhgrasp.data import State
 from bhgrasp.excitation import PoseExcitation
 from bhgrasp.experiments.adaptation import hand_model_error, identification_run
 from bhgrasp.experiments.adaptation_case import FRICTION, ideal_run
 from bhgrasp.objects import Box
-from bhgrasp.sim.state import State
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
 

@@ -15,13 +15,13 @@ import pytest
 import bhgrasp as bh
 from bhgrasp.barrett import FINGER_PUCK, SPREAD_PUCK, BarrettDriver, BarrettTransmission, Puck, PuckProperties
 from bhgrasp.barrett.transmission import MOTOR_DAMPING
+from bhgrasp.data import State
 from bhgrasp.mount import mounted
 from bhgrasp.objects import Box, SpringMounted
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
-from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import State
 
 CPR = 4096 / (2 * np.pi)  # encoder counts per motor radian
 MT = 2200 / 20000  # [N m] puck torque limit at the motor

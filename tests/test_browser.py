@@ -25,7 +25,7 @@ import pinocchio as pin
 import pytest
 
 from bhgrasp.cli import main
-from bhgrasp.sim.state import Trajectory
+from bhgrasp.data import Trajectory
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 FLAGS = ["--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",

@@ -23,7 +23,7 @@ from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Box, Plane, SpringMounted
 from bhgrasp.sim import INTEGRATORS, Simulator
 from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
-from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 
 G = 9.81

@@ -8,7 +8,8 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.objects import Box, Sphere, table
-from bhgrasp.sim.contact import ContactEngine, SpringDamper
+from bhgrasp.sim.contact import ContactEngine
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 
 FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))

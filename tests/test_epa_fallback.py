@@ -8,9 +8,9 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
+from bhgrasp.data import ContactMemory
 from bhgrasp.objects import Cylinder, FixedBox
 from bhgrasp.sim import Simulator
-from bhgrasp.sim.contact import ContactMemory
 from bhgrasp.sim.scene import Scene
 
 # A finger's distal box edge in a can, from a grasp-benchmark run (coal 3.0.3), rotations orthonormalised

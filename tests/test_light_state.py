@@ -17,13 +17,12 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
+from bhgrasp.data import DERIVED_FIELDS, ContactMemory, SimulatedState
 from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Box, SpringMounted
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import FullyActuated
-from bhgrasp.sim.contact import ContactMemory
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import DERIVED_FIELDS, SimulatedState
 
 ENGINES = ("compiled", "python")
 

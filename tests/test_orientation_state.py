@@ -10,11 +10,11 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import bhgrasp as bh
+from bhgrasp.data import Trajectory
 from bhgrasp.objects import Box, table
 from bhgrasp.orientation import rotation_from_zyz, zyz_from_rotation
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import Trajectory
 
 
 def test_zyz_matches_scipy_intrinsic_zyz() -> None:

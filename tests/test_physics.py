@@ -17,11 +17,12 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
+from bhgrasp.data import ContactMemory
 from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Box, Plane, Sphere
 from bhgrasp.sim import INTEGRATORS, Simulator
 from bhgrasp.sim.actuation import BarrettActuation
-from bhgrasp.sim.contact import ContactMemory, SpringDamper
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 
 G = 9.81

@@ -10,14 +10,14 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
+from bhgrasp.data import Trajectory
 from bhgrasp.errors import SimulationDiverged
 from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Box, Sphere, table
 from bhgrasp.planar import planar_finger
 from bhgrasp.sim import Simulator
-from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import Trajectory
 
 G = 9.81
 FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))

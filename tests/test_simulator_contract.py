@@ -16,14 +16,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from bhgrasp.data import ContactMemory, State
 from bhgrasp.errors import BhgraspError, FrozenSettingError, InputError, SimulationDiverged
 from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Sphere
 from bhgrasp.sim import ENGINES, Simulator, SimulatorSettings
 from bhgrasp.sim.batch import BatchSimulator
-from bhgrasp.sim.contact_set import ContactMemory
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import State
 from bhgrasp.sim.state_check import divergence_text
 
 

@@ -133,21 +133,3 @@ def test_full_actuation_passes_torques_through_and_bad_drives_are_refused() -> N
 
     with pytest.raises(bh.InputError, match="`drive` must be a bhgrasp Transmission"):
         Direct(hand)  # a hand where its drive model belongs
-
-
-def test_controllers_and_drive_models_never_import_the_simulator() -> None:
-    """DESIGN.md: controllers know State, a nominal Hand and analysis functions, never the simulator (AST scan)."""
-    import ast
-    from pathlib import Path
-
-    package = Path(bh.__file__).parent
-    sources = [*sorted((package / "controllers").glob("*.py")), package / "transmission.py", package / "barrett"]
-    files = [f for s in sources for f in (sorted(s.glob("*.py")) if s.is_dir() else [s])]
-    offending = []
-    for path in files:
-        for node in ast.walk(ast.parse(path.read_text())):
-            names = [node.module or ""] if isinstance(node, ast.ImportFrom) else []
-            names += [alias.name for alias in node.names] if isinstance(node, ast.Import) else []
-            offending += [f"{path.name}: {name}" for name in names
-                          if name.startswith("bhgrasp.sim") and name != "bhgrasp.sim.state"]  # fmt: skip
-    assert len(files) > 10 and offending == []

@@ -50,9 +50,9 @@ from bhgrasp.barrett import pucks as fw
 from bhgrasp.barrett.sensors import motor_angles
 from bhgrasp.barrett.transmission import PROXIMAL_RATIO, SPREAD_RATIO, BarrettTransmission
 from bhgrasp.controllers.base import Controller
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
-from bhgrasp.sim.state import State
 
 DIGITS = ("F1", "F2", "F3", "SPREAD")  # libbarrett's order
 GROUPS = {"GRASP": DIGITS[:3], "WHOLE_HAND": DIGITS}

@@ -33,9 +33,9 @@ from bhgrasp.barrett.transmission import (
     SPREAD_RATIO,
     BarrettTransmission,
 )
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
-from bhgrasp.sim.state import State
 
 COUNTS_PER_REV = 4096  # puck CTS (Robotnik pyHand_api.py sets CTS 4096; libbarrett rpc = 2 pi / cts)
 SECONDARY_RATIO = 50.0  # inner link : secondary encoder shaft (libbarrett J2_ENCODER_RATIO)
@@ -101,7 +101,7 @@ class BarrettReading:
 
 
 class BarrettSensors:
-    """Reads a :class:`~bhgrasp.sim.state.State` as the BH8-280's sensors would (built once per hand)."""
+    """Reads a :class:`~bhgrasp.data.state.State` as the BH8-280's sensors would (built once per hand)."""
 
     def __init__(self, hand: Hand, spread: float = 3e-3) -> None:
         """Locate the joints, the distal links and the pads on ``hand``.

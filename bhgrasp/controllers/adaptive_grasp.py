@@ -45,10 +45,10 @@ from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_regressors import object_parameters, object_regressor, object_regressor_python
 from bhgrasp.controllers.object_space import grasp_maps, pose_gains
 from bhgrasp.controllers.sliding import parameter_scales
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
 from bhgrasp.objects import RigidObject
-from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 ENGINES = (None, "compiled", "python")

@@ -1,6 +1,6 @@
 """Controller protocol: ``reset(state)``, ``__call__(t, state) -> torques`` and a ``log`` of internals.
 
-A controller sees only a :class:`~bhgrasp.sim.state.State` and its own *nominal* :class:`~bhgrasp.hand.Hand` (which may
+A controller sees only a :class:`~bhgrasp.data.state.State` and its own *nominal* :class:`~bhgrasp.hand.Hand` (which may
 differ from the simulated plant: ``hand.perturbed(...)``); it never imports the simulator, so the same object can
 drive a real hand.  The simulator also accepts any plain callable ``(t, state) -> u``.
 """
@@ -13,9 +13,9 @@ from typing import Any
 import numpy as np
 
 from bhgrasp._validation import as_vector
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
-from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 

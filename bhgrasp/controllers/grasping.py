@@ -24,12 +24,12 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.controllers.base import Controller
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.forces import ContactForceQP, cone_violations, pseudo_inverse_forces
 from bhgrasp.grasp.frames import _grasp_map, contact_frames, hand_jacobian
 from bhgrasp.grasp.sensing import ContactSensing, FingerContact
 from bhgrasp.hand import Hand
-from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 

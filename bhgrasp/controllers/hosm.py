@@ -22,9 +22,9 @@ import numpy as np
 from bhgrasp._validation import as_positive
 from bhgrasp.controllers.base import gain_vector, inertia_gain
 from bhgrasp.controllers.sliding import SlidingSurface
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
-from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 

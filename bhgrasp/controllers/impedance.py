@@ -35,10 +35,10 @@ from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter, critical_damping
 from bhgrasp.controllers.workspace import WorkspaceComputedTorque
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.sensing import ContactSensing, FingerContact
 from bhgrasp.hand import Hand
-from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 Sample = tuple[np.ndarray, np.ndarray, np.ndarray]

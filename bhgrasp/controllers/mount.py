@@ -28,11 +28,11 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_vector
 from bhgrasp.controllers.base import Controller, gain_vector
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.hand import Hand
 from bhgrasp.mount import MOUNT_JOINTS
-from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 SERVO_KP = (2e4, 2e4, 2e4, 100.0, 100.0, 100.0)  # [N/m, N m/rad]: stiff, inside the 1 kHz loop's stability

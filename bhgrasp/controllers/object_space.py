@@ -27,11 +27,11 @@ import pinocchio as pin
 from bhgrasp._validation import as_positive
 from bhgrasp.controllers.base import gain_vector
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.kinematics import GraspKinematics, ObjectState, contact_kinematics, parent_joints
 from bhgrasp.hand import Hand
 from bhgrasp.objects import RigidObject
-from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 LAWS = ("ctc", "natural", "stiffness")

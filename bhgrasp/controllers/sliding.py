@@ -19,9 +19,9 @@ import numpy as np
 
 from bhgrasp._validation import as_real, as_vector
 from bhgrasp.controllers.base import JointTracking, gain_vector, inertia_gain
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
-from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 

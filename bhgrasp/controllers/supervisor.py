@@ -32,13 +32,13 @@ from bhgrasp._validation import as_positive, as_real, as_vector, require_name
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.joint import ComputedTorque
+from bhgrasp.data import State
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.grasp.manipulability import manipulable_space
 from bhgrasp.grasp.path_check import TOLERANCE as PATH_TOLERANCE
 from bhgrasp.grasp.path_check import path_contacts
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.hand import Hand
-from bhgrasp.sim.state import State
 from bhgrasp.trajectories import PoseMotion, Reference, SmoothStep
 from bhgrasp.transmission import Transmission
 
@@ -53,7 +53,8 @@ class GraspSupervisor(Controller):
     """Sequence a joint-space approach and an object-space grasp controller.
 
     Logs ``phase``, ``arrived`` (per finger of the hand, 1.0 once it touched), plus the active controller's log
-    (a recorded :class:`~bhgrasp.sim.state.Trajectory` has NaN for the grasp controller's keys during the approach).
+    (a recorded :class:`~bhgrasp.data.trajectory.Trajectory` has NaN for the grasp controller's keys during the
+    approach).
     """
 
     def __init__(

@@ -28,9 +28,9 @@ import pinocchio as pin
 from bhgrasp._validation import as_vector
 from bhgrasp.controllers._workspace_terms import _workspace
 from bhgrasp.controllers.base import Controller, gain_matrix
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
-from bhgrasp.sim.state import State
 from bhgrasp.trajectories import Reference
 
 

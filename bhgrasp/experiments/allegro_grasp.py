@@ -29,7 +29,7 @@ from bhgrasp.objects import Box, FixedBox
 from bhgrasp.resources import example_robot_data_urdf
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import FullyActuated
-from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 
 ALLEGRO_URDF = "allegro_hand_description/urdf/allegro_right_hand.urdf"

@@ -18,6 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_positive
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.clearance import check_clearance
 from bhgrasp.grasp.manipulability import ManipulableSpace, manipulable_space
@@ -26,9 +27,8 @@ from bhgrasp.ik import ik
 from bhgrasp.objects import Box, FixedBox
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import Actuation, BarrettActuation, FullyActuated
-from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import State
 
 BOX_SIZE = (0.06, 0.05, 0.05)  # [m] thesis 5.7 (x along the palm, y between the fingers, z up)
 PAD_RADIUS = 0.010  # [m] fingertip pad of the packaged URDF

@@ -35,12 +35,12 @@ from bhgrasp.controllers import (
     sliding_gains,
 )
 from bhgrasp.controllers.base import Controller
+from bhgrasp.data import Trajectory
 from bhgrasp.experiments import case_progress
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.planar import thesis_two_link_finger
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import Trajectory
 from bhgrasp.trajectories import Quintic, Reference, Sinusoid, SmoothStep, exponential_approach
 
 DT = 1e-3  # [s] physics and control period

@@ -13,6 +13,7 @@ import numpy as np
 
 from bhgrasp.controllers import PDGravity, WorkspaceComputedTorque
 from bhgrasp.controllers.impedance import ImpedanceController, PositionImpedance
+from bhgrasp.data import Trajectory
 from bhgrasp.experiments.chapter4_metrics import FORCE_HEADER, _row, force_metrics
 from bhgrasp.experiments.chapter4_setups import (
     F3_GAINS,
@@ -25,7 +26,6 @@ from bhgrasp.experiments.chapter4_setups import (
     run,
 )
 from bhgrasp.grasp.sensing import ContactSensing
-from bhgrasp.sim.state import Trajectory
 from bhgrasp.trajectories import Constant, Quintic
 
 if TYPE_CHECKING:
@@ -61,7 +61,7 @@ def one_link_contact(scale: float = 1.0) -> Case:
 
 def _reaction_torques(setup: Setup, traj: Trajectory) -> np.ndarray:
     """J^T F of the recorded contacts (thesis (4.8)) per sample [N m], via the sensing module."""
-    from bhgrasp.sim.state import State
+    from bhgrasp.data import State
 
     sensing = ContactSensing(setup.hand)
     out = np.zeros((len(traj), setup.hand.nv))

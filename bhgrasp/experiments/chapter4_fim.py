@@ -46,7 +46,7 @@ from bhgrasp.experiments.chapter4_setups import (
 from bhgrasp.hand import BarrettHand
 from bhgrasp.objects import Box, SpringMounted
 from bhgrasp.sim import Simulator
-from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 from bhgrasp.trajectories import Constant, Reference, SmoothStep, exponential_approach
 

@@ -17,14 +17,14 @@ import pinocchio as pin
 
 from bhgrasp.controllers import WorkspaceComputedTorque
 from bhgrasp.controllers.base import Controller
+from bhgrasp.data import Trajectory
 from bhgrasp.errors import InputError
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.objects import Box, SpringMounted
 from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
 from bhgrasp.sim import Simulator
-from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import Trajectory
 from bhgrasp.trajectories import Reference
 
 DT = 1e-3

@@ -6,11 +6,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bhgrasp.data import Trajectory
 from bhgrasp.errors import InputError
 from bhgrasp.experiments.uncertainty import final_pose_error
 from bhgrasp.grasp.metrics import finger_normal_forces, slip_events_after
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import Trajectory
 
 MU_ASSUMED = 0.6  # the true friction is 0.8
 

@@ -57,7 +57,7 @@ from bhgrasp.mount import MountReference, mounted
 from bhgrasp.objects import FixedBox
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
-from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 from bhgrasp.trajectories import PosePath
 

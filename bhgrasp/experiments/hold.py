@@ -15,13 +15,13 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp.data import State
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.objects import Box
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import FullyActuated
-from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import State
 
 SQUEEZE = {"F1": np.array([0.0, 2.0, 0.0]), "F2": np.array([0.0, 2.0, 0.0]), "F3": np.array([0.0, -4.0, 0.0])}  # [N]
 POSTURE_GAIN = 2.0  # [N m/rad]

@@ -20,6 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp.controllers.supervisor import GraspSupervisor
+from bhgrasp.data import State
 from bhgrasp.experiments.box_grasp import FRICTION, JOINT_DAMPING, STIFFNESS
 from bhgrasp.experiments.demo_result import GraspDemoResult, evaluate_demo
 from bhgrasp.experiments.grasp_demo import MU_ASSUMED, grasp_controller
@@ -30,9 +31,8 @@ from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.objects import FixedBox
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import FullyActuated
-from bhgrasp.sim.contact import SpringDamper
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import State
 
 PEDESTAL_HEIGHT, PEDESTAL_SHARE = 0.02, 0.4  # [m], share of the object's footprint
 

@@ -20,9 +20,9 @@ from bhgrasp._validation import as_positive
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.grasp_lyapunov import object_lyapunov
 from bhgrasp.controllers.object_regressors import object_parameters
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.objects import RigidObject
-from bhgrasp.sim.state import State
 
 
 @dataclass

@@ -1,12 +1,12 @@
-"""Grasp quantities read back from a recorded :class:`~bhgrasp.sim.state.Trajectory`: finger forces and slip events."""
+"""Grasp quantities read back from a recorded :class:`~bhgrasp.data.trajectory.Trajectory`: forces and slip events."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from bhgrasp.data import Trajectory
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.hand import Hand
-from bhgrasp.sim.state import Trajectory
 
 
 def finger_of(hand: Hand, link: str) -> str | None:

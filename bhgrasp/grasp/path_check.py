@@ -33,10 +33,10 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_array, as_real, as_vector
+from bhgrasp.data import State
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.hand import Hand
-from bhgrasp.sim.state import State
 
 TOLERANCE = 2e-4  # [m] signed distance below which another geometry counts as meeting the object: a margin for
 # what the path model leaves out (it holds each pad's gap at its start, while the pads sink further as their forces

@@ -1,6 +1,6 @@
 """What a controller reads from sensed contacts: per-finger contact forces and their joint reaction torques.
 
-A :class:`~bhgrasp.sim.state.State` lists contacts as (body a, body b) with body a a hand link frame, the normal from a
+A :class:`~bhgrasp.data.state.State` lists contacts as (body a, body b) with body a a hand link frame, the normal from a
 to b and the force on b (the object).  Here contacts are grouped by finger (the finger whose joints move the link)
 and turned into the force the finger exerts on the object, its normal component, and the joint torques J^T F the
 contact forces produce (thesis (4.8), tau_d = J_f^T F_c).
@@ -14,8 +14,8 @@ import numpy as np
 
 from bhgrasp._native import optional_core
 from bhgrasp._validation import as_array, as_vector
+from bhgrasp.data import State
 from bhgrasp.hand import Hand
-from bhgrasp.sim.state import State
 
 
 @dataclass(frozen=True)

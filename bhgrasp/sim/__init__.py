@@ -5,7 +5,7 @@ Modules, one concept each:
 - the scene: :mod:`~bhgrasp.sim.scene` (hand, objects and environment as one Pinocchio model and coal geometry),
   :mod:`~bhgrasp.sim.scene_layout` (what a step reads of it: free bodies' spin, springs, quaternions, its signature);
 - contacts: :mod:`~bhgrasp.sim.contact` (detection), :mod:`~bhgrasp.sim.contact_law` (the spring-damper + Coulomb
-  law), :mod:`~bhgrasp.sim.contact_set` (contacts as data: ContactSet, Contact, ContactMemory);
+  law);
 - actuation: :mod:`~bhgrasp.sim.actuation` (full actuation; the Barrett hand's four motors and TorqueSwitch);
 - the Simulator: :mod:`~bhgrasp.sim.settings` (its frozen settings), :mod:`~bhgrasp.sim.simulator` (its contract and
   a step's dispatch), :mod:`~bhgrasp.sim.state_check` (a state checked against the scene; divergences in words),
@@ -14,8 +14,9 @@ Modules, one concept each:
   :mod:`~bhgrasp.sim.recorder`, :mod:`~bhgrasp.sim.sensor_model` (what the sensors get wrong);
 - the engines: :mod:`~bhgrasp.sim.engine` (the protocol over plain data), :mod:`~bhgrasp.sim.python_engine` (the
   readable reference step) with :mod:`~bhgrasp.sim.integrators`, :mod:`~bhgrasp.sim.compiled` (the C++ step of
-  ``bhgrasp._core``), :mod:`~bhgrasp.sim.batch` (batched rollouts);
-- data: :mod:`~bhgrasp.sim.state` (State, Trajectory).
+  ``bhgrasp._core``), :mod:`~bhgrasp.sim.batch` (batched rollouts).
+
+The states, trajectories and contacts it makes are the plain data of :mod:`bhgrasp.data`.
 """
 
 from bhgrasp.sim.settings import ENGINES, INTEGRATORS, SimulatorSettings

@@ -77,7 +77,7 @@ class Actuation(ABC):
         """Start of a run at hand configuration ``q_hand`` (mode switches re-armed)."""
 
     def restore(self, modes: np.ndarray | None, q_hand: np.ndarray) -> None:
-        """Take the mode flags a :class:`~bhgrasp.sim.state.State` carries (``None``: re-armed, as a run starts)."""
+        """Take the mode flags a :class:`~bhgrasp.data.state.State` carries (``None``: re-armed, as a run starts)."""
         if modes is None or len(modes) == 0:
             self.reset(q_hand)
 

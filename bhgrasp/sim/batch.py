@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from bhgrasp._validation import as_positive
+from bhgrasp.data import ContactSet, SimulatedState, State
 from bhgrasp.errors import InputError
 from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
 from bhgrasp.sim.compiled import (
@@ -34,9 +35,7 @@ from bhgrasp.sim.compiled import (
     memory_of,
     native_memory,
 )
-from bhgrasp.sim.contact import ContactSet
 from bhgrasp.sim.simulator import MATCH_RADIUS, Simulator
-from bhgrasp.sim.state import SimulatedState, State
 from bhgrasp.sim.state_check import check_state, divergence_text
 from bhgrasp.sim.step_output import StepOutput
 
@@ -199,7 +198,7 @@ class BatchSimulator:
         return contact_set(self._batch.contacts(self._env(env)))
 
     def state(self, env: int) -> State:
-        """Environment ``env`` as a :class:`~bhgrasp.sim.state.State` (built on demand; a start state for a run)."""
+        """Environment ``env`` as a :class:`~bhgrasp.data.state.State` (built on demand; a start state for a run)."""
         env = self._env(env)
         memory = memory_of(self._batch.memory(env))
         modes = self.modes[env]

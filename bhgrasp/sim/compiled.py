@@ -15,7 +15,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from bhgrasp._native import optional_core, required_core
-from bhgrasp.sim.contact import ContactMemory, ContactSet, SpringDamper, empty_contact_set
+from bhgrasp.data import ContactMemory, ContactSet, empty_contact_set
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.engine import DriveTerms, StepResult
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_layout import SceneLayout
@@ -55,15 +56,15 @@ class CompiledEngine:
         return native_drive(terms)
 
     def memory(self, memory: ContactMemory):
-        """A :class:`~bhgrasp.sim.contact_set.ContactMemory` as the C++ engine's ``Memory``."""
+        """A :class:`~bhgrasp.data.contacts.ContactMemory` as the C++ engine's ``Memory``."""
         return native_memory(memory)
 
     def contact_set(self, contacts) -> ContactSet:
-        """A step's ``Contacts`` as a :class:`~bhgrasp.sim.contact_set.ContactSet`."""
+        """A step's ``Contacts`` as a :class:`~bhgrasp.data.contacts.ContactSet`."""
         return contact_set(contacts)
 
     def contact_memory(self, memory) -> ContactMemory:
-        """A step's ``Memory`` as a :class:`~bhgrasp.sim.contact_set.ContactMemory` (keeping the native one)."""
+        """A step's ``Memory`` as a :class:`~bhgrasp.data.contacts.ContactMemory` (keeping the native one)."""
         return memory_of(memory)
 
     def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, drive: Any, memory: Any) -> StepResult:
@@ -162,7 +163,7 @@ def barrett_of(actuation: BarrettActuation):
 
 
 def native_memory(memory: ContactMemory):
-    """A :class:`~bhgrasp.sim.contact_set.ContactMemory` as the C++ engine's ``Memory`` (its native copy, if any)."""
+    """A :class:`~bhgrasp.data.contacts.ContactMemory` as the C++ engine's ``Memory`` (its native copy, if any)."""
     if memory.native is not None:
         return memory.native
     arrays = (memory.pair, memory.local_b, memory.displacement, memory.sliding)
@@ -170,12 +171,12 @@ def native_memory(memory: ContactMemory):
 
 
 def memory_of(native) -> ContactMemory:
-    """The C++ engine's contact memory as a :class:`~bhgrasp.sim.contact_set.ContactMemory` (keeping the native one)."""
+    """The C++ engine's contact memory as a :class:`~bhgrasp.data.contacts.ContactMemory` (keeping the native one)."""
     return ContactMemory.with_native(native)
 
 
 def contact_set(contacts) -> ContactSet:
-    """The C++ engine's contacts as a :class:`~bhgrasp.sim.contact_set.ContactSet`."""
+    """The C++ engine's contacts as a :class:`~bhgrasp.data.contacts.ContactSet`."""
     if len(contacts) == 0:
         return empty_contact_set()
     return ContactSet(

@@ -5,8 +5,7 @@ matches them to the last step's by collision pair and position on body b (so tha
 tangential spring), gives their relative Jacobians (:meth:`ContactEngine.jacobians`) and computes their forces
 with the law of :mod:`~bhgrasp.sim.contact_law` (the physics is described there), from its base
 :class:`~bhgrasp.sim.contact_law.ContactForces`.  The contacts as data (ContactSet, Contact, ContactMemory) are
-in :mod:`~bhgrasp.sim.contact_set`.  The public names of the three modules import from here too
-(``from bhgrasp.sim.contact import SpringDamper``).
+in :mod:`~bhgrasp.data.contacts`.
 """
 
 from __future__ import annotations
@@ -16,8 +15,8 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_positive
+from bhgrasp.data import ContactMemory, ContactSet, empty_contact_set
 from bhgrasp.sim.contact_law import ContactForces, SpringDamper
-from bhgrasp.sim.contact_set import Contact, ContactMemory, ContactSet, empty_contact_set
 from bhgrasp.sim.scene import Scene
 
 LOCAL_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -260,6 +259,4 @@ class ContactEngine(ContactForces):
         return jacobians
 
 
-__all__ = [
-    "Contact", "ContactEngine", "ContactForces", "ContactMemory", "ContactSet", "SpringDamper", "empty_contact_set",
-]  # fmt: skip
+__all__ = ["ContactEngine"]

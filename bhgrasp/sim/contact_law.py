@@ -27,8 +27,8 @@ from typing import Literal
 import numpy as np
 
 from bhgrasp._validation import as_positive, as_real
+from bhgrasp.data import ContactSet
 from bhgrasp.errors import InputError
-from bhgrasp.sim.contact_set import ContactSet
 
 _IDENTITY3 = np.eye(3)
 
@@ -86,7 +86,7 @@ class SpringDamper:
 
 
 class ContactForces:
-    """The force law of a :class:`SpringDamper` on the contacts of a :class:`~bhgrasp.sim.contact_set.ContactSet`.
+    """The force law of a :class:`SpringDamper` on the contacts of a :class:`~bhgrasp.data.contacts.ContactSet`.
 
     Explicit forces (:meth:`forces`), the linearly-implicit step's parts (:meth:`linear_parts`, :meth:`linearise`)
     and its active set (:meth:`start_status`, :meth:`classify`, :meth:`end_displacement`); the base of

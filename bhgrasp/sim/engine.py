@@ -15,8 +15,8 @@ from typing import Any, NamedTuple, Protocol
 
 import numpy as np
 
+from bhgrasp.data import ContactMemory, ContactSet
 from bhgrasp.sim.actuation import Actuation
-from bhgrasp.sim.contact_set import ContactMemory, ContactSet
 from bhgrasp.sim.settings import SimulatorSettings
 
 
@@ -93,7 +93,7 @@ class Engine(Protocol):
         """``terms`` in the form this engine's :meth:`step` takes (built once per actuation mode)."""
 
     def memory(self, memory: ContactMemory) -> Any:
-        """A :class:`~bhgrasp.sim.contact_set.ContactMemory` in the form this engine's :meth:`step` takes."""
+        """A :class:`~bhgrasp.data.contacts.ContactMemory` in the form this engine's :meth:`step` takes."""
 
     def step(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, drive: Any, memory: Any) -> StepResult:
         """Advance ``dt`` from ``(q, v)`` with hand joint torques ``tau`` (or nv generalized forces)."""
@@ -102,10 +102,10 @@ class Engine(Protocol):
         """The contacts at ``q`` matched to ``memory`` (no forces)."""
 
     def contact_set(self, contacts: Any) -> ContactSet:
-        """A step's contacts as a :class:`~bhgrasp.sim.contact_set.ContactSet`."""
+        """A step's contacts as a :class:`~bhgrasp.data.contacts.ContactSet`."""
 
     def contact_memory(self, memory: Any) -> ContactMemory:
-        """A step's memory as a :class:`~bhgrasp.sim.contact_set.ContactMemory`."""
+        """A step's memory as a :class:`~bhgrasp.data.contacts.ContactMemory`."""
 
 
 def divergence(q: np.ndarray, v: np.ndarray, contacts: ContactSet, settings: SimulatorSettings) -> Divergence:

@@ -30,7 +30,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.sim.contact import ContactEngine, ContactMemory, ContactSet, SpringDamper
+from bhgrasp.data import ContactMemory, ContactSet
+from bhgrasp.sim.contact import ContactEngine
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.engine import DriveTerms, StepResult, divergence
 from bhgrasp.sim.integrators import gyroscopic_torque, spin_midpoint
 from bhgrasp.sim.scene import Scene
@@ -84,7 +86,7 @@ class PythonEngine:
     def step(
         self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, drive: DriveTerms, memory: ContactMemory
     ) -> StepResult:
-        """One step from a :class:`~bhgrasp.sim.contact_set.ContactMemory`, with the drive's current terms.
+        """One step from a :class:`~bhgrasp.data.contacts.ContactMemory`, with the drive's current terms.
 
         Returns the :class:`~bhgrasp.sim.engine.StepResult`, its divergence checked as the compiled step checks it.
         """

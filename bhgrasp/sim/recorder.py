@@ -1,4 +1,4 @@
-"""Recorder: collects a simulation run sample by sample into a :class:`~bhgrasp.sim.state.Trajectory`."""
+"""Recorder: collects a simulation run sample by sample into a :class:`~bhgrasp.data.trajectory.Trajectory`."""
 
 from __future__ import annotations
 
@@ -8,13 +8,13 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._native import optional_core
+from bhgrasp.data import State, Trajectory
 from bhgrasp.sim.actuation import Actuation
 from bhgrasp.sim.scene import Scene
-from bhgrasp.sim.state import State, Trajectory
 
 
 class Recorder:
-    """Collects a run sample by sample and assembles the :class:`~bhgrasp.sim.state.Trajectory`.
+    """Collects a run sample by sample and assembles the :class:`~bhgrasp.data.trajectory.Trajectory`.
 
     A sample keeps references to what the step made (the scene's q and v, the input, the drive torques, the
     contacts as the engine returned them); the arrays of the trajectory are assembled once, at the end.

@@ -14,12 +14,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from bhgrasp._validation import as_positive, as_vector
+from bhgrasp.data import State, Trajectory, empty_contact_set
 from bhgrasp.errors import InputError
-from bhgrasp.sim.contact_set import empty_contact_set
 from bhgrasp.sim.inputs import joint_torques
 from bhgrasp.sim.recorder import Recorder
 from bhgrasp.sim.sensor_model import SensorModel, Sensors
-from bhgrasp.sim.state import State, Trajectory
 from bhgrasp.sim.step_output import StepInfo
 
 if TYPE_CHECKING:

@@ -1,7 +1,7 @@
 """What a controller's sensors get wrong: Gaussian noise on each reading and a measurement delay (issue 17, item 5).
 
 :class:`SensorModel` names the errors (standard deviations in SI units, a delay in seconds); :class:`Sensors` applies
-them to the true :class:`~bhgrasp.sim.state.State` a simulator hands its controller, so the controller sees what a
+them to the true :class:`~bhgrasp.data.state.State` a simulator hands its controller, so the controller sees what a
 real hand's encoders, an object tracker and fingertip force sensors would report:
 
 - joint positions [rad] and velocities [rad/s] (encoders), each coordinate independently;
@@ -26,8 +26,8 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_real
+from bhgrasp.data import State
 from bhgrasp.errors import InputError
-from bhgrasp.sim.state import State
 
 
 @dataclass(frozen=True)

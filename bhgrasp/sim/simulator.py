@@ -9,8 +9,8 @@ The contract of a Simulator:
 
 - **Its settings are frozen** (:class:`~bhgrasp.sim.settings.SimulatorSettings`): assigning ``sim.dt`` raises;
   :meth:`Simulator.with_settings` builds a new Simulator.
-- **A step depends only on its inputs**: the :class:`~bhgrasp.sim.state.State` carries the contact memory (an
-  immutable :class:`~bhgrasp.sim.contact_set.ContactMemory`) and the actuation modes, never the steps or runs before.
+- **A step depends only on its inputs**: the :class:`~bhgrasp.data.state.State` carries the contact memory (an
+  immutable :class:`~bhgrasp.data.contacts.ContactMemory`) and the actuation modes, never the steps or runs before.
 - **A step checks the state it is given** belongs to its scene (the scene's signature, sizes, finite values, unit
   quaternions, coordinates within ``max_coordinate``) and raises an :class:`~bhgrasp.errors.InputError` naming the
   field; a state that this Simulator's own step made is trusted (its arrays are read-only).
@@ -32,19 +32,18 @@ from typing import Any
 
 import numpy as np
 
+from bhgrasp.data import ContactMemory, SimulatedState, State
 from bhgrasp.errors import FrozenSettingError, InputError
 from bhgrasp.sim import run_loop
 from bhgrasp.sim.actuation import Actuation, FullyActuated
 from bhgrasp.sim.compiled import CompiledEngine
-from bhgrasp.sim.contact import SpringDamper
-from bhgrasp.sim.contact_set import ContactMemory
+from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.engine import DriveTerms, drive_key
 from bhgrasp.sim.inputs import control_input, generalized_forces, joint_torques
 from bhgrasp.sim.python_engine import PythonEngine
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_layout import SceneLayout
 from bhgrasp.sim.settings import SimulatorSettings
-from bhgrasp.sim.state import SimulatedState, State
 from bhgrasp.sim.state_check import check_state, describe_divergence
 from bhgrasp.sim.step_output import StepInfo, StepOutput
 

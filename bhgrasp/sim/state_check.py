@@ -13,12 +13,11 @@ from typing import Any
 
 import numpy as np
 
+from bhgrasp.data import ContactMemory, State
 from bhgrasp.errors import InputError, SimulationDiverged
-from bhgrasp.sim.contact_set import ContactMemory
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_layout import SceneLayout
 from bhgrasp.sim.settings import SimulatorSettings
-from bhgrasp.sim.state import State
 
 QUATERNION_TOLERANCE = 1e-6  # on | |quaternion| - 1 |: integration keeps it to ~1e-15, a hand-written one to its digits
 

@@ -10,9 +10,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from bhgrasp.sim.contact_set import ContactMemory, ContactSet, empty_contact_set
+from bhgrasp.data import ContactMemory, ContactSet, State, empty_contact_set
 from bhgrasp.sim.scene_layout import object_states
-from bhgrasp.sim.state import State
 
 if TYPE_CHECKING:
     from bhgrasp.sim.engine import Engine
@@ -23,7 +22,7 @@ class StepInfo:
     """What one step computed, beyond the new state: contacts with their forces and the drive torques.
 
     Attributes:
-        contacts: The step's contacts and forces, a :class:`~bhgrasp.sim.contact_set.ContactSet` (built when first
+        contacts: The step's contacts and forces, a :class:`~bhgrasp.data.contacts.ContactSet` (built when first
             read).
         drive_torques: Hand joint torques the drive delivered over the step [N m], (nv_hand,).
         contact_arrays: The contacts as the engine returned them: a ``ContactSet``, or the compiled engine's
@@ -37,7 +36,7 @@ class StepInfo:
 
     @property
     def contacts(self) -> ContactSet:
-        """The step's contacts as a :class:`~bhgrasp.sim.contact_set.ContactSet` (built on first read, then kept)."""
+        """The step's contacts as a :class:`~bhgrasp.data.contacts.ContactSet` (built on first read, then kept)."""
         if self._contacts is None:
             arrays = self.contact_arrays
             self._contacts = arrays if isinstance(arrays, ContactSet) else self._engine.contact_set(arrays)
@@ -45,7 +44,7 @@ class StepInfo:
 
 
 class StepOutput:
-    """What a step hands to its :class:`~bhgrasp.sim.state.SimulatedState` to build derived fields from.
+    """What a step hands to its :class:`~bhgrasp.data.state.SimulatedState` to build derived fields from.
 
     ``simulator``: the Simulator whose step made the state; ``contacts``: the step's ``ContactSet`` or compiled
     ``Contacts``; ``memory``: its ``ContactMemory`` or compiled ``Memory``.

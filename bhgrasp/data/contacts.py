@@ -2,7 +2,7 @@
 
 A :class:`ContactSet` holds the arrays the engines compute on (:func:`empty_contact_set` when there are none);
 :meth:`ContactSet.records` turns them into :class:`Contact` records for users; :class:`ContactMemory` is what a
-:class:`~bhgrasp.sim.state.State` carries from one step to the next (each contact's tangential spring and slide
+:class:`~bhgrasp.data.state.State` carries from one step to the next (each contact's tangential spring and slide
 flag).  World frame, SI units.
 """
 
@@ -14,7 +14,6 @@ from typing import Any
 import numpy as np
 
 from bhgrasp.errors import InputError
-from bhgrasp.sim.scene import Scene
 
 
 @dataclass(frozen=True)
@@ -59,7 +58,7 @@ class Contact:
 
 @dataclass(frozen=True, eq=False)
 class ContactMemory:
-    """What a run carries from one step to the next about its contacts (part of :class:`~bhgrasp.sim.state.State`).
+    """What a run carries from one step to the next about its contacts (part of :class:`~bhgrasp.data.state.State`).
 
     An immutable value: its arrays are read-only copies, and ``dataclasses.replace(memory, displacement=...)`` makes
     a new memory that every engine reads as given.  The compiled engine's copy of the same arrays (kept so that a
@@ -160,8 +159,8 @@ class ContactSet:
         """f_n per contact [N]."""
         return np.einsum("ij,ij->i", self.force, self.normal) if len(self) else np.zeros(0)
 
-    def records(self, scene: Scene) -> list[Contact]:
-        """The contacts as :class:`Contact` records with body names."""
+    def records(self, scene: Any) -> list[Contact]:
+        """The contacts as :class:`Contact` records, named by ``scene`` (the :class:`~bhgrasp.sim.scene.Scene`)."""
         records = []
         for i, k in enumerate(self.pair):
             pair = scene.pairs[k]
@@ -186,3 +185,6 @@ def empty_contact_set() -> ContactSet:
     return ContactSet(
         np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros((0, 3)), np.zeros(0)
     )
+
+
+__all__ = ["Contact", "ContactMemory", "ContactSet", "empty_contact_set"]
