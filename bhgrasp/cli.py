@@ -98,7 +98,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     bench.add_argument("--quick", action="store_true", help="a few repetitions only (a smoke run)")
     bench_grasp = commands.add_parser(
         "grasp-bench",
-        help="the grasp benchmark (issue 16): per object and grasp, approach -> close -> lift 10 cm -> push 10 m N "
+        help="the grasp benchmark: per object and grasp, approach -> close -> lift 10 cm -> push 10 m N "
         "along +-x, +-y, +-z -> place, on the wrist-mounted BH8-280; prints the success table",
     )
     bench_grasp.add_argument(

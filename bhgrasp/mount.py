@@ -1,4 +1,4 @@
-"""A hand on a moving wrist: six actuated mount joints between the world and the hand base (issue 16, item 1).
+"""A hand on a moving wrist: six actuated mount joints between the world and the hand base.
 
 A grasp is followed by lift, carry, shake and place, which the arm does: :func:`mounted` returns the hand with six
 1-DOF joints in front of its own, ``mount_x``, ``mount_y``, ``mount_z`` (prismatic along the mount frame's axes

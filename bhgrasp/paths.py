@@ -1,4 +1,4 @@
-"""Continuous object paths for the grasp supervisor (issue 17, item 3): a circle, and waypoints with blends.
+"""Continuous object paths for the grasp supervisor: a circle, and waypoints with blends.
 
 :class:`PoseCircle` lifts the object clear of its support, then carries its centre of mass ``turns`` times around a
 circle of radius ``radius`` in the plane of two world directions (u, v) through the lifted point, the orientation

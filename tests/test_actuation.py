@@ -7,9 +7,10 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
+from bhgrasp.barrett.transmission import MAX_MOTOR_TORQUE, PROXIMAL_RATIO
 from bhgrasp.objects import Box, SpringMounted
 from bhgrasp.sim import Simulator
-from bhgrasp.sim.actuation import MAX_MOTOR_TORQUE, PROXIMAL_RATIO, BarrettActuation, FullyActuated
+from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 

@@ -44,7 +44,7 @@ from bhgrasp.transmission import Transmission
 
 APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
 PLAN_LENGTH = 0.1  # [m] the plan's metric (dx, L dtheta): 5 mrad weighs as 0.5 mm, the motion targets' ratio
-PLAN_TOLERANCE = (5e-4, 5e-3)  # [m], [rad] the most the plan may differ from the request: issue 17's final-pose
+PLAN_TOLERANCE = (5e-4, 5e-3)  # [m], [rad] the most the plan may differ from the request: the final-pose
 # tolerance, as chapter 5's motion table judges success (a request the sensed contacts make only worse than that is
 # refused, not approximated)
 

@@ -1,6 +1,6 @@
 """The generic-hand grasp scene: the Allegro hand (example-robot-data, 16 DOF) grasps a box on a pedestal.
 
-Issue 8's demonstration that the grasp pipeline takes any :class:`~bhgrasp.hand.Hand`: nothing here is specific
+The demonstration that the grasp pipeline takes any :class:`~bhgrasp.hand.Hand`: nothing here is specific
 to the Allegro beyond the choice of fingers, the box placement and the mounting.  The hand is mounted with its
 fingers pointing along world x and its palm facing world y (base frame: fingers along z, palm normal x; the world
 gets base y as "up"), so the thumb and the index + middle fingertips squeeze the box along world x while gravity

@@ -1,4 +1,4 @@
-"""The grasp benchmark (issue 16): approach -> close -> lift 10 cm -> shake in six directions -> place, per object.
+"""The grasp benchmark: approach -> close -> lift 10 cm -> shake in six directions -> place, per object.
 
 One trial (:func:`run_trial`) puts a wrist-mounted BH8-280 (:func:`~bhgrasp.mount.mounted`) palm down above an
 object (:mod:`~bhgrasp.experiments.bench_objects`) standing on a stand of its own footprint, and runs DexGraspBench's

@@ -1,6 +1,6 @@
 """Which object motions the chapter-5 grasps make: a table of grasp x motion -> refused, or run and measured.
 
-Issue 17 asks the grasp pipeline to go beyond one scripted lift-and-turn: every requested motion either runs to its
+The grasp pipeline goes beyond one scripted lift-and-turn: every requested motion either runs to its
 end with no slip (final error below :data:`SUCCESS`) or is refused before anything is simulated, with the reason
 (:func:`~bhgrasp.experiments.grasp_demo.run_grasp_demo` refuses a motion outside the grasp's manipulable space, one
 that drives a joint past its limit, and one whose path drives the box into its pedestal).

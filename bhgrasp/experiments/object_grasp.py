@@ -1,4 +1,4 @@
-"""Grasp any object the synthesis plans (issue 17, item 1): the chapter-5 scene around a box, cylinder or sphere.
+"""Grasp any object the synthesis plans: the chapter-5 scene around a box, cylinder or sphere.
 
 :func:`object_grasp` places the object (its ``pose`` in the hand's world) on a small pedestal, synthesises its
 grasp (:func:`~bhgrasp.grasp.synthesis.synthesize`) unless one is given, and builds the simulator as the thesis'

@@ -1,4 +1,4 @@
-"""The chapter-5 path case: grasped objects carried around a circle and through waypoints (issue 17, item 3).
+"""The chapter-5 path case: grasped objects carried around a circle and through waypoints.
 
 Two grasps of :mod:`bhgrasp.experiments.synthesis_case` (the thesis' box, whose synthesis is the thesis' pinch, and
 the ball) lift their object 10 mm, then follow either a circle of :data:`RADIUS` (:class:`~bhgrasp.paths.PoseCircle`,

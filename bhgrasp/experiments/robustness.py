@@ -8,7 +8,7 @@ controller starts at :data:`ESTIMATE`), with the same per-run noise seeds, on th
 (:func:`~bhgrasp.sweep.run_sweep`); same seed, same bits on any executor.
 
 A run succeeds when the box ends within :data:`SUCCESS` of its reference (true pose, not the sensed one) with no
-sliding contact sample after the grasp closed (issue 17's target for motions).  A run that raises (e.g. the
+sliding contact sample after the grasp closed (the target for motions).  A run that raises (e.g. the
 fingers never close) counts as a failure and is reported.
 """
 

@@ -1,4 +1,4 @@
-"""What the grasp demo's controller does not know: the uncertainties of issue 17, item 5, as demo arguments.
+"""What the grasp demo's controller does not know: the uncertainties a real set-up has, as demo arguments.
 
 Sensor noise and delay, joint friction, torque limits and a wrong friction coefficient, as keyword arguments of
 :func:`~bhgrasp.experiments.grasp_demo.run_grasp_demo`.

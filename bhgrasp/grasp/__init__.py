@@ -10,9 +10,7 @@ space: which offsets a grasp can make before anything is simulated), :mod:`~bhgr
 offset's path clears the support and other fixed shapes), :mod:`~bhgrasp.grasp.path_check` (the fingers followed along
 an offset's path: links that meet the object beside the planned contacts, second order), :mod:`~bhgrasp.grasp.sensing`
 (per-finger contact forces and reaction torques) and :mod:`~bhgrasp.grasp.metrics` (finger forces and slip events read
-back from a trajectory).  Every public name is re-exported here (``from bhgrasp.grasp import grasp_map``); the former
-modules ``bhgrasp.grasp_forces``, ``bhgrasp.grasp_dynamics``, ``bhgrasp.grasp_motion``, ``bhgrasp.grasp_metrics`` and
-``bhgrasp.sensing`` still import, as re-exports of these.
+back from a trajectory).  Every public name is re-exported here (``from bhgrasp.grasp import grasp_map``).
 
 ``import bhgrasp.grasp`` does not import scipy: the force-closure LP and the convex hull import it when called.
 """

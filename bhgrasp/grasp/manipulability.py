@@ -1,4 +1,4 @@
-"""The manipulable space of a grasp: which object motions its fingers can make, and how far (issue 17, item 2).
+"""The manipulable space of a grasp: which object motions its fingers can make, and how far.
 
 Contacts that neither slide nor roll tie the object twist x_dot = (v, omega) (at the centre of mass, world) to the
 joint velocities: G^T x_dot = J_h q_dot (5.19).  A twist the fingers can produce has G^T x_dot in the range of J_h;

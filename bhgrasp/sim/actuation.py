@@ -22,15 +22,10 @@ from collections.abc import Sequence
 import numpy as np
 
 from bhgrasp._validation import as_vector
-from bhgrasp.barrett.transmission import (  # noqa: F401  (the drive's constants, importable from here as before)
+from bhgrasp.barrett.transmission import (
     BREAKAWAY_TORQUE,
-    DISTAL_ALONE_RATIO,
-    DISTAL_RATIO,
-    MAX_MOTOR_SPEED,
     MAX_MOTOR_TORQUE,
     MOTOR_DAMPING,
-    PROXIMAL_RATIO,
-    SPREAD_RATIO,
     WORM_EFFICIENCY,
     BarrettTransmission,
 )

@@ -145,7 +145,7 @@ def drive_of(actuation: Actuation):
 
 def barrett_of(actuation: BarrettActuation):
     """A Barrett actuation's parameters as the C++ ``Barrett`` of the batch (its modes are per environment)."""
-    from bhgrasp.sim import actuation as model
+    from bhgrasp.barrett import transmission as model
 
     barrett = core_module().Barrett()
     barrett.nv_hand = actuation.hand.nv

@@ -1,4 +1,4 @@
-"""What a controller's sensors get wrong: Gaussian noise on each reading and a measurement delay (issue 17, item 5).
+"""What a controller's sensors get wrong: Gaussian noise on each reading and a measurement delay.
 
 :class:`SensorModel` names the errors (standard deviations in SI units, a delay in seconds); :class:`Sensors` applies
 them to the true :class:`~bhgrasp.data.state.State` a simulator hands its controller, so the controller sees what a
