@@ -76,4 +76,6 @@ def test_readme_gives_exactly_two_setup_commands() -> None:
     assert len(commands) == 2
     assert "bhgrasp demo" in commands[0] and "pytest" in commands[1]
     ci = (README.parent / ".ci" / "run").read_text()
-    assert 'pip install --quiet -e ".[test]"' in ci and re.search(r"\n(BHGRASP_REQUIRE_BROWSER=1 )?pytest\n", ci)
+    assert 'pip install --quiet -e ".[test]"' in ci and re.search(
+        r"\n(BHGRASP_REQUIRE_CORE=1 )?(BHGRASP_REQUIRE_BROWSER=1 )?pytest\n", ci
+    )
