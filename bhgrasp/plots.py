@@ -209,7 +209,7 @@ def grasp_figure(
     Args:
         traj: The run (logs ``object_error``, ``commanded_normal``).
         finger_names: The hand's fingers, in the order of ``commanded_normal``.
-        measured_normal: (N, n_fingers) measured normal forces [N] (see ``grasp_metrics.finger_normal_forces``).
+        measured_normal: (N, n_fingers) measured normal forces [N] (see ``bhgrasp.grasp.metrics.finger_normal_forces``).
         true_mass: Drawn beside the mass estimate [kg].
         grasp_time: When the grasp closed [s] (marked; the panels start there).
         motion: (start, end) of the object motion [s] (shaded).

@@ -1,5 +1,5 @@
 // The compiled step: see engine.hpp.  Each function mirrors the Python function of the same name in
-// bhgrasp/sim/python_engine.py (PythonStep); the comments there explain the physics.  This file holds the set-up, the
+// bhgrasp/sim/python_engine.py (PythonEngine); the comments there explain the physics.  This file holds the set-up, the
 // step's dispatch, the explicit integrators' accelerations and the joint-space terms; contact detection is in
 // detect.cpp, the contact law in contact_law.cpp, the implicit step in implicit.cpp, the rotation helpers in
 // integrators.cpp.

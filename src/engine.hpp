@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -72,7 +73,7 @@ struct Settings {
   Vector lower, upper;                // hand joint limits [rad]
   double limit_stiffness = 1e3;       // [N m/rad]
   double limit_damping = 0.05;        // [N m s/rad]
-  double max_coordinate = 0.0;        // largest |q_i| [m or rad] (SimulatorSettings.max_coordinate sets it)
+  double max_coordinate = std::numeric_limits<double>::infinity();  // largest |q_i| [m or rad] (SimulatorSettings sets it)
   Vector joint_stiffness;             // (nv,) springs of spring-mounted objects [N/m]
   Vector joint_damping;               // (nv,) [N s/m]
   std::vector<int> spring_q, spring_v;  // coordinates of spring-mounted objects

@@ -1,4 +1,4 @@
-// The implicit step: see engine.hpp.  It mirrors bhgrasp/sim/python_engine.py (PythonStep._implicit, _drive) and
+// The implicit step: see engine.hpp.  It mirrors bhgrasp/sim/python_engine.py (PythonEngine._implicit, _drive) and
 // the active-set helpers of bhgrasp/sim/contact_law.py; the comments there explain the linearisation.
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // Integrator pieces: see engine.hpp.  Each function mirrors the Python function of the same name in
-// bhgrasp/sim/integrators.py or bhgrasp/sim/python_engine.py (PythonStep); the comments there explain the mechanics.
+// bhgrasp/sim/integrators.py or bhgrasp/sim/python_engine.py (PythonEngine); the comments there explain the mechanics.
 #include <algorithm>
 #include <cmath>
 

@@ -15,7 +15,9 @@ The contract of a Simulator:
   quaternions, coordinates within ``max_coordinate``) and raises an :class:`~bhgrasp.errors.InputError` naming the
   field; a state that this Simulator's own step made is trusted (its arrays are read-only).
 - **It may be shared by threads**: steps from several threads run one at a time (a lock), each as if alone.  For
-  parallel speed give each thread its own Simulator (or use :class:`~bhgrasp.sim.batch.BatchSimulator`).
+  parallel speed give each thread its own Simulator built with its own actuation (``with_settings`` and copies share
+  the actuation object, whose modes, e.g. the Barrett TorqueSwitch, each step restores and updates; a stateless
+  ``FullyActuated`` may be shared), or use :class:`~bhgrasp.sim.batch.BatchSimulator`.
 - **It pickles** (rebuilt from its scene, contact law, actuation and settings), so it travels to a process or a Dask
   worker.
 - **Every divergence names the value it saw** (:class:`~bhgrasp.errors.SimulationDiverged`).
