@@ -56,7 +56,7 @@ def adaptation_case(scale: float = 1.0):
 
     header = ["setting", "law", "sensing / plant", "mass error [%]", "I_xx / I_yy / I_zz error [%]",
               "V_o end / start", "V_o rises [% of samples]", "V rises [% of samples]", "slip samples"]  # fmt: skip
-    case = Case("adaptation", "Adaptation: learning the object online, and the Lyapunov function (5.63) (issue 17)",
+    case = Case("adaptation", "Adaptation: learning the object online, and the Lyapunov function (5.63)",
                 "parameters converge; V_dot <= 0 (5.65)", header)  # fmt: skip
     for law in ("thesis", "composite"):
         run, k_o = ideal_run(law, IDEAL_DURATION * scale)

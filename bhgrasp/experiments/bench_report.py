@@ -114,7 +114,7 @@ COMMAND = (
 
 def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
     """The report: success per actuation, then one table row per trial (mm, deg, N, N m); ``command`` made it."""
-    lines = ["# Grasp benchmark (issue 16)", "",
+    lines = ["# Grasp benchmark", "",
              f"Regenerate: `{command}`. Protocol: approach, close, "
              "lift 10 cm, push 10 m N on the object along +x, -x, +y, -y, +z, -z (2 s each), place "
              "(`bhgrasp/experiments/grasp_bench.py`). Success: within 5 cm and 15 deg of the held pose in the palm "

@@ -111,7 +111,7 @@ def motions_case(scale: float = 1.0):
 
     header = ["grasp", "motion", "outcome", "final error [mm] / [mrad]", "max tracking error [mm] / [mrad]",
               "slip samples", "force error [%]"]  # fmt: skip
-    case = Case("motions", "Object motions of the chapter-5 grasps (issue 17): refused before simulating, or run",
+    case = Case("motions", "Object motions of the chapter-5 grasps: refused before simulating, or run",
                 "Table 5.2 asks for one motion: 10 mm and 2-9 degrees", header)  # fmt: skip
     allowed = succeeded = 0
     failed: list[str] = []

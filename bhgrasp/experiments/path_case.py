@@ -142,7 +142,7 @@ def path_case(scale: float = 1.0):
     header = ["object and grasp", "path", "outcome", "max / rms deviation after the lift [mm]",
               "max deviation in the lift [mm]", "max turn off the path [mrad]", "final error [mm] / [mrad]",
               "slip samples", "least cone margin [N]"]  # fmt: skip
-    case = Case("paths", "Continuous paths (issue 17): grasped objects carried around a circle and through waypoints",
+    case = Case("paths", "Continuous paths: grasped objects carried around a circle and through waypoints",
                 "-", header)  # fmt: skip
     circles: dict[str, PathRun] = {}
     for key in WAYPOINTS:

@@ -114,7 +114,7 @@ def robustness(scale: float = 1.0, executor: Any = None):
         "mass estimate error (mean) [%]",
         "failed runs",
     ]
-    case = Case("robustness", "Robustness: what the controller does not know (issue 17, seeded Monte-Carlo)", "-",
+    case = Case("robustness", "Robustness: what the controller does not know (seeded Monte-Carlo)", "-",
                 header)  # fmt: skip
     samples = SAMPLES if scale >= 1.0 else max(2, round(SAMPLES * scale))
     summaries = {}

@@ -45,7 +45,7 @@ def synthesis_case(scale: float = 1.0):
     from bhgrasp.experiments.object_grasp import object_grasp, run_object_grasp
 
     header = ["object", "synthesised grasp", "motion", "outcome", "final error [mm] / [mrad]", "slip samples"]
-    case = Case("synthesis", "Grasp synthesis (issue 17): the planner's grasps of boxes, cylinders and spheres, moved",
+    case = Case("synthesis", "Grasp synthesis: the planner's grasps of boxes, cylinders and spheres, moved",
                 "-", header)  # fmt: skip
     requested = allowed = succeeded = 0
     failed: list[str] = []
