@@ -9,6 +9,8 @@ from __future__ import annotations
 import sys
 import weakref
 from collections.abc import Callable
+from importlib import metadata
+from pathlib import Path
 from types import ModuleType
 from typing import Any
 
@@ -39,11 +41,40 @@ def required_core(what: str) -> ModuleType:
     try:
         from bhgrasp import _core
     except ImportError as error:
+        shadowed = _shadowed_install()
+        if shadowed is not None:
+            raise CompiledEngineUnavailable(
+                f"{what} (bhgrasp._core) does not load: Python imported bhgrasp from the source folder "
+                f"{Path(__file__).parent} (the current directory comes first on sys.path), which holds no compiled "
+                f"core, not the bhgrasp installed in {shadowed}; run from another folder, or install this checkout "
+                "in place with `pip install -e .`"
+            ) from error
         raise CompiledEngineUnavailable(
             f"{what} (bhgrasp._core) does not load ({error}); reinstall with `pip install -e .` (it needs a C++17 "
             "compiler, e.g. Debian's g++), or pass engine='python' to use the Python reference"
         ) from error
     return _core
+
+
+def _shadowed_install(package: Path | None = None, distribution: metadata.Distribution | None = None) -> Path | None:
+    """The installed bhgrasp that ``package`` (the bhgrasp folder imported) shadows, if it is a source checkout.
+
+    An installed copy is a folder with the package's ``__init__.py`` and its ``_core`` extension (an editable
+    install's site-packages folder holds only the extension: then nothing is shadowed).
+    """
+    package = (Path(__file__).parent if package is None else package).resolve()
+    if not (package.parent / "pyproject.toml").is_file():
+        return None  # an installed package, not a checkout
+    try:
+        distribution = metadata.distribution("bhgrasp") if distribution is None else distribution
+    except metadata.PackageNotFoundError:
+        return None
+    for file in distribution.files or ():
+        if file.name.startswith("_core.") and file.parent.name == "bhgrasp":
+            installed = Path(str(distribution.locate_file(file))).resolve().parent
+            if installed != package and (installed / "__init__.py").is_file():
+                return installed
+    return None
 
 
 def kernel(owner: Any, name: str, build: Callable[[ModuleType], Any]) -> Any:

@@ -136,8 +136,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     experiments.add_argument(
         "--output",
         type=checked.output_folder,
-        default=Path("docs/results"),
-        help="folder for report, figures and chapterN.json",
+        default=Path("bhgrasp_experiments"),
+        help="folder for report, figures and chapterN.json (one holding a chapterN.json is refused without --force)",
+    )
+    experiments.add_argument(
+        "--force",
+        action="store_true",
+        help="replace the chapterN.json, report and figures already in --output (e.g. the committed docs/results)",
     )
     experiments.add_argument(
         "--reference", type=Path, default=Path("docs/results"), help="compare, readme-table: the committed results"
@@ -189,6 +194,13 @@ def _run(args: argparse.Namespace) -> int:
         if args.folder is not None:
             raise InputError(f"`bhgrasp experiments {args.chapter}` takes no folder; use --output")
         chapters = ("ch3", "ch4", "ch5") if args.chapter == "all" else (args.chapter,)
+        existing = [args.output / f"chapter{chapter[2:]}.json" for chapter in chapters]
+        existing = [str(path) for path in existing if path.exists()]
+        if existing and not args.force:
+            raise InputError(
+                f"{', '.join(existing)} already exist(s) (a committed result?); pass --force to replace, or choose "
+                "another --output"
+            )
         for chapter in chapters:
             status = _experiments(chapter, args.output, args.scale, not args.no_figures)
             if status:

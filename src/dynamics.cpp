@@ -1,16 +1,16 @@
 #include "dynamics.hpp"
+#include "model_io.hpp"
 
 #include <stdexcept>
 
 #include <pinocchio/algorithm/frames.hpp>
 #include <pinocchio/algorithm/jacobian.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
-#include <pinocchio/serialization.hpp>
 
 namespace bhgrasp {
 
 HandDynamics::HandDynamics(const std::string& model) {
-  model_.loadFromString(model);
+  model_ = model_from_text(model);
   data_ = pinocchio::Data(model_);
   zero_ = Eigen::VectorXd::Zero(model_.nv);
   sum_.resize(model_.nv);

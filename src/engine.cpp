@@ -4,6 +4,7 @@
 // detect.cpp, the contact law in contact_law.cpp, the implicit step in implicit.cpp, the rotation helpers in
 // integrators.cpp.
 #include "engine.hpp"
+#include "model_io.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -17,7 +18,6 @@
 #include <pinocchio/algorithm/frames.hpp>
 #include <pinocchio/algorithm/jacobian.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
-#include <pinocchio/serialization.hpp>
 
 #include "kernels.hpp"
 
@@ -44,8 +44,8 @@ void Contacts::resize(Eigen::Index m) {
 
 Engine::Engine(const std::string& model, const std::string& geometry, Settings settings)
     : settings_(std::move(settings)) {
-  model_.loadFromString(model);
-  geometry_.loadFromString(geometry);
+  model_ = model_from_text(model);
+  geometry_ = geometry_from_text(geometry);
   data_ = pinocchio::Data(model_);
   geometry_data_ = pinocchio::GeometryData(geometry_);
   const auto pairs = settings_.pairs.size();

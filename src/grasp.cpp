@@ -1,18 +1,18 @@
 // The grasp kinematics kernel: see grasp.hpp.  compute() mirrors contact_kinematics_python in
 // bhgrasp/grasp/kinematics.py line for line; the comments there and the module docstring explain the maths.
 #include "grasp.hpp"
+#include "model_io.hpp"
 
 #include <algorithm>
 #include <stdexcept>
 
 #include <pinocchio/algorithm/jacobian.hpp>
-#include <pinocchio/serialization.hpp>
 #include <pinocchio/spatial/skew.hpp>
 
 namespace bhgrasp {
 
 GraspKinematics::GraspKinematics(const std::string& model) {
-  model_.loadFromString(model);
+  model_ = model_from_text(model);
   data_ = pinocchio::Data(model_);
   masks_ = Eigen::MatrixXd::Zero(model_.njoints, model_.nv);  // (_HandIndex.masks of grasp/kinematics.py)
   for (int joint = 1; joint < model_.njoints; ++joint) {

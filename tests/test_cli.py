@@ -53,6 +53,7 @@ def test_bad_command_exits_with_usage() -> None:
     assert caught.value.code == 2
 
 
+@pytest.mark.slow
 def test_experiments_ch3_writes_the_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     """A shortened run (durations x 0.3) of `bhgrasp experiments ch3`: every case's table and PNG figures."""
     assert main(["experiments", "ch3", "--output", str(tmp_path), "--scale", "0.3"]) == 0
@@ -71,6 +72,7 @@ def test_experiments_rejects_a_bad_scale(tmp_path: Path, capsys: pytest.CaptureF
     assert caught.value.code == 2 and "argument --scale: must be a positive number, got '-1'" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_experiments_ch4_writes_the_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     """A shortened run (durations x 0.2, 2 CMA-ES generations) of `bhgrasp experiments ch4`."""
     assert main(["experiments", "ch4", "--output", str(tmp_path), "--scale", "0.2"]) == 0
@@ -83,6 +85,7 @@ def test_experiments_ch4_writes_the_report_and_figures(tmp_path: Path, capsys: p
     assert len(figures) == 6 and all(f"]({f.name})" in report for f in figures)
 
 
+@pytest.mark.slow
 def test_experiments_ch5_writes_the_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     """A shortened run (1.2 s per run: grasp and the start of the move) of `bhgrasp experiments ch5`."""
     assert main(["experiments", "ch5", "--output", str(tmp_path), "--scale", "0.4"]) == 0
@@ -177,6 +180,7 @@ def test_tune_runs_cma_es_on_the_impedance_fitness(capsys: pytest.CaptureFixture
     assert caught.value.code == 2
 
 
+@pytest.mark.slow
 def test_bench_runs_the_benchmark_scripts(capfd: pytest.CaptureFixture) -> None:
     assert main(["bench", "--quick"]) == 0
     out = capfd.readouterr().out
@@ -215,16 +219,17 @@ def test_long_commands_show_progress_on_a_terminal(tmp_path: Path, capsys: pytes
     import sys
 
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
-    assert main(["experiments", "ch3", "--output", str(tmp_path), "--scale", "0.05", "--no-figures"]) == 0  # 0.1 s
+    assert main(["experiments", "ch3", "--output", str(tmp_path / "a"), "--scale", "0.05", "--no-figures"]) == 0
     err = capsys.readouterr().err
     assert "ch3: 100%" in err and "4/4 [" in err
     assert main(["tune", "--generations", "1", "--population", "3", "--serial"]) == 0
     assert "100%" in capsys.readouterr().err
     monkeypatch.setattr(sys.stderr, "isatty", lambda: False)
-    assert main(["experiments", "ch3", "--output", str(tmp_path), "--scale", "0.05", "--no-figures"]) == 0
+    assert main(["experiments", "ch3", "--output", str(tmp_path / "b"), "--scale", "0.05", "--no-figures"]) == 0
     assert "ch3: " not in capsys.readouterr().err  # a log (CI) gets no bar
 
 
+@pytest.mark.slow
 def test_grasp_bench_reproduces_a_committed_trial_and_flags_a_difference(
     tmp_path: Path, capsys: pytest.CaptureFixture
 ) -> None:

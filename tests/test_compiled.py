@@ -128,6 +128,7 @@ def test_box_sliding_down_an_incline(integrator: str) -> None:
     assert_agree(lockstep(simulator, zero(8), 1200), 4)
 
 
+@pytest.mark.slow  # 18 s
 def test_barrett_closing_on_a_box_breaks_away_and_reopens() -> None:
     """The 4-motor transmission in each TorqueSwitch mode: the fingers close on a box, the proximal links block and
     the switches break away (the distal links close alone: mode 1); opening, the tips return to their stops and the

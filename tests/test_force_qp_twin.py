@@ -218,6 +218,7 @@ else:
 """
 
 
+@pytest.mark.slow  # 15 s
 def test_the_engines_agree_bit_for_bit_against_the_plain_proxsuite():
     """Same arithmetic (proxsuite without vector extensions on both sides): identical in every cycle."""
     run = subprocess.run([sys.executable, "-c", PLAIN_PROXSUITE, str(Path(__file__).parent)], capture_output=True,

@@ -72,6 +72,7 @@ def can_power():
     return trial, trajectory, hand
 
 
+@pytest.mark.slow
 def test_a_power_grasp_lifts_the_can_and_holds_it_with_m_g_plus_the_push(can_power) -> None:
     trial, trajectory, hand = can_power
     record = evaluate(trial, trajectory, hand)
@@ -147,6 +148,7 @@ def test_a_trial_not_lifted_names_the_fingers_force_on_the_stand_when_they_press
     )
 
 
+@pytest.mark.slow
 def test_the_power_grasp_of_the_box_closes_on_the_box_and_keeps_its_fingers_off_the_stand() -> None:
     """With the knuckles on its top the closing fingers pass beside the 5 cm box and meet its stand; the placement
     raises the hand until, in the world frame of the trial's own setup, each finger closing from the pre-shape (distal

@@ -74,8 +74,14 @@ def check_truths(namespace: dict, tmp_path: Path) -> None:
 def test_readme_gives_exactly_two_setup_commands() -> None:
     commands = re.findall(r"```bash\n(.*?)```", README.read_text(), flags=re.DOTALL)
     assert len(commands) == 2
-    assert "bhgrasp demo" in commands[0] and "pytest" in commands[1]
-    ci = (README.parent / ".ci" / "run").read_text()
-    assert 'pip install --quiet -e ".[test]"' in ci and re.search(
-        r"\n(BHGRASP_REQUIRE_CORE=1 )?(BHGRASP_REQUIRE_BROWSER=1 )?pytest\n", ci
+    assert "pip install . && bhgrasp demo" in commands[0]
+    assert 'pip install -e ".[test]" && pytest -n auto -m "not slow"' in commands[1]
+    ci = (README.parent / ".ci" / "run").read_text()  # CI runs both, the test command timed against its budget
+    assert 'pip install --quiet -e ".[test,docs]"' in ci and "\nbhgrasp demo --output" in ci
+    assert re.search(r'\n(BHGRASP_REQUIRE_CORE=1 )?(BHGRASP_REQUIRE_BROWSER=1 )?pytest -n auto -m "not slow"\n', ci)
+    assert re.search(r"\n(BHGRASP_REQUIRE_CORE=1 )?pytest -n auto -m slow\n", ci)  # the rest, in CI's own step
+    budget = int(re.search(r"\nbudget=(\d+)\n", ci).group(1))
+    stated = re.search(
+        r"the tests take about (\d+) min on 2 cores .*?CI fails above (\d+) min", README.read_text(), re.DOTALL
     )
+    assert stated and int(stated.group(2)) * 60 == budget and int(stated.group(1)) * 60 < budget

@@ -15,7 +15,7 @@ README holds exactly that table.
 Regenerating every published number (reports, figures, JSON and the README table) is one command, from the
 repository root::
 
-    bhgrasp experiments all --output docs/results --readme README.md
+    bhgrasp experiments all --output docs/results --force --readme README.md
 """
 
 from __future__ import annotations
@@ -35,7 +35,15 @@ from bhgrasp.experiments.readme_rows import README_HEADER, README_ROWS
 
 SCHEMA = 1
 REPOSITORY = Path(__file__).resolve().parents[2]
-REFERENCE = REPOSITORY / "docs" / "results"  # the committed full-scale results of a source checkout
+
+
+def _reference_folder() -> Path:
+    """The committed full-scale results: a checkout's docs/results, else the copy a wheel ships (bhgrasp/results)."""
+    checkout = REPOSITORY / "docs" / "results"
+    return checkout if checkout.is_dir() else Path(__file__).resolve().parents[1] / "results"
+
+
+REFERENCE = _reference_folder()
 
 
 # ---------------------------------------------------------------------------------------------------- tolerances
