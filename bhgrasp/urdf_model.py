@@ -87,14 +87,14 @@ def _check_inertials(root: Any, path: str | Path) -> None:
                 raise ModelError(f"{where}: {error} ({components})")
             moments = np.linalg.eigvalsh(tensor)
             if moments[0] + moments[1] < moments[2] - _inertia_tolerance(moments):
-                odd.append(
-                    f"link {link.get('name')!r}: the principal moments of inertia [{_shown(moments)}] kg m^2 break "
-                    f"the triangle inequality ({moments[0]:.6g} + {moments[1]:.6g} < {moments[2]:.6g}) ({components})"
-                )
+                odd.append((link.get("name"), moments, components))
     if odd:
+        name, moments, components = odd[0]
+        names = ", ".join(repr(item[0]) for item in odd)
         warnings.warn(
-            f"URDF {str(path)!r}: no rigid body has these inertias (check the signs of ixy, ixz, iyz); the dynamics "
-            f"use them as given: " + "; ".join(odd),
+            f"URDF {str(path)!r}: no rigid body has the inertias of {len(odd)} link(s) ({names}); check the signs "
+            f"of ixy, ixz, iyz; the dynamics use them as given. E.g. link {name!r}: the principal moments of inertia "
+            f"[{_shown(moments)}] kg m^2 break the triangle inequality ({components})",
             UserWarning,
             stacklevel=4,
         )

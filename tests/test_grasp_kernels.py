@@ -91,7 +91,7 @@ HANDS = {
 }
 
 
-@pytest.mark.filterwarnings("ignore:URDF .* no rigid body has these inertias")
+@pytest.mark.filterwarnings("ignore:URDF .* no rigid body has the inertias")
 @pytest.mark.parametrize("case", HANDS)
 @pytest.mark.parametrize("seed", range(3))
 def test_grasp_kinematics_agree_with_independent_truths_at_random_configurations(case, seed):
@@ -182,7 +182,7 @@ def test_compiled_kernel_agrees_with_its_python_twin_on_the_hold(held, fingers, 
     assert_twins_agree(hand, q, obj, points_world, frames, joints)
 
 
-@pytest.mark.filterwarnings("ignore:URDF .* no rigid body has these inertias")
+@pytest.mark.filterwarnings("ignore:URDF .* no rigid body has the inertias")
 @pytest.mark.parametrize("case", HANDS)
 @pytest.mark.parametrize("count", [3, 2])
 @pytest.mark.parametrize("seed", range(4))
