@@ -173,6 +173,23 @@ def test_an_edited_contact_memory_is_what_the_step_reads(engine: str) -> None:
 
 
 # ---------------------------------------------------------------------- threads
+def run_together(jobs: list) -> list:
+    """Each job (a no-argument callable) on its own thread, started at one barrier; their results in order."""
+    results: list = [None] * len(jobs)
+    barrier = threading.Barrier(len(jobs))
+
+    def work(i: int) -> None:
+        barrier.wait()
+        results[i] = jobs[i]()
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(len(jobs))]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    return results
+
+
 @pytest.mark.parametrize("engine", ENGINES)
 def test_steps_from_two_threads_give_each_thread_its_serial_result(engine: str) -> None:
     """The compiled step releases the GIL and wrote shared work arrays; the Python engine shared the scene's
@@ -181,34 +198,15 @@ def test_steps_from_two_threads_give_each_thread_its_serial_result(engine: str) 
     steps = 150 if engine == "compiled" else 40
     starts = [state, dataclasses.replace(state, scene_v=state.scene_v + 0.05)]
     serial = [run_steps(simulator, controller, start, steps) for start in starts]
-    results: list = [None, None]
-    barrier = threading.Barrier(2)
-
-    def work(i: int) -> None:
-        barrier.wait()
-        results[i] = run_steps(simulator, controller, starts[i], steps)
-
-    threads = [threading.Thread(target=work, args=(i,)) for i in range(2)]
-    for thread in threads:
-        thread.start()
-    for thread in threads:
-        thread.join()
-    for alone, together in zip(serial, results):
-        np.testing.assert_array_equal(together.scene_q, alone.scene_q)
-        np.testing.assert_array_equal(together.scene_v, alone.scene_v)
+    together = run_together([lambda start=start: run_steps(simulator, controller, start, steps) for start in starts])
+    for alone, with_other in zip(serial, together):
+        np.testing.assert_array_equal(with_other.scene_q, alone.scene_q)
+        np.testing.assert_array_equal(with_other.scene_v, alone.scene_v)
     # two Simulators of one scene share no work space either
-    other = simulator.with_settings()
-
-    def work_on(i: int, sim: Simulator) -> None:
-        results[i] = run_steps(sim, controller, starts[i], steps)
-
-    threads = [threading.Thread(target=work_on, args=(i, sim)) for i, sim in enumerate((simulator, other))]
-    for thread in threads:
-        thread.start()
-    for thread in threads:
-        thread.join()
-    for alone, together in zip(serial, results):
-        np.testing.assert_array_equal(together.scene_q, alone.scene_q)
+    simulators = (simulator, simulator.with_settings())
+    apart = run_together([lambda i=i: run_steps(simulators[i], controller, starts[i], steps) for i in range(2)])
+    for alone, with_other in zip(serial, apart):
+        np.testing.assert_array_equal(with_other.scene_q, alone.scene_q)
 
 
 # ---------------------------------------------------------------------- pickling
