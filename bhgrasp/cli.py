@@ -61,8 +61,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--serve",
         type=checked.nonnegative_float,
         default=None,
-        help="with --viz: keep the replay served this many seconds (default: until Enter or Ctrl-C)",
+        help="with --viz: keep the replay served this many seconds after the run (default: end with the run)",
     )
+    demo.add_argument("--wait", action="store_true", help="with --viz: keep the replay served until Enter or Ctrl-C")
     tour = commands.add_parser(
         "tour", help="print the hand model, check IK, plot the workspace, simulate a three-finger hold"
     )
@@ -354,7 +355,10 @@ def _grasp_demo(args: argparse.Namespace) -> int:
         print(result.summary())
         if viewer is not None:
             viewer.replay(result.trajectory)
-            _serve(viewer.url, args.serve)
+            if args.wait or args.serve is not None:
+                _serve(viewer.url, None if args.wait else args.serve)
+            else:
+                print("the live view ends with the run: --wait or --serve SECONDS keeps its replay up", flush=True)
     finally:
         if viewer is not None:
             viewer.close()

@@ -208,6 +208,24 @@ def test_demo_viz_streams_to_a_local_meshcat_server(tmp_path: Path, capsys: pyte
     assert "MeshCat: http://127.0.0.1:" in out and "replay at http://127.0.0.1:" in out
 
 
+def test_demo_viz_keeps_real_time_and_waits_for_no_key(
+    tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The live view is paced to the wall clock (1 s simulated takes >= 1 s) and the command ends with the run
+    unless --wait or --serve asks otherwise (it used to wait for Enter, and to take 68 s for a 3 s run)."""
+    import time
+
+    def no_key(prompt: str = "") -> str:
+        raise AssertionError(f"the demo asked for a key: {prompt!r}")
+
+    monkeypatch.setattr("builtins.input", no_key)
+    start = time.perf_counter()
+    assert main(["demo", "--output", str(tmp_path), "--duration", "1.0", "--viz"]) == 0
+    assert time.perf_counter() - start >= 1.0
+    out = capsys.readouterr().out
+    assert "the live view ends with the run: --wait or --serve SECONDS keeps its replay up" in out
+
+
 def test_cli_starts_without_matplotlib_or_meshcat() -> None:
     """`bhgrasp info` / `--help` must stay quick: plotting and 3D libraries load only when a command draws."""
     code = "import sys, bhgrasp.cli; print('matplotlib' in sys.modules, 'meshcat' in sys.modules)"

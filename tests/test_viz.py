@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from types import SimpleNamespace
 
 import numpy as np
 import pinocchio as pin
@@ -101,11 +102,95 @@ def test_live_view_shows_every_nth_state_and_leaves_the_run_unchanged(held, monk
     monkeypatch.setattr(viewer, "display", lambda state: (shown.append(state.t), real_display(state)))
     hold, other = reference_hold(), reference_hold()  # fresh simulators: contacts keep their stick anchors
     plain = hold.simulator.run(hold.controller, 0.05, state=hold.state, progress=False)
-    live = other.simulator.run(LiveView(other.controller, viewer, every=10), 0.05, state=other.state, progress=False)
+    every_tenth = LiveView(other.controller, viewer, every=10, fps=None, realtime=False)
+    live = other.simulator.run(every_tenth, 0.05, state=other.state, progress=False)
     np.testing.assert_array_equal(live.q, plain.q)
     np.testing.assert_allclose(shown, plain.t[:-1:10])  # the sensed states of calls 0, 10, 20, ...
     with pytest.raises(bh.InputError, match="every"):
         LiveView(hold.controller, viewer, every=0)
+    with pytest.raises(bh.InputError, match="fps"):
+        LiveView(hold.controller, viewer, fps=120.0)
+
+
+class FakeClock:
+    """time.perf_counter and time.sleep of a wall clock that moves only when told (or slept)."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def perf_counter(self) -> float:
+        return self.now
+
+    def sleep(self, seconds: float) -> None:
+        self.now += seconds
+
+
+@pytest.mark.parametrize(
+    ("frame_cost", "step_cost"),
+    [(0.0, 0.0), (0.1, 0.0), (0.0, 0.002)],
+    ids=["fast run", "frames cost 3 periods", "run at half real time"],
+)
+def test_live_view_keeps_real_time(held, monkeypatch, frame_cost: float, step_cost: float):
+    """A run faster than real time waits for the wall clock; frames that cost more than their period are dropped so
+    the view stays within a frame or two of real time; a run slower than real time still shows >= 4 frames a second.
+    (The demo's live view simulated 3 s in 68 s of wall time: a frame cost ~0.45 s and none was dropped.)"""
+    import bhgrasp.viz
+
+    *_, viewer = held
+    clock = FakeClock()
+    monkeypatch.setattr(bhgrasp.viz, "time", clock)
+    shown: list[float] = []
+
+    def display(state) -> None:
+        shown.append(state.t)
+        clock.now += frame_cost
+
+    monkeypatch.setattr(viewer, "display", display)
+    live = LiveView(lambda t, state: None, viewer, fps=30.0)
+    times = np.arange(0.0, 2.0, 1e-3)  # a 1 kHz control loop over 2 s
+    for t in times:
+        live(float(t), SimpleNamespace(t=float(t)))  # the fake display reads only the time
+        clock.now += step_cost
+    wall = clock.now
+    if step_cost == 0.0:
+        assert abs(wall - times[-1]) < 0.11  # real time, to a frame's cost
+        assert np.all(np.diff(shown) > 1.0 / 30.0 - 1.01e-3)  # at most 30 frames per simulated second
+        assert len(shown) == pytest.approx(60, abs=1) if frame_cost == 0.0 else 2.0 / 0.15 < len(shown) < 2.0 / 0.06
+        assert (live.skipped > 0) == (frame_cost > 1.0 / 30.0)
+    else:
+        assert wall == pytest.approx(2 * times[-1], rel=0.01)  # no waiting: the run is slower than real time
+        assert len(shown) >= LiveView.MIN_WALL_RATE * wall
+    assert live.shown == len(shown)
+
+
+def test_a_frame_sends_only_what_changed(held, monkeypatch):
+    """Hidden contact overlays that stay hidden send nothing (each message costs ~1 ms); a contact that ends hides
+    its overlays."""
+    hold, _, viewer = held
+    state = hold.state
+    for _ in range(20):
+        state, _ = hold.simulator.step(state, hold.controller(state.t, state))
+    sent: list[tuple[str, str]] = []
+    cls = type(viewer.viewer)  # on the class: Visualizer has __slots__
+    real_transform, real_property = cls.set_transform, cls.set_property
+    monkeypatch.setattr(cls, "set_transform", lambda self, *a: (sent.append(("transform", self.path.lower())),
+                                                                  real_transform(self, *a))[1])  # fmt: skip
+    monkeypatch.setattr(cls, "set_property", lambda self, *a: (sent.append(("property", self.path.lower())),
+                                                                 real_property(self, *a))[1])  # fmt: skip
+    contacts = len(state.contact_points)
+    assert 0 < contacts < viewer.max_contacts
+    viewer.display(state)
+    sent.clear()
+    viewer.display(state)  # the same frame again: the links, and the visible overlays' placements
+    nodes = viewer._geometry.ngeoms
+    assert all(kind == "transform" for kind, _ in sent)
+    assert nodes <= len(sent) <= nodes + 3 * contacts  # was nodes + 6 * max_contacts (24 slots: 144 messages)
+    sent.clear()
+    no_contacts = np.zeros((0, 3))
+    viewer.display(SimpleNamespace(q=state.q, object_poses=state.object_poses, contact_points=no_contacts,
+                                   contact_normals=no_contacts, contact_forces=no_contacts))  # fmt: skip
+    hidden = {path for kind, path in sent if kind == "property"}
+    assert hidden and all("/contacts/" in path for path in hidden) and len(hidden) <= 3 * contacts
 
 
 def test_a_mounted_hands_viewer_follows_the_wrist():

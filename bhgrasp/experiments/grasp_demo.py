@@ -169,7 +169,7 @@ def run_grasp_demo(
         approach_gains: Joint computed-torque gains (Kp [1/s^2], Kv [1/s]) of the approach.
         gains: (kp, kv) of the "ctc", "natural" or "stiffness" controller instead of the demo's.
         progress: Show a progress bar.
-        viewer: A :class:`bhgrasp.viz.SceneViewer` of this scene to stream the run to (every 20 ms).
+        viewer: A :class:`bhgrasp.viz.SceneViewer` of this scene to stream the run to (real time, <= 30 frames/s).
         stiffness: Contact stiffness [N/m].
         sensor_noise: (sigma_q [rad], sigma_v [rad/s]) Gaussian noise on the joint state the controller reads.
         seed: Seed of the sensor noise.
@@ -214,7 +214,7 @@ def run_grasp_demo(
     if viewer is not None:
         from bhgrasp.viz import LiveView
 
-        law = LiveView(law, viewer, every=20)
+        law = LiveView(law, viewer)  # real time, 30 frames per second at most
     start = time.perf_counter()
     sensors = sensor_model(sensor_noise, **{name: uncertainty[name] for name in SENSED if name in uncertainty})
     traj = setup.simulator.run(law, duration, state=setup.state, progress=progress, sensors=sensors, seed=seed)
