@@ -477,30 +477,19 @@ def _hold(duration: float) -> None:
 
 
 def _plot_workspace(hand, output: Path, samples: int, seed: int) -> Path:
-    import matplotlib
-
-    matplotlib.use("Agg")  # headless: write a file, open no window
-    import matplotlib.pyplot as plt
-
-    from bhgrasp.ik import workspace
-
     output.mkdir(parents=True, exist_ok=True)
-    figure, axes = plt.subplots(1, 2, figsize=(11, 5), constrained_layout=True)
-    colours = {"F1": "tab:blue", "F2": "tab:orange", "F3": "tab:green"}
-    for finger in hand.fingers:
-        points = workspace(hand, finger, samples, rng=seed).points
-        axes[0].scatter(points[:, 0], points[:, 1], s=0.3, alpha=0.3, color=colours[finger], label=finger)
-        axes[1].scatter(points[:, 1], points[:, 2], s=0.3, alpha=0.3, color=colours[finger], label=finger)
-    axes[0].set(xlabel="x [m]", ylabel="y [m]", title="top view (palm plane)", aspect="equal")
-    axes[1].set(xlabel="y [m]", ylabel="z [m] (palm normal)", title="side view", aspect="equal")
-    for ax in axes:
-        ax.legend(markerscale=20)
-        ax.grid(True, alpha=0.3)
-    figure.suptitle(f"Barrett BH8-280 fingertip workspace ({samples} samples per finger, seed {seed})")
     path = output / "workspace.png"
-    figure.savefig(path, dpi=120)
-    plt.close(figure)
+    _workspace_figure(hand, samples, seed).savefig(path, dpi=120)
     return path
+
+
+def _workspace_figure(hand, samples: int, seed: int):
+    """The tour's workspace figure (:func:`bhgrasp.plots.workspace_figure`) of ``samples`` tips per finger."""
+    from bhgrasp.ik import workspace
+    from bhgrasp.plots import workspace_figure
+
+    points = {finger: workspace(hand, finger, samples, rng=seed).points for finger in hand.fingers}
+    return workspace_figure(points, f"Barrett BH8-280 fingertip workspace ({samples} samples per finger, seed {seed})")
 
 
 if __name__ == "__main__":

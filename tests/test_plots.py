@@ -8,6 +8,7 @@ import pytest
 import bhgrasp as bh
 from bhgrasp import plots
 from bhgrasp.experiments.chapter3 import f3_case
+from bhgrasp.plots.joint import _running_mean
 
 
 @pytest.fixture(scope="module")
@@ -51,9 +52,9 @@ def test_tracking_figure_keeps_the_reference_and_every_torque_visible(asmc):
 
 def test_running_mean_keeps_a_constant_and_removes_a_chatter():
     t = np.arange(0.0, 1.0, 1e-3)
-    np.testing.assert_allclose(plots._running_mean(t, np.full(t.shape, 0.3), 0.02), 0.3, rtol=1e-12)
+    np.testing.assert_allclose(_running_mean(t, np.full(t.shape, 0.3), 0.02), 0.3, rtol=1e-12)
     chatter = 0.5 + np.where(np.arange(len(t)) % 2, 1.0, -1.0)  # +-1 every sample around 0.5
-    middle = plots._running_mean(t, chatter, 0.02)[20:-20]
+    middle = _running_mean(t, chatter, 0.02)[20:-20]
     np.testing.assert_allclose(middle, 0.5, atol=0.06)  # 20 samples: one unpaired sample of 20 -> 1/20
 
 

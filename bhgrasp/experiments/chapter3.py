@@ -78,7 +78,9 @@ class Case:
     """A thesis experiment: its runs, a table of our numbers beside the thesis', notes, and the table's numbers.
 
     ``values`` maps names such as ``"clean/SMC/q2/rms_error_pct"`` (unit last) to the unrounded numbers of the table;
-    :mod:`bhgrasp.experiments.results` writes them to ``chapter3.json``.
+    :mod:`bhgrasp.experiments.results` writes them to ``chapter3.json``.  ``figure_title`` heads the case's figures
+    (default: ``title``); each figure adds whether its runs had sensor noise; ``figure_groups`` (run names) split a
+    figure's runs into blocks of rows, a few at a time (:func:`bhgrasp.plots.case_figures`).
     """
 
     key: str
@@ -88,6 +90,8 @@ class Case:
     header: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     values: dict[str, float] = field(default_factory=dict)  # the table's numbers, unrounded (chapter3.json)
+    figure_title: str = ""
+    figure_groups: tuple[tuple[str, ...], ...] | None = None
 
 
 def controller(
@@ -301,7 +305,10 @@ def f3_case(name: str, noise: bool, duration: float = 3.0, hand: Hand | None = N
 def f3_hosm(scale: float = 1.0) -> Case:
     """Table 3.3 and Figs 3.29-3.37: HOSM and HOSMA A, B, C on finger F3, with and without noise (plus CTC/SMC/ASMC)."""
     hand = BarrettHand()
-    case = Case("f3", "HOSM and HOSMA A, B, C on finger F3, with and without noise (Table 3.3, Fig 3.34)")
+    case = Case("f3", "HOSM and HOSMA A, B, C on finger F3, with and without noise (Table 3.3, Fig 3.34)",
+                figure_title="Finger F3, nominal model 30 % too light: CTC, SMC, ASMC, HOSM and HOSMA A, B, C "
+                "(Table 3.3, Fig 3.34)",
+                figure_groups=(("CTC", "SMC", "ASMC"), SLIDING[2::2], SLIDING[3::2]))  # fmt: skip
     for noise in (False, True):
         for name in ("CTC", *SLIDING):
             case.runs.append(f3_case(name, noise, 3.0 * scale, hand))
