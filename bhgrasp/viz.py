@@ -211,9 +211,7 @@ class SceneViewer:
             play: Start playing at once (otherwise the viewer's Animations/play control starts it); either way the
                 replay loops: clip time t shows the run at ``traj.t[0] + t`` and wraps to 0 after the last frame.
         """
-        fps = as_positive(fps, "fps")
-        if fps > MAX_FPS:
-            raise InputError(f"`fps` must be <= {MAX_FPS:g} (a set_transform costs ~0.2 ms per node), got {fps}")
+        fps = _checked_fps(fps)
         force_scale = as_positive(force_scale, "force_scale")
         if len(traj) < 1:
             raise InputError("`traj` has no samples")
@@ -342,10 +340,7 @@ class LiveView(Controller):
             raise InputError(f"`viewer` must be a SceneViewer, got {type(viewer).__name__}")
         if int(every) < 1:
             raise InputError(f"`every` must be a positive integer, got {every}")
-        if fps is not None:
-            fps = as_positive(fps, "fps")
-            if fps > MAX_FPS:
-                raise InputError(f"`fps` must be <= {MAX_FPS:g}, got {fps}")
+        fps = None if fps is None else _checked_fps(fps)
         self.controller, self.viewer, self.every, self.fps = controller, viewer, int(every), fps
         self.realtime = bool(realtime)
         self.log = getattr(controller, "log", {})
@@ -394,6 +389,14 @@ class LiveView(Controller):
             return False
         self._behind = False
         return True
+
+
+def _checked_fps(fps: float) -> float:
+    """``fps`` [frames per simulated second] of a replay or a live view: positive and at most :data:`MAX_FPS`."""
+    fps = as_positive(fps, "fps")
+    if fps > MAX_FPS:
+        raise InputError(f"`fps` must be <= {MAX_FPS:g} (a set_transform costs ~0.2 ms per node), got {fps}")
+    return fps
 
 
 def _frame_samples(t: np.ndarray, fps: float) -> np.ndarray:

@@ -305,10 +305,13 @@ def f3_case(name: str, noise: bool, duration: float = 3.0, hand: Hand | None = N
 def f3_hosm(scale: float = 1.0) -> Case:
     """Table 3.3 and Figs 3.29-3.37: HOSM and HOSMA A, B, C on finger F3, with and without noise (plus CTC/SMC/ASMC)."""
     hand = BarrettHand()
-    case = Case("f3", "HOSM and HOSMA A, B, C on finger F3, with and without noise (Table 3.3, Fig 3.34)",
-                figure_title="Finger F3, nominal model 30 % too light: CTC, SMC, ASMC, HOSM and HOSMA A, B, C "
-                "(Table 3.3, Fig 3.34)",
-                figure_groups=(("CTC", "SMC", "ASMC"), SLIDING[2::2], SLIDING[3::2]))  # fmt: skip
+    case = Case(
+        "f3",
+        "HOSM and HOSMA A, B, C on finger F3, with and without noise (Table 3.3, Fig 3.34)",
+        figure_title="Finger F3, nominal model 30 % too light: CTC, SMC, ASMC, HOSM and HOSMA A, B, C "
+        "(Table 3.3, Fig 3.34)",
+        figure_groups=(("CTC", "SMC", "ASMC"), SLIDING[2::2], SLIDING[3::2]),
+    )
     for noise in (False, True):
         for name in ("CTC", *SLIDING):
             case.runs.append(f3_case(name, noise, 3.0 * scale, hand))

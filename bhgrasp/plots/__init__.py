@@ -28,8 +28,23 @@ from bhgrasp.plots.styles import (
 )
 
 __all__ = [
-    "DASHES", "POINT_STYLES", "DecimalLogLocator", "Figure", "case_figures", "cone_margin_figure",
-    "force_case_figure", "force_figure", "grasp_figure", "legend_beside", "log_figure", "object_error_figure",
-    "readable_log_axis", "save_case_figures", "save_force_figure", "scatter_traces", "trace_styles",
-    "tracking_figure", "workspace_figure",
-]  # fmt: skip
+    "DASHES",
+    "POINT_STYLES",
+    "DecimalLogLocator",
+    "Figure",
+    "case_figures",
+    "cone_margin_figure",
+    "force_case_figure",
+    "force_figure",
+    "grasp_figure",
+    "legend_beside",
+    "log_figure",
+    "object_error_figure",
+    "readable_log_axis",
+    "save_case_figures",
+    "save_force_figure",
+    "scatter_traces",
+    "trace_styles",
+    "tracking_figure",
+    "workspace_figure",
+]

@@ -67,8 +67,15 @@ def tracking_figure(
                 axes[row, 2].plot(traj.t, _running_mean(traj.t, traj.u[:, joint], 0.02), color=colour, **style)
         first = runs[block[0]]
         for row, (joint, label) in enumerate(zip(joints, labels), start=b * n):  # the reference once, on top
-            axes[row, 0].plot(first.t, np.degrees(first.log["q_d"][:, joint]), color="k", ls="--", lw=0.9, zorder=10,
-                              label="reference" if row == b * n else None)  # fmt: skip
+            axes[row, 0].plot(
+                first.t,
+                np.degrees(first.log["q_d"][:, joint]),
+                color="k",
+                ls="--",
+                lw=0.9,
+                zorder=10,
+                label="reference" if row == b * n else None,
+            )
             axes[row, 0].set_ylabel(f"{label} [deg]")
             axes[row, 1].set_ylabel(f"{label} error [deg]")
             axes[row, 2].set_ylabel(f"{label} torque [N m]")
@@ -112,8 +119,13 @@ def case_figures(case: Any) -> dict[str, Figure]:
         first = next(iter(runs.values()))
         name = f"chapter3_{case.key}_{index}_{'noise' if noise else 'clean'}.png"
         title = heading + (" - with sensor noise" if noise else " - without sensor noise" if both else "")
-        figures[name] = tracking_figure({k: r.trajectory for k, r in runs.items()}, joints[:4], first.labels[:4],
-                                        title, getattr(case, "figure_groups", None))  # fmt: skip
+        figures[name] = tracking_figure(
+            {k: r.trajectory for k, r in runs.items()},
+            joints[:4],
+            first.labels[:4],
+            title,
+            getattr(case, "figure_groups", None),
+        )
     return figures
 
 

@@ -159,8 +159,15 @@ def grasp_figure(
     measured, commanded = measured_normal[grasping], traj.log["commanded_normal"][grasping]
     for k, (finger, style) in enumerate(zip(finger_names, trace_styles(len(finger_names)))):
         line = axes[2].plot(t, measured[:, k], label=f"{finger} measured", **style)[0]
-        axes[2].plot(t, commanded[:, k], ":", lw=max(style["linewidth"] / 2, 0.8), zorder=3.0 + 0.01 * k,
-                     color="k" if k == 0 else line.get_color(), label=f"{finger} commanded")  # fmt: skip
+        axes[2].plot(
+            t,
+            commanded[:, k],
+            ":",
+            lw=max(style["linewidth"] / 2, 0.8),
+            zorder=3.0 + 0.01 * k,
+            color="k" if k == 0 else line.get_color(),
+            label=f"{finger} commanded",
+        )
     axes[2].set(xlabel="t [s]", ylabel="normal force [N]", title="contact forces")
     if "mass_estimate" in traj.log:
         axes[3].plot(t, np.ravel(traj.log["mass_estimate"][grasping]), label="estimate")
@@ -231,6 +238,12 @@ def workspace_figure(points: dict[str, np.ndarray], title: str = "") -> Figure:
 
 
 __all__ = [
-    "cone_margin_figure", "force_case_figure", "force_figure", "grasp_figure", "log_figure", "object_error_figure",
-    "save_force_figure", "workspace_figure",
-]  # fmt: skip
+    "cone_margin_figure",
+    "force_case_figure",
+    "force_figure",
+    "grasp_figure",
+    "log_figure",
+    "object_error_figure",
+    "save_force_figure",
+    "workspace_figure",
+]

@@ -27,8 +27,12 @@ class Figure(matplotlib.figure.Figure):
 
 
 DASHES: tuple[Any, ...] = (
-    (0, (5.0, 1.5)), (0, (5.0, 1.5, 1.5, 1.5)), (0, (1.5, 1.0)), (0, (3.0, 1.0, 1.0, 1.0, 1.0, 1.0)), (0, (8.0, 2.0)),
-)  # fmt: skip
+    (0, (5.0, 1.5)),
+    (0, (5.0, 1.5, 1.5, 1.5)),
+    (0, (1.5, 1.0)),
+    (0, (3.0, 1.0, 1.0, 1.0, 1.0, 1.0)),
+    (0, (8.0, 2.0)),
+)
 """On-off patterns [in line widths] of the traces after the first (:func:`trace_styles`), cycled."""
 
 
@@ -49,10 +53,13 @@ def trace_styles(count: int) -> list[dict[str, Any]]:
         return [{"linewidth": 1.2, "linestyle": "-", "zorder": 2.0}]
     widths = np.linspace(min(2.8, 1.0 + 1.6 * (count - 1)), 0.9, count)
     return [
-        {"linewidth": round(float(width), 3), "linestyle": "-" if k == 0 else DASHES[(k - 1) % len(DASHES)],
-         "zorder": 2.0 + 0.01 * k}
+        {
+            "linewidth": round(float(width), 3),
+            "linestyle": "-" if k == 0 else DASHES[(k - 1) % len(DASHES)],
+            "zorder": 2.0 + 0.01 * k,
+        }
         for k, width in enumerate(widths)
-    ]  # fmt: skip
+    ]
 
 
 POINT_STYLES: tuple[dict[str, Any], ...] = (
@@ -95,8 +102,13 @@ class DecimalLogLocator(ticker.LogLocator):
     every tenth, so a view inside one decade still gets labels.
     """
 
-    MANTISSAS = ((1.0,), (1.0, 2.0, 5.0), tuple(range(1, 10)), tuple(np.arange(1.0, 10.0, 0.5)),
-                 tuple(np.arange(1.0, 10.0, 0.1)))  # fmt: skip
+    MANTISSAS = (
+        (1.0,),
+        (1.0, 2.0, 5.0),
+        tuple(range(1, 10)),
+        tuple(np.arange(1.0, 10.0, 0.5)),
+        tuple(np.arange(1.0, 10.0, 0.1)),
+    )
     MIN_TICKS = 4
 
     def tick_values(self, vmin: float, vmax: float) -> np.ndarray:
@@ -130,6 +142,12 @@ def readable_log_axis(axis) -> None:
 
 
 __all__ = [
-    "DASHES", "POINT_STYLES", "DecimalLogLocator", "Figure", "legend_beside", "readable_log_axis", "scatter_traces",
+    "DASHES",
+    "POINT_STYLES",
+    "DecimalLogLocator",
+    "Figure",
+    "legend_beside",
+    "readable_log_axis",
+    "scatter_traces",
     "trace_styles",
-]  # fmt: skip
+]
