@@ -17,16 +17,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bhgrasp._validation import as_positive, as_vector
-from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.base import Controller
-from bhgrasp.controllers.grasping import GraspForceController, ObjectGraspController
-from bhgrasp.controllers.object_identification import ObjectIdentification
-from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
 from bhgrasp.errors import InputError
 from bhgrasp.experiments.allegro_grasp import allegro_box_grasp
 from bhgrasp.experiments.box_grasp import STIFFNESS, BoxGrasp, box_grasp
 from bhgrasp.experiments.demo_result import MU_ASSUMED, GraspDemoResult, evaluate_demo
+from bhgrasp.experiments.grasp_controllers import ADAPTATIONS, COMPOSITE_RATES, CONTROLLERS, SQUEEZE, grasp_controller  # noqa: F401  (their home until issue 28 moves the scenes)
 from bhgrasp.experiments.uncertainty import (
     PLANT,
     SENSED,
@@ -40,52 +37,8 @@ from bhgrasp.objects import Box
 if TYPE_CHECKING:
     from bhgrasp.plots import Figure
 
-CONTROLLERS = ("smc-adaptive", "ctc", "natural", "stiffness", "pd")
-ADAPTATIONS = (
-    "thesis",
-    "composite",
-)  # the SMC-adaptive law's object estimate: (5.52) alone, or with the measured wrench
-COMPOSITE_RATES = (5.0, 1e-3)  # Gamma_o = P(0) of the composite law: mass, inertia (chapter 5's adaptation case)
 HANDS = ("barrett", "allegro")
 OFFSET = (0.0, 0.0, 0.010, 0.1, 0.0, 0.0)  # [m, rad]: 10 mm up, 0.1 rad about x
-SQUEEZE = 5.0  # [N] desired normal force per contact (the thesis' 5 N)
-
-
-def grasp_controller(
-    name: str,
-    hand,
-    nominal_box: Box,
-    distribution: str = "qp",
-    gains: tuple[Any, Any] | None = None,
-    mu: float = MU_ASSUMED,
-    adaptation: str = "thesis",
-) -> ObjectGraspController:
-    """The object-space controller called ``name`` (one of :data:`CONTROLLERS`) with the demo's gains.
-
-    ``gains`` = (kp, kv) overrides the gains of "ctc", "natural" and "stiffness"; ``mu`` is the friction
-    coefficient the force distribution assumes; ``adaptation`` (one of :data:`ADAPTATIONS`, "smc-adaptive" only):
-    "composite" adds the measured wrench's prediction error
-    (:class:`~bhgrasp.controllers.object_identification.ObjectIdentification`, Gamma_o = :data:`COMPOSITE_RATES`).
-    """
-    shared = {"mu": mu, "squeeze": SQUEEZE, "distribution": distribution}
-    if adaptation not in ADAPTATIONS:
-        raise InputError(f"`adaptation` must be one of {ADAPTATIONS}, got {adaptation!r}")
-    if adaptation == "composite" and name != "smc-adaptive":
-        raise InputError(f"`adaptation='composite'` applies to the 'smc-adaptive' controller, not {name!r}")
-    if name == "smc-adaptive" and adaptation == "composite":
-        return SMCAdaptiveGrasp(hand, nominal_box, object_adaptation=COMPOSITE_RATES,
-                                identification=ObjectIdentification(), **shared)  # fmt: skip
-    if name == "smc-adaptive":
-        return SMCAdaptiveGrasp(hand, nominal_box, **shared)
-    if name == "pd":
-        return GraspForceController(hand, nominal_box.mass, **shared)
-    if name == "ctc":
-        kp, kv = gains or (2500.0, 100.0)
-        return ObjectSpaceController(hand, nominal_box, "ctc", kp=kp, kv=kv, **shared)
-    if name in ("natural", "stiffness"):
-        kp, kv = gains or ((400.0, 0.5), (8.0, 0.01))
-        return ObjectSpaceController(hand, nominal_box, name, kp=kp, kv=kv, **shared)
-    raise InputError(f"`controller` must be one of {CONTROLLERS}, got {name!r}")
 
 
 SWEEPABLE = ("mass", "estimate", "controller", "adaptation", "duration", "offset", "distribution", "approach_gains",

@@ -1,9 +1,13 @@
-"""Grasp any object the synthesis plans: the chapter-5 scene around a box, cylinder or sphere.
+"""Grasp any object with any hand, as the synthesis plans it: the chapter-5 scene around a box, cylinder or sphere.
 
 :func:`object_grasp` places the object (its ``pose`` in the hand's world) on a small pedestal, synthesises its
-grasp (:func:`~bhgrasp.grasp.synthesis.synthesize`) unless one is given, and builds the simulator as the thesis'
-scene does (:mod:`~bhgrasp.experiments.box_grasp`: contacts 10 kN/m, friction 0.8, joint damping 0.05 N m s/rad,
-the fully actuated BH8-280).  :func:`run_object_grasp` runs it as the demo does
+grasp unless one is given, and builds the simulator as the thesis' scene does (:mod:`~bhgrasp.experiments.box_grasp`:
+contacts 10 kN/m, friction 0.8, joint damping 0.05 N m s/rad, the hand fully actuated).  The synthesis is the
+approach-line search of :mod:`bhgrasp.grasp.synthesis` for the BH8-280 (the default hand) and the opposition search
+of :mod:`bhgrasp.grasp.opposition` for any other hand, which also plans the approach's target (pads pressed
+``closing`` into the object); the controller then cancels the drive's joint damping, which it knows (a light hand's
+links, ~5e-6 kg m^2 on the Allegro's, would lag behind a law that ignores it).  :func:`run_object_grasp` runs it as
+the demo does
 (:func:`~bhgrasp.experiments.grasp_demo.run_grasp_demo`): approach from the pre-grasp configuration, squeeze, move
 by ``offset`` with the SMC-adaptive law from a wrong mass, after refusing a motion the grasp cannot make or whose
 path drives the object into its pedestal.  The pedestal is a 20 mm high column under the object's centre, 40 % of
@@ -19,13 +23,15 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.controllers.supervisor import GraspSupervisor
+from bhgrasp._validation import as_positive
+from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
 from bhgrasp.data import State
 from bhgrasp.experiments.box_grasp import FRICTION, JOINT_DAMPING, STIFFNESS
-from bhgrasp.experiments.demo_result import GraspDemoResult, evaluate_demo
-from bhgrasp.experiments.grasp_demo import MU_ASSUMED, grasp_controller
+from bhgrasp.experiments.demo_result import MU_ASSUMED, GraspDemoResult, evaluate_demo
+from bhgrasp.experiments.grasp_controllers import grasp_controller
 from bhgrasp.grasp.clearance import check_clearance
 from bhgrasp.grasp.manipulability import ManipulableSpace, manipulable_space
+from bhgrasp.grasp.opposition import opposed_grasp
 from bhgrasp.grasp.synthesis import GraspCandidate, synthesize
 from bhgrasp.hand import BarrettHand, Hand
 from bhgrasp.objects import FixedBox
@@ -39,13 +45,18 @@ PEDESTAL_HEIGHT, PEDESTAL_SHARE = 0.02, 0.4  # [m], share of the object's footpr
 
 @dataclass
 class ObjectGrasp:
-    """A ready-to-run grasp of ``item``: simulator, start state (pre-grasp), hand and the synthesised candidate."""
+    """A ready-to-run grasp of ``item``: simulator, start state (pre-grasp), hand and the synthesised candidate.
+
+    ``cancel_damping``: the controller should cancel the drive's known viscous joint damping
+    (:class:`~bhgrasp.controllers.supervisor.MotorCommands`).
+    """
 
     simulator: Simulator
     state: State
     hand: Hand
     item: Any
     candidate: GraspCandidate
+    cancel_damping: bool = False
 
     def manipulable_space(self) -> ManipulableSpace:
         """The object motions the planned contacts allow (:mod:`bhgrasp.grasp.manipulability`)."""
@@ -59,17 +70,35 @@ class ObjectGrasp:
         check_clearance(self.item.geometry(), self.item.pose, offset, self.simulator.scene.environment)
 
 
-def object_grasp(item: Any, candidate: GraspCandidate | None = None, mu: float = MU_ASSUMED, dt: float = 1e-3,
-                 **synthesis: Any) -> ObjectGrasp:  # fmt: skip
-    """Build the scene around ``item`` (a :class:`~bhgrasp.objects.RigidObject` placed in the hand's world).
+def object_grasp(
+    item: Any,
+    candidate: GraspCandidate | None = None,
+    mu: float = MU_ASSUMED,
+    dt: float = 1e-3,
+    hand: Hand | None = None,
+    stiffness: float = STIFFNESS,
+    damping: float = JOINT_DAMPING,
+    **synthesis: Any,
+) -> ObjectGrasp:
+    """Build the scene around ``item`` (a :class:`~bhgrasp.objects.RigidObject` placed in ``hand``'s world).
 
-    ``candidate``: the grasp (default: :func:`~bhgrasp.grasp.synthesis.synthesize` with ``mu`` and ``synthesis``'s
-    options).
+    Args:
+        item: The object (its friction is set to the scene's 0.8).
+        candidate: The grasp (default: synthesised with ``mu`` and ``synthesis``'s options, module docstring).
+        mu: Friction coefficient the synthesis assumes.
+        dt: Simulator step [s].
+        hand: Any :class:`~bhgrasp.hand.Hand` (default: the BH8-280, :class:`~bhgrasp.hand.BarrettHand`).
+        stiffness: Contact stiffness [N/m] (damping 2e-3 s times it).
+        damping: Viscous joint damping [N m s/rad] of the drive.
+
+    Raises:
+        UnreachableError: The synthesis finds no grasp (the message says what was searched).
     """
-    hand = BarrettHand()
+    barrett = hand is None or isinstance(hand, BarrettHand)
+    hand = BarrettHand() if hand is None else hand
     item = replace(item, friction=FRICTION, mass=item.mass, density=None)
     if candidate is None:
-        candidate = synthesize(hand, item, mu, **synthesis)
+        candidate = synthesize(hand, item, mu, **synthesis) if barrett else opposed_grasp(hand, item, mu, **synthesis)
     shape = item.geometry()
     shape.computeLocalAABB()
     corners = np.array(np.meshgrid(*zip(shape.aabb_local.min_, shape.aabb_local.max_))).reshape(3, -1).T
@@ -78,10 +107,12 @@ def object_grasp(item: Any, candidate: GraspCandidate | None = None, mu: float =
     top = item.pose.translation[2] + world[:, 2].min()
     centre = np.array([*item.pose.translation[:2], top - 0.5 * PEDESTAL_HEIGHT])
     pedestal = FixedBox(size=(*footprint, PEDESTAL_HEIGHT), pose=pin.SE3(np.eye(3), centre), friction=FRICTION)
-    law = SpringDamper(stiffness=STIFFNESS, damping=2e-3 * STIFFNESS, friction=FRICTION)
-    drive = FullyActuated(hand, damping=JOINT_DAMPING)
+    stiffness = as_positive(stiffness, "stiffness")
+    law = SpringDamper(stiffness=stiffness, damping=2e-3 * stiffness, friction=FRICTION)
+    drive = FullyActuated(hand, damping=as_positive(damping, "damping"))
     simulator = Simulator(Scene(hand, [item], environment=[pedestal]), dt=dt, contact=law, actuation=drive)
-    return ObjectGrasp(simulator, simulator.initial_state(candidate.q_pregrasp), hand, item, candidate)
+    state = simulator.initial_state(candidate.q_pregrasp)
+    return ObjectGrasp(simulator, state, hand, item, candidate, cancel_damping=not barrett)
 
 
 def run_object_grasp(
@@ -102,11 +133,14 @@ def run_object_grasp(
     estimate = 0.5 * mass if estimate is None else float(estimate)
     nominal = replace(setup.item, mass=estimate, density=None)
     grasp = grasp_controller(controller, setup.hand, nominal)
+    damping = float(np.mean(setup.simulator.actuation.damping))  # the drive's (one value for every joint)
     supervisor = GraspSupervisor(setup.hand, setup.candidate.q_contact, grasp, offset=offset,
-                                 fingers=setup.candidate.fingers, approach_damping=JOINT_DAMPING,
+                                 fingers=setup.candidate.fingers, q_close=setup.candidate.q_close,
+                                 approach_damping=0.0 if setup.cancel_damping else damping,
                                  object_shape=setup.item.geometry())  # fmt: skip
+    law = MotorCommands(supervisor, setup.simulator.actuation.drive) if setup.cancel_damping else supervisor
     start = time.perf_counter()
-    traj = setup.simulator.run(supervisor, duration, state=setup.state, progress=False)
+    traj = setup.simulator.run(law, duration, state=setup.state, progress=False)
     wall = time.perf_counter() - start
     return evaluate_demo(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
 

@@ -70,6 +70,8 @@ class GraspCandidate:
             the IK then places the pads); height: the contacts' height above the object's centre [m].
         quality: Force closure, epsilon [N] ...; holds_weight: the QP holds the weight inside the cones;
             weight_margin: its smallest mu f_n - |f_t| [N] (negative: outside a cone).
+        q_close: The approach's target (pads pressed into the object), where the search plans one
+            (:func:`~bhgrasp.grasp.opposition.opposed_grasps`); ``None``: the supervisor's default.
     """
 
     fingers: tuple[str, ...]
@@ -82,6 +84,7 @@ class GraspCandidate:
     quality: GraspQuality
     holds_weight: bool
     weight_margin: float
+    q_close: np.ndarray | None = None
 
     @property
     def score(self) -> tuple[float, bool, float]:
@@ -197,17 +200,36 @@ def synthesize(hand: Hand, item: Any, mu: float = 0.6, **options: Any) -> GraspC
 
 
 def _candidate(hand, item, group, points, normals, q, height, mu, opening, squeeze, gravity):
+    q_pregrasp = np.clip(q - opening * _proximal_mask(hand), hand.lower, hand.upper)
+    return rate_grasp(hand, item, group, points, normals, q, q_pregrasp, height, mu, squeeze, gravity)
+
+
+def rate_grasp(
+    hand: Hand,
+    item: Any,
+    fingers: Sequence[str],
+    points: np.ndarray,
+    normals: np.ndarray,
+    q: np.ndarray,
+    q_pregrasp: np.ndarray,
+    height: float,
+    mu: float,
+    squeeze: float,
+    gravity: Any,
+    q_close: np.ndarray | None = None,
+) -> GraspCandidate:
+    """A :class:`GraspCandidate` of these contacts (``normals`` into the object) with its quality and weight test."""
     quality = grasp_quality(points, normals, item.pose.translation, mu)
-    weight = ContactForceQP(len(group), mu).solve(
+    weight = ContactForceQP(len(fingers), mu).solve(
         grasp_map(points, normals, item.pose.translation),
         np.concatenate((-item.mass * np.asarray(gravity, dtype=float), np.zeros(3))),
-        np.tile([0.0, 0.0, float(squeeze)], (len(group), 1)),
+        np.tile([0.0, 0.0, float(squeeze)], (len(fingers), 1)),
     )
-    q_pregrasp = np.clip(q - opening * _proximal_mask(hand), hand.lower, hand.upper)
     spreads = [q[i] for i, name in enumerate(hand.joint_names) if "spread" in name]
     spread = float(np.mean(spreads)) if spreads else 0.0
-    return GraspCandidate(tuple(group), points, normals, q, q_pregrasp, spread, height, quality, bool(weight.feasible),
-                          float(-weight.cone_violation))  # fmt: skip
+    feasible, margin = bool(weight.feasible), float(-weight.cone_violation)
+    return GraspCandidate(tuple(fingers), points, normals, q, q_pregrasp, spread, height, quality, feasible, margin,
+                          q_close)  # fmt: skip
 
 
 def _least_lever(hand: Hand, fingers: Sequence[str], points: np.ndarray, q: np.ndarray) -> float:
@@ -299,4 +321,4 @@ def _approach_line(hand: Hand, q_spread: np.ndarray, finger: str) -> tuple[np.nd
     return start[:2], (direction / norm if norm > 1e-9 else np.zeros(2))
 
 
-__all__ = ["FLEXIONS", "GraspCandidate", "grasp_candidates", "synthesize"]
+__all__ = ["FLEXIONS", "GraspCandidate", "grasp_candidates", "rate_grasp", "synthesize"]

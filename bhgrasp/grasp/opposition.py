@@ -1,0 +1,324 @@
+"""Grasp synthesis for any hand: fingertip pads opposed across the object, placed by IK from sampled reach.
+
+:func:`~bhgrasp.grasp.synthesis.grasp_candidates` casts each finger's line of approach, which assumes the BH8-280's
+layout (fingers that flex in a plane, spread joints named ``*spread*``).  :func:`opposed_grasps` assumes nothing of
+the hand's layout (the Allegro's thumb, a gripper written in a notebook):
+
+1. **reach**: ``samples`` configurations drawn uniformly inside the joint limits (seeded) give each finger a cloud of
+   fingertip positions and the joint values that reach them (a k-d tree per finger);
+2. **layouts**: a grasp axis ``d`` (``directions`` horizontal directions, and the object's horizontal axes), a height
+   along world z, and a layout direction ``u`` in the plane normal to ``d`` (``tilts`` angles); the grasping fingers
+   split into two sides, each side's fingers in a row along ``u``, ordered by their knuckles (first joints) along
+   ``u`` and spaced as their knuckles are; each contact is the first point of the object along a line parallel to
+   ``-d`` (or ``+d``, the other side) through the row's slot (sphere tracing on coal distances, :data:`TOLERANCE`);
+3. **reachability**: every pad centre (contact + pad radius x outward normal) must lie within ``reach_tolerance`` of
+   its finger's cloud; the IK (:func:`~bhgrasp.ik.ik`, 1e-6 m) starts from the nearest samples' joint values, the
+   idle fingers at rest (zero, clipped to the limits);
+4. **the same checks as the approach-line search**: the other collision shapes keep ``clearance`` from the object, the
+   grasping joints ``joint_margin`` from their limits, each contact Jacobian ``singularity_margin`` from singular,
+   the contacts ``edge_margin`` from an edge, the pads lift the object by ``lift`` without sliding; then force
+   closure, the Ferrari-Canny epsilon and the weight test rank the candidates
+   (:class:`~bhgrasp.grasp.synthesis.GraspCandidate`);
+5. **approach**: the pre-grasp configuration has the pads ``standoff`` out along the normals, the approach's target
+   ``closing`` into the object (both by IK from the contact configuration): a joint-space approach between them
+   closes each pad along its normal.
+
+The pads are the spheres centred on the fingertip frames in the hand's collision model (the Allegro's 12 mm tips,
+the BH8-280's 10 mm pads).  World frame, metres and radians.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from typing import Any
+
+import coal
+import numpy as np
+import pinocchio as pin
+from scipy.spatial import cKDTree
+
+from bhgrasp._validation import as_positive
+from bhgrasp.errors import InputError, UnreachableError
+from bhgrasp.grasp.probes import HandClearance, ObjectProbe
+from bhgrasp.grasp.synthesis import (
+    GraspCandidate,
+    _default_heights,
+    _finger_sets,
+    _flexing,
+    _least_lever,
+    _lifts,
+    rate_grasp,
+)
+from bhgrasp.hand import Hand
+from bhgrasp.ik import ik
+
+TOLERANCE = 1e-5  # [m] how close to the surface a traced line stops
+SIDES = (1.0, -1.0)
+
+
+class FingerReach:
+    """Where each finger's pad can go: fingertip positions of uniformly drawn configurations, in k-d trees."""
+
+    def __init__(self, hand: Hand, samples: int, rng: np.random.Generator) -> None:
+        """Draw ``samples`` configurations inside the limits (world positions of every fingertip at each)."""
+        self.q = rng.uniform(hand.lower, hand.upper, size=(samples, hand.nq))
+        tips = np.array([hand.fingertip_positions(q) for q in self.q])  # (samples, fingers, 3)
+        self.trees = {finger: cKDTree(tips[:, k]) for k, finger in enumerate(hand.fingers)}
+
+    def nearest(self, finger: str, point: np.ndarray) -> tuple[float, int]:
+        """Distance [m] from ``point`` to the finger's nearest sampled pad position, and that sample's index."""
+        distance, index = self.trees[finger].query(point)
+        return float(distance), int(index)
+
+
+def pad_radii(hand: Hand) -> dict[str, float]:
+    """Each finger's pad radius [m]: the collision sphere centred on its fingertip frame.
+
+    Raises:
+        InputError: A finger has no such sphere (pass ``pad_radius``).
+    """
+    geometry, model = hand.collision_model(), hand.model
+    radii = {}
+    for finger, frame_name in hand.fingertip_frames.items():
+        frame = model.frames[model.getFrameId(frame_name)]
+        for item in geometry.geometryObjects:
+            offset = (frame.placement.inverse() * item.placement).translation
+            on_tip = item.parentJoint == frame.parentJoint and np.linalg.norm(offset) < 1e-9
+            if on_tip and isinstance(item.geometry, coal.Sphere):
+                radii[finger] = float(item.geometry.radius)
+                break
+        else:
+            raise InputError(
+                f"finger {finger!r} has no collision sphere centred on its fingertip frame {frame_name!r}: pass "
+                "`pad_radius` [m], the radius of the pad the fingertip frame is the centre of"
+            )
+    return radii
+
+
+def knuckles(hand: Hand, q: np.ndarray) -> dict[str, np.ndarray]:
+    """World position [m] of each finger's first joint at ``q`` (where the finger leaves the palm)."""
+    data = hand.model.createData()
+    pin.forwardKinematics(hand.model, data, q)
+    placement = hand.base_placement
+    return {
+        finger: placement.act(data.oMi[hand.model.getJointId(hand.finger_joints(finger)[0])].translation)
+        for finger in hand.fingers
+    }
+
+
+def first_hit(probe: ObjectProbe, start: np.ndarray, direction: np.ndarray, reach: float) -> tuple | None:
+    """The first surface point of a convex object along ``start + t direction`` (0 <= t <= reach), and its normal.
+
+    Sphere tracing: each step is the distance to the surface.  ``None`` if the line misses (or starts inside).
+    """
+    t = 0.0
+    for _ in range(200):
+        point = start + t * direction
+        distance, nearest = probe.distance(point)
+        if distance < 0.0:
+            return None  # started inside
+        if distance < TOLERANCE:
+            normal = point - nearest
+            length = float(np.linalg.norm(normal))
+            return (nearest, normal / length) if length > 1e-12 else None
+        t += distance
+        if t > reach:
+            return None
+    return None
+
+
+def opposed_grasps(
+    hand: Hand,
+    item: Any,
+    mu: float = 0.6,
+    fingers: Sequence[str] | None = None,
+    directions: int = 8,
+    heights: Sequence[float] | None = None,
+    tilts: int = 8,
+    pad_radius: float | None = None,
+    clearance: float = 1.5e-3,
+    edge_margin: float = 5e-3,
+    joint_margin: float = 0.05,
+    standoff: float = 0.02,
+    closing: float = 0.008,
+    squeeze: float = 5.0,
+    gravity: Any = (0.0, 0.0, -9.81),
+    lift: float = 0.01,
+    singularity_margin: float = 2e-3,
+    samples: int = 4000,
+    reach_tolerance: float = 0.01,
+    rng: int = 0,
+) -> list[GraspCandidate]:
+    """Every candidate the search finds (module docstring), best first.
+
+    Args:
+        hand: Any hand (its world frame: the object's pose is in it).
+        item: A convex rigid object with ``geometry()``, ``pose`` and ``mass``.
+        mu: Friction coefficient of the quality and the weight test.
+        fingers: The grasping fingers (default: every subset of two or more).
+        directions: Number of horizontal grasp axes, evenly over 180 deg (the object's horizontal axes are added).
+        heights: Heights [m] of the grasp above the object's centre (default: 5 across the middle half).
+        tilts: Number of layout directions of a side's row of fingers, evenly over 180 deg in the face.
+        pad_radius: Pad radius [m] of every finger (default: each finger's collision sphere, :func:`pad_radii`).
+        clearance, edge_margin, joint_margin, squeeze, gravity, lift, singularity_margin: As for
+            :func:`~bhgrasp.grasp.synthesis.grasp_candidates`.
+        standoff: How far [m] the pre-grasp configuration's pads stand off their contacts along the normals.
+        closing: How deep [m] into the object the approach's target puts the pads (the squeeze's preload).
+        samples: Configurations drawn for the reach clouds.
+        reach_tolerance: How far [m] a pad centre may be from its finger's cloud to be tried by the IK.
+        rng: Seed of the draws (same seed, same candidates).
+    """
+    as_positive(mu, "mu")
+    standoff, closing = as_positive(standoff, "standoff"), as_positive(closing, "closing")
+    clearance = float(clearance)
+    sets = _finger_sets(hand, fingers)
+    if pad_radius is None:
+        radii = pad_radii(hand)
+    else:
+        radii = dict.fromkeys(hand.fingers, as_positive(pad_radius, "pad_radius"))
+    down = np.asarray(gravity, dtype=float)
+    lift_offset = np.concatenate((-float(lift) * down / np.linalg.norm(down), np.zeros(3)))
+    shape, pose = item.geometry(), item.pose
+    heights = _default_heights(shape, pose) if heights is None else [float(h) for h in heights]
+    probe, shapes = ObjectProbe(shape, pose), HandClearance(hand)
+    reach = FingerReach(hand, int(as_positive(samples, "samples")), np.random.default_rng(rng))
+    rest = np.clip(np.zeros(hand.nq), hand.lower, hand.upper)
+    knuckle = knuckles(hand, rest)
+    span = _bounding_radius(shape) + 0.02
+    centre = pose.translation
+    traced: dict[tuple, tuple | None] = {}
+
+    def contact(axis: int, side: float, height: float, tilt: int, offset: float) -> tuple | None:
+        key = (axis, side, round(height, 9), tilt, round(offset, 9))
+        if key not in traced:
+            d, u = axes[axis], _layout(axes[axis], tilt, tilts)
+            start = centre + side * span * d + height * np.array([0.0, 0.0, 1.0]) + offset * u
+            traced[key] = first_hit(probe, start, -side * d, 2.0 * span)
+        return traced[key]
+
+    axes = _grasp_axes(pose, directions)
+    candidates, seen = [], set()
+    for group in sets:
+        flexing = _flexing(hand, group)
+        for split in _splits(group):
+            rows = range(tilts if max(map(len, split)) > 1 else 1)  # one finger a side: no row to tilt
+            for axis, height, tilt in itertools.product(range(len(axes)), heights, rows):
+                u = _layout(axes[axis], tilt, tilts)
+                points, normals, seed = {}, {}, rest.copy()
+                for side, row in zip(SIDES, split):
+                    for finger, offset in _row(row, knuckle, u):
+                        hit = contact(axis, side, height, tilt, offset)
+                        if hit is None:
+                            break
+                        pad = hit[0] + radii[finger] * hit[1]
+                        distance, index = reach.nearest(finger, pad)
+                        if distance > reach_tolerance:
+                            break
+                        points[finger], normals[finger] = hit
+                        joints = hand.finger_indices(finger)
+                        seed[joints] = reach.q[index, joints]
+                    else:
+                        continue
+                    break
+                if len(points) < len(group):
+                    continue
+                outward = np.array([normals[f] for f in group])
+                contact_points = np.array([points[f] for f in group])
+                pads = {f: points[f] + radii[f] * normals[f] for f in group}
+                try:
+                    q = ik(hand, pads, seed, tolerance=1e-6, max_iterations=60).q
+                except UnreachableError:
+                    continue
+                key = (group, tuple(np.round(contact_points.ravel(), 4)))
+                if key in seen:
+                    continue
+                seen.add(key)
+                if np.any(np.minimum(q - hand.lower, hand.upper - q)[flexing] < joint_margin):
+                    continue
+                if shapes.nearest_other(q, group, shape, pose) < clearance:
+                    continue
+                if _least_lever(hand, group, contact_points, q) < singularity_margin:
+                    continue
+                if not all(probe.flat_around(p, n, edge_margin) for p, n in zip(contact_points, outward)):
+                    continue
+                if lift and not _lifts(hand, group, contact_points, -outward, q, shapes, shape, pose, lift_offset,
+                                       clearance, joint_margin):  # fmt: skip
+                    continue
+                try:
+                    q_pregrasp = ik(hand, {f: pads[f] + standoff * normals[f] for f in group}, q, tolerance=1e-6).q
+                    q_close = ik(hand, {f: pads[f] - closing * normals[f] for f in group}, q, tolerance=1e-6).q
+                except UnreachableError:
+                    continue
+                if shapes.nearest_other(q_pregrasp, (), shape, pose) < clearance:
+                    continue  # the pre-grasp must stand clear of the object, pads included
+                candidates.append(rate_grasp(hand, item, group, contact_points, -outward, q, q_pregrasp, height, mu,
+                                             squeeze, gravity, q_close=q_close))  # fmt: skip
+    candidates.sort(key=lambda c: c.score, reverse=True)
+    return candidates
+
+
+def opposed_grasp(hand: Hand, item: Any, mu: float = 0.6, **options: Any) -> GraspCandidate:
+    """The best candidate of :func:`opposed_grasps` (same arguments).
+
+    Raises:
+        UnreachableError: No candidate; the message gives the object and what was searched.
+    """
+    candidates = opposed_grasps(hand, item, mu, **options)
+    if not candidates:
+        raise UnreachableError(
+            f"no grasp of {type(item).__name__} at {np.round(item.pose.translation, 4).tolist()} m by {hand.name}: no "
+            "searched axis, height and finger layout puts the pads on it within reach, joint limits and clearance "
+            "(move the object into the fingers' reach, or give other `fingers`, `heights` or more `samples`)"
+        )
+    return candidates[0]
+
+
+def _grasp_axes(pose: pin.SE3, directions: int) -> list[np.ndarray]:
+    """Horizontal unit grasp axes: ``directions`` over 180 deg, then the object's own horizontal axes."""
+    angles = np.pi * np.arange(int(directions)) / int(directions)
+    axes = [np.array([np.cos(a), np.sin(a), 0.0]) for a in angles]
+    for column in pose.rotation.T:
+        if abs(column[2]) < 1e-6 and all(abs(abs(column @ a) - 1.0) > 1e-9 for a in axes):
+            axes.append(column / np.linalg.norm(column))
+    return axes
+
+
+def _layout(axis: np.ndarray, tilt: int, tilts: int) -> np.ndarray:
+    """Unit direction of a side's row of fingers, ``tilt`` of ``tilts`` steps over 180 deg from the horizontal.
+
+    In the plane normal to ``axis``.
+    """
+    across = np.cross([0.0, 0.0, 1.0], axis)
+    angle = np.pi * tilt / max(int(tilts), 1)
+    return np.cos(angle) * across + np.sin(angle) * np.array([0.0, 0.0, 1.0])
+
+
+def _splits(group: tuple[str, ...]) -> list[tuple[tuple[str, ...], tuple[str, ...]]]:
+    """Every way to put the fingers on two opposite sides, at least one on each (each split once)."""
+    splits = []
+    for size in range(1, len(group)):
+        for first in itertools.combinations(group, size):
+            second = tuple(f for f in group if f not in first)
+            splits.append((first, second))
+    return splits
+
+
+def _row(row: Sequence[str], knuckle: dict[str, np.ndarray], u: np.ndarray) -> list[tuple[str, float]]:
+    """The row's fingers with their offsets [m] along ``u``, centred.
+
+    Ordered as their knuckles lie along ``u``, each from the last by their knuckles' distance (fingers side by side,
+    as they leave the palm).
+    """
+    ordered = sorted(row, key=lambda f: float(knuckle[f] @ u))
+    gaps = [float(np.linalg.norm(knuckle[b] - knuckle[a])) for a, b in itertools.pairwise(ordered)]
+    positions = np.concatenate(([0.0], np.cumsum(gaps)))
+    return list(zip(ordered, positions - positions.mean()))
+
+
+def _bounding_radius(shape: coal.ShapeBase) -> float:
+    shape.computeLocalAABB()
+    return float(np.linalg.norm(np.maximum(np.abs(shape.aabb_local.min_), np.abs(shape.aabb_local.max_))))
+
+
+__all__ = ["TOLERANCE", "FingerReach", "first_hit", "knuckles", "opposed_grasp", "opposed_grasps", "pad_radii"]
