@@ -30,6 +30,7 @@ the BH8-280's 10 mm pads).  World frame, metres and radians.
 from __future__ import annotations
 
 import itertools
+from collections import Counter
 from collections.abc import Sequence
 from typing import Any
 
@@ -120,15 +121,19 @@ def first_hit(probe: ObjectProbe, start: np.ndarray, direction: np.ndarray, reac
             return None  # started inside
         if distance < TOLERANCE:
             normal = point - nearest
-            length = float(np.linalg.norm(normal))
-            return (nearest, normal / length) if length > 1e-12 else None
-        t += distance
+            return nearest, normal / float(np.linalg.norm(normal))
+        t += distance - 0.5 * TOLERANCE  # stop outside, where the nearest point gives the normal
         if t > reach:
             return None
     return None
 
 
-def opposed_grasps(
+def opposed_grasps(hand: Hand, item: Any, mu: float = 0.6, **options: Any) -> list[GraspCandidate]:
+    """Every candidate the search finds (module docstring), best first; the options are :func:`search`'s."""
+    return search(hand, item, mu, **options)[0]
+
+
+def search(
     hand: Hand,
     item: Any,
     mu: float = 0.6,
@@ -149,8 +154,8 @@ def opposed_grasps(
     samples: int = 4000,
     reach_tolerance: float = 0.01,
     rng: int = 0,
-) -> list[GraspCandidate]:
-    """Every candidate the search finds (module docstring), best first.
+) -> tuple[list[GraspCandidate], Counter]:
+    """Every candidate the search finds (module docstring), best first, and how many layouts each check rejected.
 
     Args:
         hand: Any hand (its world frame: the object's pose is in it).
@@ -197,10 +202,39 @@ def opposed_grasps(
             traced[key] = first_hit(probe, start, -side * d, 2.0 * span)
         return traced[key]
 
+    def check(group, points, normals, seed, height) -> GraspCandidate | str:
+        """The candidate of these contacts, or the name of the first check it fails."""
+        outward = np.array([normals[f] for f in group])
+        contact_points = np.array([points[f] for f in group])
+        pads = {f: points[f] + radii[f] * normals[f] for f in group}
+        try:
+            q = ik(hand, pads, seed, tolerance=1e-6, max_iterations=60).q
+        except UnreachableError:
+            return "IK did not converge"
+        if np.any(np.minimum(q - hand.lower, hand.upper - q)[_flexing(hand, group)] < joint_margin):
+            return "joint limits"
+        if shapes.nearest_other(q, group, shape, pose) < clearance:
+            return "another link on the object"
+        if _least_lever(hand, group, contact_points, q) < singularity_margin:
+            return "singular finger"
+        if not all(probe.flat_around(p, n, edge_margin) for p, n in zip(contact_points, outward)):
+            return "contact near an edge"
+        if lift and not _lifts(hand, group, contact_points, -outward, q, shapes, shape, pose, lift_offset, clearance,
+                               joint_margin):  # fmt: skip
+            return "cannot lift"
+        try:
+            q_pregrasp = ik(hand, {f: pads[f] + standoff * normals[f] for f in group}, q, tolerance=1e-6).q
+            q_close = ik(hand, {f: pads[f] - closing * normals[f] for f in group}, q, tolerance=1e-6).q
+        except UnreachableError:
+            return "no pre-grasp or approach target"
+        if shapes.nearest_other(q_pregrasp, (), shape, pose) < clearance:
+            return "pre-grasp touches the object"
+        return rate_grasp(hand, item, group, contact_points, -outward, q, q_pregrasp, height, mu, squeeze, gravity,
+                          q_close=q_close)  # fmt: skip
+
     axes = _grasp_axes(pose, directions)
-    candidates, seen = [], set()
+    candidates, seen, rejected = [], set(), Counter()
     for group in sets:
-        flexing = _flexing(hand, group)
         for split in _splits(group):
             rows = range(tilts if max(map(len, split)) > 1 else 1)  # one finger a side: no row to tilt
             for axis, height, tilt in itertools.product(range(len(axes)), heights, rows):
@@ -222,54 +256,34 @@ def opposed_grasps(
                         continue
                     break
                 if len(points) < len(group):
+                    rejected["out of reach"] += 1
                     continue
-                outward = np.array([normals[f] for f in group])
-                contact_points = np.array([points[f] for f in group])
-                pads = {f: points[f] + radii[f] * normals[f] for f in group}
-                try:
-                    q = ik(hand, pads, seed, tolerance=1e-6, max_iterations=60).q
-                except UnreachableError:
-                    continue
-                key = (group, tuple(np.round(contact_points.ravel(), 4)))
+                key = (group, tuple(np.round(np.concatenate([points[f] for f in group]), 4)))
                 if key in seen:
                     continue
                 seen.add(key)
-                if np.any(np.minimum(q - hand.lower, hand.upper - q)[flexing] < joint_margin):
-                    continue
-                if shapes.nearest_other(q, group, shape, pose) < clearance:
-                    continue
-                if _least_lever(hand, group, contact_points, q) < singularity_margin:
-                    continue
-                if not all(probe.flat_around(p, n, edge_margin) for p, n in zip(contact_points, outward)):
-                    continue
-                if lift and not _lifts(hand, group, contact_points, -outward, q, shapes, shape, pose, lift_offset,
-                                       clearance, joint_margin):  # fmt: skip
-                    continue
-                try:
-                    q_pregrasp = ik(hand, {f: pads[f] + standoff * normals[f] for f in group}, q, tolerance=1e-6).q
-                    q_close = ik(hand, {f: pads[f] - closing * normals[f] for f in group}, q, tolerance=1e-6).q
-                except UnreachableError:
-                    continue
-                if shapes.nearest_other(q_pregrasp, (), shape, pose) < clearance:
-                    continue  # the pre-grasp must stand clear of the object, pads included
-                candidates.append(rate_grasp(hand, item, group, contact_points, -outward, q, q_pregrasp, height, mu,
-                                             squeeze, gravity, q_close=q_close))  # fmt: skip
+                outcome = check(group, points, normals, seed, height)
+                if isinstance(outcome, str):
+                    rejected[outcome] += 1
+                else:
+                    candidates.append(outcome)
     candidates.sort(key=lambda c: c.score, reverse=True)
-    return candidates
+    return candidates, rejected
 
 
 def opposed_grasp(hand: Hand, item: Any, mu: float = 0.6, **options: Any) -> GraspCandidate:
-    """The best candidate of :func:`opposed_grasps` (same arguments).
+    """The best candidate of :func:`search` (same arguments).
 
     Raises:
         UnreachableError: No candidate; the message gives the object and what was searched.
     """
-    candidates = opposed_grasps(hand, item, mu, **options)
+    candidates, rejected = search(hand, item, mu, **options)
     if not candidates:
+        counts = ", ".join(f"{reason}: {count}" for reason, count in rejected.most_common()) or "none tried"
         raise UnreachableError(
             f"no grasp of {type(item).__name__} at {np.round(item.pose.translation, 4).tolist()} m by {hand.name}: no "
-            "searched axis, height and finger layout puts the pads on it within reach, joint limits and clearance "
-            "(move the object into the fingers' reach, or give other `fingers`, `heights` or more `samples`)"
+            f"searched axis, height and finger layout passes every check (layouts rejected: {counts}); move the "
+            "object into the fingers' reach, or give other `fingers`, `heights` or more `samples`"
         )
     return candidates[0]
 
@@ -321,4 +335,13 @@ def _bounding_radius(shape: coal.ShapeBase) -> float:
     return float(np.linalg.norm(np.maximum(np.abs(shape.aabb_local.min_), np.abs(shape.aabb_local.max_))))
 
 
-__all__ = ["TOLERANCE", "FingerReach", "first_hit", "knuckles", "opposed_grasp", "opposed_grasps", "pad_radii"]
+__all__ = [
+    "TOLERANCE",
+    "FingerReach",
+    "first_hit",
+    "knuckles",
+    "opposed_grasp",
+    "opposed_grasps",
+    "pad_radii",
+    "search",
+]
