@@ -9,7 +9,9 @@ normal x; the world gets base y as "up").  The thumb opposes the index and middl
 finger stays straight (at rest, zero) and out of the way.
 
 The box (0.05 x 0.07 x 0.05 m in the hand's base axes, its 70 mm side vertical) rests on a 20 mm pedestal; its centre
-sits at (0.09, 0.02, 0.02) m in the base frame, in front of the palm where the thumb and the two fingers meet.
+sits at (0.09, 0.02, 0.02) m in the base frame, in front of the palm where the thumb and the two fingers meet.  The
+search grasps across the box's faces (its horizontal axes, ``directions=0``: 1.6 s instead of 7 s over 8 more axes,
+which find the same best grasp).
 """
 
 from __future__ import annotations
@@ -67,8 +69,9 @@ def allegro_box_grasp(
     hand = allegro_hand()
     centre = hand.base_placement.act(np.array(BOX_CENTRE))
     box = Box(size=BOX_SIZE, mass=as_positive(mass, "mass"), pose=pin.SE3(MOUNT, centre))
+    approach = {"standoff": as_positive(opening, "opening"), "closing": as_positive(closing, "closing")}
     setup = object_grasp(box, mu=MU_ASSUMED, dt=dt, hand=hand, stiffness=stiffness, damping=damping, fingers=GRASPING,
-                         standoff=as_positive(opening, "opening"), closing=as_positive(closing, "closing"))  # fmt: skip
+                         directions=0, **approach)  # fmt: skip
     c = setup.candidate
     return BoxGrasp(setup.simulator, setup.state, hand, setup.item, c.q_contact, c.q_pregrasp, c.q_close, c.fingers,
                     cancel_damping=True)  # fmt: skip

@@ -162,7 +162,8 @@ def search(
         item: A convex rigid object with ``geometry()``, ``pose`` and ``mass``.
         mu: Friction coefficient of the quality and the weight test.
         fingers: The grasping fingers (default: every subset of two or more).
-        directions: Number of horizontal grasp axes, evenly over 180 deg (the object's horizontal axes are added).
+        directions: Number of horizontal grasp axes, evenly over 180 deg (the object's horizontal axes are added;
+            0: those alone, e.g. across a box's faces).
         heights: Heights [m] of the grasp above the object's centre (default: 5 across the middle half).
         tilts: Number of layout directions of a side's row of fingers, evenly over 180 deg in the face.
         pad_radius: Pad radius [m] of every finger (default: each finger's collision sphere, :func:`pad_radii`).
@@ -208,7 +209,7 @@ def search(
         contact_points = np.array([points[f] for f in group])
         pads = {f: points[f] + radii[f] * normals[f] for f in group}
         try:
-            q = ik(hand, pads, seed, tolerance=1e-6, max_iterations=60).q
+            q = ik(hand, pads, seed, tolerance=1e-6, max_iterations=25).q
         except UnreachableError:
             return "IK did not converge"
         if np.any(np.minimum(q - hand.lower, hand.upper - q)[_flexing(hand, group)] < joint_margin):
@@ -233,40 +234,44 @@ def search(
                           q_close=q_close)  # fmt: skip
 
     axes = _grasp_axes(pose, directions)
-    candidates, seen, rejected = [], set(), Counter()
+    candidates, seen, rejected, layouts = [], set(), Counter(), []
     for group in sets:
         for split in _splits(group):
             rows = range(tilts if max(map(len, split)) > 1 else 1)  # one finger a side: no row to tilt
             for axis, height, tilt in itertools.product(range(len(axes)), heights, rows):
                 u = _layout(axes[axis], tilt, tilts)
-                points, normals, seed = {}, {}, rest.copy()
-                for side, row in zip(SIDES, split):
-                    for finger, offset in _row(row, knuckle, u):
-                        hit = contact(axis, side, height, tilt, offset)
-                        if hit is None:
-                            break
-                        pad = hit[0] + radii[finger] * hit[1]
-                        distance, index = reach.nearest(finger, pad)
-                        if distance > reach_tolerance:
-                            break
-                        points[finger], normals[finger] = hit
-                        joints = hand.finger_indices(finger)
-                        seed[joints] = reach.q[index, joints]
-                    else:
-                        continue
-                    break
-                if len(points) < len(group):
-                    rejected["out of reach"] += 1
-                    continue
-                key = (group, tuple(np.round(np.concatenate([points[f] for f in group]), 4)))
-                if key in seen:
-                    continue
-                seen.add(key)
-                outcome = check(group, points, normals, seed, height)
-                if isinstance(outcome, str):
-                    rejected[outcome] += 1
-                else:
-                    candidates.append(outcome)
+                sides = [_row(row, knuckle, u) for row in split]
+                for shifts in itertools.product(*(_shifts(side, knuckle, centre, u) for side in sides)):
+                    points, normals, seed = {}, {}, rest.copy()
+                    for side, row, shift in zip(SIDES, sides, shifts):
+                        for finger, offset in row:
+                            hit = contact(axis, side, height, tilt, offset + shift)
+                            if hit is None:
+                                break
+                            pad = hit[0] + radii[finger] * hit[1]
+                            distance, index = reach.nearest(finger, pad)
+                            if distance > reach_tolerance:
+                                break
+                            points[finger], normals[finger] = hit
+                            joints = hand.finger_indices(finger)
+                            seed[joints] = reach.q[index, joints]
+                        else:
+                            continue
+                        break
+                    layouts.append((group, points, normals, seed, height))
+    for group, points, normals, seed, height in layouts:
+        if len(points) < len(group):
+            rejected["out of reach"] += 1
+            continue
+        key = (group, tuple(np.round(np.concatenate([points[f] for f in group]), 4)))
+        if key in seen:
+            continue
+        seen.add(key)
+        outcome = check(group, points, normals, seed, height)
+        if isinstance(outcome, str):
+            rejected[outcome] += 1
+        else:
+            candidates.append(outcome)
     candidates.sort(key=lambda c: c.score, reverse=True)
     return candidates, rejected
 
@@ -290,7 +295,7 @@ def opposed_grasp(hand: Hand, item: Any, mu: float = 0.6, **options: Any) -> Gra
 
 def _grasp_axes(pose: pin.SE3, directions: int) -> list[np.ndarray]:
     """Horizontal unit grasp axes: ``directions`` over 180 deg, then the object's own horizontal axes."""
-    angles = np.pi * np.arange(int(directions)) / int(directions)
+    angles = np.pi * np.arange(int(directions)) / max(int(directions), 1)
     axes = [np.array([np.cos(a), np.sin(a), 0.0]) for a in angles]
     for column in pose.rotation.T:
         if abs(column[2]) < 1e-6 and all(abs(abs(column @ a) - 1.0) > 1e-9 for a in axes):
@@ -328,6 +333,15 @@ def _row(row: Sequence[str], knuckle: dict[str, np.ndarray], u: np.ndarray) -> l
     gaps = [float(np.linalg.norm(knuckle[b] - knuckle[a])) for a, b in itertools.pairwise(ordered)]
     positions = np.concatenate(([0.0], np.cumsum(gaps)))
     return list(zip(ordered, positions - positions.mean()))
+
+
+def _shifts(row: list[tuple[str, float]], knuckle: dict[str, np.ndarray], centre: np.ndarray, u: np.ndarray) -> list:
+    """Shifts [m] of a row along ``u``: none, and each that puts one of its fingers level with its knuckle.
+
+    A finger that flexes in a plane through its knuckle reaches only that plane.
+    """
+    shifts = {0.0} | {round(float((knuckle[f] - centre) @ u) - offset, 9) for f, offset in row}
+    return sorted(shifts)
 
 
 def _bounding_radius(shape: coal.ShapeBase) -> float:
