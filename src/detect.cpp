@@ -144,6 +144,17 @@ double Engine::signed_distance(int geom, const Vector3& point) {
   if (const auto* plane = dynamic_cast<const coal::Halfspace*>(shape)) return local.dot(plane->n) - plane->d;
   if (const auto* sphere = dynamic_cast<const coal::Sphere*>(shape))
     return std::sqrt(local.squaredNorm()) - sphere->radius;
+  if (const auto* cylinder = dynamic_cast<const coal::Cylinder*>(shape)) {  // axis along local z
+    const double radial = std::sqrt(local.x() * local.x() + local.y() * local.y()) - cylinder->radius;
+    const double axial = std::abs(local.z()) - cylinder->halfLength;
+    const double outside_radial = std::max(radial, 0.0), outside_axial = std::max(axial, 0.0);
+    const double outside = std::sqrt(outside_radial * outside_radial + outside_axial * outside_axial);
+    return outside + std::min(std::max(radial, axial), 0.0);
+  }
+  if (const auto* capsule = dynamic_cast<const coal::Capsule*>(shape)) {  // segment along local z
+    const double along = local.z() - std::clamp(local.z(), -capsule->halfLength, capsule->halfLength);
+    return std::sqrt(local.x() * local.x() + local.y() * local.y() + along * along) - capsule->radius;
+  }
   coal::Transform3s probe_placement;
   probe_placement.setTranslation(point);
   coal::DistanceRequest request;

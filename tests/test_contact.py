@@ -80,6 +80,67 @@ def test_signed_distances_agree_with_coal(shape: str) -> None:
     np.testing.assert_allclose(engine._signed_distance(geom, points), expected, atol=1e-9)
 
 
+def test_cylinder_signed_distances_meet_a_second_method() -> None:
+    """Inside a cylinder the nearest surface point may be on a flat end, where coal's EPA reads the side wall (the
+    bug: a can standing on its pedestal read a 21.7 mm overlap at 9 um).  Truth: outside, coal's GJK; inside, the
+    nearest of 200k points spread over the side and both ends (brute force, 0.2 mm grid: within 0.1 mm)."""
+    import coal
+
+    radius, half = 0.033, 0.05
+    can = bh.Cylinder(radius=radius, length=2 * half, mass=0.3, pose=pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.2, 1.0),
+                                                                           np.array([0.1, 0.0, 0.05])))  # fmt: skip
+    engine, scene = engine_for(can)
+    pin.updateGeometryPlacements(scene.model, engine.data, scene.geometry, engine.geometry_data,
+                                 scene.initial_state()[0])  # fmt: skip
+    geom = scene.object_geometries[0]
+    placement = engine.geometry_data.oMg[geom]
+    local = np.random.default_rng(2).uniform([-0.05, -0.05, -0.07], [0.05, 0.05, 0.07], size=(400, 3))
+    points = local @ placement.rotation.T + placement.translation
+    computed = engine._signed_distance(geom, points)
+    inside = (np.hypot(local[:, 0], local[:, 1]) < radius) & (np.abs(local[:, 2]) < half)
+    angle, height = np.meshgrid(np.linspace(0.0, 2 * np.pi, 1036, endpoint=False), np.linspace(-half, half, 501))
+    side = np.column_stack((radius * np.cos(angle).ravel(), radius * np.sin(angle).ravel(), height.ravel()))
+    grid = np.linspace(-radius, radius, 331)
+    disc = np.array([(x, y) for x in grid for y in grid if x * x + y * y <= radius * radius])
+    ends = np.vstack([np.column_stack((disc, np.full(len(disc), z))) for z in (-half, half)])
+    surface = np.vstack((side, ends))
+    for point, value in zip(local[inside], computed[inside]):
+        nearest = np.sqrt(((surface - point) ** 2).sum(axis=1)).min()
+        assert value == pytest.approx(-nearest, abs=1e-4)
+    probe, request, result = coal.Sphere(1e-12), coal.DistanceRequest(), coal.DistanceResult()
+    transform = coal.Transform3s(placement.rotation, placement.translation)
+    shape = scene.geometry.geometryObjects[geom].geometry
+    outside = [coal.distance(probe, coal.Transform3s(np.eye(3), p), shape, transform, request, result)
+               for p in points[~inside]]  # fmt: skip
+    np.testing.assert_allclose(computed[~inside], outside, atol=1e-9)
+    assert inside.sum() > 50 and (~inside).sum() > 50
+
+
+@pytest.mark.parametrize("engine", ["python", "compiled"])
+@pytest.mark.parametrize("radius", [0.033, 0.05])
+def test_a_can_rests_on_its_pedestal(engine: str, radius: float) -> None:
+    """A 0.3 kg can on a pedestal 40 % of its width: after 0.3 s the four patch points carry m g (Newton) and it sank
+    m g / k (the spring law's closed form); before, its face patch read the side wall's depth: 4 x 33 N threw the
+    33 mm can off at the second step, and the 50 mm can diverged."""
+    from bhgrasp.objects import FixedBox
+    from bhgrasp.sim import Simulator
+
+    mass, stiffness = 0.3, 1e4
+    can = bh.Cylinder(
+        radius=radius, length=0.1, mass=mass, friction=0.8, pose=pin.SE3(np.eye(3), np.array([0, 0, 0.2]))
+    )
+    pedestal = FixedBox(size=(0.8 * radius, 0.8 * radius, 0.02), pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.14])))
+    law = SpringDamper(stiffness=stiffness, damping=2e-3 * stiffness, friction=0.8)
+    simulator = Simulator(Scene(bh.BarrettHand(), [can], environment=[pedestal]), contact=law, engine=engine)
+    state = simulator.initial_state()
+    for _ in range(300):
+        state, _ = simulator.step(state, np.zeros(8))
+    assert len(state.contact_bodies) == 4
+    np.testing.assert_allclose(state.contact_forces.sum(axis=0), [0.0, 0.0, mass * 9.81], atol=1e-6)  # [N]
+    sank = 0.2 - state.object_poses[0].translation[2]
+    assert sank == pytest.approx(mass * 9.81 / stiffness, rel=1e-3)  # [m]
+
+
 def _one_contact(depth: float = 1e-3, displacement=(0.0, 0.0, 0.0), friction: float = 0.5):
     engine, scene = engine_for(Sphere(radius=0.02, mass=0.1, pose=pin.SE3(np.eye(3), np.array([0, 0, 0.02 - depth]))))
     contacts = engine.detect(scene.initial_state()[0])

@@ -9,8 +9,10 @@ the hand's layout (the Allegro's thumb, a gripper written in a notebook):
 2. **layouts**: a grasp axis ``d`` (``directions`` horizontal directions, and the object's horizontal axes), a height
    along world z, and a layout direction ``u`` in the plane normal to ``d`` (``tilts`` angles); the grasping fingers
    split into two sides, each side's fingers in a row along ``u``, ordered by their knuckles (first joints) along
-   ``u`` and spaced as their knuckles are; each contact is the first point of the object along a line parallel to
-   ``-d`` (or ``+d``, the other side) through the row's slot (sphere tracing on coal distances, :data:`TOLERANCE`);
+   ``u`` and spaced as their knuckles are, the row centred or shifted to put one finger level with its knuckle (a
+   finger that flexes in a plane reaches only that plane); each contact is the first point of the object along a
+   line parallel to ``-d`` (or ``+d``, the other side), moved until the pad's centre lies on the finger's slot (a
+   curved face tilts the normal, and the pad with it) (sphere tracing on coal distances, :data:`TOLERANCE`);
 3. **reachability**: every pad centre (contact + pad radius x outward normal) must lie within ``reach_tolerance`` of
    its finger's cloud; the IK (:func:`~bhgrasp.ik.ik`, 1e-6 m) starts from the nearest samples' joint values, the
    idle fingers at rest (zero, clipped to the limits);
@@ -19,9 +21,13 @@ the hand's layout (the Allegro's thumb, a gripper written in a notebook):
    the contacts ``edge_margin`` from an edge, the pads lift the object by ``lift`` without sliding; then force
    closure, the Ferrari-Canny epsilon and the weight test rank the candidates
    (:class:`~bhgrasp.grasp.synthesis.GraspCandidate`);
-5. **approach**: the pre-grasp configuration has the pads ``standoff`` out along the normals, the approach's target
-   ``closing`` into the object (both by IK from the contact configuration): a joint-space approach between them
-   closes each pad along its normal.
+5. **pushing**: a pad must be able to move along its normal to within the friction cone's half-angle (J J^+ n within
+   atan(mu) of n): a finger that flexes in a plane, on a face tilted out of that plane, pushes the object sideways
+   and slides (measured: three planar fingers on a 30 mm can, pads 39 deg off their planes, slip and diverge);
+6. **approach**: the pre-grasp configuration has the pads ``standoff`` out along the normals, the approach's target
+   ``closing`` into the object (both by IK from the contact configuration; for a finger that flexes in a plane,
+   along the normal's part in that plane, J J^+ n): a joint-space approach between them closes each pad onto its
+   contact.
 
 The pads are the spheres centred on the fingertip frames in the hand's collision model (the Allegro's 12 mm tips,
 the BH8-280's 10 mm pads).  World frame, metres and radians.
@@ -55,6 +61,8 @@ from bhgrasp.hand import Hand
 from bhgrasp.ik import ik
 
 TOLERANCE = 1e-5  # [m] how close to the surface a traced line stops
+PAD_ITERATIONS = 40  # line moves that put a pad centre on its slot (each shrinks the miss by pad / face radius)
+SLOT_TOLERANCE = 1e-8  # [m] how far off its slot a pad centre may stay (well inside the IK's 1e-6 m)
 SIDES = (1.0, -1.0)
 
 
@@ -195,12 +203,23 @@ def search(
     centre = pose.translation
     traced: dict[tuple, tuple | None] = {}
 
-    def contact(axis: int, side: float, height: float, tilt: int, offset: float) -> tuple | None:
-        key = (axis, side, round(height, 9), tilt, round(offset, 9))
+    def contact(axis: int, side: float, height: float, tilt: int, offset: float, radius: float) -> tuple | None:
+        """The contact whose pad centre lies on the slot's line (``height`` along z, ``offset`` along the row)."""
+        key = (axis, side, round(height, 9), tilt, round(offset, 9), radius)
         if key not in traced:
             d, u = axes[axis], _layout(axes[axis], tilt, tilts)
-            start = centre + side * span * d + height * np.array([0.0, 0.0, 1.0]) + offset * u
-            traced[key] = first_hit(probe, start, -side * d, 2.0 * span)
+            slot = height * np.array([0.0, 0.0, 1.0]) + offset * u  # in the plane normal to d, from the centre
+            line, hit = slot.copy(), None
+            for _ in range(PAD_ITERATIONS):  # a curved face tilts the normal: move the line so the pad is on slot
+                hit = first_hit(probe, centre + side * span * d + line, -side * d, 2.0 * span)
+                if hit is None:
+                    break
+                pad = hit[0] + radius * hit[1] - centre
+                miss = (pad - (pad @ d) * d) - slot
+                if np.linalg.norm(miss) < SLOT_TOLERANCE:
+                    break
+                line -= miss
+            traced[key] = hit
         return traced[key]
 
     def check(group, points, normals, seed, height) -> GraspCandidate | str:
@@ -223,9 +242,12 @@ def search(
         if lift and not _lifts(hand, group, contact_points, -outward, q, shapes, shape, pose, lift_offset, clearance,
                                joint_margin):  # fmt: skip
             return "cannot lift"
+        away = {f: _movable(hand, q, f, normals[f]) for f in group}
+        if min(away[f] @ normals[f] for f in group) < 1.0 / np.hypot(1.0, mu):
+            return "pad pushes outside its friction cone"
         try:
-            q_pregrasp = ik(hand, {f: pads[f] + standoff * normals[f] for f in group}, q, tolerance=1e-6).q
-            q_close = ik(hand, {f: pads[f] - closing * normals[f] for f in group}, q, tolerance=1e-6).q
+            q_pregrasp = ik(hand, {f: pads[f] + standoff * away[f] for f in group}, q, tolerance=1e-6).q
+            q_close = ik(hand, {f: pads[f] - closing * away[f] for f in group}, q, tolerance=1e-6).q
         except UnreachableError:
             return "no pre-grasp or approach target"
         if shapes.nearest_other(q_pregrasp, (), shape, pose) < clearance:
@@ -245,7 +267,7 @@ def search(
                     points, normals, seed = {}, {}, rest.copy()
                     for side, row, shift in zip(SIDES, sides, shifts):
                         for finger, offset in row:
-                            hit = contact(axis, side, height, tilt, offset + shift)
+                            hit = contact(axis, side, height, tilt, offset + shift, radii[finger])
                             if hit is None:
                                 break
                             pad = hit[0] + radii[finger] * hit[1]
@@ -333,6 +355,16 @@ def _row(row: Sequence[str], knuckle: dict[str, np.ndarray], u: np.ndarray) -> l
     gaps = [float(np.linalg.norm(knuckle[b] - knuckle[a])) for a, b in itertools.pairwise(ordered)]
     positions = np.concatenate(([0.0], np.cumsum(gaps)))
     return list(zip(ordered, positions - positions.mean()))
+
+
+def _movable(hand: Hand, q: np.ndarray, finger: str, normal: np.ndarray) -> np.ndarray:
+    """The unit direction nearest ``normal`` that the finger's pad can move along at ``q`` (J J^+ n, normalised).
+
+    ``normal`` itself for a finger that moves its pad in 3-D; its part in the plane for one that flexes in a plane.
+    """
+    jacobian = hand.fingertip_jacobian(q, finger)[:, hand.finger_indices(finger)]
+    direction = jacobian @ np.linalg.lstsq(jacobian, normal, rcond=1e-9)[0]
+    return direction / np.linalg.norm(direction)
 
 
 def _shifts(row: list[tuple[str, float]], knuckle: dict[str, np.ndarray], centre: np.ndarray, u: np.ndarray) -> list:

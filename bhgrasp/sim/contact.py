@@ -170,7 +170,9 @@ class ContactEngine(ContactForces):
     def _signed_distance(self, geom: int, points: np.ndarray) -> np.ndarray:
         """Signed distance [m] of world points to a geometry (negative inside).
 
-        Closed form for boxes, half-spaces and spheres; coal's GJK/EPA for other shapes.
+        Closed form for boxes, half-spaces, spheres, cylinders and capsules; coal's GJK/EPA for other shapes (coal's
+        EPA puts a point inside a cylinder at its side wall's distance even where a flat end is nearer: a can standing
+        on its pedestal read a 21.7 mm overlap at 9 um and was thrown off).
         """
         placement = self.geometry_data.oMg[geom]
         shape = self.scene.geometry.geometryObjects[geom].geometry
@@ -183,6 +185,15 @@ class ContactEngine(ContactForces):
             return local @ shape.n - shape.d
         if isinstance(shape, coal.Sphere):
             return np.sqrt((local * local).sum(axis=1)) - shape.radius
+        if isinstance(shape, coal.Cylinder):  # axis along local z
+            radial = np.sqrt(local[:, 0] * local[:, 0] + local[:, 1] * local[:, 1]) - shape.radius
+            axial = np.abs(local[:, 2]) - shape.halfLength
+            outside_radial, outside_axial = np.maximum(radial, 0.0), np.maximum(axial, 0.0)
+            outside = np.sqrt(outside_radial * outside_radial + outside_axial * outside_axial)
+            return outside + np.minimum(np.maximum(radial, axial), 0.0)
+        if isinstance(shape, coal.Capsule):  # segment along local z
+            along = local[:, 2] - np.clip(local[:, 2], -shape.halfLength, shape.halfLength)
+            return np.sqrt(local[:, 0] * local[:, 0] + local[:, 1] * local[:, 1] + along * along) - shape.radius
         transform = coal.Transform3s(placement.rotation, placement.translation)
         return np.array([-self._overlap([(shape, transform)], point) for point in points])
 
