@@ -37,7 +37,8 @@ from __future__ import annotations
 
 import itertools
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import coal
@@ -45,7 +46,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.spatial import cKDTree
 
-from bhgrasp._validation import as_positive
+from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.grasp.probes import HandClearance, ObjectProbe
 from bhgrasp.grasp.synthesis import (
@@ -141,6 +142,27 @@ def opposed_grasps(hand: Hand, item: Any, mu: float = 0.6, **options: Any) -> li
     return search(hand, item, mu, **options)[0]
 
 
+@dataclass(frozen=True)
+class Checks:
+    """What a candidate must pass (:func:`search`'s arguments of the same names)."""
+
+    mu: float
+    clearance: float
+    edge_margin: float
+    joint_margin: float
+    standoff: float
+    closing: float
+    squeeze: float
+    gravity: np.ndarray
+    lift: float
+    singularity_margin: float
+
+    @property
+    def lift_offset(self) -> np.ndarray:
+        """The lift as an object twist-displacement (position [m], rotation [rad]): ``lift`` against gravity."""
+        return np.concatenate((-self.lift * self.gravity / np.linalg.norm(self.gravity), np.zeros(3)))
+
+
 def search(
     hand: Hand,
     item: Any,
@@ -183,119 +205,135 @@ def search(
         reach_tolerance: How far [m] a pad centre may be from its finger's cloud to be tried by the IK.
         rng: Seed of the draws (same seed, same candidates).
     """
-    as_positive(mu, "mu")
-    standoff, closing = as_positive(standoff, "standoff"), as_positive(closing, "closing")
-    clearance = float(clearance)
+    checks = Checks(as_positive(mu, "mu"), float(clearance), float(edge_margin), float(joint_margin),
+                    as_positive(standoff, "standoff"), as_positive(closing, "closing"), float(squeeze),
+                    as_vector(gravity, "gravity", 3), float(lift), float(singularity_margin))  # fmt: skip
     sets = _finger_sets(hand, fingers)
     if pad_radius is None:
         radii = pad_radii(hand)
     else:
         radii = dict.fromkeys(hand.fingers, as_positive(pad_radius, "pad_radius"))
-    down = np.asarray(gravity, dtype=float)
-    lift_offset = np.concatenate((-float(lift) * down / np.linalg.norm(down), np.zeros(3)))
+    reach = FingerReach(hand, int(as_positive(samples, "samples")), np.random.default_rng(rng))
+    placing = Placement(hand, item, radii, reach, float(reach_tolerance))
     shape, pose = item.geometry(), item.pose
     heights = _default_heights(shape, pose) if heights is None else [float(h) for h in heights]
-    probe, shapes = ObjectProbe(shape, pose), HandClearance(hand)
-    reach = FingerReach(hand, int(as_positive(samples, "samples")), np.random.default_rng(rng))
-    rest = np.clip(np.zeros(hand.nq), hand.lower, hand.upper)
-    knuckle = knuckles(hand, rest)
-    span = _bounding_radius(shape) + 0.02
-    centre = pose.translation
-    traced: dict[tuple, tuple | None] = {}
+    axes = _grasp_axes(pose, directions)
+    candidates, seen, rejected = [], set(), Counter()
+    for group in sets:
+        for split in _splits(group):
+            rows = range(tilts if max(map(len, split)) > 1 else 1)  # one finger a side: no row to tilt
+            for axis, height, tilt in itertools.product(axes, heights, rows):
+                for placed in placing.layouts(split, axis, height, _layout(axis, tilt, tilts)):
+                    if placed is None:
+                        rejected["out of reach"] += 1
+                        continue
+                    points, normals, seed = placed
+                    key = (group, tuple(np.round(np.concatenate([points[f] for f in group]), 4)))
+                    if key in seen:
+                        continue
+                    seen.add(key)
+                    outcome = placing.check(group, points, normals, seed, height, checks)
+                    if isinstance(outcome, str):
+                        rejected[outcome] += 1
+                    else:
+                        candidates.append(outcome)
+    candidates.sort(key=lambda c: c.score, reverse=True)
+    return candidates, rejected
 
-    def contact(axis: int, side: float, height: float, tilt: int, offset: float, radius: float) -> tuple | None:
-        """The contact whose pad centre lies on the slot's line (``height`` along z, ``offset`` along the row)."""
-        key = (axis, side, round(height, 9), tilt, round(offset, 9), radius)
-        if key not in traced:
-            d, u = axes[axis], _layout(axes[axis], tilt, tilts)
-            slot = height * np.array([0.0, 0.0, 1.0]) + offset * u  # in the plane normal to d, from the centre
+
+class Placement:
+    """Pads on one object: the contacts of each finger layout (traced once each), and the checks of a placement."""
+
+    def __init__(self, hand: Hand, item: Any, radii: dict[str, float], reach: FingerReach, tolerance: float) -> None:
+        """Probe ``item`` (world pose) for ``hand``'s pads of ``radii`` [m], reachable within ``tolerance`` [m]."""
+        self.hand, self.item, self.radii, self.reach, self.tolerance = hand, item, radii, reach, tolerance
+        self.shape, self.pose = item.geometry(), item.pose
+        self.probe, self.shapes = ObjectProbe(self.shape, self.pose), HandClearance(hand)
+        self.rest = np.clip(np.zeros(hand.nq), hand.lower, hand.upper)
+        self.knuckle = knuckles(hand, self.rest)
+        self.span = _bounding_radius(self.shape) + 0.02
+        self.centre = self.pose.translation
+        self.traced: dict[tuple, tuple | None] = {}
+
+    def layouts(self, split: tuple, axis: np.ndarray, height: float, u: np.ndarray) -> Iterator[tuple | None]:
+        """Each shift of the two rows (:func:`_shifts`): the fingers' contacts, normals and IK seed.
+
+        ``None`` where a pad is out of its finger's reach or its line misses the object.
+        """
+        sides = [_row(row, self.knuckle, u) for row in split]
+        for shifts in itertools.product(*(_shifts(side, self.knuckle, self.centre, u) for side in sides)):
+            points, normals, seed = {}, {}, self.rest.copy()
+            for side, row, shift in zip(SIDES, sides, shifts):
+                for finger, offset in row:
+                    hit = self.contact(axis, side, height * np.array([0.0, 0.0, 1.0]) + (offset + shift) * u,
+                                       self.radii[finger])  # fmt: skip
+                    if hit is None:
+                        break
+                    distance, index = self.reach.nearest(finger, hit[0] + self.radii[finger] * hit[1])
+                    if distance > self.tolerance:
+                        break
+                    points[finger], normals[finger] = hit
+                    joints = self.hand.finger_indices(finger)
+                    seed[joints] = self.reach.q[index, joints]
+                else:
+                    continue
+                break
+            yield (points, normals, seed) if len(points) == sum(map(len, split)) else None
+
+    def contact(self, axis: np.ndarray, side: float, slot: np.ndarray, radius: float) -> tuple | None:
+        """The contact on the ``side`` face along ``axis`` whose pad centre lies on ``slot``, and its outward normal.
+
+        ``slot``: a point [m] of the plane normal to ``axis``, from the object's centre.  ``None`` if the line misses.
+        """
+        key = (*np.round(axis, 12), side, *np.round(slot, 9), radius)
+        if key not in self.traced:
             line, hit = slot.copy(), None
             for _ in range(PAD_ITERATIONS):  # a curved face tilts the normal: move the line so the pad is on slot
-                hit = first_hit(probe, centre + side * span * d + line, -side * d, 2.0 * span)
+                start = self.centre + side * self.span * axis + line
+                hit = first_hit(self.probe, start, -side * axis, 2.0 * self.span)
                 if hit is None:
                     break
-                pad = hit[0] + radius * hit[1] - centre
-                miss = (pad - (pad @ d) * d) - slot
+                pad = hit[0] + radius * hit[1] - self.centre
+                miss = (pad - (pad @ axis) * axis) - slot
                 if np.linalg.norm(miss) < SLOT_TOLERANCE:
                     break
                 line -= miss
-            traced[key] = hit
-        return traced[key]
+            self.traced[key] = hit
+        return self.traced[key]
 
-    def check(group, points, normals, seed, height) -> GraspCandidate | str:
+    def check(self, group, points, normals, seed, height, checks: Checks) -> GraspCandidate | str:
         """The candidate of these contacts, or the name of the first check it fails."""
+        hand, shape, pose, shapes = self.hand, self.shape, self.pose, self.shapes
         outward = np.array([normals[f] for f in group])
         contact_points = np.array([points[f] for f in group])
-        pads = {f: points[f] + radii[f] * normals[f] for f in group}
+        pads = {f: points[f] + self.radii[f] * normals[f] for f in group}
         try:
             q = ik(hand, pads, seed, tolerance=1e-6, max_iterations=25).q
         except UnreachableError:
             return "IK did not converge"
-        if np.any(np.minimum(q - hand.lower, hand.upper - q)[_flexing(hand, group)] < joint_margin):
+        if np.any(np.minimum(q - hand.lower, hand.upper - q)[_flexing(hand, group)] < checks.joint_margin):
             return "joint limits"
-        if shapes.nearest_other(q, group, shape, pose) < clearance:
+        if shapes.nearest_other(q, group, shape, pose) < checks.clearance:
             return "another link on the object"
-        if _least_lever(hand, group, contact_points, q) < singularity_margin:
+        if _least_lever(hand, group, contact_points, q) < checks.singularity_margin:
             return "singular finger"
-        if not all(probe.flat_around(p, n, edge_margin) for p, n in zip(contact_points, outward)):
+        if not all(self.probe.flat_around(p, n, checks.edge_margin) for p, n in zip(contact_points, outward)):
             return "contact near an edge"
-        if lift and not _lifts(hand, group, contact_points, -outward, q, shapes, shape, pose, lift_offset, clearance,
-                               joint_margin):  # fmt: skip
+        if checks.lift and not _lifts(hand, group, contact_points, -outward, q, shapes, shape, pose,
+                                      checks.lift_offset, checks.clearance, checks.joint_margin):  # fmt: skip
             return "cannot lift"
         away = {f: _movable(hand, q, f, normals[f]) for f in group}
-        if min(away[f] @ normals[f] for f in group) < 1.0 / np.hypot(1.0, mu):
+        if min(away[f] @ normals[f] for f in group) < 1.0 / np.hypot(1.0, checks.mu):
             return "pad pushes outside its friction cone"
         try:
-            q_pregrasp = ik(hand, {f: pads[f] + standoff * away[f] for f in group}, q, tolerance=1e-6).q
-            q_close = ik(hand, {f: pads[f] - closing * away[f] for f in group}, q, tolerance=1e-6).q
+            q_pregrasp = ik(hand, {f: pads[f] + checks.standoff * away[f] for f in group}, q, tolerance=1e-6).q
+            q_close = ik(hand, {f: pads[f] - checks.closing * away[f] for f in group}, q, tolerance=1e-6).q
         except UnreachableError:
             return "no pre-grasp or approach target"
-        if shapes.nearest_other(q_pregrasp, (), shape, pose) < clearance:
+        if shapes.nearest_other(q_pregrasp, (), shape, pose) < checks.clearance:
             return "pre-grasp touches the object"
-        return rate_grasp(hand, item, group, contact_points, -outward, q, q_pregrasp, height, mu, squeeze, gravity,
-                          q_close=q_close)  # fmt: skip
-
-    axes = _grasp_axes(pose, directions)
-    candidates, seen, rejected, layouts = [], set(), Counter(), []
-    for group in sets:
-        for split in _splits(group):
-            rows = range(tilts if max(map(len, split)) > 1 else 1)  # one finger a side: no row to tilt
-            for axis, height, tilt in itertools.product(range(len(axes)), heights, rows):
-                u = _layout(axes[axis], tilt, tilts)
-                sides = [_row(row, knuckle, u) for row in split]
-                for shifts in itertools.product(*(_shifts(side, knuckle, centre, u) for side in sides)):
-                    points, normals, seed = {}, {}, rest.copy()
-                    for side, row, shift in zip(SIDES, sides, shifts):
-                        for finger, offset in row:
-                            hit = contact(axis, side, height, tilt, offset + shift, radii[finger])
-                            if hit is None:
-                                break
-                            pad = hit[0] + radii[finger] * hit[1]
-                            distance, index = reach.nearest(finger, pad)
-                            if distance > reach_tolerance:
-                                break
-                            points[finger], normals[finger] = hit
-                            joints = hand.finger_indices(finger)
-                            seed[joints] = reach.q[index, joints]
-                        else:
-                            continue
-                        break
-                    layouts.append((group, points, normals, seed, height))
-    for group, points, normals, seed, height in layouts:
-        if len(points) < len(group):
-            rejected["out of reach"] += 1
-            continue
-        key = (group, tuple(np.round(np.concatenate([points[f] for f in group]), 4)))
-        if key in seen:
-            continue
-        seen.add(key)
-        outcome = check(group, points, normals, seed, height)
-        if isinstance(outcome, str):
-            rejected[outcome] += 1
-        else:
-            candidates.append(outcome)
-    candidates.sort(key=lambda c: c.score, reverse=True)
-    return candidates, rejected
+        return rate_grasp(hand, self.item, group, contact_points, -outward, q, q_pregrasp, height, checks.mu,
+                          checks.squeeze, checks.gravity, q_close=q_close)  # fmt: skip
 
 
 def opposed_grasp(hand: Hand, item: Any, mu: float = 0.6, **options: Any) -> GraspCandidate:
@@ -383,7 +421,9 @@ def _bounding_radius(shape: coal.ShapeBase) -> float:
 
 __all__ = [
     "TOLERANCE",
+    "Checks",
     "FingerReach",
+    "Placement",
     "first_hit",
     "knuckles",
     "opposed_grasp",
