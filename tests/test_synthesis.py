@@ -103,13 +103,20 @@ def test_the_demo_refuses_a_turn_that_brings_a_link_body_onto_the_box():
 
 
 def test_slip_is_counted_from_the_sample_after_the_grasp_controller_took_over():
-    """The can's F3 pad skids in the switching sample (the approach's contacts, 0.18 N); nothing slides after it."""
-    from bhgrasp.experiments.object_grasp import run_object_grasp
-    from bhgrasp.experiments.synthesis_case import OBJECTS
+    """A sample's contacts come from the step the previous input drove: the demo counts slip from the sample after
+    the grasp controller took over.  The Allegro's pads skid while they close (the approach): counted from any such
+    sample k, that sample's skids are left out and every later one counted.  (The can's grasp, which skidded in its
+    switching sample, skids no more since a can stands on its pedestal without being thrown off.)"""
+    from bhgrasp.experiments.grasp_demo import run_grasp_demo
+    from bhgrasp.grasp.metrics import slip_events_after
 
-    setup = object_grasp(OBJECTS["can"][1])
-    result = run_object_grasp(setup, offset=LIFT)
-    traj = result.trajectory
-    assert slip_events(setup.hand, traj, result.grasp_time) == 1 and result.slip_events == 0
-    k = int(np.searchsorted(traj.t, result.grasp_time))
-    assert traj.log["phase"][k] == 1.0 and traj.log["phase"][k - 1] == 0.0  # the switching sample
+    result = run_grasp_demo(hand="allegro", mass=0.6, estimate=0.3, duration=0.6)
+    traj, hand = result.trajectory, result.scene.hand
+    switch = int(np.searchsorted(traj.t, result.grasp_time))
+    assert traj.log["phase"][switch] == 1.0 and traj.log["phase"][switch - 1] == 0.0  # the switching sample
+    per_sample = np.array([slip_events(hand, traj, t) for t in traj.t[: switch + 2]])
+    skids = -np.diff(per_sample)  # skids in each sample
+    k = int(np.argmax(skids > 0))
+    assert skids[k] > 0 and k < switch  # a pad skids during the approach
+    assert slip_events_after(hand, traj, k) == per_sample[k] - skids[k] < per_sample[k]  # sample k's left out
+    assert result.slip_events == slip_events_after(hand, traj, switch) == 0
