@@ -27,10 +27,10 @@ Vector3 patch_point(const coal::ContactPatch& patch, std::size_t i) {
   return point;
 }
 
-// Whether every contact of a query has a finite, plausible depth (contact.py _converged: EPA converged).
-bool converged(const coal::CollisionResult& result) {
+// Whether every contact of a query has a finite depth within max_depth (contact.py _converged: EPA converged).
+bool converged(const coal::CollisionResult& result, double max_depth) {
   for (std::size_t i = 0; i < result.numContacts(); ++i)
-    if (!(std::abs(result.getContact(i).penetration_depth) <= 1.0)) return false;
+    if (!(std::abs(result.getContact(i).penetration_depth) <= max_depth)) return false;
   return true;
 }
 
@@ -64,7 +64,8 @@ Contacts Engine::detect(const Vector& q, const Memory& memory) {
     result.clear();
     if (!coal::collide(shape_a.get(), transform_a, shape_b.get(), transform_b, requests_[k], result))
       continue;
-    if (!converged(result)) {  // EPA stopped short at the tight tolerance: ask again at coal's default
+    // EPA stopped short at the tight tolerance, or at a depth no contact has: ask again at coal's default
+    if (!converged(result, std::min(2.0 * std::min(bound_radius_[pair.geom_a], bound_radius_[pair.geom_b]), 1.0))) {
       result.clear();
       if (!coal::collide(shape_a.get(), transform_a, shape_b.get(), transform_b, fallback_requests_[k], result))
         continue;

@@ -25,18 +25,33 @@ _IDENTITY3 = np.eye(3)
 _NARROW_TOLERANCE = 1e-10  # GJK/EPA: coal's default 1e-6 tilts a box-on-box normal by up to 0.027 (1.5 deg)
 # At 1e-10 coal 3.0.3's EPA may stop unconverged (a box edge in a cylinder: depth -1.8e308, point 0); such a query is
 # asked again at coal's default tolerance, which converged there (depth 0.53 mm, as coal.distance gives).
+# It may also stop at a depth no contact has: a can's rim on its stand read 307 mm at 1e-10 (0.029 mm at 1e-8 and 1e-6),
+# so a depth beyond the smaller shape's bounding diameter is asked again too.
 _FALLBACK_TOLERANCE = 1e-6
-_MAX_DEPTH = 1.0  # [m] a reported penetration beyond this is a failed query, not a contact
+_MAX_DEPTH = 1.0  # [m] a reported penetration beyond this is a failed query, not a contact (half-spaces, planes)
 _NO_MEMORY = ContactMemory.empty()
 
 
-def _converged(result: coal.CollisionResult) -> bool:
-    """Whether every contact of a collision query has a finite, plausible depth (EPA converged)."""
+def _converged(result: coal.CollisionResult, max_depth: float = _MAX_DEPTH) -> bool:
+    """Whether every contact of a collision query has a finite depth within ``max_depth`` [m] (EPA converged)."""
     for i in range(result.numContacts()):
         depth = result.getContact(i).penetration_depth
-        if not abs(depth) <= _MAX_DEPTH:
+        if not abs(depth) <= max_depth:
             return False
     return True
+
+
+def _plausible_depth(shape_a: coal.CollisionGeometry, shape_b: coal.CollisionGeometry) -> float:
+    """The deepest penetration [m] a query of two shapes may report: the smaller one's bounding diameter.
+
+    From coal's ``aabb_radius``; at most :data:`_MAX_DEPTH` (a half-space has no bound).
+    """
+    radii = []
+    for shape in (shape_a, shape_b):
+        shape.computeLocalAABB()
+        bounded = np.isfinite(shape.aabb_radius) and np.all(np.isfinite(shape.aabb_center))
+        radii.append(shape.aabb_radius if bounded else np.inf)
+    return min(2.0 * min(radii), _MAX_DEPTH)
 
 
 def _fresh_request(template: coal.CollisionRequest, tolerance: float = _NARROW_TOLERANCE) -> coal.CollisionRequest:
@@ -92,6 +107,7 @@ class ContactEngine(ContactForces):
             for pair in scene.pairs
         ]  # fmt: skip
         self._fallback = [_fresh_request(request, _FALLBACK_TOLERANCE) for _, _, _, _, request, *_ in self._narrow]
+        self._max_depth = [_plausible_depth(shape_a, shape_b) for shape_a, shape_b, *_ in self._narrow]
         self._probe = coal.Sphere(1e-12)  # a point, for signed-distance queries
         self._probe_placement = coal.Transform3s()
         self._distance_request, self._distance_result = coal.DistanceRequest(), coal.DistanceResult()
@@ -117,7 +133,7 @@ class ContactEngine(ContactForces):
             result.clear()
             if not coal.collide(shape_a, transform_a, shape_b, transform_b, request, result):
                 continue
-            if not _converged(result):
+            if not _converged(result, self._max_depth[k]):
                 result.clear()
                 if not coal.collide(shape_a, transform_a, shape_b, transform_b, self._fallback[k], result):
                     continue
