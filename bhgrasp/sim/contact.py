@@ -47,7 +47,7 @@ def _plausible_depth(shape_a: coal.CollisionGeometry, shape_b: coal.CollisionGeo
     From coal's ``aabb_radius``; at most :data:`_MAX_DEPTH` (a half-space has no bound).
     """
     radii = []
-    for shape in (shape_a, shape_b):
+    for shape in (shape_a.clone(), shape_b.clone()):  # (the scene's own shapes untouched: its signature reads them)
         shape.computeLocalAABB()
         bounded = np.isfinite(shape.aabb_radius) and np.all(np.isfinite(shape.aabb_center))
         radii.append(shape.aabb_radius if bounded else np.inf)
