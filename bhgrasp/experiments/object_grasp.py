@@ -133,7 +133,7 @@ def run_object_grasp(
     estimate = 0.5 * mass if estimate is None else float(estimate)
     nominal = replace(setup.item, mass=estimate, density=None)
     grasp = grasp_controller(controller, setup.hand, nominal)
-    damping = float(np.mean(setup.simulator.actuation.damping))  # the drive's (one value for every joint)
+    damping = float(np.max(setup.simulator.actuation.damping))  # the drive's (one value for every joint)
     supervisor = GraspSupervisor(setup.hand, setup.candidate.q_contact, grasp, offset=offset,
                                  fingers=setup.candidate.fingers, q_close=setup.candidate.q_close,
                                  approach_damping=0.0 if setup.cancel_damping else damping,
