@@ -254,6 +254,7 @@ class Placement:
         self.span = _bounding_radius(self.shape) + 0.02
         self.centre = self.pose.translation
         self.traced: dict[tuple, tuple | None] = {}
+        self.nearest: dict[tuple, tuple[float, int]] = {}
 
     def layouts(self, split: tuple, axis: np.ndarray, height: float, u: np.ndarray) -> Iterator[tuple | None]:
         """Each shift of the two rows (:func:`_shifts`): the fingers' contacts, normals and IK seed.
@@ -269,7 +270,7 @@ class Placement:
                                        self.radii[finger])  # fmt: skip
                     if hit is None:
                         break
-                    distance, index = self.reach.nearest(finger, hit[0] + self.radii[finger] * hit[1])
+                    distance, index = self.reached(finger, hit)
                     if distance > self.tolerance:
                         break
                     points[finger], normals[finger] = hit
@@ -279,6 +280,13 @@ class Placement:
                     continue
                 break
             yield (points, normals, seed) if len(points) == sum(map(len, split)) else None
+
+    def reached(self, finger: str, hit: tuple) -> tuple[float, int]:
+        """How far [m] the finger's pad centre on ``hit`` is from its reach cloud, and the nearest sample (cached)."""
+        key = (finger, id(hit))  # a traced hit is one object, kept in ``traced``
+        if key not in self.nearest:
+            self.nearest[key] = self.reach.nearest(finger, hit[0] + self.radii[finger] * hit[1])
+        return self.nearest[key]
 
     def contact(self, axis: np.ndarray, side: float, slot: np.ndarray, radius: float) -> tuple | None:
         """The contact on the ``side`` face along ``axis`` whose pad centre lies on ``slot``, and its outward normal.

@@ -25,14 +25,14 @@ class ObjectProbe:
     def __init__(self, shape: coal.ShapeBase, pose: pin.SE3) -> None:
         """Probe ``shape`` placed at ``pose`` (world <- object)."""
         self.shape, self.placement = shape, coal.Transform3s(pose.rotation, pose.translation)
-        self.point = coal.Sphere(1e-9)
+        self.point, self.at = coal.Sphere(1e-9), coal.Transform3s()
         self.request, self.result = coal.DistanceRequest(), coal.DistanceResult()
 
     def distance(self, point: np.ndarray) -> tuple[float, np.ndarray]:
         """Signed distance [m] from ``point`` to the surface (negative inside), and the surface's nearest point."""
         self.result.clear()
-        distance = coal.distance(self.point, coal.Transform3s(np.eye(3), point), self.shape, self.placement,
-                                 self.request, self.result)  # fmt: skip
+        self.at.setTranslation(point)
+        distance = coal.distance(self.point, self.at, self.shape, self.placement, self.request, self.result)
         return float(distance), np.asarray(self.result.getNearestPoint2())
 
     def landing(self, start: np.ndarray, direction: np.ndarray, z: float) -> tuple[np.ndarray, np.ndarray] | None:
