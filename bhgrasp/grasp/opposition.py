@@ -23,7 +23,8 @@ the hand's layout (the Allegro's thumb, a gripper written in a notebook):
    (:class:`~bhgrasp.grasp.synthesis.GraspCandidate`);
 5. **pushing**: a pad must be able to move along its normal to within the friction cone's half-angle (J J^+ n within
    atan(mu) of n): a finger that flexes in a plane, on a face tilted out of that plane, pushes the object sideways
-   and slides (measured: three planar fingers on a 30 mm can, pads 39 deg off their planes, slip and diverge);
+   and slides (measured: three planar fingers on a 30 mm can, pads 39 deg off their planes, lifted it 11 mm off
+   the request with 27-29 sliding samples);
 6. **approach**: the pre-grasp configuration has the pads ``standoff`` out along the normals, the approach's target
    ``closing`` into the object (both by IK from the contact configuration; for a finger that flexes in a plane,
    along the normal's part in that plane, J J^+ n): a joint-space approach between them closes each pad onto its
