@@ -13,7 +13,8 @@ import numpy as np
 
 from bhgrasp import _arguments as checked
 from bhgrasp.errors import BhgraspError, InputError
-from bhgrasp.experiments.grasp_demo import ADAPTATIONS, CONTROLLERS, HANDS
+from bhgrasp.experiments.grasp_controllers import ADAPTATIONS, CONTROLLERS
+from bhgrasp.experiments.grasp_demo import HANDS
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -11,7 +11,8 @@ from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp, object_paramete
 from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
 from bhgrasp.experiments.box_grasp import box_grasp
-from bhgrasp.experiments.grasp_demo import grasp_controller, run_grasp_demo
+from bhgrasp.experiments.grasp_controllers import grasp_controller
+from bhgrasp.experiments.grasp_demo import run_grasp_demo
 from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.grasp.metrics import finger_normal_forces, slip_events
 from bhgrasp.objects import Box

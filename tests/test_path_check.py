@@ -14,7 +14,7 @@ import pytest
 import bhgrasp as bh
 from bhgrasp.controllers.supervisor import MANIPULATE, PLAN_LENGTH, GraspSupervisor
 from bhgrasp.experiments.box_grasp import OFF_STOP_SPACING, box_grasp
-from bhgrasp.experiments.grasp_demo import grasp_controller
+from bhgrasp.experiments.grasp_controllers import grasp_controller
 from bhgrasp.experiments.motions import ESTIMATE, GRASPS, MASS, MOTIONS
 from bhgrasp.grasp.manipulability import manipulable_space
 from bhgrasp.grasp.path_check import path_contacts, sensed_path_contacts

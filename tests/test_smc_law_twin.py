@@ -27,7 +27,9 @@ from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.errors import CompiledEngineUnavailable, InputError
 from bhgrasp.experiments.box_grasp import box_grasp
-from bhgrasp.experiments.grasp_demo import MU_ASSUMED, OFFSET, SQUEEZE
+from bhgrasp.experiments.demo_result import MU_ASSUMED
+from bhgrasp.experiments.grasp_controllers import SQUEEZE
+from bhgrasp.experiments.grasp_demo import OFFSET
 from bhgrasp.objects import Box
 from bhgrasp.trajectories import PoseMotion
 

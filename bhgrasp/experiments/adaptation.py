@@ -26,7 +26,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.excitation import PoseExcitation
 from bhgrasp.experiments.box_grasp import OFF_STOP_SPACING, box_grasp
 from bhgrasp.experiments.demo_result import MU_ASSUMED
-from bhgrasp.experiments.grasp_demo import SQUEEZE
+from bhgrasp.experiments.grasp_controllers import SQUEEZE
 from bhgrasp.experiments.uncertainty import sensor_model
 from bhgrasp.grasp.metrics import slip_events_after
 from bhgrasp.objects import Box

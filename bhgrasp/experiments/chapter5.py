@@ -19,7 +19,9 @@ from bhgrasp import metrics
 from bhgrasp.errors import InputError
 from bhgrasp.experiments import case_progress
 from bhgrasp.experiments.box_grasp import CONTACT_HEIGHT, STIFFNESS
-from bhgrasp.experiments.grasp_demo import MU_ASSUMED, OFFSET, SQUEEZE, GraspDemoResult, run_grasp_demo
+from bhgrasp.experiments.demo_result import MU_ASSUMED
+from bhgrasp.experiments.grasp_controllers import SQUEEZE
+from bhgrasp.experiments.grasp_demo import OFFSET, GraspDemoResult, run_grasp_demo
 from bhgrasp.grasp.metrics import finger_normal_forces
 from bhgrasp.hand import BarrettHand
 

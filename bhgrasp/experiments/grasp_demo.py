@@ -23,7 +23,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.experiments.allegro_grasp import allegro_box_grasp
 from bhgrasp.experiments.box_grasp import STIFFNESS, BoxGrasp, box_grasp
 from bhgrasp.experiments.demo_result import MU_ASSUMED, GraspDemoResult, evaluate_demo
-from bhgrasp.experiments.grasp_controllers import ADAPTATIONS, COMPOSITE_RATES, CONTROLLERS, SQUEEZE, grasp_controller  # noqa: F401  (their home until issue 28 moves the scenes)
+from bhgrasp.experiments.grasp_controllers import ADAPTATIONS, CONTROLLERS, grasp_controller
 from bhgrasp.experiments.uncertainty import (
     PLANT,
     SENSED,
@@ -114,7 +114,7 @@ def run_grasp_demo(
     Args:
         mass: True box mass [kg].
         estimate: Mass [kg] the controller starts from.
-        controller: One of :data:`CONTROLLERS`.
+        controller: One of :data:`~bhgrasp.experiments.grasp_controllers.CONTROLLERS`.
         duration: Simulated time [s].
         offset: Object motion after the squeeze (position [m], rotation vector [rad], world); one the planned grasp
             cannot make without sliding, or without a joint passing its limit, is refused before simulating.
@@ -133,8 +133,9 @@ def run_grasp_demo(
             damping (known to the controller), which dominates its light links' inertia.
         finger_spacing: Distance [m] between F1's and F2's contacts (Barrett scene; default the thesis' 50 mm, the
             spread on its stop; :data:`~bhgrasp.experiments.box_grasp.OFF_STOP_SPACING` takes it off).
-        adaptation: The SMC-adaptive law's object estimate (:data:`ADAPTATIONS`): the thesis' (5.52), or
-            ``"composite"``, which also fits the wrench the hand measures on the object once it is off its pedestal
+        adaptation: The SMC-adaptive law's object estimate
+            (:data:`~bhgrasp.experiments.grasp_controllers.ADAPTATIONS`): the thesis' (5.52), or ``"composite"``,
+            which also fits the wrench the hand measures on the object once it is off its pedestal
             (:mod:`bhgrasp.controllers.object_identification`: not fooled by joint friction, chapter 5's adaptation
             case).
         uncertainty: What the controller does not know (:data:`UNCERTAINTIES`, Barrett scene only):
@@ -208,11 +209,9 @@ def save_demo(result: GraspDemoResult, hand, output: Path) -> list[Path]:
 
 
 __all__ = [
-    "CONTROLLERS",
     "HANDS",
     "GraspDemoResult",
     "demo_figure",
-    "grasp_controller",
     "grasp_scene",
     "run_grasp_demo",
     "save_demo",

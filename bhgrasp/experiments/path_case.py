@@ -22,7 +22,7 @@ import pinocchio as pin
 
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.errors import InputError
-from bhgrasp.experiments.grasp_demo import grasp_controller
+from bhgrasp.experiments.grasp_controllers import grasp_controller
 from bhgrasp.experiments.motions import SUCCESS
 from bhgrasp.grasp.metrics import slip_events_after
 from bhgrasp.paths import PoseCircle, PoseWaypoints

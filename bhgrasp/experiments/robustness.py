@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from bhgrasp.experiments.grasp_demo import MU_ASSUMED
+from bhgrasp.experiments.demo_result import MU_ASSUMED
 
 SAMPLES = 12  # runs per scenario
 MASS_RANGE = (0.2, 1.0)  # [kg] box masses, uniform
