@@ -87,11 +87,16 @@ def test_cylinder_signed_distances_meet_a_second_method() -> None:
     import coal
 
     radius, half = 0.033, 0.05
-    can = bh.Cylinder(radius=radius, length=2 * half, mass=0.3, pose=pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.2, 1.0),
-                                                                           np.array([0.1, 0.0, 0.05])))  # fmt: skip
+    can = bh.Cylinder(
+        radius=radius,
+        length=2 * half,
+        mass=0.3,
+        pose=pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.2, 1.0), np.array([0.1, 0.0, 0.05])),
+    )
     engine, scene = engine_for(can)
-    pin.updateGeometryPlacements(scene.model, engine.data, scene.geometry, engine.geometry_data,
-                                 scene.initial_state()[0])  # fmt: skip
+    pin.updateGeometryPlacements(
+        scene.model, engine.data, scene.geometry, engine.geometry_data, scene.initial_state()[0]
+    )
     geom = scene.object_geometries[0]
     placement = engine.geometry_data.oMg[geom]
     local = np.random.default_rng(2).uniform([-0.05, -0.05, -0.07], [0.05, 0.05, 0.07], size=(400, 3))
@@ -110,8 +115,9 @@ def test_cylinder_signed_distances_meet_a_second_method() -> None:
     probe, request, result = coal.Sphere(1e-12), coal.DistanceRequest(), coal.DistanceResult()
     transform = coal.Transform3s(placement.rotation, placement.translation)
     shape = scene.geometry.geometryObjects[geom].geometry
-    outside = [coal.distance(probe, coal.Transform3s(np.eye(3), p), shape, transform, request, result)
-               for p in points[~inside]]  # fmt: skip
+    outside = [
+        coal.distance(probe, coal.Transform3s(np.eye(3), p), shape, transform, request, result) for p in points[~inside]
+    ]
     np.testing.assert_allclose(computed[~inside], outside, atol=1e-9)
     assert inside.sum() > 50 and (~inside).sum() > 50
 

@@ -57,9 +57,13 @@ def test_an_unconverged_epa_is_asked_again_and_both_engines_find_the_distance_de
 # whose top is at z = 0, the can 33 mm x 100 mm, tilted 0.134 rad about x
 STAND = (0.066, 0.066, 0.2)
 STAND_AT = np.array([0.0, 0.0, -0.1])
-RIM_ROTATION = np.array([[0.9999999807178863, -0.00015371562908713995, -0.0001222118340072409],
-                         [0.00013606344818242302, 0.991085563025875, -0.13322683006220035],
-                         [0.00014160143030978776, 0.13322681086474195, 0.9910855648307291]])  # fmt: skip
+RIM_ROTATION = np.array(
+    [
+        [0.9999999807178863, -0.00015371562908713995, -0.0001222118340072409],
+        [0.00013606344818242302, 0.991085563025875, -0.13322683006220035],
+        [0.00014160143030978776, 0.13322681086474195, 0.9910855648307291],
+    ]
+)
 RIM_AT = np.array([-7.814041918834454e-06, -0.007025738824650085, 0.053912292354647236])
 
 
@@ -75,8 +79,10 @@ def test_a_depth_no_contact_has_is_asked_again_in_both_engines() -> None:
     assert coal.collide(stand, stand_pose, can, can_pose, tight, result)
     assert result.getContact(0).penetration_depth == pytest.approx(-0.307, abs=1e-3)  # the bug handled here
     depth = -coal.distance(stand, stand_pose, can, can_pose, coal.DistanceRequest(), coal.DistanceResult())
-    lowest = max(-(orthonormal(RIM_ROTATION) @ [0.033 * np.cos(a), 0.033 * np.sin(a), -0.05] + RIM_AT)[2]
-                 for a in np.linspace(0.0, 2 * np.pi, 36000))  # the rim's deepest point under the top [m]  # fmt: skip
+    lowest = max(
+        -(orthonormal(RIM_ROTATION) @ [0.033 * np.cos(a), 0.033 * np.sin(a), -0.05] + RIM_AT)[2]
+        for a in np.linspace(0.0, 2 * np.pi, 36000)
+    )  # the rim's deepest point under the top [m]
     assert 0.0 < depth <= lowest < 4e-5  # along the normal at most the vertical overlap: tens of micrometres
     scene = Scene(
         bh.BarrettHand(base_placement=pin.SE3(np.eye(3), np.array([0.0, 0.0, 1.0]))),  # far away

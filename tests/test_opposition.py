@@ -35,16 +35,20 @@ GRAVITY = np.array([0.0, 0.0, -9.81])
 def rod(name: str, length: float) -> str:
     side, end = 0.05 * (3 * 0.008**2 + length**2) / 12, 0.05 * 0.008**2 / 2
     shape = f'<origin xyz="0 0 {length / 2}"/><geometry><cylinder radius="0.008" length="{length}"/></geometry>'
-    return (f'<link name="{name}"><inertial><origin xyz="0 0 {length / 2}"/><mass value="0.05"/>'
-            f'<inertia ixx="{side}" iyy="{side}" izz="{end}" ixy="0" ixz="0" iyz="0"/></inertial>'
-            f"<visual>{shape}</visual><collision>{shape}</collision></link>")  # fmt: skip
+    return (
+        f'<link name="{name}"><inertial><origin xyz="0 0 {length / 2}"/><mass value="0.05"/>'
+        f'<inertia ixx="{side}" iyy="{side}" izz="{end}" ixy="0" ixz="0" iyz="0"/></inertial>'
+        f"<visual>{shape}</visual><collision>{shape}</collision></link>"
+    )
 
 
 def gripper_urdf(pads: bool = True) -> str:
     """Palm at the origin (top face z = 0), fingers up along z; ``sign`` -1 closes toward -x, +1 toward +x."""
-    palm = ('<link name="palm"><inertial><origin xyz="0 0 -0.01"/><mass value="0.5"/><inertia ixx="4e-4" '
-            'iyy="6e-4" izz="9e-4" ixy="0" ixz="0" iyz="0"/></inertial><collision><origin xyz="0 0 -0.01"/>'
-            '<geometry><box size="0.16 0.1 0.02"/></geometry></collision></link>')  # fmt: skip
+    palm = (
+        '<link name="palm"><inertial><origin xyz="0 0 -0.01"/><mass value="0.5"/><inertia ixx="4e-4" '
+        'iyy="6e-4" izz="9e-4" ixy="0" ixz="0" iyz="0"/></inertial><collision><origin xyz="0 0 -0.01"/>'
+        '<geometry><box size="0.16 0.1 0.02"/></geometry></collision></link>'
+    )
     parts = ['<?xml version="1.0"?><robot name="gripper4">', palm]
     limit = '<limit lower="-0.6" upper="1.6" effort="2" velocity="3"/>'
     for name, (x, y, sign) in KNUCKLES.items():

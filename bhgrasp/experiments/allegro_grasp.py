@@ -69,12 +69,30 @@ def allegro_box_grasp(
     hand = allegro_hand()
     centre = hand.base_placement.act(np.array(BOX_CENTRE))
     box = Box(size=BOX_SIZE, mass=as_positive(mass, "mass"), pose=pin.SE3(MOUNT, centre))
-    approach = {"standoff": as_positive(opening, "opening"), "closing": as_positive(closing, "closing")}
-    setup = object_grasp(box, mu=MU_ASSUMED, dt=dt, hand=hand, stiffness=stiffness, damping=damping, fingers=GRASPING,
-                         directions=0, **approach)  # fmt: skip
+    setup = object_grasp(
+        box,
+        mu=MU_ASSUMED,
+        dt=dt,
+        hand=hand,
+        stiffness=stiffness,
+        damping=damping,
+        fingers=GRASPING,
+        directions=0,
+        standoff=as_positive(opening, "opening"),
+        closing=as_positive(closing, "closing"),
+    )
     c = setup.candidate
-    return BoxGrasp(setup.simulator, setup.state, hand, setup.item, c.q_contact, c.q_pregrasp, c.q_close, c.fingers,
-                    cancel_damping=True)  # fmt: skip
+    return BoxGrasp(
+        setup.simulator,
+        setup.state,
+        hand,
+        setup.item,
+        c.q_contact,
+        c.q_pregrasp,
+        c.q_close,
+        c.fingers,
+        cancel_damping=True,
+    )
 
 
 __all__ = ["ALLEGRO_URDF", "BOX_CENTRE", "BOX_SIZE", "FINGERTIPS", "GRASPING", "allegro_box_grasp", "allegro_hand"]

@@ -43,8 +43,9 @@ def grasp_controller(
     if adaptation == "composite" and name != "smc-adaptive":
         raise InputError(f"`adaptation='composite'` applies to the 'smc-adaptive' controller, not {name!r}")
     if name == "smc-adaptive" and adaptation == "composite":
-        return SMCAdaptiveGrasp(hand, nominal_box, object_adaptation=COMPOSITE_RATES,
-                                identification=ObjectIdentification(), **shared)  # fmt: skip
+        return SMCAdaptiveGrasp(
+            hand, nominal_box, object_adaptation=COMPOSITE_RATES, identification=ObjectIdentification(), **shared
+        )
     if name == "smc-adaptive":
         return SMCAdaptiveGrasp(hand, nominal_box, **shared)
     if name == "pd":

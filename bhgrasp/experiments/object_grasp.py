@@ -134,10 +134,16 @@ def run_object_grasp(
     nominal = replace(setup.item, mass=estimate, density=None)
     grasp = grasp_controller(controller, setup.hand, nominal)
     damping = float(np.max(setup.simulator.actuation.damping))  # the drive's (one value for every joint)
-    supervisor = GraspSupervisor(setup.hand, setup.candidate.q_contact, grasp, offset=offset,
-                                 fingers=setup.candidate.fingers, q_close=setup.candidate.q_close,
-                                 approach_damping=0.0 if setup.cancel_damping else damping,
-                                 object_shape=setup.item.geometry())  # fmt: skip
+    supervisor = GraspSupervisor(
+        setup.hand,
+        setup.candidate.q_contact,
+        grasp,
+        offset=offset,
+        fingers=setup.candidate.fingers,
+        q_close=setup.candidate.q_close,
+        approach_damping=0.0 if setup.cancel_damping else damping,
+        object_shape=setup.item.geometry(),
+    )
     law = MotorCommands(supervisor, setup.simulator.actuation.drive) if setup.cancel_damping else supervisor
     start = time.perf_counter()
     traj = setup.simulator.run(law, duration, state=setup.state, progress=False)

@@ -206,9 +206,18 @@ def search(
         reach_tolerance: How far [m] a pad centre may be from its finger's cloud to be tried by the IK.
         rng: Seed of the draws (same seed, same candidates).
     """
-    checks = Checks(as_positive(mu, "mu"), float(clearance), float(edge_margin), float(joint_margin),
-                    as_positive(standoff, "standoff"), as_positive(closing, "closing"), float(squeeze),
-                    as_vector(gravity, "gravity", 3), float(lift), float(singularity_margin))  # fmt: skip
+    checks = Checks(
+        as_positive(mu, "mu"),
+        float(clearance),
+        float(edge_margin),
+        float(joint_margin),
+        as_positive(standoff, "standoff"),
+        as_positive(closing, "closing"),
+        float(squeeze),
+        as_vector(gravity, "gravity", 3),
+        float(lift),
+        float(singularity_margin),
+    )
     sets = _finger_sets(hand, fingers)
     if pad_radius is None:
         radii = pad_radii(hand)
@@ -267,8 +276,9 @@ class Placement:
             points, normals, seed = {}, {}, self.rest.copy()
             for side, row, shift in zip(SIDES, sides, shifts):
                 for finger, offset in row:
-                    hit = self.contact(axis, side, height * np.array([0.0, 0.0, 1.0]) + (offset + shift) * u,
-                                       self.radii[finger])  # fmt: skip
+                    hit = self.contact(
+                        axis, side, height * np.array([0.0, 0.0, 1.0]) + (offset + shift) * u, self.radii[finger]
+                    )
                     if hit is None:
                         break
                     distance, index = self.reached(finger, hit)
@@ -328,8 +338,19 @@ class Placement:
             return "singular finger"
         if not all(self.probe.flat_around(p, n, checks.edge_margin) for p, n in zip(contact_points, outward)):
             return "contact near an edge"
-        if checks.lift and not _lifts(hand, group, contact_points, -outward, q, shapes, shape, pose,
-                                      checks.lift_offset, checks.clearance, checks.joint_margin):  # fmt: skip
+        if checks.lift and not _lifts(
+            hand,
+            group,
+            contact_points,
+            -outward,
+            q,
+            shapes,
+            shape,
+            pose,
+            checks.lift_offset,
+            checks.clearance,
+            checks.joint_margin,
+        ):
             return "cannot lift"
         away = {f: _movable(hand, q, f, normals[f]) for f in group}
         if min(away[f] @ normals[f] for f in group) < 1.0 / np.hypot(1.0, checks.mu):
@@ -341,8 +362,20 @@ class Placement:
             return "no pre-grasp or approach target"
         if shapes.nearest_other(q_pregrasp, (), shape, pose) < checks.clearance:
             return "pre-grasp touches the object"
-        return rate_grasp(hand, self.item, group, contact_points, -outward, q, q_pregrasp, height, checks.mu,
-                          checks.squeeze, checks.gravity, q_close=q_close)  # fmt: skip
+        return rate_grasp(
+            hand,
+            self.item,
+            group,
+            contact_points,
+            -outward,
+            q,
+            q_pregrasp,
+            height,
+            checks.mu,
+            checks.squeeze,
+            checks.gravity,
+            q_close=q_close,
+        )
 
 
 def opposed_grasp(hand: Hand, item: Any, mu: float = 0.6, **options: Any) -> GraspCandidate:

@@ -228,8 +228,9 @@ def rate_grasp(
     spreads = [q[i] for i, name in enumerate(hand.joint_names) if "spread" in name]
     spread = float(np.mean(spreads)) if spreads else 0.0
     feasible, margin = bool(weight.feasible), float(-weight.cone_violation)
-    return GraspCandidate(tuple(fingers), points, normals, q, q_pregrasp, spread, height, quality, feasible, margin,
-                          q_close)  # fmt: skip
+    return GraspCandidate(
+        tuple(fingers), points, normals, q, q_pregrasp, spread, height, quality, feasible, margin, q_close
+    )
 
 
 def _least_lever(hand: Hand, fingers: Sequence[str], points: np.ndarray, q: np.ndarray) -> float:
