@@ -79,8 +79,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     info = commands.add_parser("info", help="print a hand's joints, limits and link masses")
     info.add_argument("--urdf", type=Path, default=None, help="any hand URDF instead of the packaged Barrett hand")
     info.add_argument(
-        "--mimic", choices=["refuse", "independent"], default="refuse",
-        help="a URDF with <mimic> couplings: refuse it, or load the coupled joints as independent DOFs",
+        "--mimic", choices=["coupled", "independent"], default="coupled",
+        help="a URDF with <mimic> couplings: mimic joints follow their joint (default), or independent DOFs",
     )  # fmt: skip
     tune = commands.add_parser(
         "tune", help="tune F3's force-based impedance (M_I, K_I) with CMA-ES on the fitness (4.49) of thesis chapter 4"

@@ -26,7 +26,7 @@ from bhgrasp.errors import InputError, ModelError
 from bhgrasp.hand_dynamics import HandDynamics
 from bhgrasp.hand_model import STANDARD_GRAVITY
 from bhgrasp.hand_model import _generator as _generator  # re-exported: bhgrasp.ik imports it from here
-from bhgrasp.resources import barrett_urdf_path, leaf_links, mimic_joints
+from bhgrasp.resources import barrett_urdf_path, leaf_links
 from bhgrasp.urdf_model import _build_model
 
 BARRETT_FINGERTIPS = {"F1": "F1_tip", "F2": "F2_tip", "F3": "F3_tip"}
@@ -46,48 +46,40 @@ class Hand(HandDynamics):
         cls,
         path: str | Path,
         fingertips: Sequence[str] | Mapping[str, str] | None = None,
-        mimic: str = "refuse",
+        mimic: str = "coupled",
         **kwargs: Any,
     ) -> Hand:
         """Load any fixed-base hand URDF.
 
-        Every joint is an independent degree of freedom.  A URDF whose joints carry ``<mimic>`` tags (couplings)
-        is refused unless ``mimic="independent"`` says to load those joints as independent too (their coupling
-        is then up to an actuation model, as :class:`~bhgrasp.sim.actuation.BarrettActuation` does for the
-        BH8-280's).
+        A joint with a ``<mimic joint multiplier offset>`` tag is coupled as Pinocchio builds it (``mimic="coupled"``):
+        it has no coordinate of its own and moves as ``multiplier * q[joint] + offset``, so ``nq`` and ``nv`` count
+        the independent joints (:attr:`couplings` lists the others, :mod:`bhgrasp.couplings` says how dynamics and
+        pickles treat them).  ``mimic="independent"`` loads every joint as its own DOF (the coupling is then up to an
+        actuation model, as :class:`~bhgrasp.sim.actuation.BarrettActuation` does for the BH8-280's).
 
         Args:
             path: URDF file.  It is parsed without DTDs or entities before Pinocchio sees it.
             fingertips: Frame names of the fingertips (finger name = frame name), or a mapping finger name ->
                 frame name; by default the URDF's leaf links below a moving joint
                 (:func:`~bhgrasp.resources.leaf_links`: a palm pad fixed to the base is not a fingertip).
-            mimic: ``"refuse"`` (default: a ``<mimic>`` tag is a ModelError naming the joints) or
-                ``"independent"`` (load mimic joints as independent joints).
+            mimic: ``"coupled"`` (default) or ``"independent"``, as above.
             **kwargs: ``name``, ``base_placement``, ``gravity`` as for :class:`Hand`.
 
         Raises:
-            ModelError: Missing/malformed/unsafe/non-UTF-8 URDF, one Pinocchio cannot build, or an ``<inertial>``
+            ModelError: Missing/malformed/unsafe/non-UTF-8 URDF, one Pinocchio cannot build (e.g. a mimic joint that
+                mimics a mimic joint), or an ``<inertial>``
                 no rigid body has: mass missing, NaN/inf or < 0; an inertia component missing or NaN/inf; a tensor
                 that is not positive semi-definite or whose ixx, iyy, izz break the triangle inequality (the
                 message names the file and the link).  Point masses and massless links are legal.
-            InputError: A fingertip frame that the model does not have.
+            InputError: A fingertip frame that the model does not have, or ``mimic`` not one of the two.
 
         Warns:
             UserWarning: A link whose principal moments of inertia break the triangle inequality although its
                 diagonal does not (products of inertia no body has, e.g. example-robot-data's Allegro fingertips).
         """
-        if mimic not in ("refuse", "independent"):
-            raise InputError(f"`mimic` must be 'refuse' or 'independent', got {mimic!r}")
-        model, root = _build_model(path)
-        coupled = mimic_joints(root)
-        if coupled and mimic == "refuse":
-            pairs = ", ".join(f"{joint} mimics {source}" for joint, source in coupled.items())
-            raise ModelError(
-                f"URDF {str(path)!r} couples joints with <mimic> tags ({pairs}); bhgrasp models every joint as an "
-                "independent DOF: pass mimic='independent' (`bhgrasp info --mimic independent`) to load them so (an "
-                "actuation model then couples them), "
-                "or remove the tags (for the Barrett hand use bh.BarrettHand())"
-            )
+        if mimic not in ("coupled", "independent"):
+            raise InputError(f"`mimic` must be 'coupled' or 'independent', got {mimic!r}")
+        model, root = _build_model(path, mimic=mimic == "coupled")
         if fingertips is None:
             fingertips = leaf_links(root)
             if not fingertips:
@@ -127,8 +119,8 @@ class Hand(HandDynamics):
 
         Args:
             mass_scale: Factor on each moving body's mass and rotational inertia (centre of mass unchanged): one
-                number, or one per body in joint order (``nv`` values for a hand of 1-DOF joints).  0.7 is a
-                nominal model that underestimates every body by 30 %.
+                number, or one per body in joint order (``nv`` values for a hand of 1-DOF joints, plus one per mimic
+                joint).  0.7 is a nominal model that underestimates every body by 30 %.
             payload: ``(frame, mass [kg])``: a point mass rigidly attached at that frame's origin, e.g. an unknown
                 load at a fingertip.
             name: Display name (default: this hand's name with the perturbation).
@@ -185,6 +177,8 @@ class Hand(HandDynamics):
                 f"  {joint:<16}{limits}{self.velocity_limit[i]:13.3f}{self.effort_limit[i]:15.3f}{mass:14.4f}"
                 + "  [m, N]" * prismatic
             )
+        for coupling in self.couplings:
+            lines.append(f"  mimic {coupling.joint}: {coupling.multiplier:g} x {coupling.mimics} + {coupling.offset:g}")
         for finger in self.fingers:
             lines.append(
                 f"  finger {finger}: tip {self._fingertips[finger]!r}, joints {', '.join(self.finger_joints(finger))}"

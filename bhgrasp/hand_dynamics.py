@@ -3,10 +3,14 @@
 The third of the hand's layers (:mod:`bhgrasp.hand_model`): Pinocchio's dynamics algorithms and the Slotine-Li
 terms of the sliding and adaptive laws; ``bhgrasp._core.HandDynamics`` (``src/dynamics.cpp``) is the compiled
 twin of :meth:`HandDynamics.slotine_li_torque`.  Every method is a method of :class:`~bhgrasp.hand.Hand`.
+
+With mimic joints (:mod:`bhgrasp.couplings`), which Pinocchio's ABA and regressors do not support, forward dynamics
+solve M a = tau - b and the regressors are G^T Y on the independent twin.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -15,6 +19,7 @@ import pinocchio as pin
 
 from bhgrasp._native import kernel
 from bhgrasp._validation import as_array, as_vector
+from bhgrasp.couplings import TwinMap, independent_model, twin_map
 from bhgrasp.errors import InputError
 from bhgrasp.hand_kinematics import HandKinematics
 
@@ -47,7 +52,12 @@ class HandDynamics(HandKinematics):
 
     def coriolis_matrix(self, q: Any, v: Any) -> np.ndarray:
         """Coriolis matrix C(q, v), shape (nv, nv), with M_dot - 2 C skew-symmetric (thesis (2.27))."""
-        return pin.computeCoriolisMatrix(self._model, self._data, self._q(q), self._v(v, "v")).copy()
+        q, v = self._q(q), self._v(v, "v")
+        if self.couplings:  # Pinocchio 4.1's is wrong with mimic joints: G^T C_twin(G q + c, G v) G
+            twin, data, mapping = self._twin
+            g = mapping.velocity
+            return g.T @ pin.computeCoriolisMatrix(twin, data, mapping.configuration(q), g @ v) @ g
+        return pin.computeCoriolisMatrix(self._model, self._data, q, v).copy()
 
     def forward_dynamics(self, q: Any, v: Any, tau: Any, f_ext: Any = None) -> np.ndarray:
         """Joint accelerations (ABA) under joint torques ``tau`` [N m] and optional external forces.
@@ -58,6 +68,9 @@ class HandDynamics(HandKinematics):
                 :meth:`external_forces` builds it from forces on frames.
         """
         q, v, tau = self._q(q), self._v(v, "v"), self._v(tau, "tau")
+        if self.couplings:  # Pinocchio's ABA has no mimic joints: solve M a = tau - (C v + G - J^T f_ext)
+            bias = self.inverse_dynamics(q, v, np.zeros(self._model.nv), f_ext)
+            return np.linalg.solve(self.mass_matrix(q), tau - bias)
         if f_ext is None:
             return pin.aba(self._model, self._data, q, v, tau).copy()
         return pin.aba(self._model, self._data, q, v, tau, self._fext(f_ext)).copy()
@@ -97,7 +110,25 @@ class HandDynamics(HandKinematics):
         origin).  For the Slotine-Li form Y(q, qdot, qdot_r, qddot_r) see :meth:`slotine_li_regressor`.
         """
         q, v, a = self._q(q), self._v(v, "v"), self._v(a, "a")
-        return pin.computeJointTorqueRegressor(self._model, self._data, q, v, a).copy()
+        return self._torque_regressor(q, v, a)
+
+    def _torque_regressor(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """Pinocchio's joint-torque regressor, or G^T Y_twin(G q + c, G v, G a) with mimic joints (which it refuses).
+
+        The twin is the independent one of :mod:`bhgrasp.couplings` (tau = G^T tau_twin, the bodies in one order).
+        """
+        if not self.couplings:
+            return pin.computeJointTorqueRegressor(self._model, self._data, q, v, a).copy()
+        twin, data, mapping = self._twin
+        twin.gravity.linear = self._model.gravity.linear  # the hand's gravity may have been set since
+        g = mapping.velocity
+        return g.T @ pin.computeJointTorqueRegressor(twin, data, mapping.configuration(q), g @ v, g @ a)
+
+    @functools.cached_property
+    def _twin(self) -> tuple[pin.Model, pin.Data, TwinMap]:
+        """The independent twin of a hand with mimic joints, its data and the map to it (built on first use)."""
+        twin = independent_model(self._model)
+        return twin, twin.createData(), twin_map(self._model, twin)
 
     def slotine_li_torque(self, q: Any, v: Any, v_r: Any, a_r: Any) -> np.ndarray:
         """M(q) a_r + C(q, v) v_r + G(q) [N m], the model term of sliding and adaptive laws (thesis (3.39)-(3.40)).
@@ -127,10 +158,10 @@ class HandDynamics(HandKinematics):
         as :meth:`slotine_li_torque`.
         """
         q, v, v_r, a_r = self._q(q), self._v(v, "v"), self._v(v_r, "v_r"), self._v(a_r, "a_r")
-        model, data, zero = self._model, self._data, np.zeros(self._model.nv)
-        plus = pin.computeJointTorqueRegressor(model, data, q, v + v_r, zero).copy()
-        minus = pin.computeJointTorqueRegressor(model, data, q, v - v_r, zero).copy()
-        return pin.computeJointTorqueRegressor(model, data, q, zero, a_r) + 0.25 * (plus - minus)
+        zero = np.zeros(self._model.nv)
+        plus = self._torque_regressor(q, v + v_r, zero)
+        minus = self._torque_regressor(q, v - v_r, zero)
+        return self._torque_regressor(q, zero, a_r) + 0.25 * (plus - minus)
 
     def inertial_parameters(self) -> np.ndarray:
         """Dynamic parameters of every moving body, shape (10 * n_bodies,).

@@ -17,6 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_array, as_vector, require_name, require_rotation
+from bhgrasp.couplings import Coupling, coupled_model, independent_model, model_couplings
 from bhgrasp.errors import InputError, ModelError
 
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)  # [m/s^2] in world coordinates
@@ -58,6 +59,7 @@ class HandModel:
             raise ModelError("a hand needs at least one fingertip frame")
         self._model = model
         self._data = model.createData()
+        self.couplings: tuple[Coupling, ...] = model_couplings(model)  # mimic joints (no coordinate of their own)
         self.name = name or model.name
         self.urdf_path = urdf_path
         self.collision_geometry = collision_geometry
@@ -98,8 +100,12 @@ class HandModel:
 
     @functools.cached_property
     def joint_names(self) -> tuple[str, ...]:
-        """Joint names in Pinocchio's order (the order of ``q``, ``v`` and ``tau``)."""
-        return tuple(self._model.names[1:])  # read by controllers every cycle: built once (the model is fixed)
+        """Names of the joints with a coordinate, in Pinocchio's order (the order of ``q``, ``v`` and ``tau``).
+
+        A mimic joint (:attr:`couplings`) has none: it moves with the joint it mimics and is not listed here.
+        """
+        mimic = {coupling.joint for coupling in self.couplings}  # built once: controllers read it every cycle
+        return tuple(name for name in self._model.names[1:] if name not in mimic)
 
     @property
     def fingers(self) -> tuple[str, ...]:
@@ -137,9 +143,16 @@ class HandModel:
         return float(sum(inertia.mass for inertia in self._model.inertias))
 
     def joint_index(self, joint: str) -> int:
-        """Index of a 1-DOF joint in ``q``/``v``."""
+        """Index of a 1-DOF joint in ``q``/``v`` (a mimic joint has none: InputError naming the joint it follows)."""
         index = self._joint_indices.get(joint) if isinstance(joint, str) else None
         if index is None:
+            for coupling in self.couplings:
+                if coupling.joint == joint:
+                    source, multiplier, offset = coupling.mimics, coupling.multiplier, coupling.offset
+                    raise InputError(
+                        f"joint {joint!r} mimics {source!r} (q = {multiplier:g} q[{source!r}] + {offset:g}) and has no "
+                        f"coordinate of its own: use {source!r}"
+                    )
             require_name(joint, self.joint_names, "joint")  # raises: an unknown name
         return index
 
@@ -148,7 +161,10 @@ class HandModel:
         return {name: self._model.joints[self._model.getJointId(name)].idx_v for name in self.joint_names}
 
     def finger_joints(self, finger: str) -> tuple[str, ...]:
-        """Names of the joints that move a finger's tip, from the base outward (not the :attr:`base_joints`)."""
+        """Names of the joints whose coordinates move a finger's tip, from the base outward (not :attr:`base_joints`).
+
+        A mimic joint counts as the joint it mimics (listed once, where first met).
+        """
         joints = self._finger_joints.get(finger) if isinstance(finger, str) else None
         if joints is None:
             require_name(finger, self.fingers, "finger")  # raises: an unknown finger
@@ -160,9 +176,12 @@ class HandModel:
         supports = {
             finger: model.supports[model.frames[frame].parentJoint][1:] for finger, frame in self._tip_ids.items()
         }
-        base = set(self.base_joints)
-        return {finger: tuple(model.names[j] for j in joints if model.names[j] not in base)
-                for finger, joints in supports.items()}  # fmt: skip
+        base, mimics = set(self.base_joints), {coupling.joint: coupling.mimics for coupling in self.couplings}
+        result = {}
+        for finger, joints in supports.items():
+            names = (mimics.get(model.names[j], model.names[j]) for j in joints if model.names[j] not in base)
+            result[finger] = tuple(dict.fromkeys(names))  # in order, each once
+        return result
 
     def finger_indices(self, finger: str) -> np.ndarray:
         """Velocity indices of a finger's joints (columns of its Jacobian that can be non-zero)."""
@@ -239,6 +258,26 @@ class HandModel:
             np.all(q >= self._model.lowerPositionLimit - tolerance)
             and np.all(q <= self._model.upperPositionLimit + tolerance)
         )
+
+    # ------------------------------------------------------------------ copies and pickles
+    def __getstate__(self) -> dict:
+        """Pickles hold the model; a model with mimic joints as its independent twin and :attr:`couplings`.
+
+        Pinocchio 4.1 does not write a mimic joint's extended sizes, and a model read back crashes every algorithm
+        (:mod:`bhgrasp.couplings`); its Data is rebuilt on load either way.
+        """
+        state = dict(self.__dict__)
+        del state["_data"]
+        if self.couplings:
+            state["_model"] = independent_model(self._model)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        if state["couplings"]:
+            state["_model"] = coupled_model(state["_model"], state["couplings"])
+            state["_model"].gravity.linear = state["_model_gravity"]
+        self.__dict__.update(state)
+        self._data = self._model.createData()
 
     # ------------------------------------------------------------------ validation helpers
     def _q(self, q: Any) -> np.ndarray:

@@ -124,12 +124,3 @@ def leaf_links(root: Element) -> list[str]:
         for link in root.iter("link")
         if link.get("name") not in parents and link.get("name") in parent_joint and moves(link.get("name"))
     ]
-
-
-def mimic_joints(root: Element) -> dict[str, str]:
-    """Joint -> the joint it mimics, for every ``<mimic>`` tag of a URDF."""
-    return {
-        joint.get("name"): joint.find("mimic").get("joint")
-        for joint in root.iter("joint")
-        if joint.find("mimic") is not None
-    }

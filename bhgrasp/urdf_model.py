@@ -2,7 +2,8 @@
 
 :func:`_build_model` reads a URDF without DTDs or entities (:func:`~bhgrasp.resources.read_urdf`), refuses
 ``<inertial>`` blocks that urdfdom would silently drop or that no rigid body can have, builds the model (``<mimic>``
-tags not applied: independent joints) and checks the inertias Pinocchio built (links merged across fixed joints).
+tags applied as Pinocchio's mimic joints, or ignored: independent joints) and checks the inertias Pinocchio built
+(links merged across fixed joints).
 """
 
 from __future__ import annotations
@@ -18,12 +19,12 @@ from bhgrasp.errors import ModelError
 from bhgrasp.resources import read_urdf
 
 
-def _build_model(path: str | Path) -> tuple[pin.Model, Any]:
-    """Safely read a URDF and build its Pinocchio model (``<mimic>`` tags not applied: independent joints)."""
+def _build_model(path: str | Path, mimic: bool = False) -> tuple[pin.Model, Any]:
+    """Safely read a URDF and build its Pinocchio model (``mimic``: ``<mimic>`` tags applied, else ignored)."""
     text, root = read_urdf(path)
     _check_inertials(root, path)
     try:
-        model = pin.buildModelFromXML(text)
+        model = pin.buildModelFromXML(text, mimic=mimic)
     except (ValueError, RuntimeError) as error:
         raise ModelError(f"Pinocchio cannot build a model from {str(path)!r}: {error}") from error
     if model.nv == 0:

@@ -1,15 +1,71 @@
 #include "model_io.hpp"
 
+#include <cmath>
+
+#include <boost/variant/get.hpp>
 #include <pinocchio/multibody/geometry.hpp>
 #include <pinocchio/multibody/model.hpp>
 #include <pinocchio/serialization.hpp>
 
 namespace bhgrasp {
 
+namespace {
+
+// Pinocchio 4.1 writes a mimic joint's mimicking joint, scaling and offset but not the sizes of its extended
+// configuration and tangent spaces (nqExtended, nvExtended: read back as -1), and every algorithm then reads past
+// its vectors (a segmentation fault; pickle.loads(pickle.dumps(model)) in Python has the same defect).  Rebuilding
+// each mimic joint from what was written restores them; the indexes are set as Pinocchio's own loader sets them.
+void restore_mimic_joints(pinocchio::Model& model) {
+  using Mimic = pinocchio::JointModelMimic;
+  for (auto& joint : model.joints) {
+    const Mimic* read = boost::get<Mimic>(&joint.toVariant());
+    if (read == nullptr) continue;
+    Mimic rebuilt(read->jmodel(), read->scaling(), read->offset());
+    rebuilt.setMimicIndexes(read->jmodel().id(), read->idx_q(), read->idx_v(), read->jmodel().idx_vExtended());
+    rebuilt.setIndexes(read->id(), 0, 0, read->idx_vExtended());
+    joint = rebuilt;
+  }
+}
+
+}  // namespace
+
 pinocchio::Model model_from_text(const std::string& text) {
   pinocchio::Model model;
   model.loadFromString(text);
+  restore_mimic_joints(model);
   return model;
+}
+
+std::string independent_model_text(const std::string& text) {
+  using Mimic = pinocchio::JointModelMimic;
+  const pinocchio::Model model = model_from_text(text);
+  pinocchio::Model out;
+  out.name = model.name;
+  out.gravity = model.gravity;
+  out.inertias[0] = model.inertias[0];
+  for (pinocchio::JointIndex i = 1; i < static_cast<pinocchio::JointIndex>(model.njoints); ++i) {
+    const Mimic* mimic = boost::get<Mimic>(&model.joints[i].toVariant());
+    const pinocchio::JointModel joint = mimic != nullptr ? pinocchio::JointModel(mimic->jmodel()) : model.joints[i];
+    const pinocchio::JointIndex id = out.addJoint(model.parents[i], joint, model.jointPlacements[i], model.names[i]);
+    out.inertias[id] = model.inertias[i];  // as read (appendBodyToJoint would add it to zero: round-off)
+  }
+  // Limits: each joint's own; a mimic joint's are its mimicked joint's mapped through q = scaling q_mimicked + offset
+  // (its idx_q and idx_v in `model` point at the mimicked joint's coordinates).
+  for (pinocchio::JointIndex i = 1; i < static_cast<pinocchio::JointIndex>(model.njoints); ++i) {
+    const Mimic* mimic = boost::get<Mimic>(&model.joints[i].toVariant());
+    const auto& from = model.joints[i];
+    const auto& to = out.joints[i];
+    const int nq = to.nq(), nv = to.nv();
+    const double scaling = mimic != nullptr ? mimic->scaling() : 1.0, offset = mimic != nullptr ? mimic->offset() : 0.0;
+    const Eigen::VectorXd a = scaling * model.lowerPositionLimit.segment(from.idx_q(), nq).array() + offset;
+    const Eigen::VectorXd b = scaling * model.upperPositionLimit.segment(from.idx_q(), nq).array() + offset;
+    out.lowerPositionLimit.segment(to.idx_q(), nq) = a.cwiseMin(b);
+    out.upperPositionLimit.segment(to.idx_q(), nq) = a.cwiseMax(b);
+    out.velocityLimit.segment(to.idx_v(), nv) = std::abs(scaling) * model.velocityLimit.segment(from.idx_v(), nv);
+    out.effortLimit.segment(to.idx_v(), nv) = model.effortLimit.segment(from.idx_v(), nv);
+  }
+  for (std::size_t k = 1; k < model.frames.size(); ++k) out.addFrame(model.frames[k], false);
+  return out.saveToString();
 }
 
 pinocchio::GeometryModel geometry_from_text(const std::string& text) {

@@ -12,6 +12,12 @@ namespace bhgrasp {
 // The model written by pin.Model.saveToString().
 pinocchio::Model model_from_text(const std::string& text);
 
+// The same model with every mimic joint made an independent joint (its own coordinate, the limits of the joint it
+// mimicked mapped through the coupling): the twin in which the coupling is a constraint, and a form that serialises
+// whole (Pinocchio 4.1 does not write a mimic joint's extended sizes, see model_io.cpp).  Joint and frame indexes
+// are unchanged.
+std::string independent_model_text(const std::string& text);
+
 // The geometry written by pin.GeometryModel.saveToString().
 pinocchio::GeometryModel geometry_from_text(const std::string& text);
 

@@ -79,13 +79,20 @@ def test_unknown_fingertip_frame() -> None:
         bh.Hand.from_urdf(bh.barrett_urdf_path(), fingertips=["F1_tip", "F4_tip"], mimic="independent")
 
 
-def test_mimic_couplings_are_refused_by_name_unless_loaded_as_independent_joints(tmp_path: Path) -> None:
-    """The packaged Barrett URDF documents its couplings with <mimic>: loading it must not silently drop them."""
-    with pytest.raises(bh.ModelError, match=r"F2_spread mimics F1_spread.*pass mimic='independent'"):
-        bh.Hand.from_urdf(bh.barrett_urdf_path())
+def test_mimic_couplings_load_coupled_or_as_independent_joints_and_nothing_else(tmp_path: Path) -> None:
+    """The packaged Barrett URDF documents its couplings with <mimic>: loaded coupled by default (4 coordinates, the
+    hand before breakaway), or as the 8 independent joints of bh.BarrettHand(); no coupling is silently dropped."""
+    coupled = bh.Hand.from_urdf(bh.barrett_urdf_path())
+    assert coupled.joint_names == ("F1_spread", "F1_proximal", "F2_proximal", "F3_proximal")
+    assert {(c.joint, c.mimics) for c in coupled.couplings} == {
+        ("F2_spread", "F1_spread"),
+        ("F1_distal", "F1_proximal"),
+        ("F2_distal", "F2_proximal"),
+        ("F3_distal", "F3_proximal"),
+    }
     hand = bh.Hand.from_urdf(bh.barrett_urdf_path(), mimic="independent")
-    assert hand.nv == 8 and hand.joint_names == bh.BarrettHand().joint_names
-    with pytest.raises(bh.InputError, match="`mimic` must be 'refuse' or 'independent', got 'apply'"):
+    assert hand.nv == 8 and hand.joint_names == bh.BarrettHand().joint_names and hand.couplings == ()
+    with pytest.raises(bh.InputError, match="`mimic` must be 'coupled' or 'independent', got 'apply'"):
         bh.Hand.from_urdf(bh.barrett_urdf_path(), mimic="apply")
 
 

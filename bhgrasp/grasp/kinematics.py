@@ -40,6 +40,7 @@ import pinocchio as pin
 
 from bhgrasp._native import kernel
 from bhgrasp._validation import as_array, as_vector, require_name
+from bhgrasp.couplings import refuse_couplings
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.frames import _frames, contact_frames
 from bhgrasp.hand import Hand
@@ -215,6 +216,7 @@ def _hand_index(hand: Hand) -> _HandIndex:
     """The hand's :class:`_HandIndex`, built on first use (models are not modified after loading)."""
     index = _INDEX.get(hand)
     if index is None:
+        refuse_couplings(hand.couplings, "the grasp kinematics (grasp map, P = J_h^+ G^T and its rate)")
         model = hand.model
         masks = np.zeros((model.njoints, model.nv))
         for joint in range(1, model.njoints):
@@ -227,6 +229,7 @@ def _hand_index(hand: Hand) -> _HandIndex:
 
 def _kernel(hand: Hand) -> Any:
     """The hand's compiled ``_core.GraspKinematics``, built on first use; ``None`` if ``bhgrasp._core`` is missing."""
+    refuse_couplings(hand.couplings, "the grasp kinematics (grasp map, P = J_h^+ G^T and its rate)")
     return kernel(hand, "GraspKinematics", lambda core: core.GraspKinematics(hand.model.saveToString()))
 
 

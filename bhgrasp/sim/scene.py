@@ -191,7 +191,11 @@ class Scene:
 
     def energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """Kinetic + gravitational potential + object-spring energy [J] (contacts excluded)."""
-        kinetic = pin.computeKineticEnergy(self.model, self.data, q, v)
+        if self.hand.couplings:  # Pinocchio's kinetic energy refuses mimic joints: 1/2 v^T M v (CRBA's upper half)
+            mass = pin.crba(self.model, self.data, q)
+            kinetic = 0.5 * v @ (np.triu(mass) + np.triu(mass, 1).T) @ v
+        else:
+            kinetic = pin.computeKineticEnergy(self.model, self.data, q, v)
         potential = pin.computePotentialEnergy(self.model, self.data, q)  # moving bodies only
         springs = 0.0
         for i, item in enumerate(self.objects):
