@@ -270,12 +270,16 @@ def _sweep(config_path: Path) -> int:
     return 0
 
 
-BENCH_QUICK = {"bench_batch.py": ["--steps", "10", "--sizes", "8"],
-               "bench_hand.py": ["--repeat", "200"], "bench_sim.py": ["--duration", "0.05"],
-               "bench_control.py": ["--repeat", "50"], "bench_qp.py": ["--cycles", "50"],
-               "bench_sweep.py": ["--cases", "2", "--duration", "0.8"],
-               "bench_scaling.py": ["--steps", "20"],
-               "bench_instructions.py": ["--cases", "free", "--short", "2", "--long", "12"]}  # fmt: skip
+BENCH_QUICK = {
+    "bench_batch.py": ["--steps", "10", "--sizes", "8"],
+    "bench_hand.py": ["--repeat", "200"],
+    "bench_sim.py": ["--duration", "0.05"],
+    "bench_control.py": ["--repeat", "50"],
+    "bench_qp.py": ["--cycles", "50"],
+    "bench_sweep.py": ["--cases", "2", "--duration", "0.8"],
+    "bench_scaling.py": ["--steps", "20"],
+    "bench_instructions.py": ["--cases", "free", "--engine", "compiled", "--short", "2", "--long", "12"],
+}
 
 
 def _bench(quick: bool) -> int:

@@ -286,3 +286,30 @@ def test_the_grasp_kinematics_refuse_a_coupled_hand_by_name(hand):
         bh.ModelError, match=r"grasp kinematics .* mimic joints \(F1_distal_joint, .*mimic='independent'"
     ):
         parent_joints(hand, ["F1_distal"])
+
+
+def test_joint_controllers_drive_the_one_coordinate(hand):
+    """Computed torque with the exact model gives e'' + Kv e' + Kp e = 0 in the coupled coordinate (closed form, as
+    tests/test_controllers.py checks on the BH8-280); the adaptive sliding law (regressors through the twin) learns a
+    nominal model 30 % light and tracks better than it starts."""
+    from bhgrasp.controllers import AdaptiveSlidingMode, ComputedTorque, inertia_gain
+    from bhgrasp.trajectories import Sinusoid
+
+    sim = bh.Simulator(bh.Scene(hand), dt=1e-3)
+    reference = Sinusoid(np.array([0.5]), np.array([0.15]), 0.7)  # as the BH8-280's test
+    e0 = 0.05
+    traj = sim.run(ComputedTorque(hand, reference), 1.0, state=sim.initial_state([0.5 + e0]), progress=False)
+    kp, kv = 400.0, 160.0
+    slow, fast = np.roots([1.0, kv, kp])  # e = a exp(slow t) + b exp(fast t)
+    de0 = -reference(0.0)[1][0]
+    b = (de0 - slow * e0) / (fast - slow)
+    expected = (e0 - b) * np.exp(slow * traj.t) + b * np.exp(fast * traj.t)
+    error = traj.q[:, 0] - traj.log["q_d"][:, 0]
+    assert np.max(np.abs(error - expected)) < 1e-3  # the 1 ms zero-order hold is the only difference
+
+    nominal = hand.perturbed(0.7)
+    controller = AdaptiveSlidingMode(nominal, reference, k_s=inertia_gain(nominal, 40.0))
+    traj = sim.run(controller, 2.0, state=sim.initial_state([0.5]), progress=False)
+    error = np.abs(traj.q[:, 0] - traj.log["q_d"][:, 0])
+    first, last = error[traj.t < 0.5].max(), error[traj.t > 1.5].max()
+    assert last < 0.2 * first and last < 1e-3

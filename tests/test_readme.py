@@ -79,7 +79,10 @@ def test_readme_gives_exactly_two_setup_commands() -> None:
     ci = (README.parent / ".ci" / "run").read_text()  # CI runs both, the test command timed against its budget
     assert 'pip install --quiet -e ".[test,docs]"' in ci and "\nbhgrasp demo --output" in ci
     assert re.search(r'\n(BHGRASP_REQUIRE_CORE=1 )?(BHGRASP_REQUIRE_BROWSER=1 )?pytest -n auto -m "not slow"\n', ci)
-    assert re.search(r"\n(BHGRASP_REQUIRE_CORE=1 )?pytest -n auto -m slow\n", ci)  # the rest, in CI's own step
+    # the rest, in CI's own step (the chapters in full there)
+    assert re.search(
+        r"\n(BHGRASP_REQUIRE_CORE=1 )?(BHGRASP_FULL_CHAPTERS=1 )?pytest -n auto (--dist worksteal )?-m slow", ci
+    )
     budget = int(re.search(r"\nbudget=(\d+)\n", ci).group(1))
     stated = re.search(
         r"the tests take about (\d+) min on 2 cores.*?fails above (\d+) min", README.read_text(), re.DOTALL
