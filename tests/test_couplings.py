@@ -313,3 +313,13 @@ def test_joint_controllers_drive_the_one_coordinate(hand):
     error = np.abs(traj.q[:, 0] - traj.log["q_d"][:, 0])
     first, last = error[traj.t < 0.5].max(), error[traj.t > 1.5].max()
     assert last < 0.2 * first and last < 1e-3
+
+
+def test_info_prints_the_couplings(urdf, capsys):
+    from bhgrasp.cli import main
+
+    assert main(["info", "--urdf", str(urdf)]) == 0
+    out = capsys.readouterr().out
+    assert "gripper2: 1 joints, 2 fingers" in out and "mimic F2_proximal_joint: 1 x F1_proximal_joint + 0" in out
+    assert main(["info", "--urdf", str(urdf), "--mimic", "independent"]) == 0
+    assert "gripper2: 4 joints, 2 fingers" in capsys.readouterr().out
