@@ -3,8 +3,10 @@
 A mimic joint has no coordinate of its own: its position is ``multiplier * q[mimics] + offset`` (URDF's
 ``<mimic joint multiplier offset>``), its velocity ``multiplier * v[mimics]``.  Pinocchio 4.1 builds such a model
 with one coordinate per independent joint (``pin.buildModelFromXML(text, mimic=True)``): ``nq`` and ``nv`` count the
-independent joints only, and CRBA, RNEA and the Jacobians act in those coordinates (ABA and the regressors do not
-support mimic joints).
+independent joints only, and CRBA, RNEA, the frame Jacobians and accelerations act in those coordinates.  Pinocchio
+4.1 refuses mimic joints in ABA, the regressors and the kinetic energy, and gets its Coriolis matrix and the joint
+Jacobians' time variation wrong for them (25 % off at a measured state: tests/test_couplings.py); bhgrasp computes
+those on the twin below, and the grasp kinematics, which read per-joint Jacobian columns, refuse a coupled hand.
 
 The **independent twin** is the same tree with every mimic joint made an ordinary joint of its own coordinate.  With
 ``q_twin = G q + c`` (``G`` (nv_twin, nv): a 1 per own coordinate, the multiplier per mimic joint; ``c``: the
