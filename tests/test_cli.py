@@ -22,10 +22,8 @@ FULL_CHAPTERS = os.environ.get("BHGRASP_FULL_CHAPTERS") == "1"
 
 def run_chapter(chapter: str, output: Path, scale: float) -> None:
     """`bhgrasp experiments CHAPTER` at ``scale`` (in full under BHGRASP_FULL_CHAPTERS=1, then compared)."""
-    assert (
-        main(["experiments", chapter, "--output", str(output)] + ([] if FULL_CHAPTERS else ["--scale", str(scale)]))
-        == 0
-    )
+    shortened = [] if FULL_CHAPTERS else ["--scale", str(scale)]
+    assert main(["experiments", chapter, "--output", str(output), *shortened]) == 0
     if FULL_CHAPTERS:
         assert main(["experiments", "compare", str(output), "--reference", str(RESULTS)]) == 0
 
@@ -70,9 +68,10 @@ def test_bad_command_exits_with_usage() -> None:
 
 @pytest.mark.slow
 def test_experiments_ch5_writes_the_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    """A shortened run (1.2 s per run: grasp and the start of the move) of `bhgrasp experiments ch5`.
+    """A shortened run (1.2 s per run: grasp and the start of the move) of `bhgrasp experiments ch5` (in full and
+    compared in CI: :func:`run_chapter`).
 
-    The first slow test collected: in full (CI) it is the longest, one process of about 10 min.
+    The first slow test collected: in full it is the longest, one process of about 10 min.
     """
     run_chapter("ch5", tmp_path, 0.4)
     assert "ch5: 9 cases, 17 runs" in capsys.readouterr().out
@@ -87,7 +86,7 @@ def test_experiments_ch5_writes_the_report_and_figures(tmp_path: Path, capsys: p
 
 @pytest.mark.slow
 def test_experiments_ch3_writes_the_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    """A shortened run (durations x 0.3) of `bhgrasp experiments ch3`: every case's table and PNG figures."""
+    """A shortened run (durations x 0.3) of `bhgrasp experiments ch3` (in full in CI): each case's table, figures."""
     run_chapter("ch3", tmp_path, 0.3)
     assert "4 cases, 31 runs" in capsys.readouterr().out
     report = (tmp_path / "chapter3.md").read_text()
@@ -106,7 +105,7 @@ def test_experiments_rejects_a_bad_scale(tmp_path: Path, capsys: pytest.CaptureF
 
 @pytest.mark.slow
 def test_experiments_ch4_writes_the_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    """A shortened run (durations x 0.2, 2 CMA-ES generations) of `bhgrasp experiments ch4`."""
+    """A shortened run (durations x 0.2, 2 CMA-ES generations) of `bhgrasp experiments ch4` (in full in CI)."""
     run_chapter("ch4", tmp_path, 0.2)
     assert "ch4: 6 cases" in capsys.readouterr().out
     report = (tmp_path / "chapter4.md").read_text()
