@@ -264,10 +264,11 @@ class HandModel:
         """Pickles hold the model; a model with mimic joints as its independent twin and :attr:`couplings`.
 
         Pinocchio 4.1 does not write a mimic joint's extended sizes, and a model read back crashes every algorithm
-        (:mod:`bhgrasp.couplings`); its Data is rebuilt on load either way.
+        (:mod:`bhgrasp.couplings`); its Data (and a cached twin) are rebuilt on load either way.
         """
         state = dict(self.__dict__)
         del state["_data"]
+        state.pop("_twin", None)  # HandDynamics' cached twin: rebuilt on first use
         if self.couplings:
             state["_model"] = independent_model(self._model)
         return state
