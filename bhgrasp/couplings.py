@@ -5,8 +5,10 @@ A mimic joint has no coordinate of its own: its position is ``multiplier * q[mim
 with one coordinate per independent joint (``pin.buildModelFromXML(text, mimic=True)``): ``nq`` and ``nv`` count the
 independent joints only, and CRBA, RNEA, the frame Jacobians and accelerations act in those coordinates.  Pinocchio
 4.1 refuses mimic joints in ABA, the regressors and the kinetic energy, and gets its Coriolis matrix and the joint
-Jacobians' time variation wrong for them (25 % off at a measured state: tests/test_couplings.py); bhgrasp computes
-those on the twin below, and the grasp kinematics, which read per-joint Jacobian columns, refuse a coupled hand.
+Jacobians' time variation wrong for them (the Coriolis matrix of the test gripper 25-74 % off; tests/test_couplings.py
+measures J_dot); bhgrasp computes those on the twin below, and the grasp kinematics and the opposition search, which
+read per-joint Jacobian columns or solve one IK per finger, refuse a coupled hand.  Its CRBA is right on a fresh
+Data but, for some trees, accumulates across calls: :func:`check_couplings` refuses those trees.
 
 The **independent twin** is the same tree with every mimic joint made an ordinary joint of its own coordinate.  With
 ``q_twin = G q + c`` (``G`` (nv_twin, nv): a 1 per own coordinate, the multiplier per mimic joint; ``c``: the
@@ -46,6 +48,41 @@ def model_couplings(model: pin.Model) -> tuple[Coupling, ...]:
             Coupling(model.names[mimicking], model.names[mimicked], float(joint.scaling), float(joint.offset))
         )
     return tuple(result)
+
+
+def check_couplings(model: pin.Model, couplings: tuple[Coupling, ...]) -> None:
+    """Refuse a coupled model that Pinocchio 4.1 cannot compute with (checked when a hand is built).
+
+    - a mimic joint whose configuration is not its angle or length (a continuous joint: cos and sin), which the
+      linear map to the twin cannot carry;
+    - a model whose CRBA gives another mass matrix on a second call with the same Data: Pinocchio 4.1 accumulates
+      some entries when a mimic joint has moving joints both above and below it (e.g. a coupled hand on a wrist
+      mount, or independent -> mimic -> independent along a finger).  Checked at one configuration, two calls.
+
+    Raises:
+        ModelError: Naming the joints, and ``mimic='independent'`` as the way to load the hand.
+    """
+    if not couplings:
+        return
+    for coupling in couplings:
+        joint = model.joints[model.getJointId(coupling.mimics)]
+        if joint.nq != joint.nv:
+            raise ModelError(
+                f"mimic joint {coupling.joint!r} follows {coupling.mimics!r}, a joint of {joint.nq} configuration "
+                f"coordinates for {joint.nv} velocities (continuous): bhgrasp couples angles and lengths only; load "
+                "the hand with mimic='independent'"
+            )
+    q = pin.integrate(model, pin.neutral(model), np.full(model.nv, 0.3))
+    data = model.createData()
+    first = pin.crba(model, data, q).copy()
+    second = pin.crba(model, data, q)
+    if not np.array_equal(first, second):
+        raise ModelError(
+            f"Pinocchio 4.1's mass matrix of this coupled model ({', '.join(c.joint for c in couplings)} mimic other "
+            f"joints) changes from one call to the next by up to {np.abs(second - first).max():.3g} kg m^2: a mimic "
+            "joint with moving joints above and below it (a wrist mount, or independent -> mimic -> independent) "
+            "triggers it; load the hand with mimic='independent'"
+        )
 
 
 def refuse_couplings(couplings: tuple[Coupling, ...], what: str) -> None:
@@ -97,8 +134,9 @@ class TwinMap:
     """How a coupled model's coordinates give its twin's: ``v_twin = velocity @ v``, ``q_twin = configuration(q)``.
 
     ``velocity`` (twin.nv, model.nv) has a 1 per own coordinate and the multiplier per mimic joint; a mimic joint's
-    position is ``multiplier * q[mimics] + offset`` (Pinocchio's mimic joints are 1-DOF: revolute, prismatic or
-    helical); every other joint's configuration is copied (a joint with nq != nv, e.g. spherical, included).
+    position is ``multiplier * q[mimics] + offset`` (a hand's mimic joints are 1-DOF with nq = nv, as
+    :func:`check_couplings` requires); every other joint's configuration is copied (nq != nv, e.g. spherical,
+    included).
     """
 
     velocity: np.ndarray

@@ -17,7 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_array, as_vector, require_name, require_rotation
-from bhgrasp.couplings import Coupling, coupled_model, independent_model, model_couplings
+from bhgrasp.couplings import Coupling, check_couplings, coupled_model, independent_model, model_couplings
 from bhgrasp.errors import InputError, ModelError
 
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)  # [m/s^2] in world coordinates
@@ -60,6 +60,7 @@ class HandModel:
         self._model = model
         self._data = model.createData()
         self.couplings: tuple[Coupling, ...] = model_couplings(model)  # mimic joints (no coordinate of their own)
+        check_couplings(model, self.couplings)
         self.name = name or model.name
         self.urdf_path = urdf_path
         self.collision_geometry = collision_geometry
@@ -274,7 +275,7 @@ class HandModel:
         return state
 
     def __setstate__(self, state: dict) -> None:
-        if state["couplings"]:
+        if state.get("couplings"):
             state["_model"] = coupled_model(state["_model"], state["couplings"])
             state["_model"].gravity.linear = state["_model_gravity"]
         self.__dict__.update(state)

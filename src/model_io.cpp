@@ -1,5 +1,7 @@
 #include "model_io.hpp"
 
+#include <cmath>
+
 #include <boost/variant/get.hpp>
 #include <pinocchio/multibody/geometry.hpp>
 #include <pinocchio/multibody/model.hpp>
@@ -49,7 +51,8 @@ std::string independent_model_text(const std::string& text) {
   }
   // Per coordinate: a joint's own values copied (limits, armature, rotor, friction, damping); a mimic joint's limits
   // are its mimicked joint's mapped through q = scaling q_mimicked + offset (its idx_q and idx_v in `model` point at
-  // the mimicked joint's coordinates), its effort limits the mimicked joint's, its other values zero.
+  // the mimicked joint's coordinates), its speed limits scaled by |scaling|, its effort limits the mimicked joint's,
+  // its other values zero.
   for (pinocchio::JointIndex i = 1; i < static_cast<pinocchio::JointIndex>(model.njoints); ++i) {
     const Mimic* mimic = boost::get<Mimic>(&model.joints[i].toVariant());
     const auto& from = model.joints[i];
@@ -77,8 +80,10 @@ std::string independent_model_text(const std::string& text) {
     const double scaling = mimic->scaling(), offset = mimic->offset();
     mapped(model.lowerPositionLimit, model.upperPositionLimit, from.idx_q(), to.idx_q(), nq, scaling, offset,
            out.lowerPositionLimit, out.upperPositionLimit);
-    mapped(model.lowerVelocityLimit, model.upperVelocityLimit, from.idx_v(), to.idx_v(), nv, scaling, 0.0,
-           out.lowerVelocityLimit, out.upperVelocityLimit);
+    // Pinocchio keeps both velocity limits as magnitudes (lowerVelocityLimit = max_velocity): scaled, not mapped.
+    const double speed = std::abs(scaling);
+    out.lowerVelocityLimit.segment(to.idx_v(), nv) = speed * model.lowerVelocityLimit.segment(from.idx_v(), nv);
+    out.upperVelocityLimit.segment(to.idx_v(), nv) = speed * model.upperVelocityLimit.segment(from.idx_v(), nv);
     out.lowerEffortLimit.segment(to.idx_v(), nv) = model.lowerEffortLimit.segment(from.idx_v(), nv);
     out.upperEffortLimit.segment(to.idx_v(), nv) = model.upperEffortLimit.segment(from.idx_v(), nv);
   }

@@ -328,3 +328,71 @@ def test_info_prints_the_couplings(urdf, capsys):
     assert "gripper2: 1 joints, 2 fingers" in out and "mimic F2_proximal_joint: 1 x F1_proximal_joint + 0" in out
     assert main(["info", "--urdf", str(urdf), "--mimic", "independent"]) == 0
     assert "gripper2: 4 joints, 2 fingers" in capsys.readouterr().out
+
+
+def chain_urdf(second: str, third: str = "") -> str:
+    """palm -> J1 -> J2 -> (J3) -> tip, rods along z, axes along x; ``second``/``third`` are extra <joint> contents."""
+    links = "".join(rod(f"L{k}", 0.04) for k in (1, 2, 3))
+    joints = []
+    for k, extra in ((1, ""), (2, second), (3, third)):
+        parent = "palm" if k == 1 else f"L{k - 1}"
+        kind = "continuous" if "continuous" in extra else "revolute"
+        limit = (
+            '<limit effort="1" velocity="2"/>'
+            if kind == "continuous"
+            else '<limit lower="-1" upper="1" effort="1" velocity="2"/>'
+        )
+        body = extra.replace("continuous", "")
+        joints.append(
+            f'<joint name="J{k}" type="{kind}"><parent link="{parent}"/><child link="L{k}"/>'
+            f'<origin xyz="0 0 {0.0 if k == 1 else 0.04}"/><axis xyz="1 0 0"/>{limit}{body}</joint>'
+        )
+    return f'<?xml version="1.0"?><robot name="chain"><link name="palm"/>{links}{"".join(joints)}</robot>'
+
+
+def test_coupled_trees_pinocchio_cannot_compute_are_refused_by_name(tmp_path, hand):
+    """Pinocchio 4.1's CRBA accumulates across calls when a mimic joint has moving joints above and below it (a
+    wrist mount, or independent -> mimic -> independent); continuous mimic joints do not map linearly.  Refused."""
+    from bhgrasp.mount import mounted
+
+    path = tmp_path / "chain.urdf"
+    path.write_text(chain_urdf('<mimic joint="J1" multiplier="0.5"/>'))
+    with pytest.raises(bh.ModelError, match=r"J2 mimic other joints\) changes from one call to the next by up to"):
+        bh.Hand.from_urdf(path, fingertips=["L3"])
+    assert bh.Hand.from_urdf(path, fingertips=["L3"], mimic="independent").nv == 3
+    with pytest.raises(bh.ModelError, match="changes from one call to the next.*mimic='independent'"):
+        mounted(bh.Hand.from_urdf(bh.barrett_urdf_path()))
+    path.write_text(chain_urdf("continuous", 'continuous<mimic joint="J2" multiplier="1"/>'))
+    with pytest.raises(bh.ModelError, match=r"mimic joint 'J3' follows 'J2', a joint of 2 configuration coordinates"):
+        bh.Hand.from_urdf(path, fingertips=["L3"])
+    mounted(hand)  # the gripper's mimic joints have no moving joint below them: its mass matrix holds
+
+
+def test_a_negative_multiplier_and_the_finger_maps(tmp_path, hand):
+    """The twin's speed limits are magnitudes (|multiplier| x the source's); contact sensing puts a mimic joint's
+    link on its own finger; the opposition search, one IK per finger, refuses a coupled hand by name."""
+    from bhgrasp.grasp.opposition import knuckles
+    from bhgrasp.grasp.sensing import ContactSensing
+
+    path = tmp_path / "mirror.urdf"
+    path.write_text(
+        chain_urdf('<mimic joint="J1" multiplier="-2" offset="0.1"/>').replace(
+            '"J3" type="revolute"', '"J3" type="fixed"'
+        )
+    )
+    mirror = bh.Hand.from_urdf(path, fingertips=["L3"])
+    twin = independent_model(mirror.model)
+    np.testing.assert_array_equal(twin.upperVelocityLimit, [2.0, 4.0])
+    np.testing.assert_array_equal(twin.lowerVelocityLimit, [2.0, 4.0])
+    np.testing.assert_allclose(twin.lowerPositionLimit[1:], [-1.9])
+    np.testing.assert_allclose(twin.upperPositionLimit[1:], [2.1])
+    sensing = ContactSensing(hand)
+    assert [sensing.finger_of(link) for link in ("F1_distal", "F2_proximal", "F2_distal", "F2", "palm")] == [
+        "F1",
+        "F2",
+        "F2",
+        "F2",
+        None,
+    ]
+    with pytest.raises(bh.ModelError, match="opposition search .* does not support mimic joints"):
+        knuckles(hand, np.array([0.3]))

@@ -81,7 +81,9 @@ def test_readme_gives_exactly_two_setup_commands() -> None:
     assert re.search(r'\n(BHGRASP_REQUIRE_CORE=1 )?(BHGRASP_REQUIRE_BROWSER=1 )?pytest -n auto -m "not slow"\n', ci)
     # the rest, in CI's own step (the chapters in full there)
     assert re.search(
-        r"\n(BHGRASP_REQUIRE_CORE=1 )?(BHGRASP_FULL_CHAPTERS=1 )?pytest -n auto (--dist worksteal )?-m slow", ci
+        r"\n(BHGRASP_REQUIRE_CORE=1 )?(BHGRASP_FULL_CHAPTERS=1 )?pytest -n auto (--dist worksteal )?-m slow"
+        r"( --durations=\d+)?( \|\| slow_status=\$\?)?\n",
+        ci,
     )
     budget = int(re.search(r"\nbudget=(\d+)\n", ci).group(1))
     stated = re.search(

@@ -48,6 +48,7 @@ import pinocchio as pin
 from scipy.spatial import cKDTree
 
 from bhgrasp._validation import as_positive, as_vector
+from bhgrasp.couplings import refuse_couplings
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.grasp.probes import HandClearance, ObjectProbe
 from bhgrasp.grasp.synthesis import (
@@ -73,6 +74,7 @@ class FingerReach:
 
     def __init__(self, hand: Hand, samples: int, rng: np.random.Generator) -> None:
         """Draw ``samples`` configurations inside the limits (world positions of every fingertip at each)."""
+        refuse_couplings(hand.couplings, "the opposition search (one IK per finger)")
         self.q = rng.uniform(hand.lower, hand.upper, size=(samples, hand.nq))
         tips = np.array([hand.fingertip_positions(q) for q in self.q])  # (samples, fingers, 3)
         self.trees = {finger: cKDTree(tips[:, k]) for k, finger in enumerate(hand.fingers)}
@@ -109,6 +111,7 @@ def pad_radii(hand: Hand) -> dict[str, float]:
 
 def knuckles(hand: Hand, q: np.ndarray) -> dict[str, np.ndarray]:
     """World position [m] of each finger's first joint at ``q`` (where the finger leaves the palm)."""
+    refuse_couplings(hand.couplings, "the opposition search (one IK per finger)")
     data = hand.model.createData()
     pin.forwardKinematics(hand.model, data, q)
     placement = hand.base_placement

@@ -52,8 +52,10 @@ class ContactSensing:
         self.hand = hand
         model = hand.model
         self._finger_of: dict[str, str] = {}
-        for finger in hand.fingers:
-            joints = {model.getJointId(name) for name in hand.finger_joints(finger)}
+        base = {model.getJointId(name) for name in hand.base_joints}
+        for finger in hand.fingers:  # the joints that carry the tip (a mimic joint's body included), not the mount's
+            tip = model.frames[model.getFrameId(hand.fingertip_frames[finger])]
+            joints = set(model.supports[tip.parentJoint][1:]) - base
             for frame in model.frames:
                 if frame.parentJoint in joints:
                     self._finger_of.setdefault(frame.name, finger)
