@@ -76,8 +76,17 @@ def test_experiments_ch5_writes_the_report_and_figures(tmp_path: Path, capsys: p
     run_chapter("ch5", tmp_path, 0.4)
     assert "ch5: 9 cases, 17 runs" in capsys.readouterr().out
     report = (tmp_path / "chapter5.md").read_text()
-    headings = ("Pre-grasp", "Object CTC, natural and stiffness", "SMC-adaptive", "Unknown object mass",
-                "Object motions", "Robustness", "Adaptation", "Grasp synthesis", "Continuous paths")  # fmt: skip
+    headings = (
+        "Pre-grasp",
+        "Object CTC, natural and stiffness",
+        "SMC-adaptive",
+        "Unknown object mass",
+        "Object motions",
+        "Robustness",
+        "Adaptation",
+        "Grasp synthesis",
+        "Continuous paths",
+    )
     for heading in headings:
         assert heading in report
     figures = sorted(tmp_path.glob("*.png"))

@@ -16,26 +16,18 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from scipy.integrate import solve_ivp
+from urdf_parts import rod
 
 import bhgrasp as bh
 from bhgrasp.couplings import Coupling, independent_model, twin_map
 
 LINKS = (0.07, 0.05)  # [m] proximal, distal
+LEVER = (0.003, 0.001)  # [m] each link's centre of mass off its axis (x, y)
 MIMIC = {  # joint -> (mimicked joint, multiplier, offset [rad])
     "F1_distal_joint": ("F1_proximal_joint", 0.5, 0.1),
     "F2_proximal_joint": ("F1_proximal_joint", 1.0, 0.0),
     "F2_distal_joint": ("F1_proximal_joint", 0.5, 0.1),
 }
-
-
-def rod(name: str, length: float) -> str:
-    side, end = 0.05 * (3 * 0.008**2 + length**2) / 12, 0.05 * 0.008**2 / 2
-    shape = f'<origin xyz="0 0 {length / 2}"/><geometry><cylinder radius="0.008" length="{length}"/></geometry>'
-    return (
-        f'<link name="{name}"><inertial><origin xyz="0.003 0.001 {length / 2}"/><mass value="0.05"/>'
-        f'<inertia ixx="{side}" iyy="{side}" izz="{end}" ixy="0" ixz="0" iyz="0"/></inertial>'
-        f"<visual>{shape}</visual><collision>{shape}</collision></link>"
-    )
 
 
 def gripper_urdf() -> str:
@@ -53,8 +45,8 @@ def gripper_urdf() -> str:
             for joint, (source, multiplier, offset) in MIMIC.items()
         }
         parts += [
-            rod(f"{name}_proximal", LINKS[0]),
-            rod(f"{name}_distal", LINKS[1]),
+            rod(f"{name}_proximal", LINKS[0], LEVER),
+            rod(f"{name}_distal", LINKS[1], LEVER),
             f'<link name="{name}"><inertial><mass value="0.01"/><inertia ixx="4e-7" iyy="4e-7" izz="4e-7" ixy="0" '
             f'ixz="0" iyz="0"/></inertial><collision><geometry><sphere radius="0.01"/></geometry></collision></link>',
             f'<joint name="{name}_proximal_joint" type="revolute"><parent link="palm"/><child link="{name}_proximal"/>'
@@ -332,7 +324,7 @@ def test_info_prints_the_couplings(urdf, capsys):
 
 def chain_urdf(second: str, third: str = "") -> str:
     """palm -> J1 -> J2 -> (J3) -> tip, rods along z, axes along x; ``second``/``third`` are extra <joint> contents."""
-    links = "".join(rod(f"L{k}", 0.04) for k in (1, 2, 3))
+    links = "".join(rod(f"L{k}", 0.04, LEVER) for k in (1, 2, 3))
     joints = []
     for k, extra in ((1, ""), (2, second), (3, third)):
         parent = "palm" if k == 1 else f"L{k - 1}"

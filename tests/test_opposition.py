@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from urdf_parts import rod
 
 import bhgrasp as bh
 from bhgrasp.experiments.object_grasp import object_grasp, run_object_grasp
@@ -30,16 +31,6 @@ LINKS = (0.07, 0.05)  # [m] proximal, distal
 PAD = 0.010  # [m]
 BOX = bh.Box(size=(0.05, 0.08, 0.05), mass=0.3, pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.10])))
 GRAVITY = np.array([0.0, 0.0, -9.81])
-
-
-def rod(name: str, length: float) -> str:
-    side, end = 0.05 * (3 * 0.008**2 + length**2) / 12, 0.05 * 0.008**2 / 2
-    shape = f'<origin xyz="0 0 {length / 2}"/><geometry><cylinder radius="0.008" length="{length}"/></geometry>'
-    return (
-        f'<link name="{name}"><inertial><origin xyz="0 0 {length / 2}"/><mass value="0.05"/>'
-        f'<inertia ixx="{side}" iyy="{side}" izz="{end}" ixy="0" ixz="0" iyz="0"/></inertial>'
-        f"<visual>{shape}</visual><collision>{shape}</collision></link>"
-    )
 
 
 def gripper_urdf(pads: bool = True) -> str:
