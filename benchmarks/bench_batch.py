@@ -1,6 +1,6 @@
 """Batched rollouts: environment-steps per second against the serial compiled engine, measured in the same run.
 
-The reference hold (``bhgrasp.experiments.hold``) stepped as N environments of a ``BatchSimulator`` with its law
+The reference hold (``bhgrasp.scenarios.hold``) stepped as N environments of a ``BatchSimulator`` with its law
 written for the batch (compiled gravity and fingertip-Jacobian kernels, NumPy for the rest), at 1 and 2 threads,
 against one environment stepped by ``Simulator.step`` with the scalar law, measured in the same run.  Issue 15's
 target: >= 100 000 environment-steps per second on 2 cores.  Then Barrett hands (four motor torques each) closing
@@ -19,7 +19,7 @@ import time
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.experiments.hold import POSTURE_GAIN, SQUEEZE, reference_hold
+from bhgrasp.scenarios.hold import POSTURE_GAIN, SQUEEZE, reference_hold
 from bhgrasp.sim.batch import BatchSimulator
 
 
@@ -62,7 +62,7 @@ def barrett_rate(size: int, threads: int, steps: int) -> tuple[float, float]:
     Four motor torques per hand, the TorqueSwitches breaking away in the batch's C++; the serial rate is one hand
     stepped by ``Simulator.step`` (its Python actuation model).
     """
-    from bhgrasp.experiments.box_grasp import box_grasp
+    from bhgrasp.scenarios.box_grasp import box_grasp
     from bhgrasp.sim import Simulator
     from bhgrasp.sim.actuation import BarrettActuation
 

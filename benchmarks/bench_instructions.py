@@ -48,7 +48,7 @@ def run_case(case: str, engine: str, repetitions: int, state_file: Path) -> None
             law(1.0, state)
         return
     if case == "hold":
-        from bhgrasp.experiments.hold import reference_hold
+        from bhgrasp.scenarios.hold import reference_hold
 
         hold = reference_hold()
         simulator, state = hold.simulator, hold.state
@@ -84,9 +84,9 @@ def grasp_law(state_file: Path):
 
     from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
     from bhgrasp.data import State
-    from bhgrasp.experiments.box_grasp import BOX_SIZE
     from bhgrasp.hand import BarrettHand
     from bhgrasp.objects import Box
+    from bhgrasp.scenarios.box_grasp import BOX_SIZE
 
     data = np.load(state_file)
     state = State(float(data["t"]), data["q"], data["v"], (pin.SE3(data["pose"]),), data["twists"], data["points"],
@@ -101,8 +101,8 @@ def save_grasp_state(path: Path) -> None:
     """Run the grasp demo's supervisor to a held box (1 s) and save the sensed state there."""
     from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
     from bhgrasp.controllers.supervisor import GraspSupervisor
-    from bhgrasp.experiments.box_grasp import box_grasp
     from bhgrasp.objects import Box
+    from bhgrasp.scenarios.box_grasp import box_grasp
 
     setup = box_grasp(mass=0.6)
     law = SMCAdaptiveGrasp(setup.hand, Box(size=setup.box.size, mass=0.6))

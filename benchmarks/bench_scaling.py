@@ -26,9 +26,9 @@ import pinocchio as pin
 import bhgrasp as bh
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
-from bhgrasp.experiments.allegro_grasp import allegro_box_grasp
-from bhgrasp.experiments.box_grasp import box_grasp
 from bhgrasp.objects import Box, FixedBox, Plane
+from bhgrasp.scenarios.allegro_grasp import allegro_box_grasp
+from bhgrasp.scenarios.box_grasp import box_grasp
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.scene import Scene
 

@@ -32,7 +32,7 @@ import pinocchio as pin
 import bhgrasp as bh
 from bhgrasp.data import State
 from bhgrasp.errors import SimulationDiverged
-from bhgrasp.experiments.hold import JOINT_DAMPING, POSTURE_GAIN, SQUEEZE, reference_hold
+from bhgrasp.scenarios.hold import JOINT_DAMPING, POSTURE_GAIN, SQUEEZE, reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.compiled import core_module, engine_settings
 from bhgrasp.sim.engine import DriveTerms

@@ -1,6 +1,6 @@
 """Sweep throughput on 1 and 2 workers (process pool and Dask LocalCluster), against serial in the same run.
 
-Each case is one grasp-demo rollout (``bhgrasp.sweep.grasp_rollout``, ~1.2 s simulated so that the grasp closes
+Each case is one grasp-demo rollout (``bhgrasp.scenarios.grasp_rollout``, ~1.2 s simulated so that the grasp closes
 and holds).  Prints cases per second and the speed-up over the serial run measured here (machines are noisy:
 compare ratios).  Usage: ``python benchmarks/bench_sweep.py [--cases N] [--duration S]``.
 """
@@ -13,12 +13,13 @@ import platform
 import time
 
 from bhgrasp import sweep
+from bhgrasp.scenarios import grasp_rollout
 
 
 def throughput(design, **options) -> float:
     """Cases per second of one sweep."""
     start = time.perf_counter()
-    table = sweep.run_sweep(sweep.grasp_rollout, design, seed=0, **options)
+    table = sweep.run_sweep(grasp_rollout, design, seed=0, **options)
     elapsed = time.perf_counter() - start
     failed = int((table["status"] != "ok").sum())
     if failed:

@@ -111,9 +111,9 @@ def _number(text: str, expected: str) -> float:
 
 
 def bench_object(text: str):
-    """A grasp-benchmark object, ``KIND:DIMS:MASS`` (:class:`~bhgrasp.experiments.bench_objects.BenchObject`)."""
+    """A grasp-benchmark object, ``KIND:DIMS:MASS`` (:class:`~bhgrasp.bench.objects.BenchObject`)."""
+    from bhgrasp.bench.objects import BenchObject
     from bhgrasp.errors import InputError
-    from bhgrasp.experiments.bench_objects import BenchObject
 
     try:
         return BenchObject.parse(text)

@@ -13,8 +13,8 @@ import numpy as np
 
 from bhgrasp import _arguments as checked
 from bhgrasp.errors import BhgraspError, InputError
-from bhgrasp.experiments.grasp_controllers import ADAPTATIONS, CONTROLLERS
-from bhgrasp.experiments.grasp_demo import HANDS
+from bhgrasp.scenarios.grasp_controllers import ADAPTATIONS, CONTROLLERS
+from bhgrasp.scenarios.grasp_demo import HANDS
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -232,8 +232,8 @@ def _tune(args: argparse.Namespace) -> int:
     import numpy as np
 
     from bhgrasp import tuning
-    from bhgrasp.experiments.chapter4_fitness import impedance_fitness
-    from bhgrasp.experiments.chapter4_tuning import TUNING_BOUNDS, TUNING_TOL_FUN, TUNING_TOL_X
+    from bhgrasp.thesis.chapter4_fitness import impedance_fitness
+    from bhgrasp.thesis.chapter4_tuning import TUNING_BOUNDS, TUNING_TOL_FUN, TUNING_TOL_X
 
     lower, upper = (np.log10(bound) for bound in TUNING_BOUNDS)  # physical bounds, argued in chapter 4
     print(f"tuning log10 (M_I [kg], K_I [N/m]) of F3's impedance for f_d = {args.force:g} N within "
@@ -252,13 +252,14 @@ def _tune(args: argparse.Namespace) -> int:
 
 def _sweep(config_path: Path) -> int:
     from bhgrasp import sweep
+    from bhgrasp.scenarios.rollouts import check_grasp_case, grasp_rollout
     from bhgrasp.sweep_config import load_config
 
     config = load_config(config_path)  # every key and case checked: nothing runs on a mistake
     executor = "serial" if config.workers == 1 else None
     print(f"sweep: {len(config.cases)} cases, log {config.log}, {config.workers or 'all'} worker(s)")
-    table = sweep.run_sweep(sweep.grasp_rollout, config.cases, seed=config.seed, log=config.log, executor=executor,
-                            workers=config.workers, progress=config.progress, check=sweep.check_grasp_case)  # fmt: skip
+    table = sweep.run_sweep(grasp_rollout, config.cases, seed=config.seed, log=config.log, executor=executor,
+                            workers=config.workers, progress=config.progress, check=check_grasp_case)  # fmt: skip
     config.output.parent.mkdir(parents=True, exist_ok=True)
     table.to_csv(config.output, index=False)
     failed = table[table["status"] != "ok"]
@@ -302,8 +303,8 @@ def _bench(quick: bool) -> int:
 def _grasp_bench(args: argparse.Namespace) -> int:
     import json
 
-    from bhgrasp.experiments import bench_report
-    from bhgrasp.experiments.bench_objects import OBJECT_SET
+    from bhgrasp.bench import report as bench_report
+    from bhgrasp.bench.objects import OBJECT_SET
 
     objects = args.objects or list(OBJECT_SET)
     grasps, actuations = args.grasps or ["power", "precision"], args.actuations or ["barrett"]
@@ -344,7 +345,7 @@ def _bench_command(args: argparse.Namespace) -> str:
 
 
 def _grasp_demo(args: argparse.Namespace) -> int:
-    from bhgrasp.experiments.grasp_demo import grasp_scene, run_grasp_demo, save_demo
+    from bhgrasp.scenarios.grasp_demo import grasp_scene, run_grasp_demo, save_demo
 
     print(f"simulating {args.duration:g} s: approach, squeeze, lift and turn a {args.mass:g} kg box ...")
     viewer = None
@@ -397,7 +398,7 @@ def _serve(url: str, seconds: float | None) -> None:
 
 def _tour(output: Path, samples: int, seed: int, duration: float) -> int:
     import bhgrasp as bh
-    from bhgrasp.experiments.chapter2 import workspace_table
+    from bhgrasp.thesis.chapter2 import workspace_table
 
     hand = bh.BarrettHand()
     print(hand.summary())
@@ -408,7 +409,7 @@ def _tour(output: Path, samples: int, seed: int, duration: float) -> int:
     target = hand.fingertip_positions(q)[2]
     solution = bh.finger_ik(hand, "F3", target)
     print(f"closed-form IK of F3 back from that point: {np.round(solution.angles, 6)} rad")
-    print("\nworkspace bounds in the thesis' axes (Table 2.2; see bhgrasp.experiments.chapter2):")
+    print("\nworkspace bounds in the thesis' axes (Table 2.2; see bhgrasp.thesis.chapter2):")
     for row in workspace_table(hand, samples, seed):
         print(row.format())
     figure_path = _plot_workspace(hand, output, samples, seed)
@@ -422,14 +423,14 @@ def _experiments(chapter: str, output: Path, scale: float, figures: bool) -> int
     import time
 
     number = chapter[2:]
-    module = importlib.import_module(f"bhgrasp.experiments.chapter{number}")
+    module = importlib.import_module(f"bhgrasp.thesis.chapter{number}")
     start = time.perf_counter()
     cases = getattr(module, f"run_chapter{number}")(output, scale=scale, figures=figures, progress=sys.stderr.isatty())
     runs = sum(len(getattr(case, "runs", ())) for case in cases)
     counted = f", {runs} runs" if runs else ""
     print(f"{chapter}: {len(cases)} cases{counted} in {time.perf_counter() - start:.1f} s")
     print(f"report: {output / f'chapter{number}.md'}")
-    from bhgrasp.experiments.results import write_results
+    from bhgrasp.thesis.results import write_results
 
     print(f"figures of merit: {write_results(output, int(number), cases, scale)}")
     return 0
@@ -437,7 +438,7 @@ def _experiments(chapter: str, output: Path, scale: float, figures: bool) -> int
 
 def _results(args: argparse.Namespace) -> int:
     """``experiments compare FOLDER`` and ``experiments readme-table``."""
-    from bhgrasp.experiments import results
+    from bhgrasp.thesis import results
 
     if args.chapter == "compare":
         if args.folder is None:
@@ -455,7 +456,7 @@ def _results(args: argparse.Namespace) -> int:
 
 
 def _readme(readme: Path, folder: Path) -> None:
-    from bhgrasp.experiments.results import update_readme
+    from bhgrasp.thesis.results import update_readme
 
     try:
         changed = update_readme(readme, folder)
@@ -466,7 +467,7 @@ def _readme(readme: Path, folder: Path) -> None:
 
 def _hold(duration: float) -> None:
     """Simulate the reference three-finger hold and report contacts and creep."""
-    from bhgrasp.experiments.hold import BOX_MASS, reference_hold
+    from bhgrasp.scenarios.hold import BOX_MASS, reference_hold
 
     hold = reference_hold(dt=2e-3)
     print(f"\nsimulating a {duration:g} s three-finger hold of a {BOX_MASS} kg box (implicit contacts, dt 2 ms) ...")

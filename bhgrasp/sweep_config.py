@@ -3,7 +3,7 @@
 The file has a ``[sweep]`` table (``output``, ``log``, ``workers``, ``seed``, ``progress``), exactly one of
 ``[grid]`` (parameter = list of values: every combination) or ``[random]`` (``n`` and parameter = [low, high]:
 ``n`` uniform draws), and optionally ``[fixed]`` (parameter = value, the same in every case).  Parameters are
-those of :func:`~bhgrasp.experiments.grasp_demo.run_grasp_demo` (:data:`~bhgrasp.experiments.grasp_demo.SWEEPABLE`).
+those of :func:`~bhgrasp.scenarios.grasp_demo.run_grasp_demo` (:data:`~bhgrasp.scenarios.grasp_demo.SWEEPABLE`).
 ``docs/sweep.toml`` is an example with every key explained.  Every mistake is an ``InputError`` naming the file,
 table and key.
 """
@@ -17,6 +17,7 @@ from typing import Any
 
 from bhgrasp import sweep
 from bhgrasp.errors import InputError
+from bhgrasp.scenarios.rollouts import check_grasp_case
 from bhgrasp.sweep import _describe
 
 if sys.version_info >= (3, 11):
@@ -64,7 +65,7 @@ def load_config(path: Path) -> SweepConfig:
             if key == "n" and table == "random":
                 continue
             try:
-                sweep.check_grasp_case({key: _sample(config[table][key], table)})
+                check_grasp_case({key: _sample(config[table][key], table)})
             except InputError as error:
                 raise InputError(f"{path} [{table}] {key}: {error}") from error
     if "grid" in config:
@@ -88,7 +89,7 @@ def load_config(path: Path) -> SweepConfig:
     cases = [{**fixed, **case} for case in design]
     for index, case in enumerate(cases):
         try:
-            sweep.check_grasp_case(case)
+            check_grasp_case(case)
         except InputError as error:
             raise InputError(f"{path} case {index} ({_describe(case)}): {error}") from error
     output = Path(settings.get("output", "sweep.csv"))

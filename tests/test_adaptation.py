@@ -20,9 +20,9 @@ from bhgrasp.controllers.object_regressors import momentum_regressor, object_par
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.data import State
 from bhgrasp.excitation import PoseExcitation
-from bhgrasp.experiments.adaptation import hand_model_error, identification_run
-from bhgrasp.experiments.adaptation_case import FRICTION, ideal_run
 from bhgrasp.objects import Box
+from bhgrasp.scenarios.identification import hand_model_error, identification_run
+from bhgrasp.thesis.adaptation_case import FRICTION, ideal_run
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
 
@@ -139,7 +139,7 @@ def test_identification_waits_for_the_object_to_leave_its_support():
     run = identification_run("composite", False, 2.0)
     # the box sits on its pedestal until the lift at the squeeze's end, then the prediction term runs
     assert run.estimate.shape[1] == 7
-    from bhgrasp.experiments import adaptation
+    from bhgrasp.scenarios import identification as adaptation
 
     traj, *_ = adaptation._simulate("composite", False, 2.0, 0, 1.0, {}, {})
     identifying, phase = traj.log["identifying"], traj.log["phase"]
@@ -187,7 +187,7 @@ def test_the_supervisor_takes_a_path_instead_of_an_offset():
 
 
 def test_the_demo_takes_the_composite_law_and_names_a_bad_choice():
-    from bhgrasp.experiments.grasp_demo import run_grasp_demo
+    from bhgrasp.scenarios.grasp_demo import run_grasp_demo
 
     result = run_grasp_demo(mass=0.6, estimate=0.3, adaptation="composite")
     assert abs(result.mass_estimate - 0.6) < 1e-3 and result.slip_events == 0
@@ -201,7 +201,7 @@ def test_the_demo_takes_the_composite_law_and_names_a_bad_choice():
 def test_the_force_integrals_rebuilt_from_the_log_are_the_laws_own():
     """eta of (5.57), rebuilt offline for V's finger part, equals the Python law's integrals at the end of a run."""
     from bhgrasp.controllers.grasp_lyapunov import force_integrals
-    from bhgrasp.experiments.box_grasp import box_grasp
+    from bhgrasp.scenarios.box_grasp import box_grasp
 
     setup = box_grasp(mass=0.6)
     grasp = SMCAdaptiveGrasp(setup.hand, Box(size=setup.box.size, mass=0.3), engine="python")

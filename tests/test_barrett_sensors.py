@@ -13,8 +13,8 @@ import bhgrasp as bh
 from bhgrasp.barrett import BarrettSensors, encoder_counts, finger_pad, link_positions, motor_angles, palm_pad
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
-from bhgrasp.experiments.box_grasp import box_grasp
 from bhgrasp.grasp.sensing import ContactSensing
+from bhgrasp.scenarios.box_grasp import box_grasp
 
 COUNT = 2 * np.pi / 4096  # [rad] one motor count (libbarrett MotorPuck: rpc = 2 pi / CTS, CTS = 4096)
 FINGERS = ("F1", "F2", "F3")

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from bhgrasp.errors import InputError
-from bhgrasp.experiments.box_grasp import box_grasp
-from bhgrasp.experiments.hold import POSTURE_GAIN, SQUEEZE, reference_hold
+from bhgrasp.scenarios.box_grasp import box_grasp
+from bhgrasp.scenarios.hold import POSTURE_GAIN, SQUEEZE, reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import Actuation, BarrettActuation
 from bhgrasp.sim.batch import BatchSimulator

@@ -282,8 +282,8 @@ def test_grasp_bench_reproduces_a_committed_trial_and_flags_a_difference(
     The trial runs once (about a minute): the altered reference is compared with its record by the comparison the
     command runs (``bench_report.compare``).
     """
-    from bhgrasp.experiments import bench_report
-    from bhgrasp.experiments.results import REFERENCE
+    from bhgrasp.bench import report as bench_report
+    from bhgrasp.thesis.results import REFERENCE
 
     committed = REFERENCE / "grasp_benchmark.json"
     argv = ["grasp-bench", "--object", "box:0.06x0.05x0.05:0.3", "--grasp", "precision", "--workers", "1",

@@ -17,10 +17,10 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.errors import InputError
-from bhgrasp.experiments.allegro_grasp import allegro_box_grasp
-from bhgrasp.experiments.box_grasp import box_grasp
-from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Box, Plane, SpringMounted
+from bhgrasp.scenarios.allegro_grasp import allegro_box_grasp
+from bhgrasp.scenarios.box_grasp import box_grasp
+from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import INTEGRATORS, Simulator
 from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
 from bhgrasp.sim.contact_law import SpringDamper

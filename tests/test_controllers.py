@@ -20,7 +20,7 @@ from bhgrasp.controllers import (
     sliding_gains,
     workspace_dynamics,
 )
-from bhgrasp.experiments.chapter3 import f3_case
+from bhgrasp.thesis.chapter3 import f3_case
 from bhgrasp.trajectories import Constant, Quintic, Sinusoid, exponential_approach
 
 Q_MID = dict(

@@ -222,7 +222,7 @@ def test_trace_styles_nest_equal_traces():
 # ------------------------------------------------------------------------------------------------ the figures
 def cone_figure() -> tuple[Figure, dict]:
     """chapter5_cones.png from two short runs (1.8 s; the cone binds at 1.3 s) of the 1 kg box."""
-    from bhgrasp.experiments.grasp_demo import run_grasp_demo
+    from bhgrasp.scenarios.grasp_demo import run_grasp_demo
 
     runs = {
         "QP 1.0 kg": run_grasp_demo(1.0, 0.5, "smc-adaptive", 1.8).trajectory,
@@ -250,7 +250,7 @@ def tuning_figure() -> Figure:
 
 def f3_figures() -> tuple[dict[str, Figure], object]:
     """chapter3_f3_*.png of the F3 case at 0.15 x its durations (0.45 s runs), and the case."""
-    from bhgrasp.experiments.chapter3 import f3_hosm
+    from bhgrasp.thesis.chapter3 import f3_hosm
 
     case = f3_hosm(scale=0.15)
     return plots.case_figures(case), case
@@ -258,7 +258,7 @@ def f3_figures() -> tuple[dict[str, Figure], object]:
 
 def demo_figure() -> Figure:
     """bhgrasp demo's grasp_demo.png of a 1.5 s demo run."""
-    from bhgrasp.experiments.grasp_demo import demo_figure, run_grasp_demo
+    from bhgrasp.scenarios.grasp_demo import demo_figure, run_grasp_demo
 
     return demo_figure(run_grasp_demo(duration=1.5), bh.BarrettHand())
 
@@ -308,7 +308,7 @@ def test_chapter3_f3_noise_figure_tells_its_nine_controllers_apart_and_says_what
         errors = noisy.axes[6 * block + 1]
         assert len({(line.get_linewidth(), _dashes(line)) for line in errors.lines}) == 3
     drawn = [line.get_label() for axis in noisy.axes[::6] for line in axis.lines[:3]]  # each block's positions
-    assert sorted(drawn) == sorted(run.name for run in case.runs if run.noise)
+    assert sorted(drawn) == sorted(run.name for run in case.runs.values() if run.noise)
     assert_readable(noisy)
 
 

@@ -12,12 +12,7 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.errors import InputError
-from bhgrasp.experiments import bench_report
-from bhgrasp.experiments.bench_metrics import evaluate, failure_reason
-from bhgrasp.experiments.bench_objects import OBJECT_SET, BenchObject
-from bhgrasp.experiments.bench_placement import STAND_HEIGHT, STAND_MARGIN, grasp_clearance, stand_clearance
-from bhgrasp.experiments.grasp_bench import (
+from bhgrasp.bench import (
     APPROACH,
     CLOSE_AT,
     HELD_AT,
@@ -30,6 +25,11 @@ from bhgrasp.experiments.grasp_bench import (
     shake_force,
     simulate_trial,
 )
+from bhgrasp.bench import report as bench_report
+from bhgrasp.bench.metrics import evaluate, failure_reason
+from bhgrasp.bench.objects import OBJECT_SET, BenchObject
+from bhgrasp.bench.placement import STAND_HEIGHT, STAND_MARGIN, grasp_clearance, stand_clearance
+from bhgrasp.errors import InputError
 from bhgrasp.grasp.probes import HandClearance
 
 G = 9.81
@@ -199,7 +199,7 @@ def test_the_placement_raises_only_a_power_grasp_whose_fingers_would_meet_the_st
 
 def test_the_readme_states_the_committed_benchmark_success_rates() -> None:
     """The README's success table says what the committed report (regenerated and compared in CI) counts."""
-    from bhgrasp.experiments.results import REFERENCE
+    from bhgrasp.thesis.results import REFERENCE
 
     trials = json.loads((REFERENCE / "grasp_benchmark.json").read_text())["trials"]
     readme = (REFERENCE.parents[1] / "README.md").read_text()

@@ -7,8 +7,8 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.grasp import ObjectState, grasp_dynamics, grasp_mobility
+from bhgrasp.scenarios.hold import reference_hold
 
 
 @pytest.fixture(scope="module")

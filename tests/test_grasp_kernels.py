@@ -22,9 +22,9 @@ import pytest
 
 import bhgrasp as bh
 import bhgrasp.grasp.kinematics as kinematics_module
-from bhgrasp.experiments.allegro_grasp import allegro_hand
-from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.grasp import ObjectState, contact_frames, contact_kinematics, contact_kinematics_python, grasp_kinematics
+from bhgrasp.scenarios.allegro_grasp import allegro_hand
+from bhgrasp.scenarios.hold import reference_hold
 
 STEP = 1e-6  # [s] of the central differences
 EPS = np.finfo(float).eps

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from bhgrasp.errors import UnreachableError
-from bhgrasp.experiments.box_grasp import box_grasp
-from bhgrasp.experiments.grasp_demo import OFFSET, run_grasp_demo
 from bhgrasp.grasp import describe
+from bhgrasp.scenarios.box_grasp import box_grasp
+from bhgrasp.scenarios.grasp_demo import OFFSET, run_grasp_demo
 from bhgrasp.sim import Simulator
 
 

@@ -7,7 +7,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.controllers.grasping import GraspContacts, GraspForceController
-from bhgrasp.experiments.hold import BOX_MASS, reference_hold
+from bhgrasp.scenarios.hold import BOX_MASS, reference_hold
 from bhgrasp.trajectories import Quintic
 
 

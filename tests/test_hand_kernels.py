@@ -15,7 +15,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp._native import optional_core
-from bhgrasp.experiments.allegro_grasp import allegro_hand
+from bhgrasp.scenarios.allegro_grasp import allegro_hand
 
 pytestmark = pytest.mark.skipif(optional_core() is None, reason="bhgrasp._core is not built")
 

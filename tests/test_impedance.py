@@ -19,8 +19,8 @@ from bhgrasp.controllers.impedance import (
     PositionImpedance,
 )
 from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter, critical_damping
-from bhgrasp.experiments import chapter4, chapter4_closed_form, chapter4_fitness, chapter4_setups, chapter4_tuning
 from bhgrasp.grasp.sensing import ContactSensing, FingerContact
+from bhgrasp.thesis import chapter4, chapter4_closed_form, chapter4_fitness, chapter4_setups, chapter4_tuning
 from bhgrasp.trajectories import Constant, SmoothStep
 
 

@@ -10,7 +10,7 @@ import pytest
 
 from bhgrasp import _native
 from bhgrasp.cli import main
-from bhgrasp.experiments import results
+from bhgrasp.thesis import results
 
 
 def _installed_layout(root: Path, with_package: bool) -> metadata.Distribution:

@@ -18,8 +18,8 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.data import DERIVED_FIELDS, ContactMemory, SimulatedState
-from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Box, SpringMounted
+from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import FullyActuated
 from bhgrasp.sim.scene import Scene

@@ -9,10 +9,10 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.experiments.box_grasp import BOX_SIZE, OFF_STOP_SPACING, PEDESTAL, box_grasp
-from bhgrasp.experiments.grasp_demo import run_grasp_demo
-from bhgrasp.experiments.motions import SUCCESS, run_motion, short_reason
 from bhgrasp.grasp.clearance import check_clearance, path_clearance
+from bhgrasp.scenarios.box_grasp import BOX_SIZE, OFF_STOP_SPACING, PEDESTAL, box_grasp
+from bhgrasp.scenarios.grasp_demo import run_grasp_demo
+from bhgrasp.thesis.motions import SUCCESS, run_motion, short_reason
 
 
 @pytest.fixture(scope="module")
@@ -115,9 +115,9 @@ def _can_turn(plan_tolerance):
 
     from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
     from bhgrasp.controllers.supervisor import GraspSupervisor
-    from bhgrasp.experiments.demo_result import evaluate_demo
-    from bhgrasp.experiments.object_grasp import object_grasp
-    from bhgrasp.experiments.synthesis_case import OBJECTS
+    from bhgrasp.scenarios.demo_result import evaluate_demo
+    from bhgrasp.scenarios.object_grasp import object_grasp
+    from bhgrasp.thesis.synthesis_case import OBJECTS
 
     setup = object_grasp(OBJECTS["can"][1])
     grasp = SMCAdaptiveGrasp(setup.hand, replace(setup.item, density=None), mu=0.6, squeeze=5.0,

@@ -10,12 +10,12 @@ import bhgrasp as bh
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp, object_parameters, object_regressor
 from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
-from bhgrasp.experiments.box_grasp import box_grasp
-from bhgrasp.experiments.grasp_controllers import grasp_controller
-from bhgrasp.experiments.grasp_demo import run_grasp_demo
-from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.grasp.metrics import finger_normal_forces, slip_events
 from bhgrasp.objects import Box
+from bhgrasp.scenarios.box_grasp import box_grasp
+from bhgrasp.scenarios.grasp_controllers import grasp_controller
+from bhgrasp.scenarios.grasp_demo import run_grasp_demo
+from bhgrasp.scenarios.hold import reference_hold
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
 

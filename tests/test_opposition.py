@@ -16,10 +16,10 @@ import pytest
 from urdf_parts import rod
 
 import bhgrasp as bh
-from bhgrasp.experiments.object_grasp import object_grasp, run_object_grasp
 from bhgrasp.grasp.metrics import finger_normal_forces
 from bhgrasp.grasp.opposition import TOLERANCE, first_hit, opposed_grasp, opposed_grasps, pad_radii
 from bhgrasp.grasp.probes import ObjectProbe
+from bhgrasp.scenarios.object_grasp import object_grasp, run_object_grasp
 
 KNUCKLES = {  # finger -> knuckle x, y [m] on the palm, and the sign of its joint axes along y (-1 closes toward -x)
     "F1": (0.06, 0.025, -1.0),

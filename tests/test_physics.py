@@ -18,8 +18,8 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.data import ContactMemory
-from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Box, Plane, Sphere
+from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import INTEGRATORS, Simulator
 from bhgrasp.sim.actuation import BarrettActuation
 from bhgrasp.sim.contact_law import SpringDamper
@@ -221,7 +221,7 @@ def test_grasp_rerun_with_the_same_controller_repeats_to_round_off() -> None:
     """
     from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
     from bhgrasp.controllers.supervisor import GraspSupervisor
-    from bhgrasp.experiments.box_grasp import box_grasp
+    from bhgrasp.scenarios.box_grasp import box_grasp
 
     setup = box_grasp(mass=0.6)
     grasp = SMCAdaptiveGrasp(setup.hand, bh.Box(size=setup.box.size, mass=0.3), mu=0.6, squeeze=5.0)
@@ -242,7 +242,7 @@ def test_grasp_rerun_with_the_same_controller_repeats_to_round_off() -> None:
 def test_contact_detection_does_not_depend_on_what_was_detected_before(engine_name: str) -> None:
     """A box flush on its pedestal gave a 4-corner patch, or a 1-point patch after another configuration had been
     queried (coal's GJK guesses, stored in Pinocchio's collision requests, carried from call to call)."""
-    from bhgrasp.experiments.box_grasp import box_grasp
+    from bhgrasp.scenarios.box_grasp import box_grasp
 
     setup = box_grasp(mass=0.6)
     simulator = setup.simulator.with_settings(engine=engine_name)
@@ -272,7 +272,7 @@ def test_contact_detection_does_not_depend_on_what_was_detected_before(engine_na
 def test_flush_box_contact_normal_is_the_face_normal(engine_name: str) -> None:
     """Coal's default GJK/EPA tolerance (1e-6) tilted the normal of a box flush on its pedestal by up to 0.027;
     the narrow phase now runs to 1e-10: over random sub-micrometre offsets the normal is +z to 1e-8."""
-    from bhgrasp.experiments.box_grasp import box_grasp
+    from bhgrasp.scenarios.box_grasp import box_grasp
 
     setup = box_grasp(mass=0.6)
     simulator = setup.simulator.with_settings(engine=engine_name)

@@ -7,8 +7,8 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp import plots
-from bhgrasp.experiments.chapter3 import f3_case
 from bhgrasp.plots.joint import _running_mean
+from bhgrasp.thesis.chapter3 import f3_case
 
 
 @pytest.fixture(scope="module")
@@ -61,7 +61,7 @@ def test_running_mean_keeps_a_constant_and_removes_a_chatter():
 def test_grasp_figure_marks_the_grasp_and_motion_and_keeps_equal_fingers_visible(tmp_path):
     """Equal F1 and F2 forces stay visible (nested widths); the grasp instant and the motion window are marked;
     legends sit beside the panels."""
-    from bhgrasp.experiments.grasp_demo import demo_figure, run_grasp_demo
+    from bhgrasp.scenarios.grasp_demo import demo_figure, run_grasp_demo
 
     result = run_grasp_demo(duration=1.2)
     figure = demo_figure(result, bh.BarrettHand())

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from bhgrasp.cli import main
-from bhgrasp.experiments import chapter3, chapter5, results
+from bhgrasp.thesis import chapter3, chapter5, results
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"

@@ -18,9 +18,9 @@ import bhgrasp as bh
 from bhgrasp._native import optional_core
 from bhgrasp.controllers.adaptive_grasp import object_parameters, object_regressor, object_regressor_python
 from bhgrasp.errors import InputError
-from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.grasp.frames import _frames, _unit_normals, contact_frames
 from bhgrasp.grasp.sensing import ContactSensing
+from bhgrasp.scenarios.hold import reference_hold
 
 RELATIVE = 1e-14
 

@@ -18,8 +18,8 @@ import pytest
 
 from bhgrasp.data import ContactMemory, State
 from bhgrasp.errors import BhgraspError, FrozenSettingError, InputError, SimulationDiverged
-from bhgrasp.experiments.hold import reference_hold
 from bhgrasp.objects import Sphere
+from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import ENGINES, Simulator, SimulatorSettings
 from bhgrasp.sim.batch import BatchSimulator
 from bhgrasp.sim.scene import Scene

@@ -26,11 +26,11 @@ from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.errors import CompiledEngineUnavailable, InputError
-from bhgrasp.experiments.box_grasp import box_grasp
-from bhgrasp.experiments.demo_result import MU_ASSUMED
-from bhgrasp.experiments.grasp_controllers import SQUEEZE
-from bhgrasp.experiments.grasp_demo import OFFSET
 from bhgrasp.objects import Box
+from bhgrasp.scenarios.box_grasp import box_grasp
+from bhgrasp.scenarios.demo_result import MU_ASSUMED
+from bhgrasp.scenarios.grasp_controllers import SQUEEZE
+from bhgrasp.scenarios.grasp_demo import OFFSET
 from bhgrasp.trajectories import PoseMotion
 
 pytest.importorskip("bhgrasp._core")

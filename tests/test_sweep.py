@@ -12,6 +12,7 @@ import pytest
 import bhgrasp as bh
 from bhgrasp import sweep
 from bhgrasp.cli import main
+from bhgrasp.scenarios import hold_rollout
 
 
 def projectile(parameters: dict, seed: int) -> dict:
@@ -133,7 +134,7 @@ def test_a_sweep_file_mistake_is_named_before_anything_runs(text: str, tmp_path:
 
 
 def test_the_example_sweep_file_is_valid_and_documents_every_key() -> None:
-    from bhgrasp.experiments.grasp_demo import SWEEPABLE
+    from bhgrasp.scenarios.grasp_demo import SWEEPABLE
     from bhgrasp.sweep_config import SETTINGS, load_config
 
     path = Path(__file__).resolve().parents[1] / "docs" / "sweep.toml"
@@ -170,11 +171,11 @@ def test_batched_hold_sweep_agrees_with_serial_runs_and_a_weak_squeeze_drops_the
     """hold_rollout runs its cases in BatchSimulators: the same table from one batch, from batches of 2 on a process
     pool, and (for the reference gains) from the reference hold run alone; with 2 % of the squeeze the friction
     (0.8 x 0.16 N) cannot carry the 1.96 N box and it slides out, with the full squeeze it stays (< 1 mm)."""
-    from bhgrasp.experiments.hold import reference_hold
+    from bhgrasp.scenarios.hold import reference_hold
 
     design = sweep.grid(squeeze=[0.02, 1.0], posture_gain=[2.0, 4.0], duration=[0.3])
-    one = sweep.run_sweep(sweep.hold_rollout, design, executor="serial").drop(columns="wall_time")
-    pairs = sweep.BatchedRollout(sweep.hold_rollout.function, size=2)
+    one = sweep.run_sweep(hold_rollout, design, executor="serial").drop(columns="wall_time")
+    pairs = sweep.BatchedRollout(hold_rollout.function, size=2)
     pooled = sweep.run_sweep(pairs, design, workers=2).drop(columns="wall_time")
     assert one.equals(pooled) and (one["status"] == "ok").all()
     drops = one.set_index(["squeeze", "posture_gain"])["drop"]
@@ -184,6 +185,6 @@ def test_batched_hold_sweep_agrees_with_serial_runs_and_a_weak_squeeze_drops_the
     alone = hold.simulator.run(hold.controller, 0.3, state=hold.state, progress=False)
     assert drops[(1.0, 2.0)] == pytest.approx(hold.box_height - alone.object_position[-1, 0, 2], abs=1e-9)
     with pytest.raises(bh.InputError, match="`size` must be a positive integer"):
-        sweep.BatchedRollout(sweep.hold_rollout.function, size=0)
-    failed = sweep.run_sweep(sweep.hold_rollout, [{"mass": 0.3}], executor="serial")
+        sweep.BatchedRollout(hold_rollout.function, size=0)
+    failed = sweep.run_sweep(hold_rollout, [{"mass": 0.3}], executor="serial")
     assert failed["status"][0] == "failed" and "hold_rollout has no parameters ['mass']" in failed["error"][0]

@@ -11,14 +11,14 @@ import pytest
 import bhgrasp as bh
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.supervisor import GraspSupervisor
-from bhgrasp.experiments.box_grasp import CONTACT_HEIGHT, box_grasp
-from bhgrasp.experiments.demo_result import evaluate_demo
-from bhgrasp.experiments.object_grasp import object_grasp
 from bhgrasp.grasp.manipulability import manipulable_space
 from bhgrasp.grasp.metrics import slip_events
 from bhgrasp.grasp.probes import HandClearance
 from bhgrasp.grasp.synthesis import grasp_candidates, synthesize
 from bhgrasp.objects import Box, Cylinder, Sphere
+from bhgrasp.scenarios.box_grasp import CONTACT_HEIGHT, box_grasp
+from bhgrasp.scenarios.demo_result import evaluate_demo
+from bhgrasp.scenarios.object_grasp import object_grasp
 
 CENTRE = pin.SE3(np.eye(3), np.array([0.0, 0.0, CONTACT_HEIGHT]))
 LIFT = np.array([0.0, 0.0, 0.01, 0.0, 0.0, 0.0])
@@ -94,7 +94,7 @@ def test_a_fingertip_over_its_spread_axis_is_refused_and_no_grasp_is_named():
 
 def test_the_demo_refuses_a_turn_that_brings_a_link_body_onto_the_box():
     """The supervisor's second-order check, wired in: F3's distal link nears the +y face in a 0.3 rad turn."""
-    from bhgrasp.experiments.grasp_demo import run_grasp_demo
+    from bhgrasp.scenarios.grasp_demo import run_grasp_demo
 
     with pytest.raises(
         bh.UnreachableError, match=r"F3_distal_link_0 \(F3_distal_link\) comes within 0\.2 mm of the object's \+y face"
@@ -107,8 +107,8 @@ def test_slip_is_counted_from_the_sample_after_the_grasp_controller_took_over():
     the grasp controller took over.  The Allegro's pads skid while they close (the approach): counted from any such
     sample k, that sample's skids are left out and every later one counted.  (The can's grasp, which skidded in its
     switching sample, skids no more since a can stands on its pedestal without being thrown off.)"""
-    from bhgrasp.experiments.grasp_demo import run_grasp_demo
     from bhgrasp.grasp.metrics import slip_events_after
+    from bhgrasp.scenarios.grasp_demo import run_grasp_demo
 
     result = run_grasp_demo(hand="allegro", mass=0.6, estimate=0.3, duration=0.6)
     traj, hand = result.trajectory, result.scene.hand

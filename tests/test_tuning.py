@@ -412,7 +412,7 @@ def test_importing_tuning_does_not_import_cma_tqdm_or_dask() -> None:
 def hold_cost_batch(candidates: list[np.ndarray]) -> list[float]:
     """The reference hold for many (log10 posture gain, squeeze scale) at once in a BatchSimulator: the box's fall
     [mm] over 0.1 s plus 0.5 x the squeeze scale (a squeeze costs effort); one value per candidate."""
-    from bhgrasp.experiments.hold import SQUEEZE, reference_hold
+    from bhgrasp.scenarios.hold import SQUEEZE, reference_hold
     from bhgrasp.sim.batch import BatchSimulator
 
     hold = reference_hold()

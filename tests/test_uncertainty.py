@@ -11,13 +11,13 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.experiments.grasp_demo import check_demo_arguments, run_grasp_demo
-from bhgrasp.experiments.robustness import SCENARIOS, run_scenarios, summarise
 from bhgrasp.objects import Box, table
+from bhgrasp.scenarios.grasp_demo import check_demo_arguments, run_grasp_demo
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import FullyActuated
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.sensor_model import SensorModel, Sensors
+from bhgrasp.thesis.robustness import SCENARIOS, run_scenarios, summarise
 
 FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))
 

@@ -10,7 +10,7 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.experiments.hold import reference_hold
+from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.viz import MAX_FPS, LiveView, SceneViewer, _contact_overlays, _frame_samples
 
 

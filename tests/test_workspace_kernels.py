@@ -30,8 +30,8 @@ from bhgrasp.controllers._workspace_terms import (
 )
 from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
 from bhgrasp.errors import InputError
-from bhgrasp.experiments import chapter4, chapter4_fitness, chapter4_setups
 from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
+from bhgrasp.thesis import chapter4, chapter4_fitness, chapter4_setups
 from bhgrasp.trajectories import Constant
 
 RELATIVE = 1e-12

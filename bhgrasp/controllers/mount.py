@@ -12,7 +12,7 @@ force-torque sensor gives an arm), so the servo carries the hand and its load an
 like an arm's joint servos.  That feedforward closes a loop through the environment when the grasped object also
 rests on a support (squeezing it into a table raises the sensed force, which the servo then pushes harder
 against: a gain-one loop that oscillates): ``compensate_load=False`` leaves the load to the PD, as for grasps from
-a support (:mod:`~bhgrasp.experiments.grasp_bench`).  The finger rows are the finger controller's, or by default
+a support (:mod:`~bhgrasp.bench`).  The finger rows are the finger controller's, or by default
 the fingers' rows of the same
 inverse dynamics plus a joint PD that holds them still (a finger under gravity compensation alone swings when the
 wrist brakes: 0.8 rad on a 10 cm lift in 0.5 s).

@@ -63,7 +63,7 @@ class GraspCandidate:
         q_contact: Joint positions [rad] with each pad touching its point; q_pregrasp: the same with each finger's
             first non-spread (proximal) joint opened by ``opening`` (clipped to the limits), where an approach starts.
             The other joints stay at their contact values, as in the thesis' scene
-            (:func:`~bhgrasp.experiments.box_grasp.box_grasp`): a joint-space approach barely moves the BH8-280's
+            (:func:`~bhgrasp.scenarios.box_grasp.box_grasp`): a joint-space approach barely moves the BH8-280's
             distal joints (3.8e-5 kg m^2 against the drive's 0.05 N m s/rad, a 3 s time constant at Kp = 400 /s^2),
             so an opened distal joint is still ~0.2 rad short when its pad touches, away from the planned grasp.
         spread: The spread joints' mean [rad] in ``q_contact`` (the approach lines were cast at a searched spread;

@@ -109,7 +109,7 @@ def case_figures(case: Any) -> dict[str, Figure]:
     (:func:`tracking_figure`); ``chapter3_<key>_<index>_<noise|clean>.png``.
     """
     groups: dict[tuple, dict[str, Any]] = {}
-    for run in case.runs:
+    for run in case.runs.values():
         if "q_d" in run.trajectory.log:
             groups.setdefault((run.noise, run.joints), {})[run.name] = run
     both = len({noise for noise, _ in groups}) > 1

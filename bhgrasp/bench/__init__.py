@@ -1,0 +1,105 @@
+"""The grasp benchmark: a wrist-mounted BH8-280 approaches, closes on, lifts, shakes and places household objects.
+
+:mod:`~bhgrasp.bench.protocol` fixes the protocol (phases, thresholds, contact law, :class:`Trial`);
+:mod:`~bhgrasp.bench.objects` the object set; :mod:`~bhgrasp.bench.placement` where the hand goes;
+:mod:`~bhgrasp.bench.trial` runs one trial; :mod:`~bhgrasp.bench.metrics` scores it; :mod:`~bhgrasp.bench.report`
+runs many and writes the JSON and markdown report (``bhgrasp grasp-bench``).
+"""
+
+from bhgrasp.bench.metrics import contact_summary, evaluate, failure_reason, relative_poses
+from bhgrasp.bench.objects import KINDS, OBJECT_SET, BenchObject
+from bhgrasp.bench.placement import (
+    STAND_HEIGHT,
+    STAND_MARGIN,
+    grasp_clearance,
+    grasp_offset,
+    hand_depth,
+    stand_clearance,
+)
+from bhgrasp.bench.protocol import (
+    ACTUATIONS,
+    APPROACH,
+    CLOSE_AT,
+    DIRECTIONS,
+    DROP,
+    DT,
+    FRICTION,
+    GRASPS,
+    HELD_AT,
+    KNUCKLE_CLEARANCE,
+    LIFT,
+    LIFT_AT,
+    LOOSE,
+    PRECISION_MT,
+    PRESHAPE,
+    RELEASE,
+    ROUND_SPREAD,
+    SHAKE_TIME,
+    STAND,
+    STIFFNESS,
+    STRICT,
+    Trial,
+    spread_of,
+)
+from bhgrasp.bench.report import bench_rollout, compare, markdown, run_bench, success_rates, write_json
+from bhgrasp.bench.trial import (
+    BenchController,
+    gone,
+    idealised_damping,
+    run_trial,
+    setup,
+    shake_force,
+    simulate_trial,
+)
+
+__all__ = [
+    "ACTUATIONS",
+    "APPROACH",
+    "CLOSE_AT",
+    "DIRECTIONS",
+    "DROP",
+    "DT",
+    "FRICTION",
+    "GRASPS",
+    "HELD_AT",
+    "KINDS",
+    "KNUCKLE_CLEARANCE",
+    "LIFT",
+    "LIFT_AT",
+    "LOOSE",
+    "OBJECT_SET",
+    "PRECISION_MT",
+    "PRESHAPE",
+    "RELEASE",
+    "ROUND_SPREAD",
+    "SHAKE_TIME",
+    "STAND",
+    "STAND_HEIGHT",
+    "STAND_MARGIN",
+    "STIFFNESS",
+    "STRICT",
+    "BenchController",
+    "BenchObject",
+    "Trial",
+    "bench_rollout",
+    "compare",
+    "contact_summary",
+    "evaluate",
+    "failure_reason",
+    "gone",
+    "grasp_clearance",
+    "grasp_offset",
+    "hand_depth",
+    "idealised_damping",
+    "markdown",
+    "relative_poses",
+    "run_bench",
+    "run_trial",
+    "setup",
+    "shake_force",
+    "simulate_trial",
+    "spread_of",
+    "stand_clearance",
+    "success_rates",
+    "write_json",
+]

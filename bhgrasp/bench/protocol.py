@@ -1,0 +1,137 @@
+"""The grasp benchmark: approach -> close -> lift 10 cm -> shake in six directions -> place, per object.
+
+One trial (:func:`run_trial`) puts a wrist-mounted BH8-280 (:func:`~bhgrasp.mount.mounted`) palm down above an
+object (:mod:`~bhgrasp.bench.objects`) standing on a stand of its own footprint, and runs DexGraspBench's
+shake protocol:
+
+1. **approach** (0-1 s): the wrist descends 5 cm to the grasp height, the fingers pre-shaped (proximal 0.8 rad),
+   the spread held in position mode, the hand shifted along its F3 axis so that the fingers reach the object
+   together (:mod:`~bhgrasp.bench.placement`);
+2. **close** (from 1 s): ``power`` - the hand's own ``close()`` (libbarrett's CMD_CLOSE: each finger runs to a stall,
+   then its puck idles and its worm holds it) at full puck torque, the knuckles touching the object's top;
+   ``precision`` - the same close force-limited (puck MT lowered to :data:`PRECISION_MT`), the knuckles 2 cm
+   above it; a power grasp whose closing fingers would meet the object's stand before the object is raised until
+   they keep clear of it (:func:`~bhgrasp.bench.placement.grasp_clearance`); spheres, and cylinders in
+   the precision grasp, take a 0.45 rad spread (:data:`ROUND_SPREAD`), boxes and the cylinders' power grasp 0 (F1,
+   F2 facing F3);
+3. **lift** (3-4 s): 10 cm up, then 0.5 s at rest; the object's pose in the palm frame at 4.5 s is the held pose;
+4. **shake** (4.5-16.5 s): an external force of 10 m newtons on the object's centre of mass along +x, -x, +y, -y,
+   +z, -z (world), 2 s each;
+5. **place** (16.5-17.5 s): down to 5 mm above the start (:data:`DROP`), then ``open()`` for 0.5 s.
+
+The stand: the environment stops the hand's links too, and on a table a top-down grasp of the low objects is
+impossible - measured with the finger shapes, at every hand height at which the fingers reach the 5 cm box or the
+3 cm flat box, some finger is 11-57 mm below the table top when it touches the object; a stand the object's size
+lets the fingers pass beside it, as the thesis' pedestal does (:mod:`~bhgrasp.scenarios.box_grasp`).
+
+``actuation``: ``barrett`` - :class:`~bhgrasp.sim.actuation.BarrettActuation` (four saturated pucks, TorqueSwitch,
+self-locking worms) commanded through :class:`~bhgrasp.barrett.commands.BarrettDriver`; ``full`` - the idealised
+hand of the thesis (eight independent, back-drivable joint torques): each finger closes with the joint torques the
+real close delivers at stall (eta r MT on the proximal joint, a third of it on the distal) and keeps them, each
+joint damped as the real motors damp theirs, the spread held by a PD.  The wrist follows its path under
+:class:`~bhgrasp.controllers.mount.MountServo` in both (without load feedforward: the object starts on its stand).
+
+Success: through the shake the object stays within 5 cm and 15 deg of its held pose in the palm frame
+(DexGraspBench's thresholds); ``strict`` is ours, 1 cm and 5 deg; ``placed``: a successful trial whose object is
+back at its resting height after the release.  Every trial simulates a fixed 18 s, or stops when its object falls
+below the stand.  Contacts: :data:`STIFFNESS` and :data:`DT` (their comment gives the reasons).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from bhgrasp.bench.objects import BenchObject
+from bhgrasp.errors import InputError
+
+GRASPS = ("power", "precision")
+ACTUATIONS = ("barrett", "full")
+FRICTION = 0.8
+APPROACH, CLOSE_AT, LIFT_AT, HELD_AT, SHAKE_TIME = 0.05, 1.0, 3.0, 4.5, 2.0  # [m], [s], [s], [s], [s]
+PRESHAPE = 0.8  # [rad] proximal angle of the open hand (the distal follows at a third)
+# [rad] the spread of round objects' fingertip grasps, measured under the real drive (barrett, precision): at spread 0
+# F1 and F2 pinch a cylinder 27 deg either side of its back, its wedge opens the back-drivable spread (0 -> 0.07 rad
+# on the can as the grip closes), and under a +-x push the can turns 17 deg about the pinch axis; the can and the
+# bottle hold at 0.3-0.6 rad, the 45 mm ball at 0.3-0.6, the 35 mm ball only at 0.4-0.5 (at 0.3 it is not lifted,
+# from 0.52 it turns out between F1 and F2 under the +x push; at 60 deg, the spherical grasp, it slips out between
+# them, and at 90 deg three of the four sphere trials failed).  Spheres take it in the power grasp too (both balls
+# hold there); the cylinders' power grasp keeps spread 0, the hand's cylindrical wrap
+ROUND_SPREAD = 0.45
+LIFT = 0.10  # [m]
+RELEASE = 0.5  # [s] of open() after the place
+DROP = 0.005  # [m] the place stops this far above the lift's start: a stiff wrist setting the held object onto the
+# stand would press it there through the locked fingers
+# The contact law and step: the power close squeezes with hundreds of newtons, which the default 1e4 N/m would meet
+# with centimetres of penetration; 3e5 N/m gives about 1 mm.  The contact's geometry is explicit in the step, so
+# omega dt must stay below ~1 for the lightest link, a distal (0.042 kg): omega = 2700 rad/s, 0.67 at 0.25 ms.
+# Measured: 1e6 N/m diverged in jammed grasps at 1 ms and 0.5 ms, and while opening on the can at 0.25 ms.
+DT = 2.5e-4  # [s]
+STIFFNESS = 3e5  # [N/m] normal; tangential a tenth; damping 2e-3 s of each
+DIRECTIONS = ("+x", "-x", "+y", "-y", "+z", "-z")
+PRECISION_MT = 600.0  # puck torque units (0.03 N m at the motor): the force-limited close
+LOOSE, STRICT = (0.05, math.radians(15.0)), (0.01, math.radians(5.0))  # [m], [rad]
+KNUCKLE_CLEARANCE = {"power": 0.0, "precision": 0.02}  # [m] the knuckles above the object's top
+STAND = "pedestal"  # the stand's body name
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One benchmark case: an object, a grasp ('power' or 'precision') and an actuation ('barrett' or 'full').
+
+    ``spread`` [rad] replaces the grasp's pre-shape spread (:func:`spread_of`), e.g. to measure how much it matters.
+    """
+
+    item: BenchObject
+    grasp: str
+    actuation: str = "barrett"
+    spread: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.grasp not in GRASPS:
+            raise InputError(f"`grasp` must be one of {GRASPS}, got {self.grasp!r}")
+        if self.actuation not in ACTUATIONS:
+            raise InputError(f"`actuation` must be one of {ACTUATIONS}, got {self.actuation!r}")
+        if self.spread is not None and not (math.isfinite(self.spread) and 0.0 <= self.spread <= math.pi):
+            raise InputError(f"`spread` must be in [0, pi] rad (the BH8-280's spread range), got {self.spread!r}")
+
+    @property
+    def preshape_spread(self) -> float:
+        """The spread [rad] the hand takes before closing: ``spread``, or the grasp's own (:func:`spread_of`)."""
+        return spread_of(self.item, self.grasp) if self.spread is None else float(self.spread)
+
+
+def spread_of(item: BenchObject, grasp: str = "power") -> float:
+    """The pre-shape spread [rad]: :data:`ROUND_SPREAD` for spheres and for cylinders' ``precision`` grasp, else 0.
+
+    At 0, F1 and F2 face F3.
+    """
+    round_grasp = item.kind == "sphere" or (item.kind == "cylinder" and grasp == "precision")
+    return ROUND_SPREAD if round_grasp else 0.0
+
+
+__all__ = [
+    "ACTUATIONS",
+    "APPROACH",
+    "CLOSE_AT",
+    "DIRECTIONS",
+    "DROP",
+    "DT",
+    "FRICTION",
+    "GRASPS",
+    "HELD_AT",
+    "KNUCKLE_CLEARANCE",
+    "LIFT",
+    "LIFT_AT",
+    "LOOSE",
+    "PRECISION_MT",
+    "PRESHAPE",
+    "RELEASE",
+    "ROUND_SPREAD",
+    "SHAKE_TIME",
+    "STAND",
+    "STIFFNESS",
+    "STRICT",
+    "Trial",
+    "spread_of",
+]

@@ -1,0 +1,173 @@
+"""The grasp benchmark's runs and report: its trials on the sweep executor, its JSON and markdown files.
+
+Every object x grasp x actuation trial runs through :func:`~bhgrasp.sweep.run_sweep`; ``grasp_benchmark.json``
+(``{"protocol": ..., "trials": [...]}``, SI units) and ``grasp_benchmark.md`` (the success tables) report them.
+
+A trial that raises (e.g. :class:`~bhgrasp.errors.SimulationDiverged`) is a failed trial whose ``failure`` is the
+error; the sweep goes on (:func:`~bhgrasp.sweep.run_sweep`).  ``python -m bhgrasp grasp-bench`` is the command line.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import json
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from bhgrasp.bench.objects import BenchObject
+from bhgrasp.bench.protocol import ACTUATIONS, DIRECTIONS, GRASPS, LOOSE, STRICT, Trial
+from bhgrasp.bench.trial import run_trial
+from bhgrasp.sweep import run_sweep
+
+METRICS = (
+    "lifted",
+    "max_displacement",
+    "max_rotation",
+    "slip_samples",
+    "peak_contact_force",
+    "peak_motor_torque",
+    "peak_stand_force",
+)
+
+
+def bench_rollout(parameters: dict[str, Any], seed: int) -> dict[str, Any]:
+    """One trial as a sweep rollout (deterministic: ``seed`` is unused)."""
+    item = dataclasses.replace(BenchObject.parse(parameters["spec"]), name=parameters["name"])
+    record = run_trial(Trial(item, parameters["grasp"], parameters["actuation"], parameters.get("spread")))
+    return {key: value for key, value in record.items() if key not in parameters and key != "object"}
+
+
+def run_bench(
+    objects: Sequence[BenchObject],
+    grasps: Sequence[str] = GRASPS,
+    actuations: Sequence[str] = ("barrett",),
+    workers: int | None = None,
+    progress: bool = False,
+    executor: Any = None,
+    spreads: Sequence[float] | None = None,
+) -> tuple[list[dict[str, Any]], list[float]]:
+    """Every trial of ``objects`` x ``grasps`` x ``actuations`` (a process pool of ``workers``).
+
+    ``spreads`` [rad]: run every trial at each of these pre-shape spreads instead of its grasp's own
+    (:attr:`~bhgrasp.bench.protocol.Trial.spread`).  Returns the trial records and each trial's wall time
+    [s] (kept apart: records repeat bit for bit, times not).
+    """
+    design = [{"name": o.name, "spec": o.spec, "grasp": g, "actuation": a}
+              for a in actuations for o in objects for g in grasps]  # fmt: skip
+    if spreads:
+        design = [{**case, "spread": float(spread)} for case in design for spread in spreads]
+    for case in design:  # refuse bad cases before running
+        Trial(BenchObject.parse(case["spec"]), case["grasp"], case["actuation"], case.get("spread"))
+    table = run_sweep(bench_rollout, design, executor=executor or ("serial" if workers == 1 else None),
+                      workers=workers, progress=progress)  # fmt: skip
+    trials, walls = [], []
+    for row in table.to_dict("records"):
+        trial = {"object": row["name"], "spec": row["spec"], "grasp": row["grasp"], "actuation": row["actuation"]}
+        if row["status"] == "ok":
+            trial.update({key: row[key] for key in ("spread", "success", "strict_success", "placed", *METRICS,
+                                                     "failure")})  # fmt: skip
+        else:
+            trial.update(spread=row.get("spread"), success=False, strict_success=False, placed=False,
+                         failure=row["error"], **dict.fromkeys(METRICS))  # fmt: skip
+        trials.append({key: _plain(value) for key, value in trial.items()})
+        walls.append(row["wall_time"])
+    return trials, walls
+
+
+def _plain(value: Any) -> Any:
+    """JSON-ready: numpy scalars to Python, NaN to None."""
+    if hasattr(value, "item"):
+        value = value.item()
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    return value
+
+
+def write_json(trials: list[dict[str, Any]], path: Path) -> None:
+    """``{"protocol": ..., "trials": [...]}`` with sorted keys."""
+    protocol = {
+        "push_directions": list(DIRECTIONS), "push_force": "10 m [N]",
+        "loose": {"displacement_m": LOOSE[0], "rotation_rad": LOOSE[1]},
+        "strict": {"displacement_m": STRICT[0], "rotation_rad": STRICT[1]},
+    }  # fmt: skip
+    path.write_text(json.dumps({"protocol": protocol, "trials": trials}, indent=1, sort_keys=True) + "\n")
+
+
+def success_rates(trials: list[dict[str, Any]]) -> dict[str, tuple[int, int, int]]:
+    """Per actuation: (successes, strict successes, trials)."""
+    rates = {}
+    for actuation in ACTUATIONS:
+        rows = [t for t in trials if t["actuation"] == actuation]
+        if rows:
+            rates[actuation] = (sum(t["success"] for t in rows), sum(t["strict_success"] for t in rows), len(rows))
+    return rates
+
+
+COMMAND = (
+    "bhgrasp grasp-bench --actuation barrett --actuation full --json docs/results/grasp_benchmark.json "
+    "--report docs/results/grasp_benchmark.md"
+)  # the committed report's
+
+
+def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
+    """The report: success per actuation, then one table row per trial (mm, deg, N, N m); ``command`` made it."""
+    lines = ["# Grasp benchmark", "",
+             f"Regenerate: `{command}`. Protocol: approach, close, "
+             "lift 10 cm, push 10 m N on the object along +x, -x, +y, -y, +z, -z (2 s each), place "
+             "(`bhgrasp/bench/protocol.py`). Success: within 5 cm and 15 deg of the held pose in the palm "
+             "frame through the pushes; strict: 1 cm and 5 deg.", "",
+             "| actuation | success | strict | trials |", "|---|---:|---:|---:|"]  # fmt: skip
+    for actuation, (ok, strict, total) in success_rates(trials).items():
+        lines.append(f"| {actuation} | {ok} ({100 * ok / total:.0f} %) | {strict} ({100 * strict / total:.0f} %) "
+                     f"| {total} |")  # fmt: skip
+    lines += ["", "| object | grasp | spread [deg] | actuation | success | strict | placed | max disp. [mm] | "
+              "max rot. [deg] | slip samples | peak contact [N] | peak torque [N m] | failure |",
+              "|---|---|---:|---|---|---|---|---:|---:|---:|---:|---:|---|"]  # fmt: skip
+    for t in trials:
+        number = functools.partial(_number, t)
+        lines.append(
+            f"| {t['object']} (`{t['spec']}`) | {t['grasp']} | {number('spread', 180 / math.pi, '.0f')} | "
+            f"{t['actuation']} | {_mark(t['success'])} | "
+            f"{_mark(t['strict_success'])} | {_mark(t['placed'])} | {number('max_displacement', 1e3)} | "
+            f"{number('max_rotation', 180 / math.pi)} | {number('slip_samples', fmt='.0f')} | "
+            f"{number('peak_contact_force')} | {number('peak_motor_torque', fmt='.3f')} | {t['failure'] or ''} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def compare(trials: list[dict[str, Any]], reference: list[dict[str, Any]], rel: float = 1e-6) -> list[str]:
+    """Differences of a run from the committed trials, matched by object spec, grasp and actuation.
+
+    A difference: a trial missing from the reference, another outcome or failure, or a metric off by more than
+    ``rel`` (relative; 1e-9 absolute).
+    """
+    index = {(t["spec"], t["grasp"], t["actuation"], t.get("spread")): t for t in reference}
+    problems = []
+    for trial in trials:
+        key = (trial["spec"], trial["grasp"], trial["actuation"], trial.get("spread"))
+        known = index.get(key)
+        if known is None:
+            problems.append(f"{key}: not in the reference")
+            continue
+        for name in ("success", "strict_success", "placed", "failure"):
+            if trial[name] != known[name]:
+                problems.append(f"{key} {name}: {trial[name]!r}, reference {known[name]!r}")
+        for name in METRICS:
+            new, old = trial[name], known[name]
+            if (new is None) != (old is None) or (new is not None and abs(new - old) > max(rel * abs(old), 1e-9)):
+                problems.append(f"{key} {name}: {new!r}, reference {old!r}")
+    return problems
+
+
+def _number(trial: dict[str, Any], key: str, scale: float = 1.0, fmt: str = ".1f") -> str:
+    return "-" if trial[key] is None else format(scale * trial[key], fmt)
+
+
+def _mark(value: bool) -> str:
+    return "yes" if value else "no"
+
+
+__all__ = ["bench_rollout", "compare", "markdown", "run_bench", "success_rates", "write_json"]

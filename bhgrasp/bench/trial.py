@@ -1,0 +1,173 @@
+"""One grasp-benchmark trial (:mod:`~bhgrasp.bench.protocol`): the scene, the controller, the run and its record."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+
+import bhgrasp as bh
+from bhgrasp.barrett.commands import BarrettDriver
+from bhgrasp.barrett.pucks import FINGER_PUCK
+from bhgrasp.barrett.transmission import PROXIMAL_RATIO, WORM_EFFICIENCY, BarrettTransmission
+from bhgrasp.bench.metrics import evaluate
+from bhgrasp.bench.placement import STAND_HEIGHT, grasp_clearance, grasp_offset, hand_depth
+from bhgrasp.bench.protocol import (
+    APPROACH,
+    CLOSE_AT,
+    DROP,
+    DT,
+    FRICTION,
+    HELD_AT,
+    KNUCKLE_CLEARANCE,
+    LIFT,
+    LIFT_AT,
+    PRECISION_MT,
+    PRESHAPE,
+    RELEASE,
+    SHAKE_TIME,
+    STAND,
+    STIFFNESS,
+    Trial,
+)
+from bhgrasp.controllers.mount import MountServo
+from bhgrasp.mount import MountReference, mounted
+from bhgrasp.objects import FixedBox
+from bhgrasp.sim import Simulator
+from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
+from bhgrasp.sim.contact_law import SpringDamper
+from bhgrasp.sim.scene import Scene
+from bhgrasp.trajectories import PosePath
+
+
+def idealised_damping(hand: bh.Hand) -> np.ndarray:
+    """The idealised hand's joint damping [N m s/rad], as the BH8-280's motors damp the coordinates they drive.
+
+    eta b_m r^2 with 125:1 on the proximal, 93.75:1 on the distal and 17.5:1 on the spread joints; none on the mount.
+    """
+    drive = BarrettTransmission(hand)
+    damping = drive.joint_damping([0, 0, 0])  # armed: the spread and the proximal joints
+    damping[drive.distal] = drive.joint_damping([1, 1, 1])[drive.distal]  # broken away: the distal joints
+    damping[drive.spread[1]] = damping[drive.spread[0]]
+    return damping
+
+
+def setup(trial: Trial, dt: float = DT):
+    """The simulator, its start state, the mounted hand and the wrist path of a trial."""
+    item = trial.item
+    top = 2 * item.half_extents[2]
+    clearance, spread = KNUCKLE_CLEARANCE[trial.grasp], trial.preshape_spread
+    if trial.grasp == "power":  # the fingers off the stand (precision keeps 2 cm: at 46 mm the box slips, full)
+        clearance = grasp_clearance(item, spread, clearance, PRESHAPE)
+    grasp_height = top + clearance + hand_depth(spread, PRESHAPE)  # the hand base
+    rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
+    offset = np.array([0.0, grasp_offset(item, spread, clearance, PRESHAPE), 0.0])
+    base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + APPROACH]) - rotation @ offset)  # fingers together
+    hand = mounted(bh.BarrettHand(base_placement=base))
+    width = 2 * item.half_extents[:2]  # the stand: the object's footprint
+    pedestal = FixedBox(size=(*width, STAND_HEIGHT), pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.5 * STAND_HEIGHT])),
+                        friction=FRICTION, name=STAND)  # fmt: skip
+    scene = Scene(hand, [item.body(FRICTION)], environment=[pedestal])
+    if trial.actuation == "barrett":
+        actuation = BarrettActuation(hand, saturate=True)
+    else:  # the same motors' damping on each joint, reflected as through the worms (module docstring)
+        actuation = FullyActuated(hand, damping=idealised_damping(hand))
+    law = SpringDamper(
+        stiffness=STIFFNESS, damping=2e-3 * STIFFNESS, friction=FRICTION, tangential_stiffness=0.1 * STIFFNESS,
+        tangential_damping=2e-4 * STIFFNESS,
+    )  # fmt: skip
+    simulator = Simulator(scene, dt=dt, contact=law, actuation=actuation)
+    q = hand.neutral()
+    for finger in hand.fingers:
+        q[hand.joint_index(f"{finger}_proximal")], q[hand.joint_index(f"{finger}_distal")] = PRESHAPE, PRESHAPE / 3
+    q[[hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]] = spread
+    down, up = np.array([0, 0, -APPROACH, 0, 0, 0]), np.array([0, 0, LIFT, 0, 0, 0])
+    shake = 6 * SHAKE_TIME
+    moves = [(down, CLOSE_AT), (np.zeros(6), LIFT_AT - CLOSE_AT), (up, 1.0), (np.zeros(6), HELD_AT - LIFT_AT - 1.0),
+             (np.zeros(6), shake), (-(LIFT - DROP) / LIFT * up, 1.0)]  # fmt: skip
+    path = MountReference(PosePath(base, moves), hand.base_placement)
+    return simulator, simulator.initial_state(q), hand, path
+
+
+class BenchController:
+    """The trial's commands: the wrist on its path (MountServo), the fingers by the driver or by joint torques."""
+
+    def __init__(self, trial: Trial, hand: bh.Hand, path: MountReference) -> None:
+        self.trial, self.hand = trial, hand
+        self.servo = MountServo(hand, path, fingers=lambda t, s: np.zeros(hand.nv), compensate_load=False)
+        self.spread = [hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]
+        self.place_at = HELD_AT + 6 * SHAKE_TIME + 1.0
+        self.log: dict = {}
+        mt = PRECISION_MT if trial.grasp == "precision" else FINGER_PUCK.MT  # the finger pucks' torque limit
+        if trial.actuation == "barrett":
+            self.driver = BarrettDriver(hand, finger=FINGER_PUCK.with_(MT=mt))
+            self.driver.script([(0.0, "set_position_mode", "SPREAD"), (CLOSE_AT, "close", "GRASP"),
+                                (self.place_at, "open", "GRASP")])  # fmt: skip
+            self.log = self.driver.log
+        else:
+            self.close_torque = WORM_EFFICIENCY * PROXIMAL_RATIO * mt / FINGER_PUCK.IPNM  # the real close's stall
+
+    def reset(self, state: bh.State) -> None:
+        """Start a trial at ``state`` (the driver's script, the spread hold)."""
+        self.servo.reset(state)
+        if self.trial.actuation == "barrett":
+            self.driver.reset(state)
+        else:
+            self.spread_hold = float(state.q[self.spread[0]])
+
+    def __call__(self, t: float, state: bh.State) -> np.ndarray:
+        """The inputs of the trial's actuation: puck torques (or joint torques), then the wrist's."""
+        mount = self.servo(t, state)[:6]
+        if self.trial.actuation == "barrett":
+            u = self.driver(t, state)
+            u[4:] = mount
+            return u
+        tau = np.zeros(self.hand.nv)
+        tau[:6] = mount
+        sign = 0.0 if t < CLOSE_AT else (1.0 if t < self.place_at else -1.0)
+        for finger in self.hand.fingers:
+            tau[self.hand.joint_index(f"{finger}_proximal")] = sign * self.close_torque
+            tau[self.hand.joint_index(f"{finger}_distal")] = sign * self.close_torque / 3.0
+        error = self.spread_hold - state.q[self.spread[0]]  # a stiff PD [N m/rad, N m s/rad] holds the spread
+        tau[self.spread] = 2.0 * error - 0.05 * state.v[self.spread[0]]
+        return tau
+
+
+def shake_force(mass: float):
+    """The shake, ``t -> (1, 3)`` world force [N]: 10 m newtons along each of :data:`DIRECTIONS` for 2 s."""
+    axes = np.vstack([np.eye(3)[[0, 0, 1, 1, 2, 2]] * np.array([1, -1, 1, -1, 1, -1])[:, None]])
+    none = np.zeros((1, 3))
+
+    def force(t: float) -> np.ndarray:
+        k = math.floor((t - HELD_AT) / SHAKE_TIME)
+        return 10.0 * mass * axes[k][None, :] if 0 <= k < 6 else none
+
+    return force
+
+
+def simulate_trial(trial: Trial, dt: float = DT, record_every: int = 40, duration: float | None = None):
+    """The trial's trajectory (a sample every ``record_every`` steps) and its mounted hand.
+
+    ``duration`` [s] cuts the protocol short (default: all of it).
+    """
+    simulator, state, hand, path = setup(trial, dt)
+    controller = BenchController(trial, hand, path)
+    duration = HELD_AT + 6 * SHAKE_TIME + 1.0 + RELEASE if duration is None else duration
+    trajectory = simulator.run(controller, duration, state=state, progress=False, record_every=record_every,
+                               object_forces=shake_force(trial.item.mass), until=gone)  # fmt: skip
+    return trajectory, hand
+
+
+def run_trial(trial: Trial, dt: float = DT, record_every: int = 40) -> dict:
+    """Run one trial (module docstring) and return its record (SI units; rotations [rad], forces [N])."""
+    trajectory, hand = simulate_trial(trial, dt, record_every)
+    return evaluate(trial, trajectory, hand)
+
+
+def gone(state: bh.State) -> bool:
+    """Whether the object fell: below the stand's top (the trial stops there)."""
+    return bool(state.object_poses[0].translation[2] < -0.05)
+
+
+__all__ = ["BenchController", "gone", "idealised_damping", "run_trial", "setup", "shake_force", "simulate_trial"]

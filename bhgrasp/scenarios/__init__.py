@@ -1,0 +1,54 @@
+"""Reusable scenes: hands, objects and controllers set up for a run, for users, tests, notebooks and studies.
+
+The reference hold (:mod:`~bhgrasp.scenarios.hold`), the chapter-5 box grasp (:mod:`~bhgrasp.scenarios.box_grasp`),
+the Allegro box grasp (:mod:`~bhgrasp.scenarios.allegro_grasp`), any object grasped as the synthesis plans it
+(:mod:`~bhgrasp.scenarios.object_grasp`), the grasp demo and its result (:mod:`~bhgrasp.scenarios.grasp_demo`,
+:mod:`~bhgrasp.scenarios.demo_result`), its controllers by name (:mod:`~bhgrasp.scenarios.grasp_controllers`) and
+uncertainties (:mod:`~bhgrasp.scenarios.uncertainty`), the ideal object loop (:mod:`~bhgrasp.scenarios.object_loop`),
+the identification runs (:mod:`~bhgrasp.scenarios.identification`) and the sweep rollouts built on them
+(:mod:`~bhgrasp.scenarios.rollouts`).
+"""
+
+from bhgrasp.scenarios.allegro_grasp import allegro_box_grasp, allegro_hand
+from bhgrasp.scenarios.box_grasp import BoxGrasp, box_grasp
+from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult, evaluate_demo
+from bhgrasp.scenarios.grasp_controllers import ADAPTATIONS, CONTROLLERS, grasp_controller
+from bhgrasp.scenarios.grasp_demo import HANDS, demo_figure, grasp_scene, run_grasp_demo, save_demo
+from bhgrasp.scenarios.hold import HoldScenario, reference_hold
+from bhgrasp.scenarios.identification import IdentificationRun, identification_run
+from bhgrasp.scenarios.object_grasp import ObjectGrasp, object_grasp, run_object_grasp
+from bhgrasp.scenarios.object_loop import ObjectLoopRun, ideal_object_loop
+from bhgrasp.scenarios.rollouts import check_grasp_case, grasp_rollout, hold_rollout
+from bhgrasp.scenarios.uncertainty import UNCERTAINTIES, sensor_model
+
+__all__ = [
+    "ADAPTATIONS",
+    "CONTROLLERS",
+    "HANDS",
+    "MU_ASSUMED",
+    "UNCERTAINTIES",
+    "BoxGrasp",
+    "GraspDemoResult",
+    "HoldScenario",
+    "IdentificationRun",
+    "ObjectGrasp",
+    "ObjectLoopRun",
+    "allegro_box_grasp",
+    "allegro_hand",
+    "box_grasp",
+    "check_grasp_case",
+    "demo_figure",
+    "evaluate_demo",
+    "grasp_controller",
+    "grasp_rollout",
+    "grasp_scene",
+    "hold_rollout",
+    "ideal_object_loop",
+    "identification_run",
+    "object_grasp",
+    "reference_hold",
+    "run_grasp_demo",
+    "run_object_grasp",
+    "save_demo",
+    "sensor_model",
+]
