@@ -1,8 +1,9 @@
-"""The house's rules (DESIGN.md), checked on the code: layers import nothing above them.
+"""The house's rules (DESIGN.md), checked on the code: no import circle, and layers import nothing above them.
 
 Controllers, grasp analysis, the Barrett driver, drive models and the data vocabulary know ``State`` and the model,
 never the simulator, so that the same controller drives a real hand.  Checked twice: statically on every import
-statement (function-local ones too), and at run time on what importing them loads.
+statement (function-local ones too), and at run time on what importing them loads.  Above the library: the scenarios
+(reusable scenes), then the grasp benchmark and the thesis reproductions side by side, then the command line.
 """
 
 from __future__ import annotations
@@ -18,6 +19,16 @@ import bhgrasp
 
 PACKAGE = Path(bhgrasp.__file__).parent
 BELOW_THE_SIMULATOR = ("controllers", "grasp", "barrett", "data", "transmission.py")
+# The top floors, bottom to top; every other module of bhgrasp is the library below them (floor 0).
+TOP_FLOORS = {
+    "bhgrasp.scenarios": 1,
+    "bhgrasp.bench": 2,
+    "bhgrasp.thesis": 2,
+    "bhgrasp.cli": 3,
+    "bhgrasp._arguments": 3,
+    "bhgrasp.sweep_config": 3,
+    "bhgrasp.__main__": 3,
+}
 
 
 def imported_modules(path: Path) -> list[str]:
@@ -29,6 +40,46 @@ def imported_modules(path: Path) -> list[str]:
         elif isinstance(node, ast.Import):
             names += [alias.name for alias in node.names]
     return names
+
+
+def module_name(path: Path) -> str:
+    return ".".join(("bhgrasp", *path.relative_to(PACKAGE).with_suffix("").parts)).removesuffix(".__init__")
+
+
+MODULES = {module_name(path): path for path in PACKAGE.rglob("*.py")}
+COMPILED_CORE = "bhgrasp._core"  # an extension module, no source here
+
+
+def run_time_imports(name: str) -> set[str]:
+    """The bhgrasp modules that module ``name`` imports when it runs (function-local imports included; those under
+    ``if TYPE_CHECKING:`` left out).  ``from package import name`` names the submodule when ``name`` is one."""
+    tree = ast.parse(MODULES[name].read_text())
+    typing_only = {
+        id(inner)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+        for inner in ast.walk(node)
+    }
+    found = set()
+    for node in ast.walk(tree):
+        if id(node) in typing_only:
+            continue
+        if isinstance(node, ast.Import):
+            found |= {alias.name for alias in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            for alias in node.names:
+                submodule = f"{node.module}.{alias.name}"
+                found.add(submodule if submodule in MODULES or submodule == COMPILED_CORE else node.module)
+    return {module for module in found if module in MODULES and module != name}
+
+
+def room(name: str) -> str:
+    """The package (or root module) of bhgrasp that holds module ``name``."""
+    return ".".join(name.split(".")[:2])
+
+
+def floor_of(name: str) -> int:
+    return next((floor for top, floor in TOP_FLOORS.items() if name == top or name.startswith(top + ".")), 0)
 
 
 def sources(place: str) -> list[Path]:
@@ -68,11 +119,7 @@ def loaded_after(statement: str) -> set[str]:
 
 
 def test_importing_controllers_grasp_and_the_driver_loads_no_simulator() -> None:
-    modules = [
-        ".".join(("bhgrasp", *path.relative_to(PACKAGE).with_suffix("").parts)).removesuffix(".__init__")
-        for place in BELOW_THE_SIMULATOR
-        for path in sources(place)
-    ]
+    modules = [module_name(path) for place in BELOW_THE_SIMULATOR for path in sources(place)]
     every = "; ".join(f"import {module}" for module in modules)
     loaded = loaded_after(every)
     assert "bhgrasp.controllers.adaptive_grasp" in loaded and "bhgrasp.barrett.sensors" in loaded
@@ -87,3 +134,58 @@ def test_the_public_face_imports_on_demand() -> None:
     assert sorted(bhgrasp.__all__) == bhgrasp.__all__ == sorted(dir(bhgrasp))
     with pytest.raises(AttributeError, match="module 'bhgrasp' has no attribute 'Simulater'"):
         bhgrasp.Simulater  # noqa: B018
+
+
+def test_no_module_of_bhgrasp_imports_itself_back_through_others() -> None:
+    graph = {name: run_time_imports(name) for name in MODULES}
+    assert "bhgrasp.bench.trial" in graph["bhgrasp.bench.report"]  # the graph is read
+    circles = [circle for circle in strongly_connected(graph) if len(circle) > 1]
+    assert circles == []
+
+
+def test_the_top_floors_import_only_downwards_and_bench_and_thesis_not_each_other() -> None:
+    upward = [
+        f"{name} -> {other}"
+        for name in MODULES
+        for other in run_time_imports(name)
+        if floor_of(other) > floor_of(name) or {room(name), room(other)} == {"bhgrasp.bench", "bhgrasp.thesis"}
+    ]
+    assert upward == []
+    assert floor_of("bhgrasp.thesis.chapter5") == 2 and floor_of("bhgrasp.sweep") == 0
+
+
+def strongly_connected(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Tarjan's strongly connected components of ``graph`` (iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    components = []
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    work.append((child, iter(sorted(graph[child]))))
+                elif child in stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    component.append(member)
+                    if member == node:
+                        break
+                components.append(sorted(component))
+    return components
