@@ -232,7 +232,7 @@ def _tune(args: argparse.Namespace) -> int:
     import numpy as np
 
     from bhgrasp import tuning
-    from bhgrasp.thesis.chapter4_fitness import impedance_fitness
+    from bhgrasp.scenarios.press_fitness import impedance_fitness
     from bhgrasp.thesis.chapter4_tuning import TUNING_BOUNDS, TUNING_TOL_FUN, TUNING_TOL_X
 
     lower, upper = (np.log10(bound) for bound in TUNING_BOUNDS)  # physical bounds, argued in chapter 4

@@ -20,7 +20,8 @@ from bhgrasp.controllers.impedance import (
 )
 from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter, critical_damping
 from bhgrasp.grasp.sensing import ContactSensing, FingerContact
-from bhgrasp.thesis import chapter4, chapter4_closed_form, chapter4_fitness, chapter4_setups, chapter4_tuning
+from bhgrasp.scenarios import finger_press, press_fitness
+from bhgrasp.thesis import chapter4, chapter4_closed_form, chapter4_tuning
 from bhgrasp.trajectories import Constant, SmoothStep
 
 
@@ -152,17 +153,17 @@ def test_least_squares_estimator_identifies_the_environment_from_two_force_level
 
 
 def test_fim_tracks_the_force_with_known_environment_on_the_planar_finger():
-    setup = chapter4.planar_setup(1000.0)
+    setup = finger_press.planar_setup(1000.0)
     law = ForceImpedance(Constant(setup.tip0), setup.normal, 10.0, setup.surface_point(), setup.k_e,
                          mass=8.9, damping=167.0, stiffness=560.0)  # fmt: skip
-    traj = chapter4.run(setup, ImpedanceController(setup.hand, {"tip": law}, *chapter4_setups.PLANAR_GAINS), 3.0)
-    force = chapter4.normal_force(setup, traj)
+    traj = finger_press.run(setup, ImpedanceController(setup.hand, {"tip": law}, *finger_press.PLANAR_GAINS), 3.0)
+    force = finger_press.normal_force(setup, traj)
     assert abs(np.mean(force[-200:]) - 10.0) < 0.02 * 10.0
 
 
 @pytest.fixture(scope="module")
 def f3_setups():
-    return {spring: chapter4.f3_setup(spring) for spring in (1e3, 1e4, 5e4)}
+    return {spring: finger_press.f3_setup(spring) for spring in (1e3, 1e4, 5e4)}
 
 
 @pytest.mark.parametrize("spring", [1e3, 1e4, 5e4])
@@ -170,14 +171,14 @@ def test_adaptive_fim_on_f3_finds_the_environment_and_tracks_the_force(f3_setups
     """Estimates start at half k_e and 1 cm short of the surface; FIM with the true values is the reference."""
     setup = f3_setups[spring]
     still = Constant(setup.tip0)
-    known = ForceImpedance(still, setup.normal, 10.0, setup.surface_point(), setup.k_e, **chapter4_setups.F3_IMPEDANCE)
-    traj = chapter4.run(setup, ImpedanceController(setup.hand, {"F3": known}, *chapter4_setups.F3_GAINS), 2.0)
-    assert abs(np.mean(chapter4.normal_force(setup, traj)[-100:]) - 10.0) < 0.2  # < 2 %
+    known = ForceImpedance(still, setup.normal, 10.0, setup.surface_point(), setup.k_e, **finger_press.F3_IMPEDANCE)
+    traj = finger_press.run(setup, ImpedanceController(setup.hand, {"F3": known}, *finger_press.F3_GAINS), 2.0)
+    assert abs(np.mean(finger_press.normal_force(setup, traj)[-100:]) - 10.0) < 0.2  # < 2 %
     profile = SmoothStep([5.0], [10.0], 0.3, delay=2.0)
     adaptive = AdaptiveForceImpedance(still, setup.normal, profile, setup.surface_point() - 0.01 * setup.normal,
-                                      0.5 * setup.k_e, **chapter4_setups.F3_IMPEDANCE)  # fmt: skip
-    traj = chapter4.run(setup, ImpedanceController(setup.hand, {"F3": adaptive}, *chapter4_setups.F3_GAINS), 4.5)
-    force = chapter4.normal_force(setup, traj)
+                                      0.5 * setup.k_e, **finger_press.F3_IMPEDANCE)  # fmt: skip
+    traj = finger_press.run(setup, ImpedanceController(setup.hand, {"F3": adaptive}, *finger_press.F3_GAINS), 4.5)
+    force = finger_press.normal_force(setup, traj)
     assert abs(np.mean(force[-100:]) - 10.0) < 0.2
     assert traj.log["F3/stiffness_estimate"][-1] == pytest.approx(setup.k_e, rel=0.05)
     assert abs(traj.log["F3/surface_estimate"][-1] - setup.surface) < 0.05 * 10.0 / setup.k_e + 1e-5
@@ -206,18 +207,16 @@ def test_printed_fim_settles_where_the_closed_form_says_and_the_feedforward_at_f
     On a frictionless face the closed form needs nothing from the run but the final pose's effective mass; with
     friction it adds the deflection of the measured tangential force.
     """
-    setup = chapter4.planar_setup(1000.0, friction=friction)
+    setup = finger_press.planar_setup(1000.0, friction=friction)
     finals = {}
     for feedforward in (False, True):
         law = ForceImpedance(Constant(setup.tip0), setup.normal, 10.0, setup.surface_point(), setup.k_e,
                              mass=8.9, damping=167.0, stiffness=560.0)  # fmt: skip
         if not feedforward:
             chapter4.as_printed(law)
-        controller = ImpedanceController(
-            setup.hand, {"tip": law}, *chapter4_setups.PLANAR_GAINS, feedforward=feedforward
-        )
-        traj = chapter4.run(setup, controller, 4.0)
-        force = chapter4.normal_force(setup, traj)
+        controller = ImpedanceController(setup.hand, {"tip": law}, *finger_press.PLANAR_GAINS, feedforward=feedforward)
+        traj = finger_press.run(setup, controller, 4.0)
+        force = finger_press.normal_force(setup, traj)
         assert np.ptp(force[-500:]) < 1e-3  # at rest
         final = float(np.mean(force[-200:]))
         inner, frictionless, measured = chapter4_closed_form._closed_form(setup, traj, force, law, 80.0, feedforward)
@@ -234,12 +233,12 @@ def test_printed_fim_settles_where_the_closed_form_says_and_the_feedforward_at_f
 def test_printed_fim_on_f3_misses_f_d_as_the_closed_form_with_friction_predicts(f3_setups):
     setup = f3_setups[1e4]
     law = chapter4.as_printed(ForceImpedance(Constant(setup.tip0), setup.normal, 10.0, setup.surface_point(),
-                                             setup.k_e, **chapter4_setups.F3_IMPEDANCE))  # fmt: skip
-    controller = ImpedanceController(setup.hand, {"F3": law}, *chapter4_setups.F3_GAINS, feedforward=False)
-    traj = chapter4.run(setup, controller, 3.0)
-    force = chapter4.normal_force(setup, traj)
+                                             setup.k_e, **finger_press.F3_IMPEDANCE))  # fmt: skip
+    controller = ImpedanceController(setup.hand, {"F3": law}, *finger_press.F3_GAINS, feedforward=False)
+    traj = finger_press.run(setup, controller, 3.0)
+    force = finger_press.normal_force(setup, traj)
     inner, frictionless, measured = chapter4_closed_form._closed_form(
-        setup, traj, force, law, chapter4_setups.F3_GAINS[0], False
+        setup, traj, force, law, finger_press.F3_GAINS[0], False
     )
     final = float(np.mean(force[-150:]))
     assert 1.4 < final < 2.0  # 10 N asked
@@ -250,7 +249,7 @@ def test_printed_fim_on_f3_misses_f_d_as_the_closed_form_with_friction_predicts(
 def test_pim_lowers_peak_and_steady_force_against_the_uncontrolled_push():
     case = chapter4.f3_push(1.0)
     rows = {row[0]: row for row in case.table}
-    for spring in chapter4_setups.STIFFNESSES:
+    for spring in finger_press.STIFFNESSES:
         plain, pim = rows[f"uncontrolled, K_s = {spring:g}"], rows[f"PIM, K_s = {spring:g}"]
         assert float(pim[3]) < float(plain[3])  # push peak (after the impact window)
         assert float(pim[4]) < float(plain[4])  # steady force
@@ -274,18 +273,18 @@ def test_tuning_plan_scales_runs_and_evaluations_but_never_skips():
     for start in chapter4_tuning.TUNING_STARTS:  # starts inside the bounds, or clipped onto them
         assert np.all(np.asarray(start) > chapter4_tuning.TUNING_BOUNDS[0])
     # K_I below the environment's stiffness
-    assert chapter4_tuning.TUNING_BOUNDS[1][1] <= chapter4_fitness.TUNING_SPRING
+    assert chapter4_tuning.TUNING_BOUNDS[1][1] <= press_fitness.TUNING_SPRING
 
 
 def test_tuned_impedance_beats_its_start_on_a_held_out_force_and_is_reproducible():
-    objective = functools.partial(chapter4.impedance_fitness, duration=1.0)
+    objective = functools.partial(press_fitness.impedance_fitness, duration=1.0)
     start = np.log10([5.0, 5.0])
     first = bh.tuning.cma_es(objective, start, 0.5, seed=4, max_generations=3, population=6)  # process pool
     again = bh.tuning.cma_es(objective, start, 0.5, seed=4, max_generations=3, population=6, executor="serial")
     np.testing.assert_array_equal(first.history_parameters, again.history_parameters)
     np.testing.assert_array_equal(first.history_fitness, again.history_fitness)
-    untuned, _ = chapter4_fitness._evaluate((5.0, 5.0), 8.0)
-    tuned, _ = chapter4_fitness._evaluate(tuple(10.0**first.best), 8.0)
+    untuned, _ = press_fitness._evaluate((5.0, 5.0), 8.0)
+    tuned, _ = press_fitness._evaluate(tuple(10.0**first.best), 8.0)
     assert tuned.settling < untuned.settling and tuned.overshoot <= untuned.overshoot
 
 
@@ -293,13 +292,13 @@ def test_tuned_impedance_beats_its_start_on_a_held_out_force_and_is_reproducible
                                                ((1e-4, 1.0), 8.0), ((0.1, 500.0), 6.0)])  # fmt: skip
 def test_fitness_runs_continue_the_shared_approach_to_the_bit(params, force):
     """_discrete_fim continues the approach that every (M_I, K_I) shares; the run from the start is the same."""
-    t, measured = chapter4_fitness._discrete_fim(*params, force, chapter4_fitness.TUNING_SPRING, 1.0)
-    start, _, _ = chapter4_fitness._approach(chapter4_fitness.TUNING_SPRING, force, 1.0)
+    t, measured = press_fitness._discrete_fim(*params, force, press_fitness.TUNING_SPRING, 1.0)
+    start, _, _ = press_fitness._approach(press_fitness.TUNING_SPRING, force, 1.0)
     assert 0.1 < start.t < 0.9  # the runs share ~a third of their samples
-    setup = chapter4_fitness._cached_f3_setup(chapter4_fitness.TUNING_SPRING)
-    traj = chapter4.run(setup, chapter4_fitness._discrete_fim_controller(setup, *params, force), 1.0)
+    setup = press_fitness._cached_f3_setup(press_fitness.TUNING_SPRING)
+    traj = finger_press.run(setup, press_fitness._discrete_fim_controller(setup, *params, force), 1.0)
     np.testing.assert_array_equal(t, traj.t)
-    np.testing.assert_array_equal(measured, chapter4.normal_force(setup, traj))
+    np.testing.assert_array_equal(measured, finger_press.normal_force(setup, traj))
 
 
 def test_bad_impedance_inputs_raise_clear_errors():

@@ -11,8 +11,9 @@ import pytest
 import bhgrasp as bh
 from bhgrasp.grasp.clearance import check_clearance, path_clearance
 from bhgrasp.scenarios.box_grasp import BOX_SIZE, OFF_STOP_SPACING, PEDESTAL, box_grasp
+from bhgrasp.scenarios.demo_result import SUCCESS
 from bhgrasp.scenarios.grasp_demo import run_grasp_demo
-from bhgrasp.thesis.motions import SUCCESS, run_motion, short_reason
+from bhgrasp.thesis.motions import run_motion, short_reason
 
 
 @pytest.fixture(scope="module")
@@ -116,8 +117,7 @@ def _can_turn(plan_tolerance):
     from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
     from bhgrasp.controllers.supervisor import GraspSupervisor
     from bhgrasp.scenarios.demo_result import evaluate_demo
-    from bhgrasp.scenarios.object_grasp import object_grasp
-    from bhgrasp.thesis.synthesis_case import OBJECTS
+    from bhgrasp.scenarios.object_grasp import OBJECTS, object_grasp
 
     setup = object_grasp(OBJECTS["can"][1])
     grasp = SMCAdaptiveGrasp(setup.hand, replace(setup.item, density=None), mu=0.6, squeeze=5.0,

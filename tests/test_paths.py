@@ -9,9 +9,8 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.paths import PoseCircle, PoseWaypoints
-from bhgrasp.scenarios.object_grasp import object_grasp
-from bhgrasp.thesis.path_case import PLANES, WAYPOINTS, circle, run_path, waypoints
-from bhgrasp.thesis.synthesis_case import OBJECTS
+from bhgrasp.scenarios.carry import PLANES, WAYPOINTS, circle, run_path, waypoints
+from bhgrasp.scenarios.object_grasp import OBJECTS, object_grasp
 from bhgrasp.trajectories import PosePath
 
 START = pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.2, 0.3), np.array([0.01, -0.02, 0.17]))

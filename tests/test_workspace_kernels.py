@@ -31,7 +31,7 @@ from bhgrasp.controllers._workspace_terms import (
 from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
 from bhgrasp.errors import InputError
 from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
-from bhgrasp.thesis import chapter4, chapter4_fitness, chapter4_setups
+from bhgrasp.scenarios import finger_press, press_fitness
 from bhgrasp.trajectories import Constant
 
 RELATIVE = 1e-12
@@ -176,12 +176,12 @@ def test_the_controller_gives_the_same_torques_without_the_kernel(monkeypatch: p
 
 def test_the_impedance_controller_gives_the_same_torques_without_the_kernel(monkeypatch: pytest.MonkeyPatch) -> None:
     """In lockstep: the Python twin, fed the states of the compiled controller's run, gives its torques and logs."""
-    setup = chapter4_fitness._cached_f3_setup(chapter4_fitness.TUNING_SPRING)
+    setup = press_fitness._cached_f3_setup(press_fitness.TUNING_SPRING)
 
     def controller() -> ImpedanceController:
         law = ForceImpedance(Constant(setup.tip0), setup.normal, 6.0, setup.surface_point(), setup.k_e, mass=0.01,
-                             stiffness=100.0, period=chapter4_setups.DT)  # fmt: skip
-        return ImpedanceController(setup.hand, {"F3": law}, *chapter4_setups.F3_GAINS)
+                             stiffness=100.0, period=finger_press.DT)  # fmt: skip
+        return ImpedanceController(setup.hand, {"F3": law}, *finger_press.F3_GAINS)
 
     compiled, steps = controller(), []
 
@@ -191,7 +191,7 @@ def test_the_impedance_controller_gives_the_same_torques_without_the_kernel(monk
         return tau
 
     recording.reset = compiled.reset  # type: ignore[attr-defined]
-    traj = chapter4.run(setup, recording, 0.5)  # contact at ~0.36 s
+    traj = finger_press.run(setup, recording, 0.5)  # contact at ~0.36 s
     assert traj.contact_count().max() > 0
     no_kernel(monkeypatch)
     python = controller()

@@ -5,19 +5,24 @@ the Allegro box grasp (:mod:`~bhgrasp.scenarios.allegro_grasp`), any object gras
 (:mod:`~bhgrasp.scenarios.object_grasp`), the grasp demo and its result (:mod:`~bhgrasp.scenarios.grasp_demo`,
 :mod:`~bhgrasp.scenarios.demo_result`), its controllers by name (:mod:`~bhgrasp.scenarios.grasp_controllers`) and
 uncertainties (:mod:`~bhgrasp.scenarios.uncertainty`), the ideal object loop (:mod:`~bhgrasp.scenarios.object_loop`),
-the identification runs (:mod:`~bhgrasp.scenarios.identification`) and the sweep rollouts built on them
-(:mod:`~bhgrasp.scenarios.rollouts`).
+the identification runs (:mod:`~bhgrasp.scenarios.identification`), grasped objects carried along paths
+(:mod:`~bhgrasp.scenarios.carry`), a finger pressing a spring-mounted box (:mod:`~bhgrasp.scenarios.finger_press`,
+chapter 4's benches) and the fitness that tunes its impedance (:mod:`~bhgrasp.scenarios.press_fitness`), and the
+sweep rollouts built on them (:mod:`~bhgrasp.scenarios.rollouts`).
 """
 
 from bhgrasp.scenarios.allegro_grasp import allegro_box_grasp, allegro_hand
 from bhgrasp.scenarios.box_grasp import BoxGrasp, box_grasp
-from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult, evaluate_demo
+from bhgrasp.scenarios.carry import PathRun, circle, run_path, waypoints
+from bhgrasp.scenarios.demo_result import MU_ASSUMED, SUCCESS, GraspDemoResult, evaluate_demo
+from bhgrasp.scenarios.finger_press import ForceMetrics, Setup, f3_setup, force_metrics, normal_force, planar_setup
 from bhgrasp.scenarios.grasp_controllers import ADAPTATIONS, CONTROLLERS, grasp_controller
 from bhgrasp.scenarios.grasp_demo import HANDS, demo_figure, grasp_scene, run_grasp_demo, save_demo
 from bhgrasp.scenarios.hold import HoldScenario, reference_hold
 from bhgrasp.scenarios.identification import IdentificationRun, identification_run
-from bhgrasp.scenarios.object_grasp import ObjectGrasp, object_grasp, run_object_grasp
+from bhgrasp.scenarios.object_grasp import OBJECTS, ObjectGrasp, object_grasp, run_object_grasp
 from bhgrasp.scenarios.object_loop import ObjectLoopRun, ideal_object_loop
+from bhgrasp.scenarios.press_fitness import impedance_fitness
 from bhgrasp.scenarios.rollouts import check_grasp_case, grasp_rollout, hold_rollout
 from bhgrasp.scenarios.uncertainty import UNCERTAINTIES, sensor_model
 
@@ -26,29 +31,42 @@ __all__ = [
     "CONTROLLERS",
     "HANDS",
     "MU_ASSUMED",
+    "OBJECTS",
+    "SUCCESS",
     "UNCERTAINTIES",
     "BoxGrasp",
+    "ForceMetrics",
     "GraspDemoResult",
     "HoldScenario",
     "IdentificationRun",
     "ObjectGrasp",
     "ObjectLoopRun",
+    "PathRun",
+    "Setup",
     "allegro_box_grasp",
     "allegro_hand",
     "box_grasp",
     "check_grasp_case",
+    "circle",
     "demo_figure",
     "evaluate_demo",
+    "f3_setup",
+    "force_metrics",
     "grasp_controller",
     "grasp_rollout",
     "grasp_scene",
     "hold_rollout",
     "ideal_object_loop",
     "identification_run",
+    "impedance_fitness",
+    "normal_force",
     "object_grasp",
+    "planar_setup",
     "reference_hold",
     "run_grasp_demo",
     "run_object_grasp",
+    "run_path",
     "save_demo",
     "sensor_model",
+    "waypoints",
 ]

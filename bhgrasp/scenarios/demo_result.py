@@ -13,6 +13,7 @@ from bhgrasp.scenarios.uncertainty import final_pose_error
 from bhgrasp.sim.scene import Scene
 
 MU_ASSUMED = 0.6  # the true friction is 0.8
+SUCCESS = (0.5e-3, 5e-3)  # [m], [rad] a moved object's final error against the request (with no sliding sample)
 
 
 @dataclass
@@ -142,4 +143,4 @@ def evaluate_demo(traj, hand, controller, mass, estimate, supervisor, wall, scen
     )
 
 
-__all__ = ["MU_ASSUMED", "GraspDemoResult", "evaluate_demo"]
+__all__ = ["MU_ASSUMED", "SUCCESS", "GraspDemoResult", "evaluate_demo"]

@@ -31,8 +31,8 @@ from bhgrasp.grasp.manipulability import ManipulableSpace, manipulable_space
 from bhgrasp.grasp.opposition import opposed_grasp
 from bhgrasp.grasp.synthesis import GraspCandidate, synthesize
 from bhgrasp.hand import BarrettHand, Hand
-from bhgrasp.objects import FixedBox
-from bhgrasp.scenarios.box_grasp import FRICTION, JOINT_DAMPING, STIFFNESS
+from bhgrasp.objects import Box, Cylinder, FixedBox, Sphere
+from bhgrasp.scenarios.box_grasp import CONTACT_HEIGHT, FRICTION, JOINT_DAMPING, STIFFNESS
 from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult, evaluate_demo
 from bhgrasp.scenarios.grasp_controllers import grasp_controller
 from bhgrasp.sim import Simulator
@@ -41,6 +41,14 @@ from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 
 PEDESTAL_HEIGHT, PEDESTAL_SHARE = 0.02, 0.4  # [m], share of the object's footprint
+# Example objects of household sizes the BH8-280 spans, each centred where the thesis' box is: key -> (label, object)
+CENTRE = pin.SE3(np.eye(3), np.array([0.0, 0.0, CONTACT_HEIGHT]))
+OBJECTS = {
+    "box": ("thesis box 0.06 x 0.05 x 0.05 m, 0.6 kg", Box(size=(0.06, 0.05, 0.05), mass=0.6, pose=CENTRE)),
+    "cube": ("cube 0.05 m, 0.3 kg", Box(size=(0.05, 0.05, 0.05), mass=0.3, pose=CENTRE)),
+    "can": ("can r 33 mm x 100 mm, 0.35 kg", Cylinder(radius=0.033, length=0.10, mass=0.35, pose=CENTRE)),
+    "ball": ("ball r 35 mm, 0.2 kg", Sphere(radius=0.035, mass=0.2, pose=CENTRE)),
+}
 
 
 @dataclass
@@ -151,4 +159,4 @@ def run_object_grasp(
     return evaluate_demo(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
 
 
-__all__ = ["PEDESTAL_HEIGHT", "PEDESTAL_SHARE", "ObjectGrasp", "object_grasp", "run_object_grasp"]
+__all__ = ["OBJECTS", "PEDESTAL_HEIGHT", "PEDESTAL_SHARE", "ObjectGrasp", "object_grasp", "run_object_grasp"]

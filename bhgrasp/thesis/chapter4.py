@@ -20,14 +20,14 @@ on, the gradient law (4.41) with a constant f_d), and set the steady force of ev
 inner-loop stiffness (:func:`~bhgrasp.thesis.chapter4_closed_form.inner_loop_stiffness`) that explains the
 printed law's steady-state force error.
 
-The chapter's code, one concept per module: :mod:`~bhgrasp.thesis.chapter4_setups` (the finger-and-object
-benches, running them, the normal force), :mod:`~bhgrasp.thesis.chapter4_metrics` (force response metrics),
+The chapter's code, one concept per module: :mod:`~bhgrasp.scenarios.finger_press` (the finger-and-object
+benches, running them, the normal force and its metrics), :mod:`~bhgrasp.thesis.chapter4_metrics` (their report
+rows),
 :mod:`~bhgrasp.thesis.chapter4_closed_form` (the laws as printed, the closed-form steady force),
 :mod:`~bhgrasp.thesis.chapter4_contact` (contact without control, PIM), :mod:`~bhgrasp.thesis.chapter4_fim`
-(FIM, adaptive FIM, three fingers), :mod:`~bhgrasp.thesis.chapter4_fitness` (the tuning's fitness) and
-:mod:`~bhgrasp.thesis.chapter4_tuning` (the CMA-ES tuning).  This module holds the :class:`Case` type, the
-:data:`CASES` registry, :func:`run_chapter4` and :func:`write_report`, and re-exports the public names of the
-others (``from bhgrasp.thesis.chapter4 import planar_setup``).
+(FIM, adaptive FIM, three fingers), :mod:`~bhgrasp.scenarios.press_fitness` (the tuning's fitness) and
+:mod:`~bhgrasp.thesis.chapter4_tuning` (the CMA-ES tuning).  This module holds the :data:`CASES` registry,
+:func:`run_chapter4` and :func:`write_report`, and re-exports the cases and the closed forms.
 """
 
 from __future__ import annotations
@@ -37,23 +37,15 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from bhgrasp.scenarios.finger_press import (
+    CONTACT,
+    IMPACT_WINDOW,
+    OBJECT_MASS,
+)
 from bhgrasp.thesis.case import Case, case_progress
 from bhgrasp.thesis.chapter4_closed_form import as_printed, friction_offset, inner_loop_stiffness, steady_force
 from bhgrasp.thesis.chapter4_contact import f3_push, one_link_contact
 from bhgrasp.thesis.chapter4_fim import f3_force, planar_impedance, three_fingers
-from bhgrasp.thesis.chapter4_fitness import impedance_fitness
-from bhgrasp.thesis.chapter4_metrics import IMPACT_WINDOW, ForceMetrics, force_metrics
-from bhgrasp.thesis.chapter4_setups import (
-    CONTACT,
-    OBJECT_MASS,
-    Setup,
-    effective_stiffness,
-    f3_setup,
-    normal_force,
-    planar_setup,
-    probe_surface,
-    run,
-)
 from bhgrasp.thesis.chapter4_tuning import fingertip_mass_range, tuning, tuning_plan
 
 CASES: dict[str, Callable[..., Case]] = {
@@ -147,8 +139,20 @@ def write_report(cases: list[Case], path: Path, figures: dict[str, str], scale: 
 
 
 __all__ = [
-    "CASES", "Case", "ForceMetrics", "Setup", "as_printed", "effective_stiffness", "f3_force", "f3_push", "f3_setup",
-    "fingertip_mass_range", "force_metrics", "friction_offset", "impedance_fitness", "inner_loop_stiffness",
-    "normal_force", "one_link_contact", "planar_impedance", "planar_setup", "probe_surface", "run", "run_chapter4",
-    "steady_force", "three_fingers", "tuning", "tuning_plan", "write_report",
-]  # fmt: skip
+    "CASES",
+    "Case",
+    "as_printed",
+    "f3_force",
+    "f3_push",
+    "fingertip_mass_range",
+    "friction_offset",
+    "inner_loop_stiffness",
+    "one_link_contact",
+    "planar_impedance",
+    "run_chapter4",
+    "steady_force",
+    "three_fingers",
+    "tuning",
+    "tuning_plan",
+    "write_report",
+]

@@ -15,7 +15,7 @@ import numpy as np
 from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceLaw
 from bhgrasp.controllers.workspace import workspace_dynamics
 from bhgrasp.data import Trajectory
-from bhgrasp.thesis.chapter4_setups import Setup
+from bhgrasp.scenarios.finger_press import Setup
 
 # Gamma = diag(gamma_1, gamma_2) of the printed gradient law (4.41) in our runs, [1/(m^2 s)] and [1/s]: gamma_2 dt =
 # 0.1 keeps the explicit update stable at dt = 1 ms, gamma_1 = gamma_2 / (1 cm)^2 moves k_e as fast for a 1 cm

@@ -13,18 +13,19 @@ from bhgrasp.controllers import PDGravity, WorkspaceComputedTorque
 from bhgrasp.controllers.impedance import ImpedanceController, PositionImpedance
 from bhgrasp.data import State, Trajectory
 from bhgrasp.grasp.sensing import ContactSensing
-from bhgrasp.thesis.case import Case
-from bhgrasp.thesis.chapter4_metrics import FORCE_HEADER, _row, force_metrics
-from bhgrasp.thesis.chapter4_setups import (
+from bhgrasp.scenarios.finger_press import (
     F3_GAINS,
     F3_IMPEDANCE,
     STIFFNESSES,
     Setup,
     f3_setup,
+    force_metrics,
     normal_force,
     planar_setup,
     run,
 )
+from bhgrasp.thesis.case import Case
+from bhgrasp.thesis.chapter4_metrics import FORCE_HEADER, force_row
 from bhgrasp.trajectories import Constant, Quintic
 
 PUSH_DEPTH = 0.05  # [m] how far beyond the surface the uncontrolled push commands the fingertip
@@ -42,7 +43,7 @@ def one_link_contact(scale: float = 1.0) -> Case:
         m = force_metrics(traj.t, force)
         before = traj.t < m.contact_time if np.isfinite(m.contact_time) else np.ones(len(traj), bool)
         reaction = _reaction_torques(setup, traj)
-        case.table.append(_row(f"K_s = {spring:g} N/m", m, [f"{np.abs(reaction[before]).max():.1e}"]))
+        case.table.append(force_row(f"K_s = {spring:g} N/m", m, [f"{np.abs(reaction[before]).max():.1e}"]))
         case.traces[f"K_s {spring:g}"] = (traj.t, force, None)
     case.notes.append(
         "Thesis: contact at ~1.1 s, reaction torque zero before contact, force growing with time after it."
@@ -77,7 +78,7 @@ def f3_push(scale: float = 1.0) -> Case:
         for name, controller in (("uncontrolled", plain), ("PIM", pim)):
             traj = run(setup, controller, 3.0 * scale)
             force = normal_force(setup, traj)
-            case.table.append(_row(f"{name}, K_s = {spring:g}", force_metrics(traj.t, force)))
+            case.table.append(force_row(f"{name}, K_s = {spring:g}", force_metrics(traj.t, force)))
             case.traces[f"{name} K_s {spring:g}"] = (traj.t, force, None)
     case.notes += [
         "Thesis: uncontrolled 110-240 N for K_s = 10-50 kN/m; PIM (M_I 15, B_I 780, K_I 5000) settles at 20-30 N,"

@@ -21,6 +21,20 @@ from bhgrasp.controllers.impedance import (
 )
 from bhgrasp.hand import BarrettHand
 from bhgrasp.objects import Box, SpringMounted
+from bhgrasp.scenarios.finger_press import (
+    DT,
+    F3_GAINS,
+    F3_IMPEDANCE,
+    OBJECT_MASS,
+    PLANAR_GAINS,
+    Setup,
+    f3_setup,
+    force_metrics,
+    normal_force,
+    planar_setup,
+    probe_surface,
+    run,
+)
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
@@ -33,20 +47,7 @@ from bhgrasp.thesis.chapter4_closed_form import (
     _why_printed,
     as_printed,
 )
-from bhgrasp.thesis.chapter4_metrics import FORCE_HEADER, _row, force_metrics
-from bhgrasp.thesis.chapter4_setups import (
-    DT,
-    F3_GAINS,
-    F3_IMPEDANCE,
-    OBJECT_MASS,
-    PLANAR_GAINS,
-    Setup,
-    f3_setup,
-    normal_force,
-    planar_setup,
-    probe_surface,
-    run,
-)
+from bhgrasp.thesis.chapter4_metrics import FORCE_HEADER, force_row
 from bhgrasp.trajectories import Constant, Reference, SmoothStep, exponential_approach
 
 
@@ -104,7 +105,7 @@ def planar_impedance(scale: float = 1.0) -> Case:
                 final = force_metrics(traj.t, force, desired).final
                 why = _why_printed(inner, PLANAR_GAINS[0], law.stiffness, setup.k_e, law.force, predicted[0], final)
                 why += "  On a frictionless face the run settles at the first column (tests/test_impedance.py)."
-        case.table.append(_row(name, force_metrics(traj.t, force, desired), extra))
+        case.table.append(force_row(name, force_metrics(traj.t, force, desired), extra))
         case.traces[name] = (traj.t, force, desired)
     case.notes += [
         "Thesis: without impedance > 150 N, PIM settles at 25 N; FIM converges to 10 N; adaptive FIM converges to"
@@ -156,7 +157,7 @@ def f3_force(scale: float = 1.0) -> Case:
                 final = force_metrics(traj.t, force, 10.0).final
                 why = _why_printed(inner, F3_GAINS[0], law.stiffness, setup.k_e, law.force, predicted[0], final)
             extra += [f"{value:.3f}" for value in predicted]
-            case.table.append(_row(f"{name}, K_s = {spring:g}", force_metrics(traj.t, force, 10.0), extra))
+            case.table.append(force_row(f"{name}, K_s = {spring:g}", force_metrics(traj.t, force, 10.0), extra))
             case.traces[f"{name} K_s {spring:g}"] = (traj.t, force, 10.0)
     case.notes += [
         "Thesis (Fig 4.19, k_e unstated): contact at 6.5 s, peak 12 N, steady error ~0.02 N, k_e estimate ~4e3.",
@@ -198,7 +199,7 @@ def three_fingers(scale: float = 1.0) -> Case:
     traj = sim.run(controller, 3.0 * scale, state=sim.initial_state(q0), progress=False)
     for finger in hand.fingers:
         force = traj.log[f"{finger}/force"]
-        case.table.append(_row(finger, force_metrics(traj.t, force, 15.0)))
+        case.table.append(force_row(finger, force_metrics(traj.t, force, 15.0)))
         case.traces[finger] = (traj.t, force, 15.0)
     case.notes += [
         "Thesis: all contact forces converge close to F_d (15 N in the text, 3 N in the caption).",

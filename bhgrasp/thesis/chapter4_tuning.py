@@ -2,7 +2,7 @@
 
 :func:`tuning` runs CMA-ES over (log10 M_I, log10 K_I) inside :data:`TUNING_BOUNDS`, from the starts and seeds of
 :func:`tuning_plan`, each run to cma's own convergence, on the fitness
-:func:`~bhgrasp.thesis.chapter4_fitness.impedance_fitness`, and holds the optima out at F_d = 4, 6, 8 N;
+:func:`~bhgrasp.scenarios.press_fitness.impedance_fitness`, and holds the optima out at F_d = 4, 6, 8 N;
 :func:`fingertip_mass_range` is the range of F3's fingertip effective mass that argues the bounds.
 """
 
@@ -18,8 +18,7 @@ import numpy as np
 from bhgrasp.controllers.workspace import workspace_dynamics
 from bhgrasp.errors import InputError
 from bhgrasp.hand import Hand
-from bhgrasp.thesis.case import Case
-from bhgrasp.thesis.chapter4_fitness import (
+from bhgrasp.scenarios.press_fitness import (
     TUNING_DURATION,
     TUNING_FORCE,
     TUNING_SPRING,
@@ -27,6 +26,7 @@ from bhgrasp.thesis.chapter4_fitness import (
     _evaluate,
     impedance_fitness,
 )
+from bhgrasp.thesis.case import Case
 
 TUNING_BOUNDS = ((1e-4, 0.1), (1.0, TUNING_SPRING))  # (lower, upper) of (M_I [kg], K_I [N/m]); argued in tuning()
 TUNING_STARTS = ((0.5, 0.5), (5.0, 5.0), (0.01, 100.0))  # [M_I, K_I]: the thesis' two starts, and a light stiff one

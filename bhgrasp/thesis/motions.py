@@ -21,10 +21,10 @@ import numpy as np
 
 from bhgrasp.errors import UnreachableError
 from bhgrasp.scenarios.box_grasp import KNUCKLE_SPACING, OFF_STOP_SPACING
+from bhgrasp.scenarios.demo_result import SUCCESS
 from bhgrasp.scenarios.grasp_demo import run_grasp_demo
 from bhgrasp.thesis.case import Case
 
-SUCCESS = (0.5e-3, 5e-3)  # [m], [rad] final error against the request (with no sliding contact sample)
 MASS, ESTIMATE, DURATION = 0.6, 0.3, 3.0  # [kg], [kg], [s]
 GRASPS: dict[str, tuple[str, float]] = {
     "on_stop": ("pinch, spread on its stop (thesis)", KNUCKLE_SPACING),

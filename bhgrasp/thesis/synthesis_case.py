@@ -1,11 +1,12 @@
 """The chapter-5 synthesis case: grasps the planner chooses for boxes, cylinders and spheres, then run and moved.
 
-For each object of :data:`OBJECTS` (household sizes the BH8-280 spans, each centred where the thesis' box is),
+For each object of :data:`~bhgrasp.scenarios.object_grasp.OBJECTS` (household sizes the BH8-280 spans, each centred
+where the thesis' box is),
 :func:`~bhgrasp.grasp.synthesis.synthesize` picks the fingers, the spread and the contacts
 (:mod:`bhgrasp.scenarios.object_grasp` builds the scene around it, on a pedestal), then every motion of
 :data:`MOTIONS` is either refused before simulating (the grasp's manipulable space, the pedestal) or run with the
 SMC-adaptive law told half the mass (:func:`~bhgrasp.scenarios.object_grasp.run_object_grasp`), and judged as the
-motion table judges (:data:`~bhgrasp.thesis.motions.SUCCESS`: no sliding contact sample after the grasp
+motion table judges (:data:`~bhgrasp.scenarios.demo_result.SUCCESS`: no sliding contact sample after the grasp
 closed, the true final pose within 0.5 mm and 5 mrad of the request).
 """
 
@@ -14,22 +15,13 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import pinocchio as pin
 
 from bhgrasp.errors import UnreachableError
-from bhgrasp.objects import Box, Cylinder, Sphere
-from bhgrasp.scenarios.box_grasp import CONTACT_HEIGHT
-from bhgrasp.scenarios.object_grasp import object_grasp, run_object_grasp
+from bhgrasp.scenarios.demo_result import SUCCESS
+from bhgrasp.scenarios.object_grasp import OBJECTS, object_grasp, run_object_grasp
 from bhgrasp.thesis.case import Case
-from bhgrasp.thesis.motions import SUCCESS, short_reason
+from bhgrasp.thesis.motions import short_reason
 
-CENTRE = pin.SE3(np.eye(3), np.array([0.0, 0.0, CONTACT_HEIGHT]))
-OBJECTS = {
-    "box": ("thesis box 0.06 x 0.05 x 0.05 m, 0.6 kg", Box(size=(0.06, 0.05, 0.05), mass=0.6, pose=CENTRE)),
-    "cube": ("cube 0.05 m, 0.3 kg", Box(size=(0.05, 0.05, 0.05), mass=0.3, pose=CENTRE)),
-    "can": ("can r 33 mm x 100 mm, 0.35 kg", Cylinder(radius=0.033, length=0.10, mass=0.35, pose=CENTRE)),
-    "ball": ("ball r 35 mm, 0.2 kg", Sphere(radius=0.035, mass=0.2, pose=CENTRE)),
-}
 MOTIONS = {
     "lift": ("lift 10 mm", (0.0, 0.0, 0.01, 0.0, 0.0, 0.0)),
     "rx+0.15": ("lift, turn +0.15 rad about x", (0.0, 0.0, 0.01, 0.15, 0.0, 0.0)),

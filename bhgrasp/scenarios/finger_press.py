@@ -1,11 +1,13 @@
-"""Chapter 4's benches: a finger, a spring-mounted box in front of it, and the simulator that runs them.
+"""A finger pressing a spring-mounted box (thesis chapter 4's benches), the simulator that runs it, and its metrics.
 
 The thesis' compliant objects (4.3)-(4.7): a box of mass :data:`OBJECT_MASS` on a spring K_s (plus a light damper,
 0.3 of critical) that can only move along the pushing direction, touched through the spring-damper contact
 :data:`CONTACT`, so that the fingertip sees k_e = (1/K_s + 1/k_c)^-1 (:func:`effective_stiffness`).
 :func:`planar_setup` builds the thesis' planar finger (or its one-link finger) in front of one, :func:`f3_setup`
 Barrett finger F3, whose first touch :func:`probe_surface` measures; :func:`run` simulates a controller from the
-setup's start and :func:`normal_force` reads the force the finger exerts along the normal [N] from the contacts.
+setup's start and :func:`normal_force` reads the force the finger exerts along the normal [N] from the contacts;
+:func:`force_metrics` reads contact time, impact, peak, final force, overshoot, 2 % settling and steady-state error
+from it.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp import metrics
 from bhgrasp.controllers import WorkspaceComputedTorque
 from bhgrasp.controllers.base import Controller
 from bhgrasp.data import Trajectory
@@ -156,7 +159,61 @@ def normal_force(setup: Setup, traj: Trajectory) -> np.ndarray:
     return forces
 
 
+IMPACT_WINDOW = 0.02  # [s] after first contact: the impact transient, reported apart from the pushing peak
+
+
+@dataclass(frozen=True)
+class ForceMetrics:
+    """Force response after first contact.
+
+    Attributes: contact_time [s], impact (largest force in the first IMPACT_WINDOW after contact, before any
+    controller can react) [N], peak (largest force after it) [N], final [N], overshoot [%], settling (2 %, after
+    contact) [s], error (steady state, % of f_d).
+    """
+
+    contact_time: float
+    impact: float
+    peak: float
+    final: float
+    overshoot: float
+    settling: float
+    error: float
+
+
+def force_metrics(t: np.ndarray, force: np.ndarray, desired: float | None = None) -> ForceMetrics:
+    """Metrics of a force response; ``desired`` None uses the final force as the target (PIM, uncontrolled)."""
+    touching = np.flatnonzero(force > 1e-6)
+    if len(touching) == 0:
+        return ForceMetrics(np.nan, 0.0, 0.0, 0.0, np.nan, np.nan, np.nan)
+    k0 = touching[0]
+    window = t < t[k0] + IMPACT_WINDOW
+    impact = float(force[window].max())
+    peak = float(force[~window].max()) if np.any(~window) else 0.0
+    final = float(np.mean(force[-max(2, len(force) // 20) :]))
+    target = final if desired is None else desired
+    response = metrics.step_response(t[k0:], force[k0:], target, start=0.0)
+    error = np.nan if desired is None else 100.0 * abs(final - desired) / desired
+    overshoot = np.nan if desired is None else 100.0 * max(0.0, peak - desired) / desired  # after the impact
+    return ForceMetrics(float(t[k0]), impact, peak, final, overshoot, float(response.settling_time[0]), error)
+
+
 __all__ = [
-    "CONTACT", "DT", "F3_GAINS", "F3_IMPEDANCE", "F3_START", "OBJECT_MASS", "PLANAR_GAINS", "STIFFNESSES", "Setup",
-    "effective_stiffness", "f3_setup", "normal_force", "planar_setup", "probe_surface", "run",
-]  # fmt: skip
+    "CONTACT",
+    "DT",
+    "F3_GAINS",
+    "F3_IMPEDANCE",
+    "F3_START",
+    "IMPACT_WINDOW",
+    "OBJECT_MASS",
+    "PLANAR_GAINS",
+    "STIFFNESSES",
+    "ForceMetrics",
+    "Setup",
+    "effective_stiffness",
+    "f3_setup",
+    "force_metrics",
+    "normal_force",
+    "planar_setup",
+    "probe_surface",
+    "run",
+]

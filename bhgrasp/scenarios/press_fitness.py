@@ -16,8 +16,7 @@ import numpy as np
 from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
 from bhgrasp.errors import SimulationDiverged
 from bhgrasp.grasp.sensing import ContactSensing
-from bhgrasp.thesis.chapter4_metrics import ForceMetrics, force_metrics
-from bhgrasp.thesis.chapter4_setups import DT, F3_GAINS, Setup, f3_setup, normal_force, run
+from bhgrasp.scenarios.finger_press import DT, F3_GAINS, ForceMetrics, Setup, f3_setup, force_metrics, normal_force, run
 from bhgrasp.trajectories import Constant
 
 TUNING_SPRING = 500.0  # K_s [N/m]: the thesis' k_e = 500 N/m
