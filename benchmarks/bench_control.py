@@ -19,9 +19,9 @@ from bhgrasp.controllers import AdaptiveSlidingMode, ComputedTorque, GraspForceC
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.supervisor import GraspSupervisor
-from bhgrasp.objects import Box
+from bhgrasp.model.objects import Box
+from bhgrasp.motion.trajectories import Sinusoid
 from bhgrasp.scenarios.box_grasp import box_grasp
-from bhgrasp.trajectories import Sinusoid
 
 
 def main() -> None:

@@ -84,8 +84,8 @@ def grasp_law(state_file: Path):
 
     from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
     from bhgrasp.data import State
-    from bhgrasp.hand import BarrettHand
-    from bhgrasp.objects import Box
+    from bhgrasp.model.hand import BarrettHand
+    from bhgrasp.model.objects import Box
     from bhgrasp.scenarios.box_grasp import BOX_SIZE
 
     data = np.load(state_file)
@@ -101,7 +101,7 @@ def save_grasp_state(path: Path) -> None:
     """Run the grasp demo's supervisor to a held box (1 s) and save the sensed state there."""
     from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
     from bhgrasp.controllers.supervisor import GraspSupervisor
-    from bhgrasp.objects import Box
+    from bhgrasp.model.objects import Box
     from bhgrasp.scenarios.box_grasp import box_grasp
 
     setup = box_grasp(mass=0.6)

@@ -19,56 +19,56 @@ from bhgrasp.errors import (
     SimulationDiverged,
     UnreachableError,
 )
-from bhgrasp.ik import ik  # (a name its own module shares: bound now, or importing the module would rebind it)
 
 # public name -> the module that defines it
 _EXPORTS = {
     "BarrettActuation": "bhgrasp.sim.actuation",
-    "BarrettHand": "bhgrasp.hand",
-    "Box": "bhgrasp.objects",
-    "Capsule": "bhgrasp.objects",
+    "BarrettHand": "bhgrasp.model.hand",
+    "Box": "bhgrasp.model.objects",
+    "Capsule": "bhgrasp.model.objects",
     "Contact": "bhgrasp.data.contacts",
     "ContactForceQP": "bhgrasp.grasp",
     "ContactForceResult": "bhgrasp.grasp",
-    "Cylinder": "bhgrasp.objects",
-    "FingerIKResult": "bhgrasp.ik",
-    "FixedBox": "bhgrasp.objects",
+    "Cylinder": "bhgrasp.model.objects",
+    "FingerIKResult": "bhgrasp.model.ik",
+    "FixedBox": "bhgrasp.model.objects",
     "FullyActuated": "bhgrasp.sim.actuation",
     "GraspQuality": "bhgrasp.grasp",
-    "Hand": "bhgrasp.hand",
-    "IKResult": "bhgrasp.ik",
-    "Plane": "bhgrasp.objects",
+    "Hand": "bhgrasp.model.hand",
+    "IKResult": "bhgrasp.model.ik",
+    "Plane": "bhgrasp.model.objects",
     "Scene": "bhgrasp.sim.scene",
     "Simulator": "bhgrasp.sim.simulator",
     "SimulatorSettings": "bhgrasp.sim.settings",
-    "Sphere": "bhgrasp.objects",
+    "Sphere": "bhgrasp.model.objects",
     "SpringDamper": "bhgrasp.sim.contact_law",
-    "SpringMounted": "bhgrasp.objects",
+    "SpringMounted": "bhgrasp.model.objects",
     "State": "bhgrasp.data.state",
     "Trajectory": "bhgrasp.data.trajectory",
-    "Workspace": "bhgrasp.ik",
-    "barrett_urdf_path": "bhgrasp.resources",
-    "example_robot_data_dir": "bhgrasp.resources",
-    "example_robot_data_urdf": "bhgrasp.resources",
+    "Workspace": "bhgrasp.model.ik",
+    "barrett_urdf_path": "bhgrasp.model.resources",
+    "example_robot_data_dir": "bhgrasp.model.resources",
+    "example_robot_data_urdf": "bhgrasp.model.resources",
     "ferrari_canny": "bhgrasp.grasp",
-    "finger_ik": "bhgrasp.ik",
+    "finger_ik": "bhgrasp.model.ik",
     "grasp_map": "bhgrasp.grasp",
     "grasp_quality": "bhgrasp.grasp",
     "hand_jacobian": "bhgrasp.grasp",
+    "ik": "bhgrasp.model.ik",
     "internal_forces": "bhgrasp.grasp",
     "is_force_closure": "bhgrasp.grasp",
-    "planar_finger": "bhgrasp.planar",
+    "planar_finger": "bhgrasp.model.planar",
     "pseudo_inverse_forces": "bhgrasp.grasp",
-    "rotation_from_zyz": "bhgrasp.orientation",
-    "table": "bhgrasp.objects",
-    "thesis_impedance_finger": "bhgrasp.planar",
-    "thesis_one_link_finger": "bhgrasp.planar",
-    "thesis_two_link_finger": "bhgrasp.planar",
-    "wall": "bhgrasp.objects",
-    "workspace": "bhgrasp.ik",
-    "zyz_from_rotation": "bhgrasp.orientation",
+    "rotation_from_zyz": "bhgrasp.model.orientation",
+    "table": "bhgrasp.model.objects",
+    "thesis_impedance_finger": "bhgrasp.model.planar",
+    "thesis_one_link_finger": "bhgrasp.model.planar",
+    "thesis_two_link_finger": "bhgrasp.model.planar",
+    "wall": "bhgrasp.model.objects",
+    "workspace": "bhgrasp.model.ik",
+    "zyz_from_rotation": "bhgrasp.model.orientation",
 }
-_SUBMODULES = ("controllers", "metrics", "trajectories", "tuning")
+_SUBMODULES = ("controllers", "metrics", "motion", "tuning")
 
 
 def __getattr__(name: str) -> Any:
@@ -132,6 +132,7 @@ __all__ = [
     "internal_forces",
     "is_force_closure",
     "metrics",
+    "motion",
     "planar_finger",
     "pseudo_inverse_forces",
     "rotation_from_zyz",
@@ -139,7 +140,6 @@ __all__ = [
     "thesis_impedance_finger",
     "thesis_one_link_finger",
     "thesis_two_link_finger",
-    "trajectories",
     "tuning",
     "wall",
     "workspace",
@@ -147,7 +147,7 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported here
-    from bhgrasp import controllers, metrics, trajectories, tuning
+    from bhgrasp import controllers, metrics, motion, tuning
     from bhgrasp.data.contacts import Contact
     from bhgrasp.data.state import State
     from bhgrasp.data.trajectory import Trajectory
@@ -163,12 +163,17 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported here
         is_force_closure,
         pseudo_inverse_forces,
     )
-    from bhgrasp.hand import BarrettHand, Hand
-    from bhgrasp.ik import FingerIKResult, IKResult, Workspace, finger_ik, ik, workspace
-    from bhgrasp.objects import Box, Capsule, Cylinder, FixedBox, Plane, Sphere, SpringMounted, table, wall
-    from bhgrasp.orientation import rotation_from_zyz, zyz_from_rotation
-    from bhgrasp.planar import planar_finger, thesis_impedance_finger, thesis_one_link_finger, thesis_two_link_finger
-    from bhgrasp.resources import barrett_urdf_path, example_robot_data_dir, example_robot_data_urdf
+    from bhgrasp.model.hand import BarrettHand, Hand
+    from bhgrasp.model.ik import FingerIKResult, IKResult, Workspace, finger_ik, ik, workspace
+    from bhgrasp.model.objects import Box, Capsule, Cylinder, FixedBox, Plane, Sphere, SpringMounted, table, wall
+    from bhgrasp.model.orientation import rotation_from_zyz, zyz_from_rotation
+    from bhgrasp.model.planar import (
+        planar_finger,
+        thesis_impedance_finger,
+        thesis_one_link_finger,
+        thesis_two_link_finger,
+    )
+    from bhgrasp.model.resources import barrett_urdf_path, example_robot_data_dir, example_robot_data_urdf
     from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
     from bhgrasp.sim.contact_law import SpringDamper
     from bhgrasp.sim.scene import Scene

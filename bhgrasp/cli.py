@@ -491,7 +491,7 @@ def _plot_workspace(hand, output: Path, samples: int, seed: int) -> Path:
 
 def _workspace_figure(hand, samples: int, seed: int):
     """The tour's workspace figure (:func:`bhgrasp.plots.workspace_figure`) of ``samples`` tips per finger."""
-    from bhgrasp.ik import workspace
+    from bhgrasp.model.ik import workspace
     from bhgrasp.plots import workspace_figure
 
     points = {finger: workspace(hand, finger, samples, rng=seed).points for finger in hand.fingers}

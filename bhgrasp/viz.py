@@ -38,7 +38,7 @@ from bhgrasp._validation import as_positive
 from bhgrasp.controllers.base import Controller
 from bhgrasp.data import State, Trajectory
 from bhgrasp.errors import InputError
-from bhgrasp.objects import Box, Capsule, Cylinder, RigidObject, Sphere
+from bhgrasp.model.objects import Box, Capsule, Cylinder, RigidObject, Sphere
 from bhgrasp.sim.scene import Scene
 
 MAX_FPS = 60.0

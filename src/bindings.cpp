@@ -116,7 +116,7 @@ NB_MODULE(_core, m) {
       "normals"_a, "zero_length"_a, "switch_x"_a,
       "Contact frames (3m, 3) of bhgrasp.grasp.frames.contact_frames and the first zero normal's index (-1: none).");
   m.def("independent_model_text", &independent_model_text, "model"_a,
-        "pin.Model.saveToString() of the model with every mimic joint made an independent joint (bhgrasp.couplings).");
+        "pin.Model.saveToString() of the model with every mimic joint made an independent joint (bhgrasp.model.couplings).");
   m.def("concatenate", &concatenate, "parts"_a, "The contacts of many steps as one Contacts (rows in order).");
 
   nb::class_<Divergence>(m, "Divergence")

@@ -1,4 +1,4 @@
-// A hand's inverse dynamics for its control laws, on Pinocchio's C++ API (bhgrasp/hand_dynamics.py: HandDynamics).
+// A hand's inverse dynamics for its control laws, on Pinocchio's C++ API (bhgrasp/model/hand_dynamics.py: HandDynamics).
 // The Python twins are Hand.slotine_li_torque's NumPy path (tests/test_hand_kernels.py holds both to the bit) and
 // ContactSensing._reaction_torques_python in bhgrasp/grasp/sensing.py (to round-off, tests/test_sensing_kernels.py).
 // Units SI; joint space of the hand's model.

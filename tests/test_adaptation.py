@@ -19,8 +19,8 @@ from bhgrasp.controllers.object_identification import ObjectIdentification, cont
 from bhgrasp.controllers.object_regressors import momentum_regressor, object_parameters, object_regressor
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.data import State
-from bhgrasp.excitation import PoseExcitation
-from bhgrasp.objects import Box
+from bhgrasp.model.objects import Box
+from bhgrasp.motion.excitation import PoseExcitation
 from bhgrasp.scenarios.identification import hand_model_error, identification_run
 from bhgrasp.thesis.adaptation_case import FRICTION, ideal_run
 

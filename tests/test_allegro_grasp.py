@@ -10,7 +10,7 @@ import bhgrasp as bh
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.grasp.metrics import finger_normal_forces
-from bhgrasp.objects import Box
+from bhgrasp.model.objects import Box
 from bhgrasp.scenarios.allegro_grasp import FINGERTIPS, GRASPING, allegro_box_grasp
 from bhgrasp.scenarios.grasp_demo import OFFSET, run_grasp_demo
 

@@ -16,8 +16,8 @@ import bhgrasp as bh
 from bhgrasp.barrett import FINGER_PUCK, SPREAD_PUCK, BarrettDriver, BarrettTransmission, Puck, PuckProperties
 from bhgrasp.barrett.transmission import MOTOR_DAMPING
 from bhgrasp.data import State
-from bhgrasp.mount import mounted
-from bhgrasp.objects import Box, SpringMounted
+from bhgrasp.model.mount import mounted
+from bhgrasp.model.objects import Box, SpringMounted
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
 from bhgrasp.sim.contact_law import SpringDamper

@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 from bhgrasp.errors import InputError
+from bhgrasp.model.transmission import Transmission
 from bhgrasp.scenarios.box_grasp import box_grasp
 from bhgrasp.scenarios.hold import POSTURE_GAIN, SQUEEZE, reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import Actuation, BarrettActuation
 from bhgrasp.sim.batch import BatchSimulator
-from bhgrasp.transmission import Transmission
 
 
 def start_states(hold, n: int):

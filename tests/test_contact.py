@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.objects import Box, Sphere, table
+from bhgrasp.model.objects import Box, Sphere, table
 from bhgrasp.sim.contact import ContactEngine
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
@@ -52,7 +52,7 @@ def test_signed_distances_agree_with_coal(shape: str) -> None:
     """The closed-form signed distances used for patch depths equal coal's GJK/EPA (inside and outside)."""
     import coal
 
-    from bhgrasp.objects import Capsule
+    from bhgrasp.model.objects import Capsule
 
     items = {
         "box": Box(
@@ -128,7 +128,7 @@ def test_a_can_rests_on_its_pedestal(engine: str, radius: float) -> None:
     """A 0.3 kg can on a pedestal 40 % of its width: after 0.3 s the four patch points carry m g (Newton) and it sank
     m g / k (the spring law's closed form); before, its face patch read the side wall's depth: 4 x 33 N threw the
     33 mm can off at the second step, and the 50 mm can diverged."""
-    from bhgrasp.objects import FixedBox
+    from bhgrasp.model.objects import FixedBox
     from bhgrasp.sim import Simulator
 
     mass, stiffness = 0.3, 1e4

@@ -19,7 +19,7 @@ from scipy.integrate import solve_ivp
 from urdf_parts import rod
 
 import bhgrasp as bh
-from bhgrasp.couplings import Coupling, independent_model, twin_map
+from bhgrasp.model.couplings import Coupling, independent_model, twin_map
 
 LINKS = (0.07, 0.05)  # [m] proximal, distal
 LEVER = (0.003, 0.001)  # [m] each link's centre of mass off its axis (x, y)
@@ -290,7 +290,7 @@ def test_joint_controllers_drive_the_one_coordinate(hand):
     tests/test_controllers.py checks on the BH8-280); the adaptive sliding law (regressors through the twin) learns a
     nominal model 30 % light and tracks better than it starts."""
     from bhgrasp.controllers import AdaptiveSlidingMode, ComputedTorque, inertia_gain
-    from bhgrasp.trajectories import Sinusoid
+    from bhgrasp.motion.trajectories import Sinusoid
 
     sim = bh.Simulator(bh.Scene(hand), dt=1e-3)
     reference = Sinusoid(np.array([0.5]), np.array([0.15]), 0.7)  # as the BH8-280's test
@@ -345,7 +345,7 @@ def chain_urdf(second: str, third: str = "") -> str:
 def test_coupled_trees_pinocchio_cannot_compute_are_refused_by_name(tmp_path, hand):
     """Pinocchio 4.1's CRBA accumulates across calls when a mimic joint has moving joints above and below it (a
     wrist mount, or independent -> mimic -> independent); continuous mimic joints do not map linearly.  Refused."""
-    from bhgrasp.mount import mounted
+    from bhgrasp.model.mount import mounted
 
     path = tmp_path / "chain.urdf"
     path.write_text(chain_urdf('<mimic joint="J1" multiplier="0.5"/>'))

@@ -9,7 +9,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.data import ContactMemory
-from bhgrasp.objects import Cylinder, FixedBox
+from bhgrasp.model.objects import Cylinder, FixedBox
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.scene import Scene
 

@@ -420,7 +420,7 @@ def test_the_other_hands_are_an_optional_extra_named_when_missing(monkeypatch: p
     """example-robot-data (414 MB) is the `hands` extra: without it, asking for the Allegro names the extra."""
     import sys
 
-    from bhgrasp import resources
+    from bhgrasp.model import resources
 
     monkeypatch.setattr(sys, "path", [])
     monkeypatch.setattr(sys, "prefix", "/nonexistent")

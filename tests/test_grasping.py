@@ -7,8 +7,8 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.controllers.grasping import GraspContacts, GraspForceController
+from bhgrasp.motion.trajectories import Quintic
 from bhgrasp.scenarios.hold import BOX_MASS, reference_hold
-from bhgrasp.trajectories import Quintic
 
 
 def measured_cone_margins(traj, mu):

@@ -265,7 +265,7 @@ def test_point_jacobians_batch_matches_finite_differences(hand_name, allegro):
 
 def test_point_jacobians_of_a_one_joint_hand_keep_their_shape() -> None:
     """A 1-DOF finger (Pinocchio returns its 6 x 1 Jacobian as a vector): v_p = omega x (p - o) by hand."""
-    from bhgrasp.planar import thesis_one_link_finger
+    from bhgrasp.model.planar import thesis_one_link_finger
 
     hand = thesis_one_link_finger()
     q = np.array([0.4])

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.ik import finger_ik, ik, workspace
+from bhgrasp.model.ik import finger_ik, ik, workspace
 
 
 @pytest.mark.parametrize("finger", ["F1", "F2", "F3"])

@@ -20,9 +20,9 @@ from bhgrasp.controllers.impedance import (
 )
 from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter, critical_damping
 from bhgrasp.grasp.sensing import ContactSensing, FingerContact
+from bhgrasp.motion.trajectories import Constant, SmoothStep
 from bhgrasp.scenarios import finger_press, press_fitness
 from bhgrasp.thesis import chapter4, chapter4_closed_form, chapter4_tuning
-from bhgrasp.trajectories import Constant, SmoothStep
 
 
 @pytest.mark.parametrize(("mass", "damping", "stiffness", "period"), [(0.5, 3.0, 40.0, 1e-3), (8.9, 167.0, 560.0, 2e-3),

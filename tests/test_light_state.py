@@ -18,7 +18,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.data import DERIVED_FIELDS, ContactMemory, SimulatedState
-from bhgrasp.objects import Box, SpringMounted
+from bhgrasp.model.objects import Box, SpringMounted
 from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import FullyActuated

@@ -12,21 +12,21 @@ from bhgrasp.barrett.transmission import BarrettTransmission
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.errors import InputError, ModelError
 from bhgrasp.grasp.sensing import ContactSensing
-from bhgrasp.mount import (
+from bhgrasp.model.mount import (
     MOUNT_JOINTS,
-    MountReference,
     angular_map,
     angular_map_rate,
     mount_coordinates,
     mount_pose,
     mounted,
 )
-from bhgrasp.objects import Box
+from bhgrasp.model.objects import Box
+from bhgrasp.motion.trajectories import PoseMotion, Quintic
+from bhgrasp.motion.wrist import MountReference
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
 from bhgrasp.sim.batch import BatchSimulator
 from bhgrasp.sim.scene import Scene
-from bhgrasp.trajectories import PoseMotion, Quintic
 
 ORIGIN = pin.SE3(pin.exp3(np.array([0.2, -0.1, 0.3])), np.array([0.1, 0.2, 0.5]))
 COORDINATES = np.array([0.05, -0.02, 0.1, 0.3, -0.4, 0.7])

@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.objects import Box, Sphere, SpringMounted
+from bhgrasp.model.objects import Box, Sphere, SpringMounted
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.scene import Scene
 

@@ -11,7 +11,7 @@ from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp, object_paramete
 from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
 from bhgrasp.grasp.metrics import finger_normal_forces, slip_events
-from bhgrasp.objects import Box
+from bhgrasp.model.objects import Box
 from bhgrasp.scenarios.box_grasp import box_grasp
 from bhgrasp.scenarios.grasp_controllers import grasp_controller
 from bhgrasp.scenarios.grasp_demo import run_grasp_demo

@@ -13,7 +13,7 @@ import pinocchio as pin
 import pytest
 
 from bhgrasp.errors import InputError
-from bhgrasp.objects import (
+from bhgrasp.model.objects import (
     Box,
     Capsule,
     Cylinder,
@@ -30,7 +30,7 @@ SAMPLES = 1_000_000  # Monte-Carlo points per shape: relative standard error of 
 NASTY_POSE = pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.7, 1.1), np.array([0.1, -0.2, 0.35]))
 
 # name -> (object, half-extents of its axis-aligned bounding box, "inside" predicate on body-frame points (n, 3)).
-# The predicates and boxes are written from the geometric definitions, independently of bhgrasp.objects.
+# The predicates and boxes are written from the geometric definitions, independently of bhgrasp.model.objects.
 SHAPES: dict[str, tuple[RigidObject, np.ndarray, Callable[[np.ndarray], np.ndarray]]] = {
     "sphere": (
         Sphere(0.04, mass=0.3),

@@ -11,8 +11,8 @@ from scipy.spatial.transform import Rotation
 
 import bhgrasp as bh
 from bhgrasp.data import Trajectory
-from bhgrasp.objects import Box, table
-from bhgrasp.orientation import rotation_from_zyz, zyz_from_rotation
+from bhgrasp.model.objects import Box, table
+from bhgrasp.model.orientation import rotation_from_zyz, zyz_from_rotation
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.scene import Scene
 

@@ -16,7 +16,7 @@ from bhgrasp.controllers.supervisor import MANIPULATE, PLAN_LENGTH, GraspSupervi
 from bhgrasp.grasp.manipulability import manipulable_space
 from bhgrasp.grasp.path_check import path_contacts, sensed_path_contacts
 from bhgrasp.grasp.sensing import ContactSensing
-from bhgrasp.objects import Box
+from bhgrasp.model.objects import Box
 from bhgrasp.scenarios.box_grasp import OFF_STOP_SPACING, box_grasp
 from bhgrasp.scenarios.grasp_controllers import grasp_controller
 from bhgrasp.thesis.motions import ESTIMATE, GRASPS, MASS, MOTIONS

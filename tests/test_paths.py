@@ -1,5 +1,5 @@
-"""Continuous object paths (:mod:`bhgrasp.paths`) and the chapter-5 circle: closed forms against finite differences
-and plane geometry, and a grasped box carried around the circle without slip."""
+"""Continuous object paths (:mod:`bhgrasp.motion.paths`) and the chapter-5 circle: closed forms against finite
+differences and plane geometry, and a grasped box carried around the circle without slip."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.paths import PoseCircle, PoseWaypoints
+from bhgrasp.motion.paths import PoseCircle, PoseWaypoints
+from bhgrasp.motion.trajectories import PosePath
 from bhgrasp.scenarios.carry import PLANES, WAYPOINTS, circle, run_path, waypoints
 from bhgrasp.scenarios.object_grasp import OBJECTS, object_grasp
-from bhgrasp.trajectories import PosePath
 
 START = pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.2, 0.3), np.array([0.01, -0.02, 0.17]))
 TILTED = (np.array([0.0, 1.0, 1.0]) / np.sqrt(2.0), np.array([1.0, 0.0, 0.0]))

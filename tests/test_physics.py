@@ -18,7 +18,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.data import ContactMemory
-from bhgrasp.objects import Box, Plane, Sphere
+from bhgrasp.model.objects import Box, Plane, Sphere
 from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import INTEGRATORS, Simulator
 from bhgrasp.sim.actuation import BarrettActuation

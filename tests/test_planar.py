@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.planar import planar_finger, thesis_impedance_finger, thesis_one_link_finger, thesis_two_link_finger
+from bhgrasp.model.planar import planar_finger, thesis_impedance_finger, thesis_one_link_finger, thesis_two_link_finger
 
 G = 9.81
 

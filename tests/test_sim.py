@@ -12,8 +12,8 @@ import pytest
 import bhgrasp as bh
 from bhgrasp.data import Trajectory
 from bhgrasp.errors import SimulationDiverged
-from bhgrasp.objects import Box, Sphere, table
-from bhgrasp.planar import planar_finger
+from bhgrasp.model.objects import Box, Sphere, table
+from bhgrasp.model.planar import planar_finger
 from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.contact_law import SpringDamper

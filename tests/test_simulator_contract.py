@@ -18,7 +18,7 @@ import pytest
 
 from bhgrasp.data import ContactMemory, State
 from bhgrasp.errors import BhgraspError, FrozenSettingError, InputError, SimulationDiverged
-from bhgrasp.objects import Sphere
+from bhgrasp.model.objects import Sphere
 from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import ENGINES, Simulator, SimulatorSettings
 from bhgrasp.sim.batch import BatchSimulator

@@ -26,12 +26,12 @@ from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.errors import CompiledEngineUnavailable, InputError
-from bhgrasp.objects import Box
+from bhgrasp.model.objects import Box
+from bhgrasp.motion.trajectories import PoseMotion
 from bhgrasp.scenarios.box_grasp import box_grasp
 from bhgrasp.scenarios.demo_result import MU_ASSUMED
 from bhgrasp.scenarios.grasp_controllers import SQUEEZE
 from bhgrasp.scenarios.grasp_demo import OFFSET
-from bhgrasp.trajectories import PoseMotion
 
 pytest.importorskip("bhgrasp._core")
 

@@ -15,7 +15,7 @@ from bhgrasp.grasp.manipulability import manipulable_space
 from bhgrasp.grasp.metrics import slip_events
 from bhgrasp.grasp.probes import HandClearance
 from bhgrasp.grasp.synthesis import grasp_candidates, synthesize
-from bhgrasp.objects import Box, Cylinder, Sphere
+from bhgrasp.model.objects import Box, Cylinder, Sphere
 from bhgrasp.scenarios.box_grasp import CONTACT_HEIGHT, box_grasp
 from bhgrasp.scenarios.demo_result import evaluate_demo
 from bhgrasp.scenarios.object_grasp import object_grasp

@@ -9,7 +9,7 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.trajectories import (
+from bhgrasp.motion.trajectories import (
     CartesianReference,
     Constant,
     PoseMotion,

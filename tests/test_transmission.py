@@ -20,8 +20,8 @@ from bhgrasp.barrett.transmission import (
     switch_modes,
 )
 from bhgrasp.controllers.supervisor import MotorCommands
+from bhgrasp.model.transmission import DirectDrive
 from bhgrasp.sim.actuation import Actuation, BarrettActuation
-from bhgrasp.transmission import DirectDrive
 
 MODES = [np.array(modes) for modes in itertools.product((0, 1, 2), repeat=3)]
 PROXIMAL, DISTAL = (1, 4, 6), (2, 5, 7)  # joint indices of F1, F2, F3

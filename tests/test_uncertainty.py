@@ -11,7 +11,7 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.objects import Box, table
+from bhgrasp.model.objects import Box, table
 from bhgrasp.scenarios.grasp_demo import check_demo_arguments, run_grasp_demo
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import FullyActuated

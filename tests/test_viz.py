@@ -195,8 +195,8 @@ def test_a_frame_sends_only_what_changed(held, monkeypatch):
 
 def test_a_mounted_hands_viewer_follows_the_wrist():
     """The viewer of a hand on a wrist mount draws its links where the scene's geometry is, mount moved and turned."""
-    from bhgrasp.mount import mounted
-    from bhgrasp.objects import Box
+    from bhgrasp.model.mount import mounted
+    from bhgrasp.model.objects import Box
     from bhgrasp.sim.scene import Scene
 
     hand = mounted(bh.BarrettHand())

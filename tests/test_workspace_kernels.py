@@ -30,9 +30,9 @@ from bhgrasp.controllers._workspace_terms import (
 )
 from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
 from bhgrasp.errors import InputError
-from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
+from bhgrasp.model.planar import thesis_impedance_finger, thesis_one_link_finger
+from bhgrasp.motion.trajectories import Constant
 from bhgrasp.scenarios import finger_press, press_fitness
-from bhgrasp.trajectories import Constant
 
 RELATIVE = 1e-12
 MAX_CONDITION = 100.0

@@ -52,7 +52,7 @@ from bhgrasp.barrett.transmission import PROXIMAL_RATIO, SPREAD_RATIO, BarrettTr
 from bhgrasp.controllers.base import Controller
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 DIGITS = ("F1", "F2", "F3", "SPREAD")  # libbarrett's order
 GROUPS = {"GRASP": DIGITS[:3], "WHOLE_HAND": DIGITS}

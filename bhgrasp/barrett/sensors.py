@@ -35,7 +35,7 @@ from bhgrasp.barrett.transmission import (
 )
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 COUNTS_PER_REV = 4096  # puck CTS (Robotnik pyHand_api.py sets CTS 4096; libbarrett rpc = 2 pi / cts)
 SECONDARY_RATIO = 50.0  # inner link : secondary encoder shaft (libbarrett J2_ENCODER_RATIO)

@@ -31,7 +31,7 @@ of freedom", BH8 manual 9.3.2): its puck holds it (default HOLD = 1), where the 
 their worms.
 
 Inputs are motor torques [N m] at the motor shafts, then one torque [N m or N] per joint outside the hand's eight
-(e.g. the wrist mount's of :func:`~bhgrasp.mount.mounted`), applied directly.  A linear torque-speed line through
+(e.g. the wrist mount's of :func:`~bhgrasp.model.mount.mounted`), applied directly.  A linear torque-speed line through
 the puck limits gives each motor a viscous damping [N m s/rad] at its shaft; through a gear ratio r and the
 efficiency eta it damps the driven joint by eta b_m r^2 (a finger's torque is eta r (u - b_m r w)).
 """
@@ -45,8 +45,8 @@ import numpy as np
 
 from bhgrasp._validation import as_positive
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
-from bhgrasp.transmission import Transmission, per_joint
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.transmission import Transmission, per_joint
 
 SPREAD_RATIO = 17.5  # motor : spread joint (libbarrett SPREAD_RATIO)
 PROXIMAL_RATIO = 125.0  # motor : proximal joint (libbarrett J2_RATIO, Barrett wiki)

@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp.errors import InputError
-from bhgrasp.objects import Box, Cylinder, RigidObject, Sphere
+from bhgrasp.model.objects import Box, Cylinder, RigidObject, Sphere
 
 KINDS = {"box": 3, "cylinder": 2, "sphere": 1}  # kind -> number of dimensions
 _NUMBER = r"[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?"

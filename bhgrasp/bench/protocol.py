@@ -1,6 +1,6 @@
 """The grasp benchmark: approach -> close -> lift 10 cm -> shake in six directions -> place, per object.
 
-One trial (:func:`run_trial`) puts a wrist-mounted BH8-280 (:func:`~bhgrasp.mount.mounted`) palm down above an
+One trial (:func:`run_trial`) puts a wrist-mounted BH8-280 (:func:`~bhgrasp.model.mount.mounted`) palm down above an
 object (:mod:`~bhgrasp.bench.objects`) standing on a stand of its own footprint, and runs DexGraspBench's
 shake protocol:
 

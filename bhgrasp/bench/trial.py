@@ -32,13 +32,14 @@ from bhgrasp.bench.protocol import (
     Trial,
 )
 from bhgrasp.controllers.mount import MountServo
-from bhgrasp.mount import MountReference, mounted
-from bhgrasp.objects import FixedBox
+from bhgrasp.model.mount import mounted
+from bhgrasp.model.objects import FixedBox
+from bhgrasp.motion.trajectories import PosePath
+from bhgrasp.motion.wrist import MountReference
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
-from bhgrasp.trajectories import PosePath
 
 
 def idealised_damping(hand: bh.Hand) -> np.ndarray:

@@ -16,7 +16,7 @@ import numpy as np
 
 from bhgrasp._native import kernel
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 
 @dataclass(frozen=True)

@@ -47,9 +47,9 @@ from bhgrasp.controllers.object_space import grasp_maps, pose_gains
 from bhgrasp.controllers.sliding import parameter_scales
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
-from bhgrasp.objects import RigidObject
-from bhgrasp.trajectories import Reference
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.objects import RigidObject
+from bhgrasp.motion.trajectories import Reference
 
 ENGINES = (None, "compiled", "python")
 

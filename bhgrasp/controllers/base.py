@@ -1,8 +1,8 @@
 """Controller protocol: ``reset(state)``, ``__call__(t, state) -> torques`` and a ``log`` of internals.
 
-A controller sees only a :class:`~bhgrasp.data.state.State` and its own *nominal* :class:`~bhgrasp.hand.Hand` (which may
-differ from the simulated plant: ``hand.perturbed(...)``); it never imports the simulator, so the same object can
-drive a real hand.  The simulator also accepts any plain callable ``(t, state) -> u``.
+A controller sees only a :class:`~bhgrasp.data.state.State` and its own *nominal* :class:`~bhgrasp.model.hand.Hand`
+(which may differ from the simulated plant: ``hand.perturbed(...)``); it never imports the simulator, so the same object
+can drive a real hand.  The simulator also accepts any plain callable ``(t, state) -> u``.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ import numpy as np
 from bhgrasp._validation import as_vector
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
-from bhgrasp.trajectories import Reference
+from bhgrasp.model.hand import Hand
+from bhgrasp.motion.trajectories import Reference
 
 
 class Controller(ABC):

@@ -16,8 +16,8 @@ import numpy as np
 
 from bhgrasp._validation import as_positive
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
-from bhgrasp.trajectories import Reference
+from bhgrasp.model.hand import Hand
+from bhgrasp.motion.trajectories import Reference
 
 
 @dataclass(frozen=True)

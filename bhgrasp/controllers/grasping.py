@@ -29,8 +29,8 @@ from bhgrasp.errors import InputError
 from bhgrasp.grasp.forces import ContactForceQP, cone_violations, pseudo_inverse_forces
 from bhgrasp.grasp.frames import _grasp_map, contact_frames, hand_jacobian
 from bhgrasp.grasp.sensing import ContactSensing, FingerContact
-from bhgrasp.hand import Hand
-from bhgrasp.trajectories import Reference
+from bhgrasp.model.hand import Hand
+from bhgrasp.motion.trajectories import Reference
 
 
 class ObjectGraspController(Controller):

@@ -24,8 +24,8 @@ from bhgrasp.controllers.base import gain_vector, inertia_gain
 from bhgrasp.controllers.sliding import SlidingSurface
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
-from bhgrasp.trajectories import Reference
+from bhgrasp.model.hand import Hand
+from bhgrasp.motion.trajectories import Reference
 
 
 class QuasiContinuousA(SlidingSurface):

@@ -38,8 +38,8 @@ from bhgrasp.controllers.workspace import WorkspaceComputedTorque
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.sensing import ContactSensing, FingerContact
-from bhgrasp.hand import Hand
-from bhgrasp.trajectories import Reference
+from bhgrasp.model.hand import Hand
+from bhgrasp.motion.trajectories import Reference
 
 Sample = tuple[np.ndarray, np.ndarray, np.ndarray]
 _SEARCH_BAND = 5e-3  # [m] a fingertip this close to its target without contact makes the surface estimate advance

@@ -8,8 +8,8 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp.controllers.base import JointTracking, gain_matrix
-from bhgrasp.hand import Hand
-from bhgrasp.trajectories import Reference
+from bhgrasp.model.hand import Hand
+from bhgrasp.motion.trajectories import Reference
 
 
 class PDGravity(JointTracking):

@@ -1,8 +1,8 @@
-"""The wrist servo of a mounted hand (:func:`~bhgrasp.mount.mounted`): the arm's part of lift, carry, shake, place.
+"""The wrist servo of a mounted hand (:func:`~bhgrasp.model.mount.mounted`): the arm's part of lift, carry, shake.
 
 :class:`MountServo` drives the six mount coordinates c (x, y, z [m], yaw, pitch, roll [rad]) along a reference
-(any :class:`~bhgrasp.trajectories.Reference` of size 6: a :class:`~bhgrasp.trajectories.Quintic` lift, a
-:class:`~bhgrasp.trajectories.Sinusoid` shake, ...) while another controller runs the fingers.  On the mount rows
+(any :class:`~bhgrasp.motion.trajectories.Reference` of size 6: a :class:`~bhgrasp.motion.trajectories.Quintic` lift, a
+:class:`~bhgrasp.motion.trajectories.Sinusoid` shake, ...) while another controller runs the fingers.  On the mount rows
 
     tau_m = [ID(q, v, a_ref)]_m - [tau_contact]_m + kp (c_d - c) + kd (c_dot_d - c_dot),
 
@@ -31,9 +31,9 @@ from bhgrasp.controllers.base import Controller, gain_vector
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.sensing import ContactSensing
-from bhgrasp.hand import Hand
-from bhgrasp.mount import MOUNT_JOINTS
-from bhgrasp.trajectories import Reference
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.mount import MOUNT_JOINTS
+from bhgrasp.motion.trajectories import Reference
 
 SERVO_KP = (2e4, 2e4, 2e4, 100.0, 100.0, 100.0)  # [N/m, N m/rad]: stiff, inside the 1 kHz loop's stability
 SERVO_KD = (300.0, 300.0, 300.0, 1.0, 1.0, 1.0)  # [N s/m, N m s/rad]
@@ -69,7 +69,7 @@ class MountServo(Controller):
         """
         super().__init__()
         if not isinstance(nominal, Hand) or nominal.joint_names[:6] != MOUNT_JOINTS:
-            raise InputError(f"`nominal` must be a mounted hand (bhgrasp.mount.mounted(hand)), got {nominal!r}")
+            raise InputError(f"`nominal` must be a mounted hand (bhgrasp.model.mount.mounted(hand)), got {nominal!r}")
         if not isinstance(reference, Reference) or reference.size != 6:
             raise InputError(f"`reference` must be a Reference of size 6 (mount coordinates), got {reference!r}")
         self.nominal, self.reference, self.fingers = nominal, reference, fingers

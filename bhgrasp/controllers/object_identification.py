@@ -39,7 +39,7 @@ import numpy as np
 from bhgrasp._validation import as_positive
 from bhgrasp.controllers.object_regressors import momentum_regressor
 from bhgrasp.data import State
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 
 def contact_wrench(state: State, frames: frozenset[str], held: str) -> tuple[np.ndarray, bool]:

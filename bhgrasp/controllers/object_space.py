@@ -30,9 +30,9 @@ from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.kinematics import GraspKinematics, ObjectState, contact_kinematics, parent_joints
-from bhgrasp.hand import Hand
-from bhgrasp.objects import RigidObject
-from bhgrasp.trajectories import Reference
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.objects import RigidObject
+from bhgrasp.motion.trajectories import Reference
 
 LAWS = ("ctc", "natural", "stiffness")
 

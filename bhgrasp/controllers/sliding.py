@@ -5,7 +5,7 @@ Common structure (e = q - q_d, thesis (3.33)-(3.38)), per joint with diagonal ga
     s = e_dot + lambda e,   qd_r = qd_d - lambda e,   qdd_r = qdd_d - lambda e_dot   (so s = qd - qd_r)
     tau = M_hat qdd_r + C_hat(q, qd) qd_r + G_hat - K_s s + u_robust
 
-The model term uses the controller's nominal hand (:meth:`~bhgrasp.hand.Hand.slotine_li_torque`) or, when
+The model term uses the controller's nominal hand (:meth:`~bhgrasp.model.hand.Hand.slotine_li_torque`) or, when
 adaptive, the regressor form Y(q, qd, qd_r, qdd_r) theta_hat with the gradient update
 theta_hat_dot = -Gamma^-1 Y^T s.  The thesis prints +Gamma^-1 Y^T s (3.43); with its own s = qd - qd_r and
 tau = Y sigma - K s that sign makes the Lyapunov function of A.1 grow, so we use the minus sign (Slotine & Li 1987).
@@ -21,8 +21,8 @@ from bhgrasp._validation import as_real, as_vector
 from bhgrasp.controllers.base import JointTracking, gain_vector, inertia_gain
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
-from bhgrasp.trajectories import Reference
+from bhgrasp.model.hand import Hand
+from bhgrasp.motion.trajectories import Reference
 
 
 def parameter_scales(hand: Hand) -> np.ndarray:

@@ -12,7 +12,7 @@ Phases (logged as ``phase``: 0 approach, 1 squeeze, 2 manipulate):
 2. **manipulate** — the grasp controller follows a minimum-jerk motion from the caught pose by ``offset``
    (position [m], rotation vector [rad], world) over ``move_time``; by default the part of it the grasp can make at
    the contacts sensed then (``planned_offset``, :meth:`GraspSupervisor._plan`); or any object ``path`` (e.g. the
-   persistently exciting :class:`~bhgrasp.excitation.PoseExcitation` of an identification run).
+   persistently exciting :class:`~bhgrasp.motion.excitation.PoseExcitation` of an identification run).
 
 :class:`MotorCommands` adapts any joint-torque controller to a drive with fewer inputs (the BH8-280's four
 motors, :mod:`bhgrasp.barrett.transmission`): u solves T^T B u = T^T tau, i.e. the motors do the same work as tau
@@ -38,9 +38,9 @@ from bhgrasp.grasp.manipulability import manipulable_space
 from bhgrasp.grasp.path_check import TOLERANCE as PATH_TOLERANCE
 from bhgrasp.grasp.path_check import path_contacts
 from bhgrasp.grasp.sensing import ContactSensing
-from bhgrasp.hand import Hand
-from bhgrasp.trajectories import PoseMotion, Reference, SmoothStep
-from bhgrasp.transmission import Transmission
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.transmission import Transmission
+from bhgrasp.motion.trajectories import PoseMotion, Reference, SmoothStep
 
 APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
 PLAN_LENGTH = 0.1  # [m] the plan's metric (dx, L dtheta): 5 mrad weighs as 0.5 mm, the motion targets' ratio
@@ -103,7 +103,7 @@ class GraspSupervisor(Controller):
             path: The object reference after the squeeze instead of the minimum-jerk ``offset`` (which must then be
                 zero; nothing is planned): called as ``path(pose, delay=start)`` with the pose the grasp caught and
                 the motion's start time [s], e.g. ``functools.partial(PoseExcitation, amplitude=..., frequency=...)``
-                (:class:`~bhgrasp.excitation.PoseExcitation`).
+                (:class:`~bhgrasp.motion.excitation.PoseExcitation`).
             approach_damping: The joints' known viscous damping [N m s/rad] the approach cancels (its computed
                 torque models the links alone, whose inertia is small next to it: at 0.05 N m s/rad a BH8-280
                 distal joint closes with a ~3 s time constant under the default gains); the grasp controller does
@@ -259,7 +259,7 @@ class GraspSupervisor(Controller):
 class MotorCommands(Controller):
     """Run a joint-torque controller through a drive with fewer inputs: u with T^T B u = T^T (tau + D v).
 
-    The drive model (:class:`~bhgrasp.transmission.Transmission`, e.g. the BH8-280's
+    The drive model (:class:`~bhgrasp.model.transmission.Transmission`, e.g. the BH8-280's
     :class:`~bhgrasp.barrett.transmission.BarrettTransmission`) is the hand's, not the simulator's: its mode (the
     TorqueSwitch states) is read from the state's ``actuation_modes``, as a real hand's driver reports them.  D v
     compensates the drive's known viscous damping (for the BH8-280 mostly the motors' torque-speed line reflected

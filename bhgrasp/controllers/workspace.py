@@ -30,8 +30,8 @@ from bhgrasp.controllers._workspace_terms import _workspace
 from bhgrasp.controllers.base import Controller, gain_matrix
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
-from bhgrasp.trajectories import Reference
+from bhgrasp.model.hand import Hand
+from bhgrasp.motion.trajectories import Reference
 
 
 @dataclass(frozen=True)

@@ -105,7 +105,7 @@ class Trajectory:
 
     def object_euler_zyz(self) -> np.ndarray:
         """(N, n_objects, 3) object orientations as the thesis' Z-Y-Z Euler angles [rad] (for reporting only)."""
-        from bhgrasp.orientation import zyz_from_rotation
+        from bhgrasp.model.orientation import zyz_from_rotation
 
         n, m = self.object_quaternion.shape[:2]
         angles = np.empty((n, m, 3))

@@ -1,10 +1,10 @@
 """Whether a grasped object's motion clears its surroundings: the support it starts on, a table, a wall.
 
-A motion of the grasp supervisor (:class:`~bhgrasp.trajectories.PoseMotion`: a minimum-jerk offset of the object's
-pose, rotating about a fixed world axis through its origin) is checked before anything is simulated, at
+A motion of the grasp supervisor (:class:`~bhgrasp.motion.trajectories.PoseMotion`: a minimum-jerk offset of the
+object's pose, rotating about a fixed world axis through its origin) is checked before anything is simulated, at
 ``samples`` evenly spaced poses along the path, by coal's signed distance between the object's shape and each fixed
-shape.  A turn of an object resting on its support drives an edge into it: :func:`check_clearance` refuses such a
-motion with the smallest lift (added to the offset) that clears the path.
+shape.  A turn of an object resting on its support drives an edge into it: :func:`check_clearance` refuses such a motion
+with the smallest lift (added to the offset) that clears the path.
 """
 
 from __future__ import annotations
@@ -28,10 +28,9 @@ def path_clearance(
     """The smallest signed distance [m] from the moving ``shape`` to the ``fixed`` shapes along the path.
 
     Args:
-        shape: The object's coal shape, placed by its pose.
-        start: The object's pose when the motion starts (world).
-        offset: (dx [m], dtheta [rad]) of the motion, world.
-        fixed: Fixed shapes with ``geometry()``, ``placement`` and ``name`` (e.g. :class:`~bhgrasp.objects.FixedBox`;
+        shape: The object's coal shape, placed by its pose. start: The object's pose when the motion starts (world).
+        offset: (dx [m], dtheta [rad]) of the motion, world. fixed: Fixed shapes with ``geometry()``, ``placement`` and
+        ``name`` (e.g. :class:`~bhgrasp.model.objects.FixedBox`;
             an unnamed one is called "environment<i>", as the scene calls it).
         samples: Poses checked along the path (the start and the end included).
 

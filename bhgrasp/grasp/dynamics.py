@@ -27,7 +27,7 @@ import pinocchio as pin
 from bhgrasp._validation import as_array, as_positive, as_vector
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.kinematics import ObjectState, grasp_kinematics
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ import numpy as np
 from bhgrasp._native import optional_core
 from bhgrasp._validation import as_array, as_vector
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 TANGENT_SWITCH = 0.9  # |n . x| above which the tangent t1 is built from the world y-axis instead of the x-axis
 ZERO_NORMAL = 1e-12  # a normal shorter than this is rejected as zero

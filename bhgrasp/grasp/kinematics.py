@@ -40,10 +40,10 @@ import pinocchio as pin
 
 from bhgrasp._native import kernel
 from bhgrasp._validation import as_array, as_vector, require_name
-from bhgrasp.couplings import refuse_couplings
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.frames import _frames, contact_frames
-from bhgrasp.hand import Hand
+from bhgrasp.model.couplings import refuse_couplings
+from bhgrasp.model.hand import Hand
 
 
 @dataclass(frozen=True)
@@ -122,7 +122,7 @@ def contact_kinematics(
 
     Runs the compiled kernel (``src/grasp.cpp``, one per hand, its own Pinocchio data) when ``bhgrasp._core``
     loads; without it, its Python twin :func:`contact_kinematics_python` (same maths, same results to round-off:
-    ``tests/test_grasp_kernels.py``), silently.  The hand's current :attr:`~bhgrasp.hand.Hand.base_placement` is
+    ``tests/test_grasp_kernels.py``), silently.  The hand's current :attr:`~bhgrasp.model.hand.Hand.base_placement` is
     read on every call; its model must not change after the first.
 
     Args:

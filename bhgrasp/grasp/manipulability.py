@@ -28,7 +28,7 @@ import numpy as np
 from bhgrasp._validation import as_array, as_positive, as_vector
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.grasp.frames import grasp_map, hand_jacobian
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 SLIDE_TOLERANCE = 2e-4  # [m] contact sliding a checked offset may need (the tracking target is 0.5 mm)
 RANK_TOLERANCE = 1e-9  # relative singular value below which a direction counts as missing

@@ -6,7 +6,7 @@ import numpy as np
 
 from bhgrasp.data import Trajectory
 from bhgrasp.grasp.sensing import ContactSensing
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 
 def finger_of(hand: Hand, link: str) -> str | None:

@@ -6,7 +6,7 @@ beside the planned contact (a fingertip's distal link body beside its spherical 
 finger then touches at several points, its normal force splits among them and the planned contact's share may no
 longer hold its tangential load.  :func:`path_contacts` foresees that before the motion is made:
 
-1. The object follows the supervisor's path (:class:`~bhgrasp.trajectories.PoseMotion` at blend b in [0, 1]):
+1. The object follows the supervisor's path (:class:`~bhgrasp.motion.trajectories.PoseMotion` at blend b in [0, 1]):
    centre ``c(b) = c_0 + b dx``, rotation ``R(b) = exp(b dtheta) R_0``, so its twist per unit blend is the constant
    ``(dx, dtheta)`` at the moving centre (world).
 2. The fingers keep their contacts without slipping; a spherical pad rolls, so the contact is re-found at each step
@@ -36,7 +36,7 @@ from bhgrasp._validation import as_array, as_real, as_vector
 from bhgrasp.data import State
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.grasp.sensing import ContactSensing
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 TOLERANCE = 2e-4  # [m] signed distance below which another geometry counts as meeting the object: a margin for
 # what the path model leaves out (it holds each pad's gap at its start, while the pads sink further as their forces

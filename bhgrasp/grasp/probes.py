@@ -14,7 +14,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 SURFACE_TOLERANCE = 1e-5  # [m] the ray's bisection
 

@@ -15,7 +15,7 @@ import numpy as np
 from bhgrasp._native import optional_core
 from bhgrasp._validation import as_array, as_vector
 from bhgrasp.data import State
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 
 @dataclass(frozen=True)
@@ -148,7 +148,7 @@ class ContactSensing:
                                       state.contact_forces[rows])  # fmt: skip
 
     def _reaction_torques_python(self, state: State) -> np.ndarray:
-        """:meth:`reaction_torques` through :meth:`~bhgrasp.hand.Hand.point_jacobians` (the compiled sum's twin)."""
+        """:meth:`reaction_torques` through :meth:`Hand.point_jacobians` (the compiled sum's twin)."""
         hand = self.hand
         rows = [k for k, (link, _) in enumerate(state.contact_bodies)
                 if link in self._finger_of or hand.model.existFrame(link)]  # fmt: skip

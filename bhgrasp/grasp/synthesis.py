@@ -1,14 +1,14 @@
 """Grasp synthesis: fingertip contacts, spread and pre-grasp configuration for an object, best quality first.
 
-For a hand and a convex object (:class:`~bhgrasp.objects.Box`, :class:`~bhgrasp.objects.Cylinder`,
-:class:`~bhgrasp.objects.Sphere` ... placed by its ``pose`` in the hand's world), :func:`grasp_candidates` searches
-the spread joints (every joint named ``*spread*`` at one value) and the contact height along the palm normal:
+For a hand and a convex object (:class:`~bhgrasp.model.objects.Box`, :class:`~bhgrasp.model.objects.Cylinder`,
+:class:`~bhgrasp.model.objects.Sphere` ... placed by its ``pose`` in the hand's world), :func:`grasp_candidates`
+searches the spread joints (every joint named ``*spread*`` at one value) and the contact height along the palm normal:
 
 1. **where each finger lands**: a finger closes in a plane; the horizontal line through its fingertip at two
    flexions (every non-spread joint at 0.6, then 1.4 rad, clipped to the limits) is cast at the contact height
    toward the object, and its first point on the surface (coal distances, 0.01 mm) is the finger's contact;
 2. **reachability**: the fingertip frames (the pads' centres) go one pad radius out along the surface normal there,
-   and the IK (:func:`~bhgrasp.ik.ik`, 1e-6 m) must reach them inside the joint limits, away from a kinematic
+   and the IK (:func:`~bhgrasp.model.ik.ik`, 1e-6 m) must reach them inside the joint limits, away from a kinematic
    singularity (every joint of a grasping finger moves its contact: ``singularity_margin``);
 3. **only the pads touch**: every other collision shape of the hand keeps ``clearance`` from the object (a link
    body pressing beside the pad makes several contacts whose forces the grasp controller does not distribute), also
@@ -47,8 +47,8 @@ from bhgrasp.grasp.frames import grasp_map
 from bhgrasp.grasp.manipulability import SLIDE_TOLERANCE, manipulable_space
 from bhgrasp.grasp.probes import HandClearance, ObjectProbe
 from bhgrasp.grasp.quality import GraspQuality, grasp_quality
-from bhgrasp.hand import Hand
-from bhgrasp.ik import ik
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.ik import ik
 
 FLEXIONS = (0.6, 1.4)  # [rad] the two closings that give a finger's line of approach
 

@@ -217,7 +217,7 @@ def workspace_figure(points: dict[str, np.ndarray], title: str = "") -> Figure:
     on the same points, drawn as rings and dots.  Legends sit beside the views.
 
     Args:
-        points: Finger -> (N, 3) fingertip positions in frame W (e.g. ``bhgrasp.ik.workspace(...).points``).
+        points: Finger -> (N, 3) fingertip positions in frame W (e.g. ``bhgrasp.model.ik.workspace(...).points``).
         title: Figure title.
     """
     if not points:

@@ -1,6 +1,6 @@
 """The generic-hand grasp scene: the Allegro hand (example-robot-data, 16 DOF) grasps a box on a pedestal.
 
-The demonstration that the grasp pipeline takes any :class:`~bhgrasp.hand.Hand`: the scene is a call of
+The demonstration that the grasp pipeline takes any :class:`~bhgrasp.model.hand.Hand`: the scene is a call of
 :func:`~bhgrasp.scenarios.object_grasp.object_grasp` (pedestal, contact law, drive) whose grasp the opposition search
 plans (:mod:`bhgrasp.grasp.opposition`: pads placed by IK from sampled reach, the same checks as the BH8-280's
 synthesis); what is chosen here is only the mounting, where the box sits and which fingers grasp.  The hand is
@@ -20,9 +20,9 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_positive
-from bhgrasp.hand import Hand
-from bhgrasp.objects import Box
-from bhgrasp.resources import example_robot_data_urdf
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.objects import Box
+from bhgrasp.model.resources import example_robot_data_urdf
 from bhgrasp.scenarios.box_grasp import JOINT_DAMPING, STIFFNESS, BoxGrasp
 from bhgrasp.scenarios.demo_result import MU_ASSUMED
 from bhgrasp.scenarios.object_grasp import object_grasp

@@ -22,9 +22,9 @@ from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.clearance import check_clearance
 from bhgrasp.grasp.manipulability import ManipulableSpace, manipulable_space
-from bhgrasp.hand import BarrettHand, Hand
-from bhgrasp.ik import ik
-from bhgrasp.objects import Box, FixedBox
+from bhgrasp.model.hand import BarrettHand, Hand
+from bhgrasp.model.ik import ik
+from bhgrasp.model.objects import Box, FixedBox
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import Actuation, BarrettActuation, FullyActuated
 from bhgrasp.sim.contact_law import SpringDamper

@@ -1,14 +1,15 @@
 """Grasped objects carried along continuous paths: a circle (:func:`circle`) or waypoints (:func:`waypoints`).
 
-:func:`run_path` takes a grasp planned by :func:`~bhgrasp.scenarios.object_grasp.object_grasp`, lifts its object
-10 mm, then follows the path: a circle (:class:`~bhgrasp.paths.PoseCircle`, minimum-jerk in arc angle) in a plane of
-:data:`PLANES`, or turns and shifts joined by minimum-jerk blends that overlap (:class:`~bhgrasp.paths.PoseWaypoints`;
-:data:`WAYPOINTS` holds moves for two objects of :data:`~bhgrasp.scenarios.object_grasp.OBJECTS`).  The path is
-checked against the grasp's manipulable space before simulating (its ``extremes``); the SMC-adaptive law, told half
-the mass, tracks it (:class:`~bhgrasp.controllers.supervisor.GraspSupervisor` with ``path``).  Measured along the
-path after the lift: the true centre of mass's distance from the reference, the orientation's angle from the
-reference's, slip, the least cone margin of the commanded forces; at the end, the pose error against the path's end
-(success: :data:`~bhgrasp.scenarios.demo_result.SUCCESS`).
+:func:`run_path` takes a grasp planned by :func:`~bhgrasp.scenarios.object_grasp.object_grasp`, lifts its object 10 mm,
+then follows the path: a circle (:class:`~bhgrasp.motion.paths.PoseCircle`, minimum-jerk in arc angle) in a plane of
+:data:`PLANES`, or turns and shifts joined by minimum-jerk blends that overlap
+(:class:`~bhgrasp.motion.paths.PoseWaypoints`; :data:`WAYPOINTS` holds moves for two objects of
+:data:`~bhgrasp.scenarios.object_grasp.OBJECTS`).  The path is checked against the grasp's manipulable space before
+simulating (its ``extremes``); the SMC-adaptive law, told half the mass, tracks it
+(:class:`~bhgrasp.controllers.supervisor.GraspSupervisor` with ``path``).  Measured along the path after the lift: the
+true centre of mass's distance from the reference, the orientation's angle from the reference's, slip, the least cone
+margin of the commanded forces; at the end, the pose error against the path's end (success:
+:data:`~bhgrasp.scenarios.demo_result.SUCCESS`).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import pinocchio as pin
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.metrics import slip_events_after
-from bhgrasp.paths import PoseCircle, PoseWaypoints
+from bhgrasp.motion.paths import PoseCircle, PoseWaypoints
 from bhgrasp.scenarios.demo_result import SUCCESS
 from bhgrasp.scenarios.grasp_controllers import grasp_controller
 
@@ -66,12 +67,12 @@ class PathRun:
 
 
 def circle(radius: float = RADIUS, plane: str = "y-z", duration: float = CIRCLE_TIME):
-    """The supervisor's path factory of a :class:`~bhgrasp.paths.PoseCircle` after :data:`LIFT` in :data:`LIFT_TIME`."""
+    """The supervisor's path factory of a :class:`~bhgrasp.motion.paths.PoseCircle` after :data:`LIFT`."""
     return partial(PoseCircle, radius=radius, plane=PLANES[plane], duration=duration, lift=LIFT, lift_time=LIFT_TIME)
 
 
 def waypoints(moves, overlap: float = OVERLAP):
-    """The supervisor's path factory of :class:`~bhgrasp.paths.PoseWaypoints`: :data:`LIFT_MOVE`, then ``moves``."""
+    """The path factory of :class:`~bhgrasp.motion.paths.PoseWaypoints`: :data:`LIFT_MOVE`, then ``moves``."""
     return partial(PoseWaypoints, moves=[LIFT_MOVE, *moves], overlap=overlap)
 
 

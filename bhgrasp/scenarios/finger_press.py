@@ -22,13 +22,13 @@ from bhgrasp.controllers import WorkspaceComputedTorque
 from bhgrasp.controllers.base import Controller
 from bhgrasp.data import Trajectory
 from bhgrasp.errors import InputError
-from bhgrasp.hand import BarrettHand, Hand
-from bhgrasp.objects import Box, SpringMounted
-from bhgrasp.planar import thesis_impedance_finger, thesis_one_link_finger
+from bhgrasp.model.hand import BarrettHand, Hand
+from bhgrasp.model.objects import Box, SpringMounted
+from bhgrasp.model.planar import thesis_impedance_finger, thesis_one_link_finger
+from bhgrasp.motion.trajectories import Reference
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
-from bhgrasp.trajectories import Reference
 
 DT = 1e-3
 OBJECT_MASS = 0.25  # [kg] thesis 4.5.3

@@ -9,7 +9,7 @@ from bhgrasp.controllers.grasping import GraspForceController, ObjectGraspContro
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.errors import InputError
-from bhgrasp.objects import Box
+from bhgrasp.model.objects import Box
 from bhgrasp.scenarios.demo_result import MU_ASSUMED
 
 CONTROLLERS = ("smc-adaptive", "ctc", "natural", "stiffness", "pd")

@@ -21,7 +21,7 @@ from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.metrics import finger_normal_forces
-from bhgrasp.objects import Box
+from bhgrasp.model.objects import Box
 from bhgrasp.scenarios.allegro_grasp import allegro_box_grasp
 from bhgrasp.scenarios.box_grasp import STIFFNESS, BoxGrasp, box_grasp
 from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult, evaluate_demo

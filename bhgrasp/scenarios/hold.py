@@ -16,8 +16,8 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp.data import State
-from bhgrasp.hand import BarrettHand, Hand
-from bhgrasp.objects import Box
+from bhgrasp.model.hand import BarrettHand, Hand
+from bhgrasp.model.objects import Box
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import FullyActuated
 from bhgrasp.sim.contact_law import SpringDamper

@@ -23,9 +23,9 @@ from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_regressors import object_parameters
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.errors import InputError
-from bhgrasp.excitation import PoseExcitation
 from bhgrasp.grasp.metrics import slip_events_after
-from bhgrasp.objects import Box
+from bhgrasp.model.objects import Box
+from bhgrasp.motion.excitation import PoseExcitation
 from bhgrasp.scenarios.box_grasp import OFF_STOP_SPACING, box_grasp
 from bhgrasp.scenarios.demo_result import MU_ASSUMED
 from bhgrasp.scenarios.grasp_controllers import SQUEEZE
@@ -109,7 +109,7 @@ def identification_run(
         duration: Simulated time [s] (the grasp closes at about 0.6 s, the shaking starts 0.5 s after the lift).
         seed: Seed of the sensor noise.
         hand_scale: The controller's hand model has every link's mass and inertia scaled by this
-            (:meth:`~bhgrasp.hand.Hand.perturbed`; 1: the true hand).
+            (:meth:`~bhgrasp.model.hand.Hand.perturbed`; 1: the true hand).
         plant: Extra :func:`~bhgrasp.scenarios.box_grasp.box_grasp` arguments (e.g. ``joint_friction``).
         controller: Extra :class:`~bhgrasp.controllers.adaptive_grasp.SMCAdaptiveGrasp` arguments.
     """

@@ -30,8 +30,8 @@ from bhgrasp.grasp.clearance import check_clearance
 from bhgrasp.grasp.manipulability import ManipulableSpace, manipulable_space
 from bhgrasp.grasp.opposition import opposed_grasp
 from bhgrasp.grasp.synthesis import GraspCandidate, synthesize
-from bhgrasp.hand import BarrettHand, Hand
-from bhgrasp.objects import Box, Cylinder, FixedBox, Sphere
+from bhgrasp.model.hand import BarrettHand, Hand
+from bhgrasp.model.objects import Box, Cylinder, FixedBox, Sphere
 from bhgrasp.scenarios.box_grasp import CONTACT_HEIGHT, FRICTION, JOINT_DAMPING, STIFFNESS
 from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult, evaluate_demo
 from bhgrasp.scenarios.grasp_controllers import grasp_controller
@@ -88,14 +88,14 @@ def object_grasp(
     damping: float = JOINT_DAMPING,
     **synthesis: Any,
 ) -> ObjectGrasp:
-    """Build the scene around ``item`` (a :class:`~bhgrasp.objects.RigidObject` placed in ``hand``'s world).
+    """Build the scene around ``item`` (a :class:`~bhgrasp.model.objects.RigidObject` placed in ``hand``'s world).
 
     Args:
         item: The object (its friction is set to the scene's 0.8).
         candidate: The grasp (default: synthesised with ``mu`` and ``synthesis``'s options, module docstring).
         mu: Friction coefficient the synthesis assumes.
         dt: Simulator step [s].
-        hand: Any :class:`~bhgrasp.hand.Hand` (default: the BH8-280, :class:`~bhgrasp.hand.BarrettHand`).
+        hand: Any :class:`~bhgrasp.model.hand.Hand` (default: the BH8-280, :class:`~bhgrasp.model.hand.BarrettHand`).
         stiffness: Contact stiffness [N/m] (damping 2e-3 s times it).
         damping: Viscous joint damping [N m s/rad] of the drive.
 

@@ -22,7 +22,7 @@ from bhgrasp.controllers.grasp_lyapunov import object_lyapunov
 from bhgrasp.controllers.object_regressors import object_parameters
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
-from bhgrasp.objects import RigidObject
+from bhgrasp.model.objects import RigidObject
 
 
 @dataclass

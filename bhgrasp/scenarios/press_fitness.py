@@ -16,8 +16,8 @@ import numpy as np
 from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
 from bhgrasp.errors import SimulationDiverged
 from bhgrasp.grasp.sensing import ContactSensing
+from bhgrasp.motion.trajectories import Constant
 from bhgrasp.scenarios.finger_press import DT, F3_GAINS, ForceMetrics, Setup, f3_setup, force_metrics, normal_force, run
-from bhgrasp.trajectories import Constant
 
 TUNING_SPRING = 500.0  # K_s [N/m]: the thesis' k_e = 500 N/m
 TUNING_FORCE = 6.0  # f_d [N] of the fitness; 4 and 8 N are held out

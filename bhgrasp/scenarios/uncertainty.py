@@ -31,8 +31,8 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.errors import InputError
+from bhgrasp.motion.trajectories import PoseMotion
 from bhgrasp.sim.sensor_model import SensorModel
-from bhgrasp.trajectories import PoseMotion
 
 SENSED = ("pose_noise", "twist_noise", "force_noise", "delay")
 PLANT = ("friction", "joint_friction", "joint_damping", "torque_limit")

@@ -2,7 +2,7 @@
 
 An actuation model gives the simulator a transmission ``T`` (hand velocities ``v = T w`` for the driven
 coordinates ``w``) and the joint torques its inputs produce, from the hand's drive model
-(:mod:`bhgrasp.transmission`, shared with the controllers); it adds what only a simulation needs: saturation,
+(:mod:`bhgrasp.model.transmission`, shared with the controllers); it adds what only a simulation needs: saturation,
 Coulomb joint friction, and the mode state carried from step to step.  Joints outside ``T``'s range are held
 (their velocity is zero).  Passive joint damping and Coulomb friction are offered on both models; the BH8-280's
 self-locking worms are :class:`BarrettActuation`'s own (a locked finger's column leaves ``T``).
@@ -30,8 +30,8 @@ from bhgrasp.barrett.transmission import (
     BarrettTransmission,
 )
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
-from bhgrasp.transmission import DirectDrive, Transmission, per_joint
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.transmission import DirectDrive, Transmission, per_joint
 
 
 class Actuation(ABC):
@@ -137,7 +137,7 @@ class FullyActuated(Actuation):
 class BarrettActuation(Actuation):
     """The BH8-280's 4 motors with spread coupling and TorqueSwitch breakaway (inputs: motor torques [N m]).
 
-    On a mounted hand (:func:`~bhgrasp.mount.mounted`) the mount's joint torques follow the four motor torques.
+    On a mounted hand (:func:`~bhgrasp.model.mount.mounted`) the mount's joint torques follow the four motor torques.
     """
 
     FINGERS = ("F1", "F2", "F3")

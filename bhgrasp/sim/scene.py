@@ -6,7 +6,7 @@ free flyer's; 6 velocities: the linear velocity [m/s] of its centre of mass in t
 velocity [rad/s] in its *body* frame).  Translating world-aligned keeps the translational dynamics free of Coriolis
 terms (``m dv/dt = f`` exactly), so the integrators conserve linear momentum; Pinocchio's free flyer would step the
 linear velocity in the rotating body frame, where the explicit ``w x v`` term pumps energy.  A spring-mounted object
-(:class:`~bhgrasp.objects.SpringMounted`) adds one prismatic coordinate: its displacement [m] from rest along
+(:class:`~bhgrasp.model.objects.SpringMounted`) adds one prismatic coordinate: its displacement [m] from rest along
 its direction.  World = the frame the hand base is placed in (``hand.base_placement``); gravity is the hand's.
 """
 
@@ -20,8 +20,8 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
-from bhgrasp.objects import FixedBox, Plane, RigidObject, SpringMounted
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.objects import FixedBox, Plane, RigidObject, SpringMounted
 
 Environment = Plane | FixedBox
 

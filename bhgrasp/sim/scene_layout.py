@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.objects import RigidObject
+from bhgrasp.model.objects import RigidObject
 from bhgrasp.sim.scene import Scene
 
 

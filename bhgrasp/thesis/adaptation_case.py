@@ -14,9 +14,9 @@ import pinocchio as pin
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_regressors import object_parameters
-from bhgrasp.excitation import PoseExcitation
-from bhgrasp.hand import BarrettHand
-from bhgrasp.objects import Box
+from bhgrasp.model.hand import BarrettHand
+from bhgrasp.model.objects import Box
+from bhgrasp.motion.excitation import PoseExcitation
 from bhgrasp.scenarios.box_grasp import BOX_SIZE
 from bhgrasp.scenarios.identification import (
     ESTIMATE,
@@ -115,7 +115,7 @@ def _notes(values: dict[str, float], hand: dict[str, float], noisy: list[Identif
     return [
         f"The {MASS} kg box (0.06 x 0.05 x 0.05 m), the controller told {ESTIMATE} kg and the inertia of a "
         f"{ESTIMATE} kg box; Gamma_o = {RATES[0]} (mass), {RATES[1]} (inertia), the composite law's P(0).  The "
-        "off-stop pinch lifts it 10 mm and shakes it (`bhgrasp.excitation.PoseExcitation`): "
+        "off-stop pinch lifts it 10 mm and shakes it (`bhgrasp.motion.excitation.PoseExcitation`): "
         f"+-{1e3 * amplitude[1]:g} mm along y and z at {frequency[1]} / {frequency[2]} Hz, +-{amplitude[3]} rad about "
         f"x at {frequency[3]} Hz and about y at {frequency[4]} Hz; along x and about z the grasp cannot move it "
         "without sliding F3.  Modules `bhgrasp.scenarios.identification` and `adaptation_case`.",

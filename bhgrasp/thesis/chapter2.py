@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bhgrasp.hand import Hand
-from bhgrasp.ik import workspace
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.ik import workspace
 
 # Thesis Table 2.2 [m]: finger -> ((x_min, x_max), (y_min, y_max), (z_min, z_max)); F2's x range is printed
 # as [0.02, -0.18] (mirrored F1) and F3's x as 0.

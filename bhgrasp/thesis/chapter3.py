@@ -36,12 +36,12 @@ from bhgrasp.controllers import (
 )
 from bhgrasp.controllers.base import Controller
 from bhgrasp.data import Trajectory
-from bhgrasp.hand import BarrettHand, Hand
-from bhgrasp.planar import thesis_two_link_finger
+from bhgrasp.model.hand import BarrettHand, Hand
+from bhgrasp.model.planar import thesis_two_link_finger
+from bhgrasp.motion.trajectories import Quintic, Reference, Sinusoid, SmoothStep, exponential_approach
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.scene import Scene
 from bhgrasp.thesis.case import Case, case_progress
-from bhgrasp.trajectories import Quintic, Reference, Sinusoid, SmoothStep, exponential_approach
 
 DT = 1e-3  # [s] physics and control period
 MASS_ERROR = 0.3  # nominal = plant scaled by 1 - MASS_ERROR

@@ -13,6 +13,7 @@ from bhgrasp.controllers import PDGravity, WorkspaceComputedTorque
 from bhgrasp.controllers.impedance import ImpedanceController, PositionImpedance
 from bhgrasp.data import State, Trajectory
 from bhgrasp.grasp.sensing import ContactSensing
+from bhgrasp.motion.trajectories import Constant, Quintic
 from bhgrasp.scenarios.finger_press import (
     F3_GAINS,
     F3_IMPEDANCE,
@@ -26,7 +27,6 @@ from bhgrasp.scenarios.finger_press import (
 )
 from bhgrasp.thesis.case import Case
 from bhgrasp.thesis.chapter4_metrics import FORCE_HEADER, force_row
-from bhgrasp.trajectories import Constant, Quintic
 
 PUSH_DEPTH = 0.05  # [m] how far beyond the surface the uncontrolled push commands the fingertip
 

@@ -19,8 +19,9 @@ from bhgrasp.controllers.impedance import (
     ImpedanceController,
     PositionImpedance,
 )
-from bhgrasp.hand import BarrettHand
-from bhgrasp.objects import Box, SpringMounted
+from bhgrasp.model.hand import BarrettHand
+from bhgrasp.model.objects import Box, SpringMounted
+from bhgrasp.motion.trajectories import Constant, Reference, SmoothStep, exponential_approach
 from bhgrasp.scenarios.finger_press import (
     DT,
     F3_GAINS,
@@ -48,7 +49,6 @@ from bhgrasp.thesis.chapter4_closed_form import (
     as_printed,
 )
 from bhgrasp.thesis.chapter4_metrics import FORCE_HEADER, force_row
-from bhgrasp.trajectories import Constant, Reference, SmoothStep, exponential_approach
 
 
 def planar_impedance(scale: float = 1.0) -> Case:

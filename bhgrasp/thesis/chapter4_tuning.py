@@ -17,7 +17,7 @@ import numpy as np
 
 from bhgrasp.controllers.workspace import workspace_dynamics
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 from bhgrasp.scenarios.press_fitness import (
     TUNING_DURATION,
     TUNING_FORCE,

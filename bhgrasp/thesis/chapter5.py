@@ -17,7 +17,7 @@ import numpy as np
 from bhgrasp import metrics
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.metrics import finger_normal_forces
-from bhgrasp.hand import BarrettHand
+from bhgrasp.model.hand import BarrettHand
 from bhgrasp.scenarios.box_grasp import CONTACT_HEIGHT, STIFFNESS
 from bhgrasp.scenarios.demo_result import MU_ASSUMED
 from bhgrasp.scenarios.grasp_controllers import SQUEEZE

@@ -1,15 +1,15 @@
 """The chapter-5 path case: grasped objects carried around a circle and through waypoints (scenarios.carry).
 
-Two grasps of :mod:`bhgrasp.thesis.synthesis_case` (the thesis' box, whose synthesis is the thesis' pinch, and
-the ball) lift their object 10 mm, then follow either a circle of :data:`RADIUS` (:class:`~bhgrasp.paths.PoseCircle`,
+Two grasps of :mod:`bhgrasp.thesis.synthesis_case` (the thesis' box, whose synthesis is the thesis' pinch, and the ball)
+lift their object 10 mm, then follow either a circle of :data:`RADIUS` (:class:`~bhgrasp.motion.paths.PoseCircle`,
 minimum-jerk in arc angle) in the plane the grasps translate in, the vertical y-z plane (F3 has no spread joint: no
 grasp of the BH8-280 moves its object along x, and a horizontal circle is refused), or :data:`WAYPOINTS`: turns and
-shifts joined by minimum-jerk blends that overlap (:class:`~bhgrasp.paths.PoseWaypoints`).  Each path is checked
-against the grasp's manipulable space before simulating (its ``extremes``); the SMC-adaptive law, told half the
-mass, tracks it (:class:`~bhgrasp.controllers.supervisor.GraspSupervisor` with ``path``).  Measured along the path
-after the lift: the true centre of mass's distance from the reference, the orientation's angle from the
-reference's, slip, the least cone margin of the commanded forces; at the end, the pose error against the path's end
-(success as the motion table's, :data:`~bhgrasp.scenarios.demo_result.SUCCESS`).
+shifts joined by minimum-jerk blends that overlap (:class:`~bhgrasp.motion.paths.PoseWaypoints`).  Each path is checked
+against the grasp's manipulable space before simulating (its ``extremes``); the SMC-adaptive law, told half the mass,
+tracks it (:class:`~bhgrasp.controllers.supervisor.GraspSupervisor` with ``path``).  Measured along the path after the
+lift: the true centre of mass's distance from the reference, the orientation's angle from the reference's, slip, the
+least cone margin of the commanded forces; at the end, the pose error against the path's end (success as the motion
+table's, :data:`~bhgrasp.scenarios.demo_result.SUCCESS`).
 """
 
 from __future__ import annotations
@@ -65,14 +65,14 @@ def path_case(scale: float = 1.0):
                 ("final_rotation_mrad", 1e3 * run.final_rotation_error), ("slip_events", float(run.slip_events)),
                 ("cone_margin_N", run.cone_margin))})  # fmt: skip
     case.notes += [
-        f"Circle (`bhgrasp.paths.PoseCircle`): a {1e3 * LIFT[2]:g} mm lift in {LIFT_TIME:g} s, then once around a "
-        "circle through the lifted "
+        f"Circle (`bhgrasp.motion.paths.PoseCircle`): a {1e3 * LIFT[2]:g} mm lift in {LIFT_TIME:g} s, then once "
+        "around a circle through the lifted "
         f"point, of radius {1e3 * RADIUS:g} mm, the arc angle on a minimum-jerk blend (at rest at both ends), the "
         "orientation held; checked against the grasp's manipulable space at eight of its points before simulating "
         "(a circle with a component along x is refused: F3 cannot move along x).",
-        f"Waypoints (`bhgrasp.paths.PoseWaypoints`): a {1e3 * LIFT_MOVE[0][2]:g} mm lift in {LIFT_MOVE[1]:g} s, then "
-        f"the moves listed, each a minimum-jerk blend starting {OVERLAP * scale:g} s before the previous one ends, so "
-        "that the object passes "
+        f"Waypoints (`bhgrasp.motion.paths.PoseWaypoints`): a {1e3 * LIFT_MOVE[0][2]:g} mm lift in "
+        f"{LIFT_MOVE[1]:g} s, then the moves listed, each a minimum-jerk blend starting {OVERLAP * scale:g} s "
+        "before the previous one ends, so that the object passes "
         "the inner waypoints without stopping; checked at every waypoint before simulating.",
         "Deviation: the true centre of mass's distance from the path's, in the lift and from the end of the lift to "
         "the end of the run; turn: the angle between the object's orientation and the path's.  The SMC-adaptive law "

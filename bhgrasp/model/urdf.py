@@ -1,6 +1,6 @@
-"""A URDF as a Pinocchio model, read safely and with every inertia checked (the loader of :mod:`bhgrasp.hand`).
+"""A URDF as a Pinocchio model, read safely and with every inertia checked (the loader of :mod:`bhgrasp.model.hand`).
 
-:func:`_build_model` reads a URDF without DTDs or entities (:func:`~bhgrasp.resources.read_urdf`), refuses
+:func:`_build_model` reads a URDF without DTDs or entities (:func:`~bhgrasp.model.resources.read_urdf`), refuses
 ``<inertial>`` blocks that urdfdom would silently drop or that no rigid body can have, builds the model (``<mimic>``
 tags applied as Pinocchio's mimic joints, or ignored: independent joints) and checks the inertias Pinocchio built
 (links merged across fixed joints).
@@ -16,7 +16,7 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp.errors import ModelError
-from bhgrasp.resources import read_urdf
+from bhgrasp.model.resources import read_urdf
 
 
 def _build_model(path: str | Path, mimic: bool = False) -> tuple[pin.Model, Any]:

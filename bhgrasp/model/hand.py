@@ -4,12 +4,12 @@ Conventions: SI units and radians; ``q`` (size ``nq``) and ``v`` (size ``nv``) i
 (:attr:`Hand.joint_names`).  "World" is the frame the hand base is placed in by :attr:`Hand.base_placement`
 (identity by default, so world = hand base frame W); gravity is given in world coordinates.
 
-A :class:`Hand` is built in layers, one module each: :class:`~bhgrasp.hand_model.HandModel` (model and data,
+A :class:`Hand` is built in layers, one module each: :class:`~bhgrasp.model.hand_model.HandModel` (model and data,
 fingertip frames, names, sizes, limits, world placement, gravity, configurations),
-:class:`~bhgrasp.hand_kinematics.HandKinematics` (frame poses, fingertip positions, Jacobians),
-:class:`~bhgrasp.hand_dynamics.HandDynamics` (CRBA, RNEA, ABA, Coriolis, external forces, regressors) and this
+:class:`~bhgrasp.model.hand_kinematics.HandKinematics` (frame poses, fingertip positions, Jacobians),
+:class:`~bhgrasp.model.hand_dynamics.HandDynamics` (CRBA, RNEA, ABA, Coriolis, external forces, regressors) and this
 module (loading a URDF, collision shapes, perturbed copies, the summary, the packaged :class:`BarrettHand`).  A
-URDF is read and its inertias checked by :mod:`bhgrasp.urdf_model`.
+URDF is read and its inertias checked by :mod:`bhgrasp.model.urdf`.
 """
 
 from __future__ import annotations
@@ -23,11 +23,11 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_vector
 from bhgrasp.errors import InputError, ModelError
-from bhgrasp.hand_dynamics import HandDynamics
-from bhgrasp.hand_model import STANDARD_GRAVITY
-from bhgrasp.hand_model import _generator as _generator  # re-exported: bhgrasp.ik imports it from here
-from bhgrasp.resources import barrett_urdf_path, leaf_links
-from bhgrasp.urdf_model import _build_model
+from bhgrasp.model.hand_dynamics import HandDynamics
+from bhgrasp.model.hand_model import STANDARD_GRAVITY
+from bhgrasp.model.hand_model import _generator as _generator  # re-exported: bhgrasp.model.ik imports it from here
+from bhgrasp.model.resources import barrett_urdf_path, leaf_links
+from bhgrasp.model.urdf import _build_model
 
 BARRETT_FINGERTIPS = {"F1": "F1_tip", "F2": "F2_tip", "F3": "F3_tip"}
 
@@ -53,7 +53,7 @@ class Hand(HandDynamics):
 
         A joint with a ``<mimic joint multiplier offset>`` tag is coupled as Pinocchio builds it (``mimic="coupled"``):
         it has no coordinate of its own and moves as ``multiplier * q[joint] + offset``, so ``nq`` and ``nv`` count
-        the independent joints (:attr:`couplings` lists the others, :mod:`bhgrasp.couplings` says how dynamics and
+        the independent joints (:attr:`couplings` lists the others, :mod:`bhgrasp.model.couplings` says how dynamics and
         pickles treat them).  ``mimic="independent"`` loads every joint as its own DOF (the coupling is then up to an
         actuation model, as :class:`~bhgrasp.sim.actuation.BarrettActuation` does for the BH8-280's).
 
@@ -61,7 +61,7 @@ class Hand(HandDynamics):
             path: URDF file.  It is parsed without DTDs or entities before Pinocchio sees it.
             fingertips: Frame names of the fingertips (finger name = frame name), or a mapping finger name ->
                 frame name; by default the URDF's leaf links below a moving joint
-                (:func:`~bhgrasp.resources.leaf_links`: a palm pad fixed to the base is not a fingertip).
+                (:func:`~bhgrasp.model.resources.leaf_links`: a palm pad fixed to the base is not a fingertip).
             mimic: ``"coupled"`` (default) or ``"independent"``, as above.
             **kwargs: ``name``, ``base_placement``, ``gravity`` as for :class:`Hand`.
 

@@ -10,8 +10,8 @@ b_l and b the minimum-jerk blends of the lift and of the circle (0 -> 1).  The c
 first heads along +v.  Velocity and acceleration are in closed form (world twist, omega = 0).
 
 :class:`PoseWaypoints` joins moves between waypoints with minimum-jerk blends: each move (a world offset, as
-:class:`~bhgrasp.trajectories.PoseMotion` makes it) starts ``overlap`` seconds before the previous one ends, and the
-moves add up (Flash & Hogan 1985's superposition of minimum-jerk strokes): the object passes by the inner waypoints
+:class:`~bhgrasp.motion.trajectories.PoseMotion` makes it) starts ``overlap`` seconds before the previous one ends, and
+the moves add up (Flash & Hogan 1985's superposition of minimum-jerk strokes): the object passes by the inner waypoints
 without stopping and ends at rest at the last one.
 """
 
@@ -24,7 +24,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.errors import InputError
-from bhgrasp.trajectories import Reference, Sample, _time, minimum_jerk
+from bhgrasp.motion.trajectories import Reference, Sample, _time, minimum_jerk
 
 _EXTREME_ANGLES = np.arange(1, 8) * np.pi / 4  # the circle's points checked by :meth:`PoseCircle.extremes`
 
@@ -122,7 +122,7 @@ class PoseWaypoints(Reference):
     overlap)): x(t) = x_0 + sum_i b_i dx_i and R(t) = E_n ... E_1 R_0, E_i = exp(b_i dtheta_i) (each a turn about
     a fixed world axis).  The world twist is omega = sum_i P_i b_i' dtheta_i with P_i = E_n ... E_(i+1), and its
     derivative sum_i (P_i b_i'' dtheta_i + omega_(>i) x P_i b_i' dtheta_i), omega_(>i) the part of omega from the
-    moves after i.  ``overlap`` 0 gives :class:`~bhgrasp.trajectories.PosePath` (waypoints joined at rest).
+    moves after i.  ``overlap`` 0 gives :class:`~bhgrasp.motion.trajectories.PosePath` (waypoints joined at rest).
     """
 
     def __init__(self, start: pin.SE3, moves: Any, overlap: float = 0.0, delay: float = 0.0) -> None:

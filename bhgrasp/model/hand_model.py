@@ -1,9 +1,10 @@
-"""HandModel: the Pinocchio model a :class:`~bhgrasp.hand.Hand` wraps, with its names, limits, placement and gravity.
+"""HandModel: the Pinocchio model a :class:`~bhgrasp.model.hand.Hand` wraps: names, limits, placement, gravity.
 
-The first of the hand's layers, one module each: :class:`HandModel` (Pinocchio model and data, fingertip frames,
-names, sizes, limits, world placement, gravity, configurations, and the checks of ``q``, ``v`` and frame names that
-the layers above use) <- :class:`~bhgrasp.hand_kinematics.HandKinematics` <-
-:class:`~bhgrasp.hand_dynamics.HandDynamics` <- :class:`~bhgrasp.hand.Hand`.  Conventions as in :mod:`bhgrasp.hand`.
+The first of the hand's layers, one module each: :class:`HandModel` (Pinocchio model and data, fingertip frames, names,
+sizes, limits, world placement, gravity, configurations, and the checks of ``q``, ``v`` and frame names that the layers
+above use) <- :class:`~bhgrasp.model.hand_kinematics.HandKinematics` <-
+:class:`~bhgrasp.model.hand_dynamics.HandDynamics` <- :class:`~bhgrasp.model.hand.Hand`.  Conventions as in
+:mod:`bhgrasp.model.hand`.
 """
 
 from __future__ import annotations
@@ -17,8 +18,8 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_array, as_vector, require_name, require_rotation
-from bhgrasp.couplings import Coupling, check_couplings, coupled_model, independent_model, model_couplings
 from bhgrasp.errors import InputError, ModelError
+from bhgrasp.model.couplings import Coupling, check_couplings, coupled_model, independent_model, model_couplings
 
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)  # [m/s^2] in world coordinates
 
@@ -26,7 +27,7 @@ STANDARD_GRAVITY = (0.0, 0.0, -9.81)  # [m/s^2] in world coordinates
 class HandModel:
     """A fixed-base hand's Pinocchio model and data, fingertip frames, names, sizes, limits, placement and gravity.
 
-    The base layer of :class:`~bhgrasp.hand.Hand`, whose docstring says how its methods treat inputs and results.
+    The base layer of :class:`~bhgrasp.model.hand.Hand`, whose docstring says how its methods treat inputs and results.
     """
 
     def __init__(
@@ -53,7 +54,7 @@ class HandModel:
             collision_geometry: Collision shapes attached to the model's joints and frames, for a hand built
                 without a URDF (e.g. a planar finger's tip sphere); scenes use it instead of ``urdf_path``'s.
             base_joints: Joints that move the whole hand and belong to no finger (a wrist mount's,
-                :func:`~bhgrasp.mount.mounted`): :meth:`finger_joints` leaves them out.
+                :func:`~bhgrasp.model.mount.mounted`): :meth:`finger_joints` leaves them out.
         """
         if not fingertips:
             raise ModelError("a hand needs at least one fingertip frame")
@@ -265,7 +266,7 @@ class HandModel:
         """Pickles hold the model; a model with mimic joints as its independent twin and :attr:`couplings`.
 
         Pinocchio 4.1 does not write a mimic joint's extended sizes, and a model read back crashes every algorithm
-        (:mod:`bhgrasp.couplings`); its Data (and a cached twin) are rebuilt on load either way.
+        (:mod:`bhgrasp.model.couplings`); its Data (and a cached twin) are rebuilt on load either way.
         """
         state = dict(self.__dict__)
         del state["_data"]

@@ -24,7 +24,7 @@ import numpy as np
 
 from bhgrasp._validation import as_vector
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 
 class Transmission(ABC):

@@ -29,8 +29,8 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_real, as_vector, require_name
 from bhgrasp.errors import InputError, ModelError
-from bhgrasp.hand import Hand
-from bhgrasp.ik import finger_ik
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.ik import finger_ik
 
 Sample = tuple[np.ndarray, np.ndarray, np.ndarray]  # (position, velocity, acceleration), each of shape (size,)
 
@@ -301,7 +301,7 @@ class Constant(Reference):
 class CartesianReference(Reference):
     """A fingertip reference in the world [m] turned into a joint reference of the whole hand (size ``nv``).
 
-    At each time the finger's joints come from the closed-form :func:`~bhgrasp.ik.finger_ik`, seeded with the
+    At each time the finger's joints come from the closed-form :func:`~bhgrasp.model.ik.finger_ik`, seeded with the
     previous solution (``q_rest`` at first and after :meth:`reset`) so that the IK branch stays continuous along
     the path.  With ``J`` the finger's columns of :meth:`Hand.fingertip_jacobian` (world-aligned):
     ``qdot = J^+ xdot`` and ``qddot = J^+ (xddot - Jdot qdot)``, where ``Jdot qdot`` is the classical fingertip

@@ -1,4 +1,4 @@
-"""The thesis' planar fingers (chapters 3-4) as Pinocchio models with the :class:`~bhgrasp.hand.Hand` interface.
+"""The thesis' planar fingers (chapters 3-4) as Pinocchio models with the :class:`~bhgrasp.model.hand.Hand` interface.
 
 An n-link serial chain in the x-y plane: every joint turns about z, angles are measured from +x (joint i
 relative to link i-1), gravity points along -y.  As in the thesis' Lagrangian ((2.11)-(2.13): kinetic energy
@@ -16,7 +16,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.errors import InputError
-from bhgrasp.hand import Hand
+from bhgrasp.model.hand import Hand
 
 PLANAR_GRAVITY = (0.0, -9.81, 0.0)  # [m/s^2]: the thesis' potential energy is m g y
 

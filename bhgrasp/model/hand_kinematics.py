@@ -1,7 +1,7 @@
 """HandKinematics: frame poses, fingertip positions, Jacobians and bias accelerations of a hand.
 
-The second of the hand's layers (:mod:`bhgrasp.hand_model`): Pinocchio's forward kinematics and frame Jacobians,
-world-aligned, with the hand's base placement applied.  Every method is a method of :class:`~bhgrasp.hand.Hand`.
+The second of the hand's layers (:mod:`bhgrasp.model.hand_model`): Pinocchio's forward kinematics and frame Jacobians,
+world-aligned, with the hand's base placement applied.  Every method is a method of :class:`~bhgrasp.model.hand.Hand`.
 """
 
 from __future__ import annotations
@@ -13,11 +13,11 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_array, as_vector, require_name
-from bhgrasp.hand_model import HandModel
+from bhgrasp.model.hand_model import HandModel
 
 
 class HandKinematics(HandModel):
-    """A :class:`~bhgrasp.hand_model.HandModel` with kinematics: frame poses, fingertip positions and Jacobians."""
+    """A :class:`~bhgrasp.model.hand_model.HandModel` with kinematics: frame poses, fingertip points and Jacobians."""
 
     # ------------------------------------------------------------------ kinematics
     def frame_placement(self, q: Any, frame: str) -> pin.SE3:

@@ -18,7 +18,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_vector, require_name
 from bhgrasp.errors import InputError, ModelError, UnreachableError
-from bhgrasp.hand import Hand, _generator
+from bhgrasp.model.hand import Hand, _generator
 
 _LIMIT_SLACK = 1e-9  # [rad] joint-limit tolerance for solutions exactly on a limit
 

@@ -15,7 +15,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.errors import InputError
-from bhgrasp.trajectories import Reference, Sample, _time, minimum_jerk
+from bhgrasp.motion.trajectories import Reference, Sample, _time, minimum_jerk
 
 _AXES = np.eye(3)
 

@@ -13,9 +13,10 @@ a contact point's velocity includes the wrist's motion (the point Jacobians have
 
 Why actuated joints and not a prescribed base motion: the hand's inertia couples to the wrist's acceleration, the
 fingers' contact velocities include the wrist's, and the wrist feels the object's load, all without a second code
-path: the mounted hand is a :class:`~bhgrasp.hand.Hand` like any other (``nq`` = 6 + the hand's), so the engines,
+path: the mounted hand is a :class:`~bhgrasp.model.hand.Hand` like any other (``nq`` = 6 + the hand's), so the engines,
 batches, recorder, sensing and viewer handle it unchanged.  A stiff servo on the mount joints
-(:class:`~bhgrasp.controllers.mount.MountServo`) drives it along a reference, as an arm's joint servos do.
+(:class:`~bhgrasp.controllers.mount.MountServo`) drives it along a reference
+(:class:`~bhgrasp.motion.wrist.MountReference`), as an arm's joint servos do.
 
 Limits: translation +-``reach`` [m]; yaw and roll +-pi; pitch +-1.5 rad (the Z-Y-X angles are singular at
 +-pi/2).  Gravity stays the hand's (world coordinates), in any direction.
@@ -29,9 +30,8 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_vector
-from bhgrasp.errors import InputError, ModelError
-from bhgrasp.hand import Hand
-from bhgrasp.trajectories import Reference, Sample
+from bhgrasp.errors import ModelError
+from bhgrasp.model.hand import Hand
 
 MOUNT_JOINTS = ("mount_x", "mount_y", "mount_z", "mount_yaw", "mount_pitch", "mount_roll")
 _JOINT_MODELS = (pin.JointModelPX, pin.JointModelPY, pin.JointModelPZ, pin.JointModelRZ, pin.JointModelRY,
@@ -123,44 +123,8 @@ def angular_map_rate(coordinates: Any, rates: Any) -> np.ndarray:
     return np.column_stack((np.zeros(3), y_rate, x_rate))
 
 
-class MountReference(Reference):
-    """A world pose reference of the hand base turned into mount coordinates (size 6) for a mounted hand's servo.
-
-    ``pose``: a Reference of size 6 giving the base pose (x [m], rotation vector of world <- base [rad]) with its
-    world twist (v [m/s], omega [rad/s]) and twist derivative, as :class:`~bhgrasp.trajectories.PoseMotion` does;
-    ``origin``: the mount's origin in the world (the mounted hand's ``base_placement``).  The coordinates are
-    c = coordinates(origin^-1 pose), their rates c_dot = (R_o^T v, E^-1 R_o^T omega) and accelerations
-    c_dd = (R_o^T a, E^-1 (R_o^T alpha - dE/dt angle rates)) (:func:`angular_map`, :func:`angular_map_rate`).
-    """
-
-    def __init__(self, pose: Reference, origin: pin.SE3) -> None:
-        """Wrap ``pose`` for a mount whose origin is ``origin`` (world <- mount)."""
-        if not isinstance(pose, Reference) or pose.size != 6:
-            raise InputError(f"`pose` must be a Reference of size 6 (position, rotation vector), got {pose!r}")
-        if not isinstance(origin, pin.SE3):
-            raise InputError(f"`origin` must be a pinocchio.SE3, got {type(origin).__name__}")
-        self.pose, self.origin = pose, pin.SE3(origin)
-
-    @property
-    def size(self) -> int:
-        """Six mount coordinates."""
-        return 6
-
-    def __call__(self, t: float) -> Sample:
-        """Coordinates, their rates and accelerations at ``t`` [s]."""
-        sample, twist, derivative = self.pose(t)
-        rotation_t = self.origin.rotation.T
-        local = self.origin.actInv(pin.SE3(pin.exp3(sample[3:]), sample[:3]))
-        c = mount_coordinates(local)
-        angular = angular_map(c)
-        c_dot = np.concatenate((rotation_t @ twist[:3], np.linalg.solve(angular, rotation_t @ twist[3:])))
-        spin = rotation_t @ derivative[3:] - angular_map_rate(c, c_dot) @ c_dot[3:]
-        return c, c_dot, np.concatenate((rotation_t @ derivative[:3], np.linalg.solve(angular, spin)))
-
-
 __all__ = [
     "MOUNT_JOINTS",
-    "MountReference",
     "angular_map",
     "angular_map_rate",
     "mount_coordinates",

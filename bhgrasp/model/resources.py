@@ -11,7 +11,7 @@ from defusedxml.ElementTree import fromstring as safe_fromstring
 
 from bhgrasp.errors import ModelError
 
-_PACKAGE_DIR = Path(__file__).resolve().parent
+_PACKAGE_DIR = Path(__file__).resolve().parents[1]  # the bhgrasp folder
 _ERD_SUBDIR = Path("share", "example-robot-data", "robots")
 
 

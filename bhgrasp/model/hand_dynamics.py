@@ -1,11 +1,11 @@
 """HandDynamics: rigid-body dynamics of a hand (CRBA, RNEA, ABA, Coriolis, external forces, regressors).
 
-The third of the hand's layers (:mod:`bhgrasp.hand_model`): Pinocchio's dynamics algorithms and the Slotine-Li
+The third of the hand's layers (:mod:`bhgrasp.model.hand_model`): Pinocchio's dynamics algorithms and the Slotine-Li
 terms of the sliding and adaptive laws; ``bhgrasp._core.HandDynamics`` (``src/dynamics.cpp``) is the compiled
-twin of :meth:`HandDynamics.slotine_li_torque`.  Every method is a method of :class:`~bhgrasp.hand.Hand`.
+twin of :meth:`HandDynamics.slotine_li_torque`.  Every method is a method of :class:`~bhgrasp.model.hand.Hand`.
 
-With mimic joints (:mod:`bhgrasp.couplings`), which Pinocchio's ABA and regressors do not support, forward dynamics
-solve M a = tau - b and the regressors are G^T Y on the independent twin.
+With mimic joints (:mod:`bhgrasp.model.couplings`), which Pinocchio's ABA and regressors do not support, forward
+dynamics solve M a = tau - b and the regressors are G^T Y on the independent twin.
 """
 
 from __future__ import annotations
@@ -19,13 +19,13 @@ import pinocchio as pin
 
 from bhgrasp._native import kernel
 from bhgrasp._validation import as_array, as_vector
-from bhgrasp.couplings import TwinMap, independent_model, twin_map
 from bhgrasp.errors import InputError
-from bhgrasp.hand_kinematics import HandKinematics
+from bhgrasp.model.couplings import TwinMap, independent_model, twin_map
+from bhgrasp.model.hand_kinematics import HandKinematics
 
 
 class HandDynamics(HandKinematics):
-    """A :class:`~bhgrasp.hand_kinematics.HandKinematics` with rigid-body dynamics (Pinocchio's algorithms)."""
+    """A :class:`~bhgrasp.model.hand_kinematics.HandKinematics` with rigid-body dynamics (Pinocchio's algorithms)."""
 
     def _dynamics(self) -> Any:
         """The compiled ``_core.HandDynamics`` of this hand's model, built on first use (``None`` without the core).
@@ -115,7 +115,7 @@ class HandDynamics(HandKinematics):
     def _torque_regressor(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
         """Pinocchio's joint-torque regressor, or G^T Y_twin(G q + c, G v, G a) with mimic joints (which it refuses).
 
-        The twin is the independent one of :mod:`bhgrasp.couplings` (tau = G^T tau_twin, the bodies in one order).
+        The twin is the independent one of :mod:`bhgrasp.model.couplings` (tau = G^T tau_twin, the bodies in one order).
         """
         if not self.couplings:
             return pin.computeJointTorqueRegressor(self._model, self._data, q, v, a).copy()

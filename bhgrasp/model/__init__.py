@@ -1,0 +1,64 @@
+"""The hand and what it grasps, as models.
+
+:class:`Hand` (URDF loading, kinematics, dynamics), couplings, resources, planar fingers, objects, the drive's
+transmission, the wrist mount, orientation maths and inverse kinematics.
+"""
+
+from bhgrasp.model.couplings import Coupling, TwinMap
+from bhgrasp.model.hand import BarrettHand, Hand
+from bhgrasp.model.ik import FingerIKResult, IKResult, Workspace, finger_ik, ik, workspace
+from bhgrasp.model.mount import MOUNT_JOINTS, mount_coordinates, mount_pose, mounted
+from bhgrasp.model.objects import (
+    Box,
+    Capsule,
+    Cylinder,
+    FixedBox,
+    Plane,
+    RigidObject,
+    Sphere,
+    SpringMounted,
+    table,
+    wall,
+)
+from bhgrasp.model.orientation import rotation_from_zyz, zyz_from_rotation
+from bhgrasp.model.planar import planar_finger, thesis_impedance_finger, thesis_one_link_finger, thesis_two_link_finger
+from bhgrasp.model.resources import barrett_urdf_path, example_robot_data_dir, example_robot_data_urdf
+from bhgrasp.model.transmission import DirectDrive, Transmission
+
+__all__ = [
+    "MOUNT_JOINTS",
+    "BarrettHand",
+    "Box",
+    "Capsule",
+    "Coupling",
+    "Cylinder",
+    "DirectDrive",
+    "FingerIKResult",
+    "FixedBox",
+    "Hand",
+    "IKResult",
+    "Plane",
+    "RigidObject",
+    "Sphere",
+    "SpringMounted",
+    "Transmission",
+    "TwinMap",
+    "Workspace",
+    "barrett_urdf_path",
+    "example_robot_data_dir",
+    "example_robot_data_urdf",
+    "finger_ik",
+    "ik",
+    "mount_coordinates",
+    "mount_pose",
+    "mounted",
+    "planar_finger",
+    "rotation_from_zyz",
+    "table",
+    "thesis_impedance_finger",
+    "thesis_one_link_finger",
+    "thesis_two_link_finger",
+    "wall",
+    "workspace",
+    "zyz_from_rotation",
+]

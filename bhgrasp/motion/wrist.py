@@ -1,0 +1,48 @@
+"""A wrist reference: a world pose reference of the hand base in mount coordinates (:class:`MountReference`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp.errors import InputError
+from bhgrasp.model.mount import angular_map, angular_map_rate, mount_coordinates
+from bhgrasp.motion.trajectories import Reference, Sample
+
+
+class MountReference(Reference):
+    """A world pose reference of the hand base turned into mount coordinates (size 6) for a mounted hand's servo.
+
+    ``pose``: a Reference of size 6 giving the base pose (x [m], rotation vector of world <- base [rad]) with its
+    world twist (v [m/s], omega [rad/s]) and twist derivative, as :class:`~bhgrasp.motion.trajectories.PoseMotion` does;
+    ``origin``: the mount's origin in the world (the mounted hand's ``base_placement``).  The coordinates are
+    c = coordinates(origin^-1 pose), their rates c_dot = (R_o^T v, E^-1 R_o^T omega) and accelerations
+    c_dd = (R_o^T a, E^-1 (R_o^T alpha - dE/dt angle rates)) (:func:`angular_map`, :func:`angular_map_rate`).
+    """
+
+    def __init__(self, pose: Reference, origin: pin.SE3) -> None:
+        """Wrap ``pose`` for a mount whose origin is ``origin`` (world <- mount)."""
+        if not isinstance(pose, Reference) or pose.size != 6:
+            raise InputError(f"`pose` must be a Reference of size 6 (position, rotation vector), got {pose!r}")
+        if not isinstance(origin, pin.SE3):
+            raise InputError(f"`origin` must be a pinocchio.SE3, got {type(origin).__name__}")
+        self.pose, self.origin = pose, pin.SE3(origin)
+
+    @property
+    def size(self) -> int:
+        """Six mount coordinates."""
+        return 6
+
+    def __call__(self, t: float) -> Sample:
+        """Coordinates, their rates and accelerations at ``t`` [s]."""
+        sample, twist, derivative = self.pose(t)
+        rotation_t = self.origin.rotation.T
+        local = self.origin.actInv(pin.SE3(pin.exp3(sample[3:]), sample[:3]))
+        c = mount_coordinates(local)
+        angular = angular_map(c)
+        c_dot = np.concatenate((rotation_t @ twist[:3], np.linalg.solve(angular, rotation_t @ twist[3:])))
+        spin = rotation_t @ derivative[3:] - angular_map_rate(c, c_dot) @ c_dot[3:]
+        return c, c_dot, np.concatenate((rotation_t @ derivative[:3], np.linalg.solve(angular, spin)))
+
+
+__all__ = ["MountReference"]
