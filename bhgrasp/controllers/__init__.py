@@ -1,25 +1,56 @@
-"""Controllers: joint space (PD + gravity, computed torque), fingertip space, sliding mode and its higher orders."""
+"""Controllers: each a callable ``(t, state) -> u`` that knows a nominal hand and never the simulator.
 
+Joint space (PD + gravity, computed torque), fingertip space, sliding mode and its higher orders, force impedance,
+object-space and grasp laws (the SMC-adaptive grasp, object identification), the grasp supervisor and the wrist servo.
+"""
+
+from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.base import Controller, JointTracking, inertia_gain
 from bhgrasp.controllers.design import SlidingGains, sliding_gains
-from bhgrasp.controllers.grasping import GraspForceController
+from bhgrasp.controllers.grasping import GraspForceController, ObjectGraspController
 from bhgrasp.controllers.hosm import QuasiContinuousA, SuperTwisting, TwistingB, hosm
+from bhgrasp.controllers.impedance import (
+    AdaptiveForceImpedance,
+    ForceImpedance,
+    ImpedanceController,
+    ImpedanceLaw,
+    PositionImpedance,
+)
+from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter
 from bhgrasp.controllers.joint import ComputedTorque, PDGravity
+from bhgrasp.controllers.mount import MountServo
+from bhgrasp.controllers.object_identification import ObjectIdentification
+from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.sliding import AdaptiveSlidingMode, SlidingMode, SlidingSurface, lyapunov, parameter_scales
+from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
 from bhgrasp.controllers.workspace import WorkspaceComputedTorque, WorkspaceDynamics, workspace_dynamics
 
 __all__ = [
+    "AdaptiveForceImpedance",
     "AdaptiveSlidingMode",
     "ComputedTorque",
     "Controller",
+    "ForceImpedance",
     "GraspForceController",
+    "GraspSupervisor",
+    "ImpedanceController",
+    "ImpedanceFilter",
+    "ImpedanceLaw",
     "JointTracking",
+    "MotorCommands",
+    "MountServo",
+    "ObjectGraspController",
+    "ObjectIdentification",
+    "ObjectSpaceController",
     "PDGravity",
+    "PositionImpedance",
     "QuasiContinuousA",
+    "SMCAdaptiveGrasp",
     "SlidingGains",
     "SlidingMode",
     "SlidingSurface",
     "SuperTwisting",
+    "TustinImpedanceFilter",
     "TwistingB",
     "WorkspaceComputedTorque",
     "WorkspaceDynamics",
