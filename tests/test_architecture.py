@@ -1,9 +1,10 @@
 """The house's rules (DESIGN.md), checked on the code: no import circle, and layers import nothing above them.
 
 The model, motion references, controllers, grasp analysis, the Barrett driver and the data vocabulary know ``State``
-and the model, never the simulator, so that the same controller drives a real hand.  Checked twice: statically on every import
-statement (function-local ones too), and at run time on what importing them loads.  Above the library: the scenarios
-(reusable scenes), then the grasp benchmark and the thesis reproductions side by side, then the command line.
+and the model, never the simulator, so that the same controller drives a real hand.  Checked twice: statically on
+every import statement (function-local ones too), and at run time on what importing them loads.  Above the library:
+the scenarios (reusable scenes), then the grasp benchmark and the thesis reproductions side by side, then the command
+line.
 """
 
 from __future__ import annotations

@@ -28,10 +28,11 @@ def path_clearance(
     """The smallest signed distance [m] from the moving ``shape`` to the ``fixed`` shapes along the path.
 
     Args:
-        shape: The object's coal shape, placed by its pose. start: The object's pose when the motion starts (world).
-        offset: (dx [m], dtheta [rad]) of the motion, world. fixed: Fixed shapes with ``geometry()``, ``placement`` and
-        ``name`` (e.g. :class:`~bhgrasp.model.objects.FixedBox`;
-            an unnamed one is called "environment<i>", as the scene calls it).
+        shape: The object's coal shape, placed by its pose.
+        start: The object's pose when the motion starts (world).
+        offset: (dx [m], dtheta [rad]) of the motion, world.
+        fixed: Fixed shapes with ``geometry()``, ``placement`` and ``name`` (e.g.
+            :class:`~bhgrasp.model.objects.FixedBox`; an unnamed one is called "environment<i>", as the scene calls it).
         samples: Poses checked along the path (the start and the end included).
 
     Returns:

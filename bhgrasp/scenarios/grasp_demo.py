@@ -210,7 +210,6 @@ def save_demo(result: GraspDemoResult, hand, output: Path) -> list[Path]:
 
 __all__ = [
     "HANDS",
-    "GraspDemoResult",
     "demo_figure",
     "grasp_scene",
     "run_grasp_demo",

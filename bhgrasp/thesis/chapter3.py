@@ -408,7 +408,6 @@ def _findings(cases: list[Case]) -> list[str]:
 
 __all__ = [
     "CASES",
-    "Case",
     "Run",
     "barrett_smc_asmc",
     "controller",

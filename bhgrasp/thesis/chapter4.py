@@ -140,7 +140,6 @@ def write_report(cases: list[Case], path: Path, figures: dict[str, str], scale: 
 
 __all__ = [
     "CASES",
-    "Case",
     "as_printed",
     "f3_force",
     "f3_push",

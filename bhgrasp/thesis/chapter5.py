@@ -19,9 +19,9 @@ from bhgrasp.errors import InputError
 from bhgrasp.grasp.metrics import finger_normal_forces
 from bhgrasp.model.hand import BarrettHand
 from bhgrasp.scenarios.box_grasp import CONTACT_HEIGHT, STIFFNESS
-from bhgrasp.scenarios.demo_result import MU_ASSUMED
+from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult
 from bhgrasp.scenarios.grasp_controllers import SQUEEZE
-from bhgrasp.scenarios.grasp_demo import OFFSET, GraspDemoResult, run_grasp_demo
+from bhgrasp.scenarios.grasp_demo import OFFSET, run_grasp_demo
 from bhgrasp.thesis.adaptation_case import adaptation_case
 from bhgrasp.thesis.case import Case, case_progress
 from bhgrasp.thesis.motions import motions_case
@@ -339,6 +339,6 @@ def write_report(cases: list[Case], path: Path, figures: dict[str, list[str]], s
 
 
 __all__ = [
-    "CASES", "Case", "estimate_convergence", "force_metrics", "mass_sweep", "motion_metrics", "object_laws",
+    "CASES", "estimate_convergence", "force_metrics", "mass_sweep", "motion_metrics", "object_laws",
     "pregrasp", "run_chapter5", "smc_adaptive", "write_report",
 ]  # fmt: skip
