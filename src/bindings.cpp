@@ -1,6 +1,6 @@
 // Python bindings of bhgrasp._core: thin wrappers, no logic.  Input checks that a user can trip live in Python
-// (bhgrasp/compiled.py); the checks here only keep a wrong call from reading out of bounds.  Models cross the
-// boundary serialised: pin.Model.saveToString() / pin.GeometryModel.saveToString().
+// (bhgrasp/sim/compiled.py and each kernel's Python caller); the checks here only keep a wrong call from reading out
+// of bounds.  Models cross the boundary serialised: pin.Model.saveToString() / pin.GeometryModel.saveToString().
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/array.h>
