@@ -19,7 +19,7 @@ from bhgrasp.sweep import BatchedRollout
 
 
 def check_grasp_case(parameters: dict[str, Any]) -> None:
-    """The checks :func:`grasp_rollout` makes of a case, without running it (for :func:`run_sweep`'s ``check``).
+    """The checks :func:`grasp_rollout` makes of a case, without running it (a ``check`` for ``run_sweep``).
 
     Raises:
         InputError: ``seed`` given, or a name that is not a parameter of the grasp demo, or a bad value.
