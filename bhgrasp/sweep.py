@@ -104,8 +104,9 @@ def run_sweep(
             (in this process), or any ``concurrent.futures.Executor`` such as a Dask ``Client.get_executor()``.
         workers: Processes of the default pool.
         progress: Show a tqdm progress bar.
-        check: Called with every case's parameters before anything runs (e.g. :func:`check_grasp_case`); an
-            ``InputError`` it raises stops the sweep at once, naming the case.
+        check: Called with every case's parameters before anything runs (e.g.
+            :func:`~bhgrasp.scenarios.rollouts.check_grasp_case`); an ``InputError`` it raises stops the sweep at once,
+            naming the case.
 
     Raises:
         InputError: A case uses a reserved column name or fails ``check``; the log belongs to another sweep (other

@@ -1,4 +1,4 @@
-// Batched rollouts: N copies of one scene stepped together by the compiled engine (bhgrasp.batch).
+// Batched rollouts: N copies of one scene stepped together by the compiled engine (bhgrasp.sim.batch).
 //
 // Each environment owns an Engine (its own Pinocchio and coal data) and its contact memory, so environments never
 // share state; a step runs them on a few threads, each environment on one thread, with the same arithmetic as a

@@ -29,7 +29,7 @@ using Points = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;  // (m
 using Indices = Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>;
 using Flags = Eigen::Matrix<bool, Eigen::Dynamic, 1>;
 
-// The contact force law (bhgrasp.contact.SpringDamper).
+// The contact force law (bhgrasp.sim.contact_law.SpringDamper).
 struct ContactLaw {
   double stiffness = 1e4;             // k [N/m] (Hunt-Crossley: [N/m^e])
   double damping = 20.0;              // c [N s/m]
@@ -42,7 +42,7 @@ struct ContactLaw {
   double match_radius = 3e-3;         // contacts match last step's within this distance on body b [m]
 };
 
-// One collision pair: forces act on body b along the normal from a to b (bhgrasp.scene.CollisionPair).
+// One collision pair: forces act on body b along the normal from a to b (bhgrasp.sim.scene.CollisionPair).
 struct Pair {
   int geom_a = 0, geom_b = 0;    // geometry indices
   int joint_a = 0, joint_b = 0;  // joints carrying the bodies (0: the world or the fixed palm)
@@ -83,7 +83,7 @@ struct Settings {
   std::vector<Query> queries;  // per pair
 };
 
-// The actuation of one step (bhgrasp.actuation.Actuation in its current mode).
+// The actuation of one step (bhgrasp.sim.actuation.Actuation in its current mode).
 struct Drive {
   Matrix transmission;    // (nv_hand, n_driven) T: v_hand = T w
   Vector joint_damping;   // (nv_hand,) passive + drive damping [N m s/rad]
@@ -91,7 +91,7 @@ struct Drive {
   Vector motor_damping;   // (nv_hand,) the drive's own damping (joint_damping minus the passive joints')
 };
 
-// What a run carries from one step to the next about its contacts (bhgrasp.contact.ContactMemory).
+// What a run carries from one step to the next about its contacts (bhgrasp.data.contacts.ContactMemory).
 struct Memory {
   Indices pair;
   Points local_b;
@@ -99,7 +99,7 @@ struct Memory {
   Flags sliding;
 };
 
-// The contacts of one instant (bhgrasp.contact.ContactSet).
+// The contacts of one instant (bhgrasp.data.contacts.ContactSet).
 struct Contacts {
   Indices pair;
   Points point, normal;

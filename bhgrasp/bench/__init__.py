@@ -1,9 +1,9 @@
 """The grasp benchmark: a wrist-mounted BH8-280 approaches, closes on, lifts, shakes and places household objects.
 
-:mod:`~bhgrasp.bench.protocol` fixes the protocol (phases, thresholds, contact law, :class:`Trial`);
-:mod:`~bhgrasp.bench.objects` the object set; :mod:`~bhgrasp.bench.placement` where the hand goes;
-:mod:`~bhgrasp.bench.trial` runs one trial; :mod:`~bhgrasp.bench.metrics` scores it; :mod:`~bhgrasp.bench.report`
-runs many and writes the JSON and markdown report (``bhgrasp grasp-bench``).
+:mod:`~bhgrasp.bench.protocol` fixes the protocol (phases, thresholds, contact law,
+:class:`~bhgrasp.bench.protocol.Trial`); :mod:`~bhgrasp.bench.objects` the object set; :mod:`~bhgrasp.bench.placement`
+where the hand goes; :mod:`~bhgrasp.bench.trial` runs one trial; :mod:`~bhgrasp.bench.metrics` scores it;
+:mod:`~bhgrasp.bench.report` runs many and writes the JSON and markdown report (``bhgrasp grasp-bench``).
 """
 
 from bhgrasp.bench.metrics import contact_summary, evaluate, failure_reason, relative_poses

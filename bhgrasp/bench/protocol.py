@@ -1,8 +1,8 @@
 """The grasp benchmark: approach -> close -> lift 10 cm -> shake in six directions -> place, per object.
 
-One trial (:func:`run_trial`) puts a wrist-mounted BH8-280 (:func:`~bhgrasp.model.mount.mounted`) palm down above an
-object (:mod:`~bhgrasp.bench.objects`) standing on a stand of its own footprint, and runs DexGraspBench's
-shake protocol:
+One trial (:func:`~bhgrasp.bench.trial.run_trial`) puts a wrist-mounted BH8-280 (:func:`~bhgrasp.model.mount.mounted`)
+palm down above an object (:mod:`~bhgrasp.bench.objects`) standing on a stand of its own footprint, and runs
+DexGraspBench's shake protocol:
 
 1. **approach** (0-1 s): the wrist descends 5 cm to the grasp height, the fingers pre-shaped (proximal 0.8 rad),
    the spread held in position mode, the hand shifted along its F3 axis so that the fingers reach the object

@@ -72,7 +72,7 @@ def setup(trial: Trial, dt: float = DT):
     scene = Scene(hand, [item.body(FRICTION)], environment=[pedestal])
     if trial.actuation == "barrett":
         actuation = BarrettActuation(hand, saturate=True)
-    else:  # the same motors' damping on each joint, reflected as through the worms (module docstring)
+    else:  # the same motors' damping on each joint, reflected as through the worms (bench.protocol)
         actuation = FullyActuated(hand, damping=idealised_damping(hand))
     law = SpringDamper(
         stiffness=STIFFNESS, damping=2e-3 * STIFFNESS, friction=FRICTION, tangential_stiffness=0.1 * STIFFNESS,
@@ -136,7 +136,10 @@ class BenchController:
 
 
 def shake_force(mass: float):
-    """The shake, ``t -> (1, 3)`` world force [N]: 10 m newtons along each of :data:`DIRECTIONS` for 2 s."""
+    """The shake, ``t -> (1, 3)`` world force [N]: 10 m newtons along each direction for 2 s.
+
+    The directions: :data:`~bhgrasp.bench.protocol.DIRECTIONS`.
+    """
     axes = np.vstack([np.eye(3)[[0, 0, 1, 1, 2, 2]] * np.array([1, -1, 1, -1, 1, -1])[:, None]])
     none = np.zeros((1, 3))
 
@@ -161,7 +164,7 @@ def simulate_trial(trial: Trial, dt: float = DT, record_every: int = 40, duratio
 
 
 def run_trial(trial: Trial, dt: float = DT, record_every: int = 40) -> dict:
-    """Run one trial (module docstring) and return its record (SI units; rotations [rad], forces [N])."""
+    """Run one trial (:mod:`~bhgrasp.bench.protocol`) and return its record (SI units; rotations [rad], forces [N])."""
     trajectory, hand = simulate_trial(trial, dt, record_every)
     return evaluate(trial, trajectory, hand)
 

@@ -1,4 +1,4 @@
-"""The wrist servo of a mounted hand (:func:`~bhgrasp.model.mount.mounted`): the arm's part of lift, carry, shake.
+"""The wrist servo of a mounted hand (:func:`~bhgrasp.model.mount.mounted`): lift, carry, shake and place.
 
 :class:`MountServo` drives the six mount coordinates c (x, y, z [m], yaw, pitch, roll [rad]) along a reference
 (any :class:`~bhgrasp.motion.trajectories.Reference` of size 6: a :class:`~bhgrasp.motion.trajectories.Quintic` lift, a

@@ -148,7 +148,10 @@ class ContactSensing:
                                       state.contact_forces[rows])  # fmt: skip
 
     def _reaction_torques_python(self, state: State) -> np.ndarray:
-        """:meth:`reaction_torques` through :meth:`Hand.point_jacobians` (the compiled sum's twin)."""
+        """:meth:`reaction_torques` by the hand's point Jacobians (the compiled sum's twin).
+
+        Through :meth:`~bhgrasp.model.hand.Hand.point_jacobians`.
+        """
         hand = self.hand
         rows = [k for k, (link, _) in enumerate(state.contact_bodies)
                 if link in self._finger_of or hand.model.existFrame(link)]  # fmt: skip

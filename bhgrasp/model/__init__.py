@@ -1,7 +1,7 @@
 """The hand and what it grasps, as models.
 
-:class:`Hand` (URDF loading, kinematics, dynamics), couplings, resources, planar fingers, objects, the drive's
-transmission, the wrist mount, orientation maths and inverse kinematics.
+:class:`~bhgrasp.model.hand.Hand` (URDF loading, kinematics, dynamics), couplings, resources, planar fingers, objects,
+the drive's transmission, the wrist mount, orientation maths and inverse kinematics.
 """
 
 from bhgrasp.model.couplings import Coupling, TwinMap

@@ -17,7 +17,7 @@ from bhgrasp.model.hand_model import HandModel
 
 
 class HandKinematics(HandModel):
-    """A :class:`~bhgrasp.model.hand_model.HandModel` with kinematics: frame poses, fingertip points and Jacobians."""
+    """A :class:`~bhgrasp.model.hand_model.HandModel` with kinematics: frame poses, fingertip positions, Jacobians."""
 
     # ------------------------------------------------------------------ kinematics
     def frame_placement(self, q: Any, frame: str) -> pin.SE3:

@@ -1,4 +1,4 @@
-"""HandModel: the Pinocchio model a :class:`~bhgrasp.model.hand.Hand` wraps: names, limits, placement, gravity.
+"""HandModel: the Pinocchio model a :class:`~bhgrasp.model.hand.Hand` wraps, with its names, limits, placement, gravity.
 
 The first of the hand's layers, one module each: :class:`HandModel` (Pinocchio model and data, fingertip frames, names,
 sizes, limits, world placement, gravity, configurations, and the checks of ``q``, ``v`` and frame names that the layers

@@ -17,7 +17,8 @@ class MountReference(Reference):
     world twist (v [m/s], omega [rad/s]) and twist derivative, as :class:`~bhgrasp.motion.trajectories.PoseMotion` does;
     ``origin``: the mount's origin in the world (the mounted hand's ``base_placement``).  The coordinates are
     c = coordinates(origin^-1 pose), their rates c_dot = (R_o^T v, E^-1 R_o^T omega) and accelerations
-    c_dd = (R_o^T a, E^-1 (R_o^T alpha - dE/dt angle rates)) (:func:`angular_map`, :func:`angular_map_rate`).
+    c_dd = (R_o^T a, E^-1 (R_o^T alpha - dE/dt angle rates)) (:func:`~bhgrasp.model.mount.angular_map`,
+    :func:`~bhgrasp.model.mount.angular_map_rate`).
     """
 
     def __init__(self, pose: Reference, origin: pin.SE3) -> None:

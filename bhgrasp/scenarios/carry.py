@@ -67,12 +67,18 @@ class PathRun:
 
 
 def circle(radius: float = RADIUS, plane: str = "y-z", duration: float = CIRCLE_TIME):
-    """The supervisor's path factory of a :class:`~bhgrasp.motion.paths.PoseCircle` after :data:`LIFT`."""
+    """The supervisor's path factory of a :class:`~bhgrasp.motion.paths.PoseCircle`.
+
+    The circle follows :data:`LIFT` made in :data:`LIFT_TIME`.
+    """
     return partial(PoseCircle, radius=radius, plane=PLANES[plane], duration=duration, lift=LIFT, lift_time=LIFT_TIME)
 
 
 def waypoints(moves, overlap: float = OVERLAP):
-    """The path factory of :class:`~bhgrasp.motion.paths.PoseWaypoints`: :data:`LIFT_MOVE`, then ``moves``."""
+    """The supervisor's path factory of :class:`~bhgrasp.motion.paths.PoseWaypoints`.
+
+    The waypoint moves are :data:`LIFT_MOVE`, then ``moves``.
+    """
     return partial(PoseWaypoints, moves=[LIFT_MOVE, *moves], overlap=overlap)
 
 

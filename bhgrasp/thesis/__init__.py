@@ -1,4 +1,4 @@
-"""Reproductions of the thesis' results, chapters 2-5: one module per chapter, one :class:`Case` per experiment.
+"""Reproductions of the thesis' results, chapters 2-5: one module per chapter, one ``Case`` per experiment.
 
 ``bhgrasp experiments chN`` runs a chapter; :mod:`~bhgrasp.thesis.results` writes, compares and tabulates its
 figures of merit (``docs/results``).

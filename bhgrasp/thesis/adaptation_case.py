@@ -118,7 +118,7 @@ def _notes(values: dict[str, float], hand: dict[str, float], noisy: list[Identif
         "off-stop pinch lifts it 10 mm and shakes it (`bhgrasp.motion.excitation.PoseExcitation`): "
         f"+-{1e3 * amplitude[1]:g} mm along y and z at {frequency[1]} / {frequency[2]} Hz, +-{amplitude[3]} rad about "
         f"x at {frequency[3]} Hz and about y at {frequency[4]} Hz; along x and about z the grasp cannot move it "
-        "without sliding F3.  Modules `bhgrasp.scenarios.identification` and `adaptation_case`.",
+        "without sliding F3.  Modules `bhgrasp.scenarios.identification` and `bhgrasp.thesis.adaptation_case`.",
         "Ideal loop: a free body receives exactly the commanded wrench (no fingers): the thesis' assumption "
         "Delta F_o = 0.  There V_o never rises (largest step "
         f"{values['ideal/thesis/largest_rise_rel']:.1e} / {values['ideal/composite/largest_rise_rel']:.1e} of V_o(0)"

@@ -149,7 +149,7 @@ def ctc_steps(scale: float = 1.0) -> Case:
     traj = simulate(hand, lambda: WorkspaceComputedTorque(hand, refs), q_start, duration, False)
     _add(case, Run("fingertip CTC", False, traj, tuple(range(hand.nv)), hand.joint_names))
     case.header = ["run", "joint", "overshoot %", "rise 10-90 % [s]", "settling 2 % [s]", "max error % of step"]
-    for run, key in zip(list(case.runs.values())[:2], ("joint_steps", "spread")):
+    for run, key in zip((case.runs["CTC joint steps"], case.runs["CTC with spread 65 deg"]), ("joint_steps", "spread")):
         t, q = run.trajectory.t, run.trajectory.q
         target = (qs if "spread" in run.name else qf)[list(run.joints)]
         response = metrics.step_response(t, q[:, list(run.joints)], target, start=q0[list(run.joints)])
@@ -166,7 +166,7 @@ def ctc_steps(scale: float = 1.0) -> Case:
             })  # fmt: skip
         case.values[f"{key}/max_overshoot_pct"] = np.max(response.overshoot_percent)
         case.values[f"{key}/max_settling_s"] = np.max(response.settling_time)
-    tip = list(case.runs.values())[2].trajectory
+    tip = case.runs["fingertip CTC"].trajectory
     x_error = np.linalg.norm(tip.log["x_error"].reshape(len(tip.t), -1, 3), axis=2)
     travel = np.linalg.norm(goal - start, axis=1)
     late = tip.t >= 0.5

@@ -22,10 +22,9 @@ printed law's steady-state force error.
 
 The chapter's code, one concept per module: :mod:`~bhgrasp.scenarios.finger_press` (the finger-and-object
 benches, running them, the normal force and its metrics), :mod:`~bhgrasp.thesis.chapter4_metrics` (their report
-rows),
-:mod:`~bhgrasp.thesis.chapter4_closed_form` (the laws as printed, the closed-form steady force),
-:mod:`~bhgrasp.thesis.chapter4_contact` (contact without control, PIM), :mod:`~bhgrasp.thesis.chapter4_fim`
-(FIM, adaptive FIM, three fingers), :mod:`~bhgrasp.scenarios.press_fitness` (the tuning's fitness) and
+rows), :mod:`~bhgrasp.thesis.chapter4_closed_form` (the laws as printed, the closed-form steady force),
+:mod:`~bhgrasp.thesis.chapter4_contact` (contact without control, PIM), :mod:`~bhgrasp.thesis.chapter4_fim` (FIM,
+adaptive FIM, three fingers), :mod:`~bhgrasp.scenarios.press_fitness` (the tuning's fitness) and
 :mod:`~bhgrasp.thesis.chapter4_tuning` (the CMA-ES tuning).  This module holds the :data:`CASES` registry,
 :func:`run_chapter4` and :func:`write_report`, and re-exports the cases and the closed forms.
 """

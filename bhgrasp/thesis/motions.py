@@ -175,4 +175,4 @@ def _notes(allowed: int, succeeded: int, failed: list[str], shortfall: tuple[flo
     ]
 
 
-__all__ = ["GRASPS", "MOTIONS", "SUCCESS", "motions_case", "run_motion", "short_reason"]
+__all__ = ["GRASPS", "MOTIONS", "motions_case", "run_motion", "short_reason"]

@@ -1,15 +1,16 @@
 """The chapter-5 path case: grasped objects carried around a circle and through waypoints (scenarios.carry).
 
 Two grasps of :mod:`bhgrasp.thesis.synthesis_case` (the thesis' box, whose synthesis is the thesis' pinch, and the ball)
-lift their object 10 mm, then follow either a circle of :data:`RADIUS` (:class:`~bhgrasp.motion.paths.PoseCircle`,
-minimum-jerk in arc angle) in the plane the grasps translate in, the vertical y-z plane (F3 has no spread joint: no
-grasp of the BH8-280 moves its object along x, and a horizontal circle is refused), or :data:`WAYPOINTS`: turns and
-shifts joined by minimum-jerk blends that overlap (:class:`~bhgrasp.motion.paths.PoseWaypoints`).  Each path is checked
-against the grasp's manipulable space before simulating (its ``extremes``); the SMC-adaptive law, told half the mass,
-tracks it (:class:`~bhgrasp.controllers.supervisor.GraspSupervisor` with ``path``).  Measured along the path after the
-lift: the true centre of mass's distance from the reference, the orientation's angle from the reference's, slip, the
-least cone margin of the commanded forces; at the end, the pose error against the path's end (success as the motion
-table's, :data:`~bhgrasp.scenarios.demo_result.SUCCESS`).
+lift their object 10 mm, then follow either a circle of :data:`~bhgrasp.scenarios.carry.RADIUS`
+(:class:`~bhgrasp.motion.paths.PoseCircle`, minimum-jerk in arc angle) in the plane the grasps translate in, the
+vertical y-z plane (F3 has no spread joint: no grasp of the BH8-280 moves its object along x, and a horizontal circle is
+refused), or :data:`~bhgrasp.scenarios.carry.WAYPOINTS`: turns and shifts joined by minimum-jerk blends that overlap
+(:class:`~bhgrasp.motion.paths.PoseWaypoints`).  Each path is checked against the grasp's manipulable space before
+simulating (its ``extremes``); the SMC-adaptive law, told half the mass, tracks it
+(:class:`~bhgrasp.controllers.supervisor.GraspSupervisor` with ``path``).  Measured along the path after the lift: the
+true centre of mass's distance from the reference, the orientation's angle from the reference's, slip, the least cone
+margin of the commanded forces; at the end, the pose error against the path's end (success as the motion table's,
+:data:`~bhgrasp.scenarios.demo_result.SUCCESS`).
 """
 
 from __future__ import annotations

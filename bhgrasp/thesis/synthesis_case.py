@@ -1,8 +1,7 @@
 """The chapter-5 synthesis case: grasps the planner chooses for boxes, cylinders and spheres, then run and moved.
 
 For each object of :data:`~bhgrasp.scenarios.object_grasp.OBJECTS` (household sizes the BH8-280 spans, each centred
-where the thesis' box is),
-:func:`~bhgrasp.grasp.synthesis.synthesize` picks the fingers, the spread and the contacts
+where the thesis' box is), :func:`~bhgrasp.grasp.synthesis.synthesize` picks the fingers, the spread and the contacts
 (:mod:`bhgrasp.scenarios.object_grasp` builds the scene around it, on a pedestal), then every motion of
 :data:`MOTIONS` is either refused before simulating (the grasp's manipulable space, the pedestal) or run with the
 SMC-adaptive law told half the mass (:func:`~bhgrasp.scenarios.object_grasp.run_object_grasp`), and judged as the
@@ -117,4 +116,4 @@ def _notes(allowed: int, succeeded: int, failed: list[str]) -> list[str]:
     ]
 
 
-__all__ = ["MOTIONS", "OBJECTS", "synthesis_case"]
+__all__ = ["MOTIONS", "synthesis_case"]
