@@ -21,7 +21,7 @@ from bhgrasp.controllers import (
     workspace_dynamics,
 )
 from bhgrasp.motion.trajectories import Constant, Quintic, Sinusoid, exponential_approach
-from bhgrasp.thesis.chapter3 import f3_case
+from bhgrasp.scenarios.joint_tracking import f3_case
 
 Q_MID = dict(
     F1_spread=0.5, F1_proximal=0.6, F1_distal=0.3, F2_spread=0.5, F2_proximal=0.6, F2_distal=0.3,

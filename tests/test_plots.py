@@ -8,7 +8,7 @@ import pytest
 import bhgrasp as bh
 from bhgrasp import plots
 from bhgrasp.plots.joint import _running_mean
-from bhgrasp.thesis.chapter3 import f3_case
+from bhgrasp.scenarios.joint_tracking import f3_case
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,8 @@ uncertainties (:mod:`~bhgrasp.scenarios.uncertainty`), the ideal object loop (:m
 the identification runs (:mod:`~bhgrasp.scenarios.identification`), grasped objects carried along paths
 (:mod:`~bhgrasp.scenarios.carry`), a finger pressing a spring-mounted box (:mod:`~bhgrasp.scenarios.finger_press`,
 chapter 4's benches) and the fitness that tunes its impedance (:mod:`~bhgrasp.scenarios.press_fitness`), and the
-sweep rollouts built on them (:mod:`~bhgrasp.scenarios.rollouts`).
+sweep rollouts built on them (:mod:`~bhgrasp.scenarios.rollouts`); joint tracking with the thesis' joint
+controllers by name (:mod:`~bhgrasp.scenarios.joint_tracking`).
 """
 
 from bhgrasp.scenarios.allegro_grasp import allegro_box_grasp, allegro_hand
@@ -20,6 +21,7 @@ from bhgrasp.scenarios.grasp_controllers import ADAPTATIONS, CONTROLLERS, grasp_
 from bhgrasp.scenarios.grasp_demo import HANDS, demo_figure, grasp_scene, run_grasp_demo, save_demo
 from bhgrasp.scenarios.hold import HoldScenario, reference_hold
 from bhgrasp.scenarios.identification import IdentificationRun, identification_run
+from bhgrasp.scenarios.joint_tracking import f3_case
 from bhgrasp.scenarios.object_grasp import OBJECTS, ObjectGrasp, object_grasp, run_object_grasp
 from bhgrasp.scenarios.object_loop import ObjectLoopRun, ideal_object_loop
 from bhgrasp.scenarios.press_fitness import impedance_fitness
@@ -50,6 +52,7 @@ __all__ = [
     "circle",
     "demo_figure",
     "evaluate_demo",
+    "f3_case",
     "f3_setup",
     "force_metrics",
     "grasp_controller",
