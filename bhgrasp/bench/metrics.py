@@ -31,17 +31,25 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
     lifted = float(trajectory.object_position[held, 0, 2] - trajectory.object_position[0, 0, 2])
     held_through = lifted > 0.5 * LIFT and t[-1] >= HELD_AT + 6 * SHAKE_TIME - 1e-9  # not stopped: still in the scene
     record = {
-        "object": trial.item.name, "spec": trial.item.spec, "grasp": trial.grasp, "actuation": trial.actuation,
+        "object": trial.item.name,
+        "spec": trial.item.spec,
+        "grasp": trial.grasp,
+        "actuation": trial.actuation,
         "spread": trial.preshape_spread,
-        "lifted": lifted, "max_displacement": float(offsets.max()), "max_rotation": float(turns.max()),
+        "lifted": lifted,
+        "max_displacement": float(offsets.max()),
+        "max_rotation": float(turns.max()),
         "success": bool(held_through and offsets.max() < LOOSE[0] and turns.max() < LOOSE[1]),
         "strict_success": bool(held_through and offsets.max() < STRICT[0] and turns.max() < STRICT[1]),
-    }  # fmt: skip
+    }
     final = trajectory.object_position[-1, 0, 2] - trajectory.object_position[0, 0, 2]
     record["placed"] = bool(record["success"] and abs(final) < 0.005)  # set down and let go at its resting height
     record.update(contact_summary(trajectory, hand, held, shaken))
-    fingers = slice(1, 4) if trial.actuation == "barrett" else [hand.joint_index(f"{f}_{j}") for f in hand.fingers
-                                                                for j in ("proximal", "distal")]  # fmt: skip
+    fingers = (
+        slice(1, 4)
+        if trial.actuation == "barrett"
+        else [hand.joint_index(f"{f}_{j}") for f in hand.fingers for j in ("proximal", "distal")]
+    )
     record["peak_motor_torque"] = float(np.abs(trajectory.u[:, fingers]).max())  # finger pucks or joints [N m]
     record["failure"] = failure_reason(record, offsets, turns, t[held : shaken + 1], float(t[-1]))
     return record
@@ -73,8 +81,11 @@ def contact_summary(trajectory, hand: bh.Hand, held: int, shaken: int) -> dict:
     forces = magnitudes * on_object
     rows = slice(trajectory.contact_offsets[held], trajectory.contact_offsets[shaken + 1])
     loaded = (forces[rows] > 0.1) & ~trajectory.contact_sticking[rows]
-    return {"peak_contact_force": float(forces.max(initial=0.0)), "slip_samples": int(loaded.sum()),
-            "peak_stand_force": float((magnitudes * on_stand).max(initial=0.0))}  # fmt: skip
+    return {
+        "peak_contact_force": float(forces.max(initial=0.0)),
+        "slip_samples": int(loaded.sum()),
+        "peak_stand_force": float((magnitudes * on_stand).max(initial=0.0)),
+    }
 
 
 def failure_reason(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.ndarray, end: float) -> str:

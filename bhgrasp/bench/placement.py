@@ -45,18 +45,26 @@ class _Reach:
         self.model_data = self.hand.model.createData()
         self.shape = item.body(0.8).geometry()
         self.spread, self.opening, self.closed = spread, opening, closed
-        self.shapes = {finger: [i for i, g in enumerate(self.geometry.geometryObjects)
-                                if g.name.startswith(finger) and "knuckle" not in g.name]
-                       for finger in self.hand.fingers}  # fmt: skip
+        self.shapes = {
+            finger: [
+                i
+                for i, g in enumerate(self.geometry.geometryObjects)
+                if g.name.startswith(finger) and "knuckle" not in g.name
+            ]
+            for finger in self.hand.fingers
+        }
 
     def distance(self, finger: str, angle: float, centre: np.ndarray, shape: coal.ShapeBase | None = None) -> float:
         """Distance [m] from the finger's links to the object at ``centre`` with every finger at ``angle``.
 
         ``shape``: another shape placed at ``centre`` (axes as the object's) instead of the object.
         """
-        q = self.hand.configuration(F1_spread=self.spread, F2_spread=self.spread,
-                                    **{f"{f}_proximal": angle for f in self.hand.fingers},
-                                    **{f"{f}_distal": angle / 3 for f in self.hand.fingers})  # fmt: skip
+        q = self.hand.configuration(
+            F1_spread=self.spread,
+            F2_spread=self.spread,
+            **{f"{f}_proximal": angle for f in self.hand.fingers},
+            **{f"{f}_distal": angle / 3 for f in self.hand.fingers},
+        )
         pin.updateGeometryPlacements(self.hand.model, self.model_data, self.geometry, self.data, q)
         placement = coal.Transform3s(_FLIP, centre)
         shape = self.shape if shape is None else shape
@@ -64,8 +72,14 @@ class _Reach:
         for i in self.shapes[finger]:
             frame = self.data.oMg[i]
             result = coal.DistanceResult()
-            gap = coal.distance(self.geometry.geometryObjects[i].geometry, coal.Transform3s(frame.rotation,
-                                frame.translation), shape, placement, coal.DistanceRequest(), result)  # fmt: skip
+            gap = coal.distance(
+                self.geometry.geometryObjects[i].geometry,
+                coal.Transform3s(frame.rotation, frame.translation),
+                shape,
+                placement,
+                coal.DistanceRequest(),
+                result,
+            )
             nearest = min(nearest, gap)
         return nearest
 
@@ -98,8 +112,11 @@ def hand_depth(spread: float, opening: float) -> float:
     q = reach.hand.configuration(F1_spread=spread, F2_spread=spread)
     pin.updateGeometryPlacements(reach.hand.model, reach.model_data, reach.geometry, reach.data, q)
     shapes = reach.geometry.geometryObjects
-    return max(_deepest_corner(item.geometry, reach.data.oMg[i]) for i, item in enumerate(shapes)
-               if not any(part in item.name for part in ("proximal", "distal")))  # fmt: skip
+    return max(
+        _deepest_corner(item.geometry, reach.data.oMg[i])
+        for i, item in enumerate(shapes)
+        if not any(part in item.name for part in ("proximal", "distal"))
+    )
 
 
 def grasp_offset(item: BenchObject, spread: float, clearance: float, opening: float) -> float:

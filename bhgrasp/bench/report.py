@@ -55,23 +55,39 @@ def run_bench(
     (:attr:`~bhgrasp.bench.protocol.Trial.spread`).  Returns the trial records and each trial's wall time
     [s] (kept apart: records repeat bit for bit, times not).
     """
-    design = [{"name": o.name, "spec": o.spec, "grasp": g, "actuation": a}
-              for a in actuations for o in objects for g in grasps]  # fmt: skip
+    design = [
+        {"name": o.name, "spec": o.spec, "grasp": g, "actuation": a}
+        for a in actuations
+        for o in objects
+        for g in grasps
+    ]
     if spreads:
         design = [{**case, "spread": float(spread)} for case in design for spread in spreads]
     for case in design:  # refuse bad cases before running
         Trial(BenchObject.parse(case["spec"]), case["grasp"], case["actuation"], case.get("spread"))
-    table = run_sweep(bench_rollout, design, executor=executor or ("serial" if workers == 1 else None),
-                      workers=workers, progress=progress)  # fmt: skip
+    table = run_sweep(
+        bench_rollout,
+        design,
+        executor=executor or ("serial" if workers == 1 else None),
+        workers=workers,
+        progress=progress,
+    )
     trials, walls = [], []
     for row in table.to_dict("records"):
         trial = {"object": row["name"], "spec": row["spec"], "grasp": row["grasp"], "actuation": row["actuation"]}
         if row["status"] == "ok":
-            trial.update({key: row[key] for key in ("spread", "success", "strict_success", "placed", *METRICS,
-                                                     "failure")})  # fmt: skip
+            trial.update(
+                {key: row[key] for key in ("spread", "success", "strict_success", "placed", *METRICS, "failure")}
+            )
         else:
-            trial.update(spread=row.get("spread"), success=False, strict_success=False, placed=False,
-                         failure=row["error"], **dict.fromkeys(METRICS))  # fmt: skip
+            trial.update(
+                spread=row.get("spread"),
+                success=False,
+                strict_success=False,
+                placed=False,
+                failure=row["error"],
+                **dict.fromkeys(METRICS),
+            )
         trials.append({key: _plain(value) for key, value in trial.items()})
         walls.append(row["wall_time"])
     return trials, walls
@@ -89,10 +105,11 @@ def _plain(value: Any) -> Any:
 def write_json(trials: list[dict[str, Any]], path: Path) -> None:
     """``{"protocol": ..., "trials": [...]}`` with sorted keys."""
     protocol = {
-        "push_directions": list(DIRECTIONS), "push_force": "10 m [N]",
+        "push_directions": list(DIRECTIONS),
+        "push_force": "10 m [N]",
         "loose": {"displacement_m": LOOSE[0], "rotation_rad": LOOSE[1]},
         "strict": {"displacement_m": STRICT[0], "rotation_rad": STRICT[1]},
-    }  # fmt: skip
+    }
     path.write_text(json.dumps({"protocol": protocol, "trials": trials}, indent=1, sort_keys=True) + "\n")
 
 
@@ -114,18 +131,27 @@ COMMAND = (
 
 def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
     """The report: success per actuation, then one table row per trial (mm, deg, N, N m); ``command`` made it."""
-    lines = ["# Grasp benchmark", "",
-             f"Regenerate: `{command}`. Protocol: approach, close, "
-             "lift 10 cm, push 10 m N on the object along +x, -x, +y, -y, +z, -z (2 s each), place "
-             "(`bhgrasp/bench/protocol.py`). Success: within 5 cm and 15 deg of the held pose in the palm "
-             "frame through the pushes; strict: 1 cm and 5 deg.", "",
-             "| actuation | success | strict | trials |", "|---|---:|---:|---:|"]  # fmt: skip
+    lines = [
+        "# Grasp benchmark",
+        "",
+        f"Regenerate: `{command}`. Protocol: approach, close, "
+        "lift 10 cm, push 10 m N on the object along +x, -x, +y, -y, +z, -z (2 s each), place "
+        "(`bhgrasp/bench/protocol.py`). Success: within 5 cm and 15 deg of the held pose in the palm "
+        "frame through the pushes; strict: 1 cm and 5 deg.",
+        "",
+        "| actuation | success | strict | trials |",
+        "|---|---:|---:|---:|",
+    ]
     for actuation, (ok, strict, total) in success_rates(trials).items():
-        lines.append(f"| {actuation} | {ok} ({100 * ok / total:.0f} %) | {strict} ({100 * strict / total:.0f} %) "
-                     f"| {total} |")  # fmt: skip
-    lines += ["", "| object | grasp | spread [deg] | actuation | success | strict | placed | max disp. [mm] | "
-              "max rot. [deg] | slip samples | peak contact [N] | peak torque [N m] | failure |",
-              "|---|---|---:|---|---|---|---|---:|---:|---:|---:|---:|---|"]  # fmt: skip
+        lines.append(
+            f"| {actuation} | {ok} ({100 * ok / total:.0f} %) | {strict} ({100 * strict / total:.0f} %) | {total} |"
+        )
+    lines += [
+        "",
+        "| object | grasp | spread [deg] | actuation | success | strict | placed | max disp. [mm] | "
+        "max rot. [deg] | slip samples | peak contact [N] | peak torque [N m] | failure |",
+        "|---|---|---:|---|---|---|---|---:|---:|---:|---:|---:|---|",
+    ]
     for t in trials:
         number = functools.partial(_number, t)
         lines.append(

@@ -67,17 +67,24 @@ def setup(trial: Trial, dt: float = DT):
     base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + APPROACH]) - rotation @ offset)  # fingers together
     hand = mounted(bh.BarrettHand(base_placement=base))
     width = 2 * item.half_extents[:2]  # the stand: the object's footprint
-    pedestal = FixedBox(size=(*width, STAND_HEIGHT), pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.5 * STAND_HEIGHT])),
-                        friction=FRICTION, name=STAND)  # fmt: skip
+    pedestal = FixedBox(
+        size=(*width, STAND_HEIGHT),
+        pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.5 * STAND_HEIGHT])),
+        friction=FRICTION,
+        name=STAND,
+    )
     scene = Scene(hand, [item.body(FRICTION)], environment=[pedestal])
     if trial.actuation == "barrett":
         actuation = BarrettActuation(hand, saturate=True)
     else:  # the same motors' damping on each joint, reflected as through the worms (bench.protocol)
         actuation = FullyActuated(hand, damping=idealised_damping(hand))
     law = SpringDamper(
-        stiffness=STIFFNESS, damping=2e-3 * STIFFNESS, friction=FRICTION, tangential_stiffness=0.1 * STIFFNESS,
+        stiffness=STIFFNESS,
+        damping=2e-3 * STIFFNESS,
+        friction=FRICTION,
+        tangential_stiffness=0.1 * STIFFNESS,
         tangential_damping=2e-4 * STIFFNESS,
-    )  # fmt: skip
+    )
     simulator = Simulator(scene, dt=dt, contact=law, actuation=actuation)
     q = hand.neutral()
     for finger in hand.fingers:
@@ -85,8 +92,14 @@ def setup(trial: Trial, dt: float = DT):
     q[[hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]] = spread
     down, up = np.array([0, 0, -APPROACH, 0, 0, 0]), np.array([0, 0, LIFT, 0, 0, 0])
     shake = 6 * SHAKE_TIME
-    moves = [(down, CLOSE_AT), (np.zeros(6), LIFT_AT - CLOSE_AT), (up, 1.0), (np.zeros(6), HELD_AT - LIFT_AT - 1.0),
-             (np.zeros(6), shake), (-(LIFT - DROP) / LIFT * up, 1.0)]  # fmt: skip
+    moves = [
+        (down, CLOSE_AT),
+        (np.zeros(6), LIFT_AT - CLOSE_AT),
+        (up, 1.0),
+        (np.zeros(6), HELD_AT - LIFT_AT - 1.0),
+        (np.zeros(6), shake),
+        (-(LIFT - DROP) / LIFT * up, 1.0),
+    ]
     path = MountReference(PosePath(base, moves), hand.base_placement)
     return simulator, simulator.initial_state(q), hand, path
 
@@ -103,8 +116,9 @@ class BenchController:
         mt = PRECISION_MT if trial.grasp == "precision" else FINGER_PUCK.MT  # the finger pucks' torque limit
         if trial.actuation == "barrett":
             self.driver = BarrettDriver(hand, finger=FINGER_PUCK.with_(MT=mt))
-            self.driver.script([(0.0, "set_position_mode", "SPREAD"), (CLOSE_AT, "close", "GRASP"),
-                                (self.place_at, "open", "GRASP")])  # fmt: skip
+            self.driver.script(
+                [(0.0, "set_position_mode", "SPREAD"), (CLOSE_AT, "close", "GRASP"), (self.place_at, "open", "GRASP")]
+            )
             self.log = self.driver.log
         else:
             self.close_torque = WORM_EFFICIENCY * PROXIMAL_RATIO * mt / FINGER_PUCK.IPNM  # the real close's stall
@@ -158,8 +172,15 @@ def simulate_trial(trial: Trial, dt: float = DT, record_every: int = 40, duratio
     simulator, state, hand, path = setup(trial, dt)
     controller = BenchController(trial, hand, path)
     duration = HELD_AT + 6 * SHAKE_TIME + 1.0 + RELEASE if duration is None else duration
-    trajectory = simulator.run(controller, duration, state=state, progress=False, record_every=record_every,
-                               object_forces=shake_force(trial.item.mass), until=gone)  # fmt: skip
+    trajectory = simulator.run(
+        controller,
+        duration,
+        state=state,
+        progress=False,
+        record_every=record_every,
+        object_forces=shake_force(trial.item.mass),
+        until=gone,
+    )
     return trajectory, hand
 
 

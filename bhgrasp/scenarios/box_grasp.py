@@ -127,8 +127,9 @@ def box_grasp(
         "F2": centre + np.array([0.5 * spacing, -half, 0.0]),
         "F3": centre + np.array([0.0, half, 0.0]),
     }
-    guess = hand.configuration(F1_proximal=1.2, F1_distal=0.5, F2_proximal=1.2, F2_distal=0.5, F3_proximal=1.2,
-                               F3_distal=0.5)  # fmt: skip
+    guess = hand.configuration(
+        F1_proximal=1.2, F1_distal=0.5, F2_proximal=1.2, F2_distal=0.5, F3_proximal=1.2, F3_distal=0.5
+    )
     q_contact = ik(hand, targets, guess, tolerance=1e-7).q
     q_start = q_contact.copy()
     for finger in hand.fingers:

@@ -34,9 +34,12 @@ OVERLAP = 0.3  # [s] each waypoint move starts this long before the previous one
 LIFT_MOVE = ((0.0, 0.0, 0.01, 0.0, 0.0, 0.0), 0.6)  # (offset, duration [s]): the waypoint paths' first move
 WAYPOINTS = {  # object of OBJECTS -> the moves after the lift: (offset (dx [m], dtheta [rad]), [s])
     "box": [((0.0, 0.003, 0.0, 0.15, 0.0, 0.0), 0.8), ((0.0, -0.003, 0.0, -0.15, 0.0, 0.0), 0.8)],
-    "ball": [((0.0, 0.0, 0.0, 0.0, 0.1, 0.0), 0.8), ((0.0, 0.0, 0.0, 0.1, -0.1, 0.0), 0.8),
-             ((0.0, 0.0, 0.0, -0.1, 0.0, 0.0), 0.8)],
-}  # fmt: skip
+    "ball": [
+        ((0.0, 0.0, 0.0, 0.0, 0.1, 0.0), 0.8),
+        ((0.0, 0.0, 0.0, 0.1, -0.1, 0.0), 0.8),
+        ((0.0, 0.0, 0.0, -0.1, 0.0, 0.0), 0.8),
+    ],
+}
 
 
 @dataclass(frozen=True)
@@ -99,8 +102,9 @@ def run_path(setup, path) -> PathRun:
         space.check(offset)
     nominal = replace(setup.item, mass=0.5 * setup.item.mass, density=None)
     grasp = grasp_controller("smc-adaptive", setup.hand, nominal)
-    supervisor = GraspSupervisor(setup.hand, setup.candidate.q_contact, grasp, path=path,
-                                 fingers=setup.candidate.fingers)  # fmt: skip
+    supervisor = GraspSupervisor(
+        setup.hand, setup.candidate.q_contact, grasp, path=path, fingers=setup.candidate.fingers
+    )
     duration = 0.3 + supervisor.squeeze_time + probe.end_time + SETTLE  # the approach takes about 0.2 s
     traj = setup.simulator.run(supervisor, duration, state=setup.state, progress=False)
     reference, grasping = grasp.reference, np.flatnonzero(traj.log["phase"] >= 1)
@@ -117,14 +121,18 @@ def run_path(setup, path) -> PathRun:
     turns = [_turn(traj.object_quaternion[k, 0], pin.exp3(sample[3:])) for k, sample in zip(on_path, samples)]
     end = reference(traj.t[-1])[0]
     return PathRun(
-        t=traj.t[on_path], reference=wanted, position=position, max_deviation=float(deviation.max()),
+        t=traj.t[on_path],
+        reference=wanted,
+        position=position,
+        max_deviation=float(deviation.max()),
         lift_deviation=float(max(lift_gap, default=0.0)),
-        rms_deviation=float(np.sqrt(np.mean(deviation**2))), max_rotation=float(max(turns)),
+        rms_deviation=float(np.sqrt(np.mean(deviation**2))),
+        max_rotation=float(max(turns)),
         final_position_error=float(np.linalg.norm(traj.object_position[-1, 0] - end[:3])),
         final_rotation_error=_turn(traj.object_quaternion[-1, 0], pin.exp3(end[3:])),
         slip_events=slip_events_after(setup.hand, traj, closed),
         cone_margin=float(np.nanmin(traj.log["cone_margin"][grasping])),
-    )  # fmt: skip
+    )
 
 
 def _lifted(reference) -> float:

@@ -65,18 +65,21 @@ class GraspDemoResult:
             final = "at the end of the run, not the motion's final error"
         if duration < self.settle_time:
             window = f"at the last sample: the run ended before the forces settle at {self.settle_time:.2f} s"
-        return "\n".join([
-            f"grasp demo ({self.scene.hand.name}, {self.controller}): box {self.true_mass:.2f} kg, "
-            f"controller told {self.initial_estimate:.2f} kg{estimate}",
-            f"  grasp closed at {self.grasp_time:.3f} s; {motion}",
-            f"  object pose error: {1e3 * self.position_error:.3f} mm, {1e3 * self.rotation_error:.3f} mrad ({final})",
-            *self._plan_lines(),
-            f"  contact force error: {100 * self.force_error:.2f} % of the commanded normal force ({window})",
-            f"  slip events: {self.slip_events} (sliding hand-object contact samples after the grasp closed)",
-            f"  commanded forces: min cone margin {self.cone_margin:.3f} N at mu {MU_ASSUMED}, "
-            f"{self.infeasible_samples} infeasible samples",
-            f"  time: {duration:.2f} s simulated in {self.wall_time:.1f} s wall",
-        ])  # fmt: skip
+        return "\n".join(
+            [
+                f"grasp demo ({self.scene.hand.name}, {self.controller}): box {self.true_mass:.2f} kg, "
+                f"controller told {self.initial_estimate:.2f} kg{estimate}",
+                f"  grasp closed at {self.grasp_time:.3f} s; {motion}",
+                f"  object pose error: {1e3 * self.position_error:.3f} mm, "
+                f"{1e3 * self.rotation_error:.3f} mrad ({final})",
+                *self._plan_lines(),
+                f"  contact force error: {100 * self.force_error:.2f} % of the commanded normal force ({window})",
+                f"  slip events: {self.slip_events} (sliding hand-object contact samples after the grasp closed)",
+                f"  commanded forces: min cone margin {self.cone_margin:.3f} N at mu {MU_ASSUMED}, "
+                f"{self.infeasible_samples} infeasible samples",
+                f"  time: {duration:.2f} s simulated in {self.wall_time:.1f} s wall",
+            ]
+        )
 
     def _plan_lines(self) -> list[str]:
         """The planned motion and the error against the request, when the supervisor changed the motion."""

@@ -105,8 +105,9 @@ def f3_setup(spring: float, friction: float = 0.5) -> Setup:
     rotation = np.column_stack((side, np.cross(normal, side), normal))  # box z axis along the normal
     half = 0.03
     centre = tip0 + (0.02 + 0.01 + half) * normal  # 2 cm gap ahead of the 1 cm tip sphere
-    box = Box(size=(0.06, 0.06, 2 * half), mass=OBJECT_MASS, friction=friction, pose=pin.SE3(rotation, centre),
-              name="object")  # fmt: skip
+    box = Box(
+        size=(0.06, 0.06, 2 * half), mass=OBJECT_MASS, friction=friction, pose=pin.SE3(rotation, centre), name="object"
+    )
     mounted = SpringMounted(box, direction=normal, stiffness=spring, damping=0.6 * np.sqrt(spring * OBJECT_MASS))
     sim = Simulator(Scene(hand, objects=[mounted]), dt=DT, contact=CONTACT)
     setup = Setup(hand, "F3", sim, q0, tip0, normal, 0.0, effective_stiffness(spring))

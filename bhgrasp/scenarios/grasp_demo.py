@@ -41,8 +41,22 @@ HANDS = ("barrett", "allegro")
 OFFSET = (0.0, 0.0, 0.010, 0.1, 0.0, 0.0)  # [m, rad]: 10 mm up, 0.1 rad about x
 
 
-SWEEPABLE = ("mass", "estimate", "controller", "adaptation", "duration", "offset", "distribution", "approach_gains",
-             "gains", "stiffness", "sensor_noise", "hand", "finger_spacing", *UNCERTAINTIES)  # fmt: skip
+SWEEPABLE = (
+    "mass",
+    "estimate",
+    "controller",
+    "adaptation",
+    "duration",
+    "offset",
+    "distribution",
+    "approach_gains",
+    "gains",
+    "stiffness",
+    "sensor_noise",
+    "hand",
+    "finger_spacing",
+    *UNCERTAINTIES,
+)
 """The parameters of :func:`run_grasp_demo` a sweep case may set (the case's seed comes from the sweep)."""
 
 
@@ -145,11 +159,21 @@ def run_grasp_demo(
             ``torque_limit`` [N m] on each joint torque, ``friction`` the true friction coefficient (0.8) and
             ``mu`` the one the force distribution assumes (0.6).
     """
-    check_demo_arguments(mass=mass, estimate=estimate, controller=controller, adaptation=adaptation,
-                         duration=duration, offset=offset,
-                         distribution=distribution, approach_gains=approach_gains, stiffness=stiffness,
-                         sensor_noise=sensor_noise, hand=hand, **uncertainty,
-                         **({} if finger_spacing is None else {"finger_spacing": finger_spacing}))  # fmt: skip
+    check_demo_arguments(
+        mass=mass,
+        estimate=estimate,
+        controller=controller,
+        adaptation=adaptation,
+        duration=duration,
+        offset=offset,
+        distribution=distribution,
+        approach_gains=approach_gains,
+        stiffness=stiffness,
+        sensor_noise=sensor_noise,
+        hand=hand,
+        **uncertainty,
+        **({} if finger_spacing is None else {"finger_spacing": finger_spacing}),
+    )
     mass, estimate, duration, offset = float(mass), float(estimate), float(duration), as_vector(offset, "offset", 6)
     plant = {name: uncertainty[name] for name in PLANT if name in uncertainty}
     if finger_spacing is not None:
@@ -158,12 +182,22 @@ def run_grasp_demo(
     setup.manipulable_space().check(offset)  # a motion the grasp cannot make is refused before simulating
     setup.check_clearance(offset)  # so is one that drives the box into its pedestal
     nominal_box = Box(size=setup.box.size, mass=estimate)
-    grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains,
-                             float(uncertainty.get("mu", MU_ASSUMED)), adaptation)  # fmt: skip
+    grasp = grasp_controller(
+        controller, setup.hand, nominal_box, distribution, gains, float(uncertainty.get("mu", MU_ASSUMED)), adaptation
+    )
     kp, kv = approach_gains
     shape = setup.box.geometry() if hand == "barrett" else None  # the Barrett scene's motions are checked to the end
-    supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=offset, kp=kp, kv=kv,
-                                 q_close=setup.q_close, fingers=setup.fingers, object_shape=shape)  # fmt: skip
+    supervisor = GraspSupervisor(
+        setup.hand,
+        setup.q_contact,
+        grasp,
+        offset=offset,
+        kp=kp,
+        kv=kv,
+        q_close=setup.q_close,
+        fingers=setup.fingers,
+        object_shape=shape,
+    )
     law: Controller = MotorCommands(supervisor, setup.simulator.actuation.drive) if setup.cancel_damping else supervisor
     if viewer is not None:
         from bhgrasp.viz import LiveView
@@ -194,8 +228,14 @@ def demo_figure(result: GraspDemoResult, hand) -> Figure:
     from bhgrasp.plots import grasp_figure
 
     measured = finger_normal_forces(hand, result.trajectory)
-    return grasp_figure(result.trajectory, hand.fingers, measured, result.true_mass, grasp_time=result.grasp_time,
-                        motion=(result.motion_start, result.motion_end))  # fmt: skip
+    return grasp_figure(
+        result.trajectory,
+        hand.fingers,
+        measured,
+        result.true_mass,
+        grasp_time=result.grasp_time,
+        motion=(result.motion_start, result.motion_end),
+    )
 
 
 def save_demo(result: GraspDemoResult, hand, output: Path) -> list[Path]:

@@ -35,8 +35,13 @@ MASS, ESTIMATE = 0.6, 0.3  # [kg] true box, and the box the controller is told (
 RATES = (5.0, 1e-3)  # Gamma_o: mass [kg^2 / (N s)...], inertia; the composite law's P(0)
 EXCITATION = {"amplitude": (0.0, 0.002, 0.002, 0.1, 0.1, 0.0), "frequency": (1.0, 1.1, 1.3, 2.0, 2.5, 1.0)}
 """Lift 10 mm, then +-2 mm along y and z and +-0.1 rad about x and y (frequencies [Hz]); none along x or about z."""
-NOISE = {"pose_noise": (2e-4, 2e-3), "twist_noise": (2e-3, 2e-2), "force_noise": 0.1, "sensor_noise": (1e-4, 5e-3),
-         "delay": 0.002}  # fmt: skip
+NOISE = {
+    "pose_noise": (2e-4, 2e-3),
+    "twist_noise": (2e-3, 2e-2),
+    "force_noise": 0.1,
+    "sensor_noise": (1e-4, 5e-3),
+    "delay": 0.002,
+}
 """The robustness table's combined sensing: a 0.2 mm / 2 mrad tracker, 2 mm/s / 20 mrad/s twist, 0.1 N force noise,
 joint noise and a 2 ms delay."""
 LAWS = ("thesis", "composite")
@@ -67,8 +72,11 @@ class IdentificationRun:
 
     def inertia_error(self, index: int = -1) -> float:
         """|I_hat - I|_F / |I|_F [%] at sample ``index``."""
-        return float(100.0 * np.linalg.norm(_tensor(self.estimate[index]) - _tensor(self.truth)) /
-                     np.linalg.norm(_tensor(self.truth)))  # fmt: skip
+        return float(
+            100.0
+            * np.linalg.norm(_tensor(self.estimate[index]) - _tensor(self.truth))
+            / np.linalg.norm(_tensor(self.truth))
+        )
 
     def axis_errors(self, index: int = -1) -> np.ndarray:
         """(I_hat_ii - I_ii) / I_ii [%] about the body x, y, z axes."""
@@ -132,8 +140,12 @@ def hand_model_error(duration: float, hand_scale: float, rate: float) -> dict[st
         regressor = hand.regressor(traj.q[k], traj.v[k], (traj.v[k + 1] - traj.v[k - 1]) / (2.0 * dt))
         torques.append([regressor @ true, regressor @ (nominal - true), regressor @ (learnt - true)])
     rms = np.sqrt(np.mean(np.square(np.array(torques)), axis=(0, 2)))
-    return {"torque_Nm": float(rms[0]), "nominal_torque_error_Nm": float(rms[1]),
-            "learnt_torque_error_Nm": float(rms[2]), "error_ratio": float(rms[2] / rms[1])}  # fmt: skip
+    return {
+        "torque_Nm": float(rms[0]),
+        "nominal_torque_error_Nm": float(rms[1]),
+        "learnt_torque_error_Nm": float(rms[2]),
+        "error_ratio": float(rms[2] / rms[1]),
+    }
 
 
 def _simulate(law: str, noisy: bool, duration: float, seed: int, hand_scale: float, plant: dict, controller: dict):
@@ -143,8 +155,15 @@ def _simulate(law: str, noisy: bool, duration: float, seed: int, hand_scale: flo
     nominal = Box(size=setup.box.size, mass=ESTIMATE)
     identification = ObjectIdentification() if law == "composite" else None
     model = setup.hand if hand_scale == 1.0 else setup.hand.perturbed(hand_scale)
-    grasp = SMCAdaptiveGrasp(model, nominal, mu=MU_ASSUMED, squeeze=SQUEEZE, object_adaptation=RATES,
-                             identification=identification, **controller)  # fmt: skip
+    grasp = SMCAdaptiveGrasp(
+        model,
+        nominal,
+        mu=MU_ASSUMED,
+        squeeze=SQUEEZE,
+        object_adaptation=RATES,
+        identification=identification,
+        **controller,
+    )
     path = partial(PoseExcitation, **EXCITATION)
     space = setup.manipulable_space()
     for offset in path(pin.SE3.Identity()).extremes():  # refused before simulating if the grasp cannot make it
@@ -168,21 +187,51 @@ def summarise(traj, setup, grasp: SMCAdaptiveGrasp, law: str, noisy: bool) -> Id
     for i, k in enumerate(held):
         x, y, z, w = traj.object_quaternion[k, 0]
         rotation = pin.Quaternion(w, x, y, z).toRotationMatrix()
-        kinetic, parameter = object_lyapunov(setup.box.mass, setup.box.inertia, rotation, log["object_sliding"][i],
-                                             log["object_parameters"][i], information[i])  # fmt: skip
+        kinetic, parameter = object_lyapunov(
+            setup.box.mass,
+            setup.box.inertia,
+            rotation,
+            log["object_sliding"][i],
+            log["object_parameters"][i],
+            information[i],
+        )
         lyapunov[i] = kinetic + parameter
     steps = np.diff(traj.t, prepend=traj.t[0])[held]  # each grasp cycle's length; the first has none (its clock
     steps[0] = 0.0  # starts there), nor the run's last sample (no control call: it repeats the last cycle's log)
     if held[-1] == len(traj.t) - 1:
         steps[-1] = 0.0
     integrals = force_integrals(log["desired_force"], log["force_error"], steps)
-    fingers = np.array([sum(finger_lyapunov(setup.hand.mass_matrix(traj.q[k]), log["joint_sliding"][i], integrals[i],
-                                            grasp.force_integral)) for i, k in enumerate(held)])  # fmt: skip
+    fingers = np.array(
+        [
+            sum(
+                finger_lyapunov(
+                    setup.hand.mass_matrix(traj.q[k]), log["joint_sliding"][i], integrals[i], grasp.force_integral
+                )
+            )
+            for i, k in enumerate(held)
+        ]
+    )
     return IdentificationRun(
-        law=law, noisy=noisy, t=t, estimate=log["object_parameters"], truth=truth, lyapunov=lyapunov,
-        slip_events=slip_events_after(setup.hand, traj, int(held[0])), finger_lyapunov=fingers,
-    )  # fmt: skip
+        law=law,
+        noisy=noisy,
+        t=t,
+        estimate=log["object_parameters"],
+        truth=truth,
+        lyapunov=lyapunov,
+        slip_events=slip_events_after(setup.hand, traj, int(held[0])),
+        finger_lyapunov=fingers,
+    )
 
 
-__all__ = ["ESTIMATE", "EXCITATION", "LAWS", "MASS", "NOISE", "RATES", "IdentificationRun", "hand_model_error",
-           "identification_run", "summarise"]  # fmt: skip
+__all__ = [
+    "ESTIMATE",
+    "EXCITATION",
+    "LAWS",
+    "MASS",
+    "NOISE",
+    "RATES",
+    "IdentificationRun",
+    "hand_model_error",
+    "identification_run",
+    "summarise",
+]

@@ -61,9 +61,7 @@ class Run:
         return metrics.chattering_index(self.trajectory.t, self.trajectory.u[:, list(self.joints)])
 
 
-def controller(
-    name: str, nominal: Hand, reference: Reference, duration: float, lam: float = 17.0
-) -> Controller:  # fmt: skip
+def controller(name: str, nominal: Hand, reference: Reference, duration: float, lam: float = 17.0) -> Controller:
     """One of the chapter's controllers by name ("CTC", "SMC", "ASMC", "HOSM-A" ... "HOSMA-C") with our gains."""
     if name == "CTC":
         return ComputedTorque(nominal, reference, kp=400.0, kv=160.0)

@@ -70,8 +70,9 @@ class ObjectGrasp:
         """The object motions the planned contacts allow (:mod:`bhgrasp.grasp.manipulability`)."""
         c = self.candidate
         frames = [self.hand.fingertip_frames[f] for f in c.fingers]
-        return manipulable_space(self.hand, c.q_contact, c.points, c.normals, frames, self.item.pose.translation,
-                                 c.fingers)  # fmt: skip
+        return manipulable_space(
+            self.hand, c.q_contact, c.points, c.normals, frames, self.item.pose.translation, c.fingers
+        )
 
     def check_clearance(self, offset: Any) -> None:
         """Refuse a motion that drives the object into its pedestal (:mod:`bhgrasp.grasp.clearance`)."""
@@ -124,9 +125,12 @@ def object_grasp(
 
 
 def run_object_grasp(
-    setup: ObjectGrasp, offset: Any = (0.0, 0.0, 0.01, 0.0, 0.0, 0.0), estimate: float | None = None,
-    duration: float = 3.0, controller: str = "smc-adaptive",
-) -> GraspDemoResult:  # fmt: skip
+    setup: ObjectGrasp,
+    offset: Any = (0.0, 0.0, 0.01, 0.0, 0.0, 0.0),
+    estimate: float | None = None,
+    duration: float = 3.0,
+    controller: str = "smc-adaptive",
+) -> GraspDemoResult:
     """Grasp, squeeze and move the object by ``offset`` (the demo's sequence).
 
     ``estimate`` [kg]: the controller's

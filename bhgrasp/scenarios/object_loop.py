@@ -105,12 +105,22 @@ def ideal_object_loop(
                 power = 0.5 * np.sum(law.identification.weights * (filtered @ error) ** 2)
         previous = t
         information = law.parameter_information()
-        kinetic, parameter = object_lyapunov(body.mass, body.inertia, rotation, sliding, law.object_estimate,
-                                             information)  # fmt: skip
-        for name, value in (("t", t), ("rotation", rotation), ("position", position), ("twist", twist),
-                            ("sliding", sliding), ("estimate", np.array(law.object_estimate)),
-                            ("information", information), ("wrench", wrench), ("kinetic", kinetic),
-                            ("parameter_term", parameter), ("prediction_power", power)):  # fmt: skip
+        kinetic, parameter = object_lyapunov(
+            body.mass, body.inertia, rotation, sliding, law.object_estimate, information
+        )
+        for name, value in (
+            ("t", t),
+            ("rotation", rotation),
+            ("position", position),
+            ("twist", twist),
+            ("sliding", sliding),
+            ("estimate", np.array(law.object_estimate)),
+            ("information", information),
+            ("wrench", wrench),
+            ("kinetic", kinetic),
+            ("parameter_term", parameter),
+            ("prediction_power", power),
+        ):
             columns[name].append(np.array(value, dtype=float))
         force, torque = wrench[:3], wrench[3:]
         k1 = _derivative(state, force, torque, body, gravity)

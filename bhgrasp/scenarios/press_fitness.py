@@ -25,9 +25,11 @@ TUNING_DURATION = 1.0  # [s] simulated per evaluation: first contact at ~0.36 s,
 
 
 def impedance_fitness(
-    log_params: np.ndarray, force: float = TUNING_FORCE, spring: float = TUNING_SPRING,
+    log_params: np.ndarray,
+    force: float = TUNING_FORCE,
+    spring: float = TUNING_SPRING,
     duration: float = TUNING_DURATION,
-) -> float:  # fmt: skip
+) -> float:
     """Fitness (4.49) of FIM with the Tustin filter on F3: mean |f_d - f_k| from first contact on [N].
 
     ``log_params`` = (log10 M_I, log10 K_I); B_I is critical for K_I + k_e.  A run that diverges or never touches
@@ -73,8 +75,16 @@ def _discrete_fim(
 
 
 def _discrete_fim_controller(setup: Setup, mass: float, stiffness: float, force: float) -> ImpedanceController:
-    law = ForceImpedance(Constant(setup.tip0), setup.normal, force, setup.surface_point(), setup.k_e,
-                         mass=mass, stiffness=stiffness, period=DT)  # fmt: skip
+    law = ForceImpedance(
+        Constant(setup.tip0),
+        setup.normal,
+        force,
+        setup.surface_point(),
+        setup.k_e,
+        mass=mass,
+        stiffness=stiffness,
+        period=DT,
+    )
     return ImpedanceController(setup.hand, {"F3": law}, *F3_GAINS, log_reaction_torque=False)  # forces only
 
 

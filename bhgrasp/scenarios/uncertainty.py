@@ -68,10 +68,15 @@ def sensor_model(sensor_noise: Any = None, **sensed: Any) -> SensorModel:
     pose = as_vector(sensed.get("pose_noise", (0.0, 0.0)), "pose_noise", 2)
     twist = as_vector(sensed.get("twist_noise", (0.0, 0.0)), "twist_noise", 2)
     return SensorModel(
-        joint_position=joints[0], joint_velocity=joints[1], object_position=pose[0], object_rotation=pose[1],
-        object_velocity=twist[0], object_angular_velocity=twist[1], contact_force=sensed.get("force_noise", 0.0),
+        joint_position=joints[0],
+        joint_velocity=joints[1],
+        object_position=pose[0],
+        object_rotation=pose[1],
+        object_velocity=twist[0],
+        object_angular_velocity=twist[1],
+        contact_force=sensed.get("force_noise", 0.0),
         delay=sensed.get("delay", 0.0),
-    )  # fmt: skip
+    )
 
 
 def final_pose_error(trajectory, supervisor) -> np.ndarray:
