@@ -60,7 +60,7 @@ Vector barrett_torques(const Barrett& barrett, const Modes& modes, const MotorIn
 }
 
 void barrett_update(const Barrett& barrett, Modes& modes, const Vector& q_hand, const Vector& v_hand,
-                    const MotorInputs& u, const Vector& drive_torques) {
+                    const MotorInputs& u, const Vector& drive_torques, const Vector& load) {
   const Modes before = modes;
   for (int finger = 0; finger < 3; ++finger) {
     const double motor = u[finger + 1];
@@ -69,8 +69,7 @@ void barrett_update(const Barrett& barrett, Modes& modes, const Vector& q_hand, 
     const bool distal_at_stop = q_hand[distal] <= barrett.lower[distal] + 1e-4;
     int& mode = modes[static_cast<std::size_t>(finger)];
     if (mode == 0) {
-      const bool blocked = std::abs(v_hand[proximal]) < barrett.blocked_speed;
-      if (motor > 0.0 && blocked && drive_torques[proximal] > barrett.breakaway_torque) mode = 1;
+      if (motor > 0.0 && load[proximal] > barrett.breakaway_torque) mode = 1;
     } else if (mode == 1 && motor < 0.0 && distal_at_stop) {
       mode = 2;
     } else if (mode == 2 && (proximal_at_stop || motor > 0.0)) {

@@ -20,9 +20,8 @@ struct Barrett {
   std::array<int, 3> proximal{{-1, -1, -1}}, distal{{-1, -1, -1}};
   double spread_ratio = 0.0, proximal_ratio = 0.0, distal_ratio = 0.0, distal_alone_ratio = 0.0;  // motor : joint
   double max_motor_torque = 0.0;  // [N m], the clip when `saturate`
-  double breakaway_torque = 0.0;  // [N m] proximal drive torque that breaks a blocked switch away
+  double breakaway_torque = 0.0;  // [N m] proximal load torque that breaks the switch away
   double motor_damping = 0.0;     // [N m s/rad] at the motor shaft
-  double blocked_speed = 0.0;     // [rad/s] proximal speed below which the link counts as blocked
   double efficiency = 1.0;        // forward efficiency of the finger worm drives
   bool saturate = false, self_locking = false;
   Vector damping, friction, lower;  // (nv_hand,) passive joint damping, Coulomb friction, lower joint limits
@@ -34,9 +33,10 @@ Drive barrett_drive(const Barrett& barrett, const Modes& modes);
 // Joint torques [N m] the motor inputs apply in `modes` (BarrettActuation.joint_torques).
 Vector barrett_torques(const Barrett& barrett, const Modes& modes, const MotorInputs& u);
 
-// After a step to (q_hand, v_hand) under inputs u with delivered drive torques: the switches' next modes and the
-// worm locks (BarrettActuation.update; BarrettTransmission.switch and locks).
+// After a step to (q_hand, v_hand) under inputs u with delivered drive torques and the links' load (the drive less
+// their own inertia): the switches' next modes and the worm locks (BarrettActuation.update; BarrettTransmission.switch
+// and locks).
 void barrett_update(const Barrett& barrett, Modes& modes, const Vector& q_hand, const Vector& v_hand,
-                    const MotorInputs& u, const Vector& drive_torques);
+                    const MotorInputs& u, const Vector& drive_torques, const Vector& load);
 
 }  // namespace bhgrasp

@@ -115,7 +115,7 @@ void Batch::step_barrett(const Rows& u, double max_speed, double max_penetration
                                           max_penetration);
     divergences_[e] = result.divergence;
     if (result.divergence.kind) return;
-    barrett_update(barrett_, modes, result.q.head(nv_hand_), result.v.head(nv_hand_), inputs, result.drive);
+    barrett_update(barrett_, modes, result.q.head(nv_hand_), result.v.head(nv_hand_), inputs, result.drive, result.load);
     q_.row(i) = result.q.transpose();
     v_.row(i) = result.v.transpose();
     memories_[e] = std::move(result.memory);

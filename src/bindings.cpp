@@ -126,7 +126,7 @@ NB_MODULE(_core, m) {
   nb::class_<StepResult>(m, "StepResult")
       .def_ro("q", &StepResult::q).def_ro("v", &StepResult::v)
       .def_ro("contacts", &StepResult::contacts).def_ro("memory", &StepResult::memory)
-      .def_ro("drive", &StepResult::drive)
+      .def_ro("drive", &StepResult::drive).def_ro("load", &StepResult::load)
       .def_ro("divergence", &StepResult::divergence);
 
   nb::class_<Engine>(m, "Engine")
@@ -145,7 +145,7 @@ NB_MODULE(_core, m) {
       .def_rw("proximal_ratio", &Barrett::proximal_ratio).def_rw("distal_ratio", &Barrett::distal_ratio)
       .def_rw("distal_alone_ratio", &Barrett::distal_alone_ratio).def_rw("max_motor_torque", &Barrett::max_motor_torque)
       .def_rw("breakaway_torque", &Barrett::breakaway_torque).def_rw("motor_damping", &Barrett::motor_damping)
-      .def_rw("blocked_speed", &Barrett::blocked_speed).def_rw("saturate", &Barrett::saturate)
+      .def_rw("saturate", &Barrett::saturate)
       .def_rw("efficiency", &Barrett::efficiency).def_rw("self_locking", &Barrett::self_locking)
       .def_rw("damping", &Barrett::damping).def_rw("friction", &Barrett::friction)
       .def_rw("lower", &Barrett::lower);

@@ -212,6 +212,7 @@ StepResult Engine::step(const Vector& q, const Vector& v, const Vector& tau_hand
     }
     result.contacts = std::move(first.contacts);
     result.drive = std::move(first.drive);
+    result.load = std::move(first.load);
     result.memory = Memory{result.contacts.pair, result.contacts.local_b, first.displacement,
                            (!result.contacts.sticking.array()).matrix()};
   }
@@ -266,9 +267,10 @@ Engine::Acceleration Engine::acceleration(const Vector& q, const Vector& v, cons
   if (gyroscopic) implicit_gyroscopic(v, bias);
   reduced_solve(transmission, mass, total + generalized - bias, result.acceleration);
   const int nvh = settings_.nv_hand;
-  result.drive = (mass * result.acceleration + bias - generalized - joint.torque + joint.damping.cwiseProduct(v))
-                     .head(nvh);
+  const Vector inertial = mass * result.acceleration;
+  result.drive = (inertial + bias - generalized - joint.torque + joint.damping.cwiseProduct(v)).head(nvh);
   result.drive -= drive.motor_damping.cwiseProduct(v.head(nvh));
+  result.load = result.drive - inertial.head(nvh);
   return result;
 }
 

@@ -127,6 +127,7 @@ struct StepResult {
   Contacts contacts;
   Memory memory;
   Vector drive;  // hand joint torques the drive delivered [N m]
+  Vector load;   // drive less the hand links' own inertial torques M a [N m] (what a clutch passes)
   Divergence divergence;
 };
 
@@ -164,7 +165,7 @@ class Engine {
     Vector acceleration;
     Contacts contacts;
     Points displacement;
-    Vector drive;
+    Vector drive, load;
   };
 
   // Work arrays, kept from step to step so that a step allocates only the arrays it returns.  Each is sized by the

@@ -139,6 +139,7 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
   Vector& delivered = work.delivered;
   delivered = (work.product + (bias - contact_torque - joint.torque) + implicit_damping.cwiseProduct(v_next)).head(nvh);
   result.drive = delivered - drive.motor_damping.cwiseProduct(v_next.head(nvh));
+  result.load = result.drive - work.product.head(nvh);  // less the links' inertia (python_engine.py: _drive)
   work.increment = v_next * dt;
   result.q = integrate(q, work.increment);
   result.v = v_next;

@@ -64,7 +64,7 @@ def test_internal_entity_bomb_is_refused(tmp_path: Path) -> None:
 
 
 def test_urdf_pinocchio_rejects(tmp_path: Path) -> None:
-    broken = VALID_URDF.replace('<limit lower="0" upper="2.443460952792061" velocity="2.454" effort="13.75"/>', "", 1)
+    broken = VALID_URDF.replace('<limit lower="0" upper="2.443460952792061" velocity="2.454" effort="2.667"/>', "", 1)
     with pytest.raises(bh.ModelError, match="Pinocchio cannot build a model"):
         bh.Hand.from_urdf(write(tmp_path, broken))
 

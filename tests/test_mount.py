@@ -8,7 +8,7 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.barrett.transmission import BarrettTransmission
+from bhgrasp.barrett.transmission import MAX_MOTOR_TORQUE, BarrettTransmission
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.errors import InputError, ModelError
 from bhgrasp.grasp.sensing import ContactSensing
@@ -177,7 +177,7 @@ def test_the_barrett_drive_runs_a_mounted_hand_with_direct_mount_inputs() -> Non
         np.testing.assert_array_equal(gears[6:, :4], unmounted.gears(modes))
     actuation = BarrettActuation(hand, saturate=True)
     np.testing.assert_array_equal(actuation.joint_torques(np.r_[1.0, 0, 0, 0, 100.0, 0, 0, 0, 0, 0])[[6, 0]],
-                                  [17.5 * 0.11, 100.0])  # the pucks saturate, the mount does not  # fmt: skip
+                                  [17.5 * MAX_MOTOR_TORQUE, 100.0])  # pucks saturate, the mount does not  # fmt: skip
     simulator = Simulator(Scene(hand), actuation=actuation)
     with pytest.raises(InputError, match="BatchSimulator runs the Barrett hand's four motors alone, got 10 inputs"):
         BatchSimulator(simulator, [simulator.initial_state()])

@@ -17,6 +17,7 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
+from bhgrasp.barrett.transmission import MAX_MOTOR_TORQUE
 
 JOINTS = ["F1_spread", "F1_proximal", "F1_distal", "F2_spread", "F2_proximal", "F2_distal", "F3_proximal", "F3_distal"]
 # Barrett WIKI-MASS v5 masses [kg]: palm with pad, knuckle x2, inner link x3, fingertip x3.
@@ -59,7 +60,7 @@ def test_limits_are_barretts(barrett: bh.Hand) -> None:
     for i, joint in enumerate(barrett.joint_names):
         kind = joint.split("_")[1]
         assert barrett.velocity_limit[i] == pytest.approx(motor_speed[kind] / ratio[kind], rel=1e-3)
-        assert barrett.effort_limit[i] == pytest.approx(2200 / 20000 * ratio[kind], rel=1e-3)
+        assert barrett.effort_limit[i] == pytest.approx(MAX_MOTOR_TORQUE * ratio[kind], rel=1e-3)  # the pucks' MT
 
 
 def test_mimic_tags_document_the_couplings(urdf_root: ET.Element) -> None:

@@ -10,7 +10,9 @@ motor.  Names and numbers are libbarrett's (``BarrettTechnology/libbarrett`` @10
   CT/OT close/open targets, MCV/MOV close/open velocities, IPNM puck units per N m;
 - defaults (Robotnik ``pyHand_api.py`` @4993a1f, ``set_puck_like`` lines 629-708): fingers KP 500, KD 2500,
   ACCEL 200, MV 200, TSTOP 50, HOLD 0, CT 195000; spread KP 1000, KD 10000, MV 50, TSTOP 150, HOLD 1, CT 35950;
-  all: KI 0, MT 2200, MCV = MOV = 200, IPNM 20000.
+  all: KI 0, MT 2200, MCV = MOV = 200; IPNM (puck units per N m at the motor) is ours, 103125, so that MT gives
+  the calibrated motor torque :data:`~bhgrasp.barrett.transmission.MAX_MOTOR_TORQUE` (0.0213 N m; Robotnik's
+  default 20000 would give 0.11 N m and a fingertip stall five times Barrett's figure: see that module).
 
 Semantics (Barrett wiki ``Hand/282/ControlModes`` v5, for the BH8-280 and 282): TORQUE streams T; PID holds P with
 KP, KD, KI; VELOCITY keeps V until a new one, limited to MV; TRAPEZOIDAL moves to E accelerating at ACCEL up to MV
@@ -21,11 +23,11 @@ Assumptions (Barrett publishes no firmware source nor units for KP, KD, ACCEL):
 
 - PID output in puck torque units = (KP e + KD de + KI sum e) / 1024 (:data:`PID_SCALE`, Q10 fixed point), e in
   counts, de in counts per 1 ms tick; motor torque = units / IPNM.  So at the motor the finger defaults are
-  kp = 0.0159 N m/rad, kd = 7.96e-5 N m s/rad (spread 0.0318, 3.18e-4).  Why: the simulated motor is its
-  torque-speed line (a damper b_m = 0.11 N m / 307 rad/s = 3.6e-4 N m s/rad at the shaft, no rotor inertia), and a
+  kp = 3.09e-3 N m/rad, kd = 1.54e-5 N m s/rad (spread 6.17e-3, 6.17e-5).  Why: the simulated motor is its
+  torque-speed line (a damper b_m = 0.0213 N m / 307 rad/s = 6.9e-5 N m s/rad at the shaft, no rotor inertia), and a
   finger's links reflect almost no inertia through 125:1, so a sampled D term is stable only with kd < b_m (unscaled,
-  KD 2500 gives kd = 0.08 and KP 500 kp = 16 N m/rad: the output would chatter at MT).  With 2^10 a finger's loop is
-  first order, time constant (b_m + kd) / kp = 27.5 ms; it holds the proximal joint with kp 125^2 = 249 N m/rad and
+  KD 2500 gives kd = 0.016 and KP 500 kp = 3.2 N m/rad: the output would chatter at MT).  With 2^10 a finger's loop
+  is first order, time constant (b_m + kd) / kp = 27.5 ms; it holds the proximal joint with kp 125^2 = 48 N m/rad and
   closes in about 1 s (the often quoted, unverified, close time); the spread (which carries F1 and F2's inertia) is
   second order with damping ratio about 0.5.  Gains are overridable in SI.
 - ACCEL in counts/ms^2 / 256 (:data:`ACCEL_UNIT`): the finger default ramps to MV in 256 ms.
@@ -41,6 +43,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from bhgrasp.barrett.sensors import COUNTS_PER_REV
+from bhgrasp.barrett.transmission import MAX_MOTOR_TORQUE
 from bhgrasp.errors import InputError
 
 IDLE, TORQUE, PID, VELOCITY, TRAPEZOIDAL = 0, 2, 3, 4, 5  # MotorPuck::MotorMode
@@ -69,7 +72,7 @@ class PuckProperties:
     OT: float = 0.0
     MCV: float = 200.0
     MOV: float = 200.0
-    IPNM: float = 20000.0
+    IPNM: float = 2200.0 / MAX_MOTOR_TORQUE  # 103125: MT at the calibrated motor torque (module docstring)
 
     def __post_init__(self) -> None:
         for name in ("KP", "KD", "KI", "ACCEL", "MV", "MT", "TSTOP", "IPNM", "MCV", "MOV"):
@@ -82,7 +85,7 @@ class PuckProperties:
 
     @property
     def torque_limit(self) -> float:
-        """MT as a motor torque [N m] (MT / IPNM: 0.11 N m by default)."""
+        """MT as a motor torque [N m] (MT / IPNM: 0.0213 N m by default)."""
         return self.MT / self.IPNM
 
     def gains(self) -> tuple[float, float, float]:

@@ -8,14 +8,16 @@ Facts (sources in ``../shared/reference/barrett_public_data.md`` sections 1.4 an
   (libbarrett ``J3_RATIO``);
 - finger motor : distal worm, absolute, 93.75 : 1: it drives the distal joint alone after breakaway (Barrett
   wiki; BH8 manual p. 61);
-- puck torque limit MT 2200 / IPNM 20000 = 0.11 N m at the motor; speed limit MV 200 counts/ms at 4096
-  counts/rev = 307 rad/s at the motor (Robotnik ``pyHand_api.py`` defaults; libbarrett counts/ms);
+- puck torque limit MT 2200 (Robotnik ``pyHand_api.py`` default); speed limit MV 200 counts/ms at 4096
+  counts/rev = 307 rad/s at the motor (Robotnik defaults; libbarrett counts/ms);
+- the motor torque at MT, :data:`MAX_MOTOR_TORQUE`, calibrated (below) to Barrett's stalled fingertip force;
 - breakaway torque 0.5 N m at the proximal joint (GraspIt! ``breakAwayTorque``; Barrett publishes no N m value,
   its firmware sets the threshold through the puck properties IVEL, IOFF, IHIT, OT).
 
 TorqueSwitch (BH8 manual; Barrett wiki): a finger motor turns the proximal joint and, through the clutch, the distal
-joint at one third of its speed, until the proximal link is blocked while closing and its drive torque exceeds the
-breakaway threshold; then the proximal joint holds and the motor drives the distal joint alone through its 93.75:1
+joint at one third of its speed, until, while closing, the torque the clutch passes to the proximal link exceeds the
+breakaway threshold (a contact on either link, a joint stop; whatever the link's speed, :meth:`switch`); then the
+proximal joint holds and the motor drives the distal joint alone through its 93.75:1
 worm.  Opening a broken-away finger drives the fingertip back to its stop, then the proximal link alone to its open
 stop, where the switch re-arms.  Modes per finger: 0 armed (coupled), 1 broken away, 2 re-opening the proximal link.
 
@@ -29,6 +31,19 @@ would drive it back against the motor or the motor is idle, and it unlocks when 
 holding needs in the motor's direction.  The spread is back-drivable ("the backdrivability built into this degree
 of freedom", BH8 manual 9.3.2): its puck holds it (default HOLD = 1), where the fingers' HOLD = 0 leaves them to
 their worms.
+
+The motor torque at MT.  Barrett publishes no torque constant for the hand's motors; Robotnik's default IPNM = 20000
+puck units per N m would make MT 0.11 N m, which through a self-locking worm (eta <= 0.5) presses a stalled
+fingertip with about 100 N (5 N m on the distal joint).  Barrett's own figures agree on a fifth of that: the
+fingertip torque sensor's range "+/- 1 N-m (+/- 2 kg at finger tip is about 20 N @ 5 cm)", the stalled fingertip
+force it plots against commanded velocity up to about 25 N (BH8 manual 9.3.1, Fig. 25), "the load limit of the
+fingers, 2 kg per finger" (Barrett wiki, safety page).  So the drive is calibrated to the stall of a broken-away
+finger, whose motor drives the distal joint alone: :data:`STALL_TIP_FORCE` 20 N at :data:`TIP_LEVER` 5 cm from the
+distal axis, eta 93.75 u_max = 1 N m, u_max = 0.0213 N m at the motor (the pucks' IPNM becomes MT / u_max = 103125,
+:mod:`~bhgrasp.barrett.pucks`).  A worm's efficiency and the motor's torque enter a stall only as their product;
+keeping eta at its bound puts the calibration in the motor's torque (a self-locking worm of 3-5 deg lead and
+friction 0.05-0.15 has eta 0.3-0.5, so the motor torque is 0.02-0.036 N m either way).  The motor's torque-speed
+line keeps its no-load speed, so the unloaded close still takes about 1 s.
 
 Inputs are motor torques [N m] at the motor shafts, then one torque [N m or N] per joint outside the hand's eight
 (e.g. the wrist mount's of :func:`~bhgrasp.model.mount.mounted`), applied directly.  A linear torque-speed line through
@@ -52,13 +67,15 @@ SPREAD_RATIO = 17.5  # motor : spread joint (libbarrett SPREAD_RATIO)
 PROXIMAL_RATIO = 125.0  # motor : proximal joint (libbarrett J2_RATIO, Barrett wiki)
 DISTAL_RATIO = 375.0  # motor : distal joint relative to the proximal link, coupled (libbarrett J3_RATIO)
 DISTAL_ALONE_RATIO = 93.75  # motor : distal worm gear, absolute (Barrett wiki); drives the distal after breakaway
-MAX_MOTOR_TORQUE = 2200 / 20000  # [N m] puck MT / IPNM (Robotnik pyHand_api defaults)
+WORM_EFFICIENCY = 0.5  # forward efficiency of a finger's worm drive: the bound for a self-locking worm (docstring)
+STALL_TIP_FORCE, TIP_LEVER = 20.0, 0.05  # [N], [m] Barrett: +/- 1 N m "is about 20 N @ 5 cm" (docstring)
+# [N m] the motor torque at the pucks' MT: a broken-away finger's stall presses STALL_TIP_FORCE at TIP_LEVER
+MAX_MOTOR_TORQUE = STALL_TIP_FORCE * TIP_LEVER / (WORM_EFFICIENCY * DISTAL_ALONE_RATIO)
 MAX_MOTOR_SPEED = 200e3 / 4096 * 2 * np.pi  # [rad/s] finger puck default MV = 200 counts/ms, 4096 counts/rev
 # A linear torque-speed line through (MAX_MOTOR_TORQUE, 0) and (0, MAX_MOTOR_SPEED): motor viscous damping
 # [N m s/rad] at the shaft; through 125:1 it caps the proximal speed at 2.45 rad/s under full torque.
 MOTOR_DAMPING = MAX_MOTOR_TORQUE / MAX_MOTOR_SPEED
 BREAKAWAY_TORQUE = 0.5  # [N m] at the proximal joint (GraspIt! breakAwayTorque)
-WORM_EFFICIENCY = 0.5  # forward efficiency of a finger's worm drive: the bound for a self-locking worm (docstring)
 FINGERS = ("F1", "F2", "F3")
 ARMED, BROKEN_AWAY, REOPENING = 0, 1, 2
 STOP_TOLERANCE = 1e-4  # [rad] a joint this close to its lower limit is at its stop
@@ -72,7 +89,6 @@ class BarrettTransmission(Transmission):
         hand: Hand,
         breakaway_torque: float = BREAKAWAY_TORQUE,
         motor_damping: float = MOTOR_DAMPING,
-        blocked_speed: float = 0.02,
         damping: float | Sequence[float] = 0.0,
         efficiency: float = WORM_EFFICIENCY,
         self_locking: bool = True,
@@ -82,10 +98,8 @@ class BarrettTransmission(Transmission):
         Args:
             hand: A Barrett hand (joints F1_spread, F2_spread and F*_proximal, F*_distal), possibly mounted: its
                 other joints are driven directly.
-            breakaway_torque: Proximal drive torque [N m] above which the TorqueSwitch breaks away.
+            breakaway_torque: Proximal load torque [N m] above which the TorqueSwitch breaks away (:meth:`switch`).
             motor_damping: Motor viscous damping at the shaft [N m s/rad] (its torque-speed line).
-            blocked_speed: Proximal speed [rad/s] below which the proximal link counts as blocked; breakaway needs
-                a blocked link (a start-up torque transient of a moving finger does not break the switch).
             damping: Passive viscous joint damping [N m s/rad], scalar or per joint.
             efficiency: Forward efficiency of the finger worm drives, in (0, 1] (1: ideal gears).
             self_locking: Whether the finger drives self-lock (:meth:`locks`); ``False``: they back-drive freely.
@@ -98,7 +112,6 @@ class BarrettTransmission(Transmission):
             raise InputError(f"the BH8-280 transmission needs a Barrett hand; `hand` lacks joints {missing}")
         self.breakaway_torque = as_positive(breakaway_torque, "breakaway_torque")
         self.motor_damping = float(per_joint(motor_damping, 1, "motor_damping")[0])
-        self.blocked_speed = as_positive(blocked_speed, "blocked_speed")
         self.efficiency = as_positive(efficiency, "efficiency")
         if self.efficiency > 1.0:
             raise InputError(f"`efficiency` must be in (0, 1], got {efficiency!r}")
@@ -162,23 +175,26 @@ class BarrettTransmission(Transmission):
                 damping[self.proximal[finger]] += self.efficiency * self.motor_damping * PROXIMAL_RATIO**2
         return damping
 
-    def switch(
-        self, modes: Any, q_hand: np.ndarray, v_hand: np.ndarray, u: np.ndarray, drive: np.ndarray
-    ) -> np.ndarray:
-        """The TorqueSwitch modes after a step that ended at (``q_hand``, ``v_hand``) under motor torques ``u``.
+    def switch(self, modes: Any, q_hand: np.ndarray, u: np.ndarray, load: np.ndarray) -> np.ndarray:
+        """The TorqueSwitch modes after a step that ended at ``q_hand`` under motor torques ``u``.
 
-        ``drive``: the joint torques the drive delivered over the step [N m] (inputs plus the reactions that hold
-        joints outside T). Armed -> broken away when the finger closes (u > 0), its proximal link is blocked and
-        its drive torque exceeds the breakaway torque; broken away -> re-opening when it opens (u < 0) with the
-        fingertip at its stop; re-opening -> armed at the proximal stop, or when it closes again.
+        ``load``: the joint torques the drive carried over the step less the links' own inertial torques [N m]
+        (:attr:`~bhgrasp.sim.engine.StepResult.load`).  The clutch sits between the worm gear and the proximal
+        link and slips on the torque it transmits, whatever the link's speed.  Between a motor geared 125:1 and a
+        light link, the motor's reflected rotor inertia is far the larger (a rotor of 1e-6 kg m^2 reflects 0.016
+        kg m^2; a finger's links have about 5e-4 kg m^2 about the proximal axis), so a change of speed is the
+        rotor's business and the clutch carries the links' load: gravity, contacts, joint stops.  The simulated
+        motor has no rotor inertia, so the drive's own torque would break a switch at start-up in free air; the
+        load does not.  Armed -> broken away when the finger closes (u > 0) and its proximal load exceeds the
+        breakaway torque; broken away -> re-opening when it opens (u < 0) with the fingertip at its stop;
+        re-opening -> armed at the proximal stop, or when it closes again.
         """
         modes = switch_modes(modes).copy()
         for finger in range(3):
             motor, proximal, distal = u[finger + 1], self.proximal[finger], self.distal[finger]
             at_stop = q_hand[[proximal, distal]] <= self._lower[[proximal, distal]] + STOP_TOLERANCE
             if modes[finger] == ARMED:
-                blocked = abs(v_hand[proximal]) < self.blocked_speed
-                if motor > 0.0 and blocked and drive[proximal] > self.breakaway_torque:
+                if motor > 0.0 and load[proximal] > self.breakaway_torque:
                     modes[finger] = BROKEN_AWAY
             elif modes[finger] == BROKEN_AWAY and motor < 0.0 and at_stop[1]:
                 modes[finger] = REOPENING
@@ -239,6 +255,8 @@ __all__ = [
     "PROXIMAL_RATIO",
     "REOPENING",
     "SPREAD_RATIO",
+    "STALL_TIP_FORCE",
+    "TIP_LEVER",
     "WORM_EFFICIENCY",
     "BarrettTransmission",
     "switch_modes",

@@ -79,8 +79,14 @@ class Actuation(ABC):
     def begin(self, u: np.ndarray) -> None:  # noqa: B027  (optional hook)
         """Before each step, with the step's inputs ``u`` (after :meth:`restore`)."""
 
-    def update(self, q_hand: np.ndarray, v_hand: np.ndarray, u: np.ndarray, drive_torques: np.ndarray) -> None:  # noqa: B027
-        """After each step: ``drive_torques`` are the joint torques the drive delivered (inputs + reactions)."""
+    def update(  # noqa: B027
+        self, q_hand: np.ndarray, v_hand: np.ndarray, u: np.ndarray, drive_torques: np.ndarray, load: np.ndarray
+    ) -> None:
+        """After each step, with the drive's torques and the links' load.
+
+        ``drive_torques``: the joint torques the drive delivered (inputs + reactions); ``load``: the same less the
+        links' own inertial torques.
+        """
 
     def modes(self) -> np.ndarray:
         """Numeric mode flags to record (e.g. TorqueSwitch broken per finger); empty if none (a fresh array)."""
@@ -148,7 +154,6 @@ class BarrettActuation(Actuation):
         breakaway_torque: float = BREAKAWAY_TORQUE,
         saturate: bool = False,
         motor_damping: float = MOTOR_DAMPING,
-        blocked_speed: float = 0.02,
         damping: float | Sequence[float] = 0.0,
         friction: float | Sequence[float] = 0.0,
         efficiency: float = WORM_EFFICIENCY,
@@ -158,21 +163,18 @@ class BarrettActuation(Actuation):
 
         Args:
             hand: A Barrett hand (joint names F1_spread ... F3_distal).
-            breakaway_torque: Proximal drive torque [N m] above which the TorqueSwitch breaks away (GraspIt!'s
-                breakAwayTorque, 0.5 N m).
-            saturate: Clip motor torques to the puck limit, 0.11 N m (MT 2200 / IPNM 20000).
+            breakaway_torque: Proximal load torque [N m] above which the TorqueSwitch breaks away (GraspIt!'s
+                breakAwayTorque, 0.5 N m; the rule: :meth:`~bhgrasp.barrett.transmission.BarrettTransmission.switch`).
+            saturate: Clip motor torques to the pucks' limit, :data:`~bhgrasp.barrett.transmission.MAX_MOTOR_TORQUE`
+                (0.0213 N m, calibrated to Barrett's stalled fingertip force).
             motor_damping: Motor viscous damping at the shaft [N m s/rad] (its torque-speed line); it acts on
-                each driven coordinate times the square of its gear ratio.  Default: 0.11 N m / 307 rad/s.
-            blocked_speed: Proximal speed [rad/s] below which the proximal link counts as blocked; breakaway needs
-                a blocked link (a start-up torque transient of a moving finger does not break the switch).
+                each driven coordinate times the square of its gear ratio.  Default: 0.0213 N m / 307 rad/s.
             damping: Viscous joint damping [N m s/rad].
             friction: Coulomb joint friction [N m].
             efficiency: Forward efficiency of the finger worm drives (default 0.5, the self-locking bound).
             self_locking: Whether the finger worm drives self-lock (the real hand's are "non-backdrivable").
         """
-        drive = BarrettTransmission(
-            hand, breakaway_torque, motor_damping, blocked_speed, damping, efficiency, self_locking
-        )
+        drive = BarrettTransmission(hand, breakaway_torque, motor_damping, damping, efficiency, self_locking)
         super().__init__(drive, friction)
         self.saturate = bool(saturate)
         self.mode = np.zeros(3, dtype=int)  # per finger: 0 coupled, 1 broken away, 2 re-opening the proximal
@@ -188,11 +190,6 @@ class BarrettActuation(Actuation):
     def motor_damping(self) -> float:
         """Motor viscous damping at the shaft [N m s/rad]."""
         return self.drive.motor_damping
-
-    @property
-    def blocked_speed(self) -> float:
-        """Proximal speed [rad/s] below which the proximal link counts as blocked."""
-        return self.drive.blocked_speed
 
     @property
     def broken(self) -> np.ndarray:
@@ -244,13 +241,15 @@ class BarrettActuation(Actuation):
         if self.drive.self_locking:
             self.locked |= u[1:4] == 0.0
 
-    def update(self, q_hand: np.ndarray, v_hand: np.ndarray, u: np.ndarray, drive_torques: np.ndarray) -> None:
+    def update(
+        self, q_hand: np.ndarray, v_hand: np.ndarray, u: np.ndarray, drive_torques: np.ndarray, load: np.ndarray
+    ) -> None:
         """The TorqueSwitch and worm-lock rules, with the motor torques the pucks delivered.
 
         (``switch`` and ``locks`` of :class:`~bhgrasp.barrett.transmission.BarrettTransmission`.)
         """
         u = self.delivered(u)
-        modes = self.drive.switch(self.mode, q_hand, v_hand, u, drive_torques)
+        modes = self.drive.switch(self.mode, q_hand, u, load)
         locked = self.locked & (modes == self.mode)  # a finger on a new coordinate starts unlocked
         self.locked[:] = self.drive.locks(locked, modes, v_hand, u, drive_torques)
         self.mode[:] = modes

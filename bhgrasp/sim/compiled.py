@@ -74,7 +74,9 @@ class CompiledEngine:
         objects (converted by :func:`contact_set` and :func:`memory_of` when read).
         """
         result = self._engine.step(q, v, tau_hand, drive, memory, *self._limits)
-        return StepResult(result.q, result.v, result.contacts, result.drive, result.memory, result.divergence)
+        return StepResult(
+            result.q, result.v, result.contacts, result.drive, result.memory, result.divergence, result.load
+        )
 
     def detect(self, q: np.ndarray, memory: ContactMemory) -> ContactSet:
         """The contacts at ``q`` matched to ``memory`` (no forces)."""
@@ -155,7 +157,7 @@ def barrett_of(actuation: BarrettActuation):
     barrett.spread_ratio, barrett.proximal_ratio = model.SPREAD_RATIO, model.PROXIMAL_RATIO
     barrett.distal_ratio, barrett.distal_alone_ratio = model.DISTAL_RATIO, model.DISTAL_ALONE_RATIO
     barrett.max_motor_torque, barrett.breakaway_torque = model.MAX_MOTOR_TORQUE, actuation.breakaway_torque
-    barrett.motor_damping, barrett.blocked_speed = actuation.motor_damping, actuation.blocked_speed
+    barrett.motor_damping = actuation.motor_damping
     barrett.saturate = actuation.saturate
     barrett.efficiency, barrett.self_locking = actuation.drive.efficiency, actuation.self_locking
     barrett.damping, barrett.friction, barrett.lower = actuation.damping, actuation.friction, actuation.hand.lower

@@ -74,6 +74,8 @@ class StepResult(NamedTuple):
         drive: Hand joint torques the drive delivered over the step [N m], (nv_hand,).
         memory: The contact memory after the step (a ``ContactMemory``, or the compiled engine's ``Memory``).
         divergence: What the engine found diverged, or ``None`` when it leaves the check to the Simulator.
+        load: The load the drive carried [N m], (nv_hand,): ``drive`` less the hand links' own inertial torques
+            (M a), what a clutch between a motor of dominant reflected inertia and the links transmits.
     """
 
     q: np.ndarray
@@ -82,6 +84,7 @@ class StepResult(NamedTuple):
     drive: np.ndarray
     memory: Any
     divergence: Any
+    load: np.ndarray
 
 
 class Engine(Protocol):

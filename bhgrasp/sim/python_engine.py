@@ -91,11 +91,11 @@ class PythonEngine:
         Returns the :class:`~bhgrasp.sim.engine.StepResult`, its divergence checked as the compiled step checks it.
         """
         if self.settings.integrator == "implicit":
-            q_next, v_next, contacts, torques, memory = self._implicit(q, v, tau_hand, drive, memory)
+            q_next, v_next, contacts, (torques, load), memory = self._implicit(q, v, tau_hand, drive, memory)
         else:
-            q_next, v_next, contacts, torques, memory = self._explicit(q, v, tau_hand, drive, memory)
+            q_next, v_next, contacts, (torques, load), memory = self._explicit(q, v, tau_hand, drive, memory)
         checked = divergence(q_next, v_next, contacts, self.settings)
-        return StepResult(q_next, v_next, contacts, torques, memory, checked)
+        return StepResult(q_next, v_next, contacts, torques, memory, checked, load)
 
     # ------------------------------------------------------------------ joint space
     def _implicit_gyroscopic(self, v: np.ndarray, bias: np.ndarray) -> None:
@@ -225,14 +225,17 @@ class PythonEngine:
         torques = self._drive(mass, v, v_next, bias - generalized - passive, dt * stiffness + damping, drive)
         return pin.integrate(model, q, v_next * dt), v_next, contacts, torques, memory
 
-    def _drive(self, mass, v, v_next, forces, implicit_damping, drive: DriveTerms) -> np.ndarray:
-        """Hand joint torques the drive delivered over the step (M a + bias - contact - passive + implicit terms).
+    def _drive(self, mass, v, v_next, forces, implicit_damping, drive: DriveTerms) -> tuple[np.ndarray, np.ndarray]:
+        """The drive's hand joint torques over the step, and the links' load (the same less their inertia M a).
 
-        ``forces`` is bias - contact - passive torques, ``implicit_damping`` the diagonal (dt K + C) acting on v+.
+        The drive delivered M a + bias - contact - passive + implicit terms; ``forces`` is bias - contact - passive
+        torques, ``implicit_damping`` the diagonal (dt K + C) acting on v+.
         """
         nvh = self.scene.nv_hand
-        torques = (mass @ ((v_next - v) / self.settings.dt) + forces + implicit_damping * v_next)[:nvh]
-        return torques - drive.motor_damping * v_next[:nvh]  # the clutch passes what the motor's losses leave
+        inertial = mass @ ((v_next - v) / self.settings.dt)
+        torques = (inertial + forces + implicit_damping * v_next)[:nvh]
+        torques = torques - drive.motor_damping * v_next[:nvh]  # the clutch passes what the motor's losses leave
+        return torques, torques - inertial[:nvh]
 
     # ------------------------------------------------------------------ the explicit steps
     def _explicit(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, drive: DriveTerms, memory: ContactMemory):
@@ -298,11 +301,12 @@ class PythonEngine:
             self._implicit_gyroscopic(v, bias)
         reduced = transmission.T @ mass @ transmission
         acceleration = transmission @ np.linalg.solve(reduced, transmission.T @ (total + generalized - bias))
-        torques = (mass @ acceleration + bias - generalized - passive + damping * v)[:nvh]
+        inertial = mass @ acceleration
+        torques = (inertial + bias - generalized - passive + damping * v)[:nvh]
         torques -= drive.motor_damping * v[:nvh]
         if displacement is None:
             displacement = np.zeros((0, 3))
-        return acceleration, contacts, forces, sticking, displacement, torques
+        return acceleration, contacts, forces, sticking, displacement, (torques, torques - inertial[:nvh])
 
 
 __all__ = ["PythonEngine"]

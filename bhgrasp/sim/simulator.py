@@ -251,7 +251,7 @@ class Simulator:
         if result.divergence.kind:
             raise describe_divergence(t, result.divergence, self.settings)
         if self._modal:
-            actuation.update(result.q[:nqh], result.v[:nvh], u, result.drive)
+            actuation.update(result.q[:nqh], result.v[:nvh], u, result.drive, result.load)
         return self._state(t, result.q, result.v, result.contacts, result.memory), StepInfo(
             result.contacts, result.drive, self.engine
         )
