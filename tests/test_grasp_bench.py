@@ -5,6 +5,7 @@ static geometry says they will, and the report's bookkeeping."""
 from __future__ import annotations
 
 import json
+from types import SimpleNamespace
 
 import coal
 import numpy as np
@@ -12,9 +13,11 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
+from bhgrasp.barrett.transmission import MAX_MOTOR_TORQUE
 from bhgrasp.bench import (
     APPROACH,
     CLOSE_AT,
+    FORCE_LIMIT,
     HELD_AT,
     KNUCKLE_CLEARANCE,
     LIFT,
@@ -26,7 +29,7 @@ from bhgrasp.bench import (
     simulate_trial,
 )
 from bhgrasp.bench import report as bench_report
-from bhgrasp.bench.metrics import evaluate, failure_reason
+from bhgrasp.bench.metrics import evaluate, failure_reason, joint_load
 from bhgrasp.bench.objects import OBJECT_SET, BenchObject
 from bhgrasp.bench.placement import STAND_HEIGHT, STAND_MARGIN, grasp_clearance, stand_clearance
 from bhgrasp.errors import InputError
@@ -93,7 +96,7 @@ def test_a_power_grasp_lifts_the_can_and_holds_it_with_m_g_plus_the_push(can_pow
     assert (trajectory.modes[shake, 3:] == 1).all()
     fingers = [hand.joint_index(f"{f}_{j}") for f in hand.fingers for j in ("proximal", "distal")]
     assert np.ptp(trajectory.q[shake][:, fingers], axis=0).max() == 0.0
-    assert np.abs(trajectory.u[:, 1:4]).max() <= 0.11 + 1e-12  # the pucks' MT
+    assert np.abs(trajectory.u[:, 1:4]).max() <= MAX_MOTOR_TORQUE + 1e-15  # the pucks' MT
 
 
 def first_touch(trajectory, finger: str) -> float:
@@ -117,15 +120,18 @@ def test_the_fingers_reach_a_ball_together_where_the_static_geometry_says() -> N
 def test_the_report_compares_outcomes_and_metrics_and_renders_the_rates(tmp_path) -> None:
     trial = {"object": "box", "spec": "box:0.06x0.05x0.05:0.3", "grasp": "power", "actuation": "barrett",
              "success": True, "strict_success": True, "placed": True, "failure": "", "lifted": 0.1,
-             "max_displacement": 1e-4, "max_rotation": 1e-3, "slip_samples": 0, "peak_contact_force": 150.0,
-             "peak_motor_torque": 0.11, "peak_stand_force": 0.0, "spread": 0.0}  # fmt: skip
+             "max_displacement": 1e-4, "max_rotation": 1e-3, "slip_samples": 0, "peak_contact_force": 15.0,
+             "peak_stand_force": 0.0, "peak_joint_torque": 1.3, "torque_to_rating": 0.5, "inside_envelope": True,
+             "most_loaded_joint": "F3_proximal",
+             "spread": 0.0}  # fmt: skip
     failed = {**trial, "grasp": "precision", "success": False, "strict_success": False, "placed": False,
               "failure": "moved 5 mm / 15 deg under the +x push"}  # fmt: skip
     trials = [trial, failed]
     assert bench_report.compare(trials, trials) == []
-    moved = [{**trial, "peak_contact_force": 150.001}, failed]
+    moved = [{**trial, "peak_contact_force": 15.0001}, failed]
     assert bench_report.compare(moved, trials) == [f"{('box:0.06x0.05x0.05:0.3', 'power', 'barrett', 0.0)} "
-                                                   "peak_contact_force: 150.001, reference 150.0"]  # fmt: skip
+                                                   "peak_contact_force: 15.0001, reference 15.0"]  # fmt: skip
+    assert len(bench_report.compare([{**trial, "inside_envelope": False}], trials)) == 1
     assert "not in the reference" in bench_report.compare([{**trial, "spread": 0.45}], trials)[0]
     assert len(bench_report.compare([{**trial, "success": False}], trials)) == 1
     assert "not in the reference" in bench_report.compare([{**trial, "actuation": "full"}], trials)[0]
@@ -146,6 +152,24 @@ def test_a_trial_not_lifted_names_the_fingers_force_on_the_stand_when_they_press
         failure_reason({**record, "peak_stand_force": 0.0}, *args)
         == "not lifted: the object rose 45 mm of the wrist's 100"
     )
+
+
+def test_a_trial_outside_the_real_hands_envelope_fails_and_names_its_most_loaded_joint() -> None:
+    """joint_load: each finger joint's peak |tau| over its effort limit (F3's distal carries 3 N m, 1.5 x its 2 N m);
+    a held trial outside the envelope is no success and its failure says why."""
+    hand = bh.BarrettHand()
+    tau = np.zeros((5, 8))
+    tau[2, hand.joint_index("F3_distal")] = -3.0
+    tau[3, hand.joint_index("F1_proximal")] = 2.0  # 0.75 of its 2.667 N m
+    load = joint_load(SimpleNamespace(tau=tau), hand)
+    assert load == {"peak_joint_torque": 3.0, "torque_to_rating": pytest.approx(1.5), "most_loaded_joint": "F3_distal"}
+    record = {"lifted": 0.1, "success": False, "inside_envelope": False, "peak_contact_force": 62.4}
+    record.update(peak_stand_force=3.0, **load)
+    args = (np.zeros(1), np.zeros(1), np.zeros(1), 18.0)
+    assert failure_reason(record, *args) == (
+        f"outside the real hand's envelope: peak contact 62 N (limit {FORCE_LIMIT:.0f}), F3_distal at 1.50 x its rating"
+    )
+    assert FORCE_LIMIT == 50.0  # twice the top of Barrett's 15-25 N stalled fingertip force
 
 
 @pytest.mark.slow

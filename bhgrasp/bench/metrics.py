@@ -13,14 +13,14 @@ import numpy as np
 import pinocchio as pin
 
 import bhgrasp as bh
-from bhgrasp.bench.protocol import DIRECTIONS, HELD_AT, LIFT, LOOSE, SHAKE_TIME, STAND, STRICT, Trial
+from bhgrasp.bench.protocol import DIRECTIONS, FORCE_LIMIT, HELD_AT, LIFT, LOOSE, SHAKE_TIME, STAND, STRICT, Trial
 
 
 def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
     """A trial's record from its trajectory.
 
-    Lifted height, displacement and rotation in the palm frame through the shake, success, placement, slip, peak
-    forces and torques, and why it failed.
+    Lifted height, displacement and rotation in the palm frame through the shake, the envelope (peak forces, finger
+    joint torques against their ratings), success, placement, slip, and why it failed.
     """
     t = trajectory.t
     held = min(int(np.searchsorted(t, HELD_AT - 1e-9)), len(t) - 1)
@@ -39,18 +39,18 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
         "lifted": lifted,
         "max_displacement": float(offsets.max()),
         "max_rotation": float(turns.max()),
-        "success": bool(held_through and offsets.max() < LOOSE[0] and turns.max() < LOOSE[1]),
-        "strict_success": bool(held_through and offsets.max() < STRICT[0] and turns.max() < STRICT[1]),
     }
+    record.update(contact_summary(trajectory, hand, held, shaken))
+    record.update(joint_load(trajectory, hand))
+    record["inside_envelope"] = bool(
+        max(record["peak_contact_force"], record["peak_stand_force"]) <= FORCE_LIMIT
+        and record["torque_to_rating"] <= 1.0
+    )
+    kept = held_through and record["inside_envelope"]
+    record["success"] = bool(kept and offsets.max() < LOOSE[0] and turns.max() < LOOSE[1])
+    record["strict_success"] = bool(kept and offsets.max() < STRICT[0] and turns.max() < STRICT[1])
     final = trajectory.object_position[-1, 0, 2] - trajectory.object_position[0, 0, 2]
     record["placed"] = bool(record["success"] and abs(final) < 0.005)  # set down and let go at its resting height
-    record.update(contact_summary(trajectory, hand, held, shaken))
-    fingers = (
-        slice(1, 4)
-        if trial.actuation == "barrett"
-        else [hand.joint_index(f"{f}_{j}") for f in hand.fingers for j in ("proximal", "distal")]
-    )
-    record["peak_motor_torque"] = float(np.abs(trajectory.u[:, fingers]).max())  # finger pucks or joints [N m]
     record["failure"] = failure_reason(record, offsets, turns, t[held : shaken + 1], float(t[-1]))
     return record
 
@@ -88,6 +88,23 @@ def contact_summary(trajectory, hand: bh.Hand, held: int, shaken: int) -> dict:
     }
 
 
+def joint_load(trajectory, hand: bh.Hand) -> dict:
+    """The finger joints' peak torque [N m] through the trial and its largest ratio to a joint's rating.
+
+    The torques are the drive's with the worms' reactions; a rating is the hand's effort limit; the most loaded
+    joint is named.
+    """
+    joints = [hand.joint_index(f"{f}_{j}") for f in hand.fingers for j in ("proximal", "distal")]
+    peaks = np.abs(trajectory.tau[:, joints]).max(axis=0)
+    ratios = peaks / hand.effort_limit[joints]
+    worst = int(np.argmax(ratios))
+    return {
+        "peak_joint_torque": float(peaks.max()),
+        "torque_to_rating": float(ratios[worst]),
+        "most_loaded_joint": hand.joint_names[joints[worst]],
+    }
+
+
 def failure_reason(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.ndarray, end: float) -> str:
     """Why a trial failed ('' if it succeeded).
 
@@ -101,6 +118,12 @@ def failure_reason(record: dict, offsets: np.ndarray, turns: np.ndarray, times: 
         return reason
     if record["success"]:
         return ""
+    if not record["inside_envelope"]:
+        force = max(record["peak_contact_force"], record["peak_stand_force"])
+        return (
+            f"outside the real hand's envelope: peak contact {force:.0f} N (limit {FORCE_LIMIT:.0f}), "
+            f"{record['most_loaded_joint']} at {record['torque_to_rating']:.2f} x its rating"
+        )
     moved = np.flatnonzero((offsets >= LOOSE[0]) | (turns >= LOOSE[1]))
     if len(moved) == 0:
         return f"the object left the scene at {end:.2f} s"
@@ -109,4 +132,4 @@ def failure_reason(record: dict, offsets: np.ndarray, turns: np.ndarray, times: 
     return f"moved {1e3 * offsets[k]:.0f} mm / {math.degrees(turns[k]):.0f} deg under the {direction} push"
 
 
-__all__ = ["contact_summary", "evaluate", "failure_reason", "relative_poses"]
+__all__ = ["contact_summary", "evaluate", "failure_reason", "joint_load", "relative_poses"]

@@ -32,9 +32,11 @@ joint damped as the real motors damp theirs, the spread held by a PD.  The wrist
 :class:`~bhgrasp.controllers.mount.MountServo` in both (without load feedforward: the object starts on its stand).
 
 Success: through the shake the object stays within 5 cm and 15 deg of its held pose in the palm frame
-(DexGraspBench's thresholds); ``strict`` is ours, 1 cm and 5 deg; ``placed``: a successful trial whose object is
-back at its resting height after the release.  Every trial simulates a fixed 18 s, or stops when its object falls
-below the stand.  Contacts: :data:`STIFFNESS` and :data:`DT` (their comment gives the reasons).
+(DexGraspBench's thresholds), and the whole trial stays inside the real hand's envelope (no contact force above
+:data:`FORCE_LIMIT`, no finger joint torque above its rating); ``strict`` is ours, 1 cm and 5 deg; ``placed``: a
+successful trial whose object is back at its resting height after the release.  Every trial simulates a fixed
+18 s, or stops when its object falls below the stand.  Contacts: :data:`STIFFNESS` and :data:`DT` (their comment
+gives the reasons).
 """
 
 from __future__ import annotations
@@ -50,7 +52,9 @@ ACTUATIONS = ("barrett", "full")
 FRICTION = 0.8
 APPROACH, CLOSE_AT, LIFT_AT, HELD_AT, SHAKE_TIME = 0.05, 1.0, 3.0, 4.5, 2.0  # [m], [s], [s], [s], [s]
 PRESHAPE = 0.8  # [rad] proximal angle of the open hand (the distal follows at a third)
-# [rad] the spread of round objects' fingertip grasps, measured under the real drive (barrett, precision): at spread 0
+# [rad] the spread of round objects' fingertip grasps, chosen on these trials under the real drive before its
+# calibration (under the calibrated drive docs/results/grasp_spread.md has the can holding at 0.3-0.6 rad, the 35 mm
+# ball at 0.45-0.6, the bottle at all but 0.45, the 45 mm ball at none).  Measured with the drive then: at spread 0
 # F1 and F2 pinch a cylinder 27 deg either side of its back, its wedge opens the back-drivable spread (0 -> 0.07 rad
 # on the can as the grip closes), and under a +-x push the can turns 17 deg about the pinch axis; the can and the
 # bottle hold at 0.3-0.6 rad, the 45 mm ball at 0.3-0.6, the 35 mm ball only at 0.4-0.5 (at 0.3 it is not lifted,
@@ -62,15 +66,20 @@ LIFT = 0.10  # [m]
 RELEASE = 0.5  # [s] of open() after the place
 DROP = 0.005  # [m] the place stops this far above the lift's start: a stiff wrist setting the held object onto the
 # stand would press it there through the locked fingers
-# The contact law and step: the power close squeezes with hundreds of newtons, which the default 1e4 N/m would meet
-# with centimetres of penetration; 3e5 N/m gives about 1 mm.  The contact's geometry is explicit in the step, so
-# omega dt must stay below ~1 for the lightest link, a distal (0.042 kg): omega = 2700 rad/s, 0.67 at 0.25 ms.
-# Measured: 1e6 N/m diverged in jammed grasps at 1 ms and 0.5 ms, and while opening on the can at 0.25 ms.
+# The contact law and step: chosen when the drive (before its calibration) squeezed with hundreds of newtons, which
+# the default 1e4 N/m would meet with centimetres of penetration; 3e5 N/m gives about 1 mm there, 0.1 mm at the
+# calibrated drive's 20-40 N.  The contact's geometry is explicit in the step, so omega dt must stay below ~1 for the
+# lightest link, a distal (0.042 kg): omega = 2700 rad/s, 0.67 at 0.25 ms.  Measured: 1e6 N/m diverged in jammed
+# grasps at 1 ms and 0.5 ms, and while opening on the can at 0.25 ms.
 DT = 2.5e-4  # [s]
 STIFFNESS = 3e5  # [N/m] normal; tangential a tenth; damping 2e-3 s of each
 DIRECTIONS = ("+x", "-x", "+y", "-y", "+z", "-z")
-PRECISION_MT = 600.0  # puck torque units (0.03 N m at the motor): the force-limited close
+PRECISION_MT = 600.0  # puck torque units (0.0058 N m at the motor, 27 % of MT): the force-limited close
 LOOSE, STRICT = (0.05, math.radians(15.0)), (0.01, math.radians(5.0))  # [m], [rad]
+# The real hand's envelope (bhgrasp.barrett.transmission, urdf/README.md): Barrett's stalled fingertip force is
+# 15-25 N; a trial in which any contact (on the object or the stand) passes twice that, or a finger joint carries more
+# than its rating (the URDF's effort limit: the pucks' MT through ideal gears), needed what the hand cannot give
+FORCE_LIMIT = 2 * 25.0  # [N]
 KNUCKLE_CLEARANCE = {"power": 0.0, "precision": 0.02}  # [m] the knuckles above the object's top
 STAND = "pedestal"  # the stand's body name
 

@@ -18,18 +18,20 @@ from pathlib import Path
 from typing import Any
 
 from bhgrasp.bench.objects import BenchObject
-from bhgrasp.bench.protocol import ACTUATIONS, DIRECTIONS, GRASPS, LOOSE, STRICT, Trial
+from bhgrasp.bench.protocol import ACTUATIONS, DIRECTIONS, FORCE_LIMIT, GRASPS, LOOSE, STRICT, Trial
 from bhgrasp.bench.trial import run_trial
 from bhgrasp.sweep import run_sweep
 
+OUTCOMES = ("success", "strict_success", "placed", "inside_envelope")
 METRICS = (
     "lifted",
     "max_displacement",
     "max_rotation",
     "slip_samples",
     "peak_contact_force",
-    "peak_motor_torque",
     "peak_stand_force",
+    "peak_joint_torque",
+    "torque_to_rating",
 )
 
 
@@ -76,15 +78,15 @@ def run_bench(
     for row in table.to_dict("records"):
         trial = {"object": row["name"], "spec": row["spec"], "grasp": row["grasp"], "actuation": row["actuation"]}
         if row["status"] == "ok":
-            trial.update(
-                {key: row[key] for key in ("spread", "success", "strict_success", "placed", *METRICS, "failure")}
-            )
+            trial.update({key: row[key] for key in ("spread", *OUTCOMES, *METRICS, "most_loaded_joint", "failure")})
         else:
             trial.update(
                 spread=row.get("spread"),
                 success=False,
                 strict_success=False,
                 placed=False,
+                inside_envelope=None,
+                most_loaded_joint=None,
                 failure=row["error"],
                 **dict.fromkeys(METRICS),
             )
@@ -109,6 +111,7 @@ def write_json(trials: list[dict[str, Any]], path: Path) -> None:
         "push_force": "10 m [N]",
         "loose": {"displacement_m": LOOSE[0], "rotation_rad": LOOSE[1]},
         "strict": {"displacement_m": STRICT[0], "rotation_rad": STRICT[1]},
+        "envelope": {"contact_force_n": FORCE_LIMIT, "joint_torque": "the hand's effort limit"},
     }
     path.write_text(json.dumps({"protocol": protocol, "trials": trials}, indent=1, sort_keys=True) + "\n")
 
@@ -137,7 +140,9 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
         f"Regenerate: `{command}`. Protocol: approach, close, "
         "lift 10 cm, push 10 m N on the object along +x, -x, +y, -y, +z, -z (2 s each), place "
         "(`bhgrasp/bench/protocol.py`). Success: within 5 cm and 15 deg of the held pose in the palm "
-        "frame through the pushes; strict: 1 cm and 5 deg.",
+        "frame through the pushes, and inside the real hand's envelope all along (no contact force above "
+        f"{FORCE_LIMIT:.0f} N, twice Barrett's stalled fingertip force; no finger joint torque above its rating, "
+        "the pucks' MT through ideal gears); strict: 1 cm and 5 deg.",
         "",
         "| actuation | success | strict | trials |",
         "|---|---:|---:|---:|",
@@ -149,8 +154,9 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
     lines += [
         "",
         "| object | grasp | spread [deg] | actuation | success | strict | placed | max disp. [mm] | "
-        "max rot. [deg] | slip samples | peak contact [N] | peak torque [N m] | failure |",
-        "|---|---|---:|---|---|---|---|---:|---:|---:|---:|---:|---|",
+        "max rot. [deg] | slip samples | peak contact [N] | peak on stand [N] | peak joint torque [N m] | "
+        "x rating | envelope | failure |",
+        "|---|---|---:|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|---|",
     ]
     for t in trials:
         number = functools.partial(_number, t)
@@ -159,7 +165,9 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
             f"{t['actuation']} | {_mark(t['success'])} | "
             f"{_mark(t['strict_success'])} | {_mark(t['placed'])} | {number('max_displacement', 1e3)} | "
             f"{number('max_rotation', 180 / math.pi)} | {number('slip_samples', fmt='.0f')} | "
-            f"{number('peak_contact_force')} | {number('peak_motor_torque', fmt='.3f')} | {t['failure'] or ''} |"
+            f"{number('peak_contact_force')} | {number('peak_stand_force')} | "
+            f"{number('peak_joint_torque', fmt='.2f')} | {number('torque_to_rating', fmt='.2f')} | "
+            f"{_mark(t['inside_envelope'])} | {t['failure'] or ''} |"
         )
     return "\n".join(lines) + "\n"
 
@@ -178,7 +186,7 @@ def compare(trials: list[dict[str, Any]], reference: list[dict[str, Any]], rel: 
         if known is None:
             problems.append(f"{key}: not in the reference")
             continue
-        for name in ("success", "strict_success", "placed", "failure"):
+        for name in (*OUTCOMES, "most_loaded_joint", "failure"):
             if trial[name] != known[name]:
                 problems.append(f"{key} {name}: {trial[name]!r}, reference {known[name]!r}")
         for name in METRICS:
