@@ -108,7 +108,8 @@ def compiled_layers(simulator: Simulator, state: State, u: np.ndarray, steps: in
     for chunk in chunks(steps):
         q, v, memory = state.scene_q, state.scene_v, engine.memory(state.contact_memory)
         for _ in range(chunk):
-            q, v, _, _, memory, _ = engine.step(q, v, tau, drive, memory)
+            result = engine.step(q, v, tau, drive, memory)
+            q, v, memory = result.q, result.v, result.memory
     wrapped = time.perf_counter() - start
     bare = core_module().Engine(
         simulator.scene.model.saveToString(),
