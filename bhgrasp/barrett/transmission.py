@@ -41,8 +41,9 @@ fingers, 2 kg per finger" (Barrett wiki, safety page).  So the drive is calibrat
 finger, whose motor drives the distal joint alone: :data:`STALL_TIP_FORCE` 20 N at :data:`TIP_LEVER` 5 cm from the
 distal axis, eta 93.75 u_max = 1 N m, u_max = 0.0213 N m at the motor (the pucks' IPNM becomes MT / u_max = 103125,
 :mod:`~bhgrasp.barrett.pucks`).  A worm's efficiency and the motor's torque enter a stall only as their product;
-keeping eta at its bound puts the calibration in the motor's torque (a self-locking worm of 3-5 deg lead and
-friction 0.05-0.15 has eta 0.3-0.5, so the motor torque is 0.02-0.036 N m either way).  The motor's torque-speed
+keeping eta at its bound puts the calibration in the motor's torque (a worm of 3-5 deg lead that self-locks, its
+friction angle above the lead, at friction 0.06-0.15 has eta 0.25-0.48, so the motor torque is 0.02-0.04 N m either
+way).  The motor's torque-speed
 line keeps its no-load speed, so the unloaded close still takes about 1 s.
 
 Inputs are motor torques [N m] at the motor shafts, then one torque [N m or N] per joint outside the hand's eight
