@@ -191,6 +191,28 @@ def test_pid_hold_gives_way_by_the_disturbance_over_its_stiffness() -> None:
         assert torques[-1] - torques[k] == pytest.approx(-0.3 / (eta * 125), rel=0.02)
 
 
+def test_the_back_drivable_spread_gives_way_by_the_load_over_its_stiffness_and_to_its_stop_past_mt() -> None:
+    """The spread's puck holds its position (HOLD = 1) through spur gears without a worm: a load d on the spread
+    moves it by d / (17.5^2 kp) (kp from the spread's KP 1000) and it returns; past 17.5 MT = 0.37 N m the puck
+    saturates and the load pushes the spread to its stop."""
+    hand = bh.BarrettHand()
+    kp = 1000 * CPR / (SCALE * IPNM)  # [N m/rad] at the motor
+    for load, expected in ((0.1, 0.1 / (17.5**2 * kp)), (0.5, np.pi - 1.0)):
+        sim = _sim(hand)
+        start = sim.initial_state(hand.configuration(F1_spread=1.0, F2_spread=1.0))
+        driver = BarrettDriver(hand)
+        driver.script([(0.0, "set_position_mode", "SPREAD")])
+        push = np.zeros(8)
+        push[0] = load
+        disturbance = lambda t, push=push: push if 0.5 <= t < 2.0 else np.zeros(8)  # noqa: E731
+        trajectory = sim.run(driver, 3.0, state=start, progress=False, disturbance=disturbance)
+        held, pushed = (int(np.searchsorted(trajectory.t, t)) for t in (0.45, 1.99))
+        moved = trajectory.q[pushed, 0] - trajectory.q[held, 0]
+        assert moved == pytest.approx(expected, rel=0.02)  # 0.053 rad, or to the pi stop
+        assert abs(trajectory.q[-1, 0] - trajectory.q[held, 0]) < 1e-3  # it returns when the load goes
+    assert 17.5 * MT == pytest.approx(0.3733, abs=1e-4)
+
+
 def test_a_mounted_hand_gets_zero_on_its_mount_and_the_pucks_tick_at_1_khz() -> None:
     hand = mounted(bh.BarrettHand())
     driver = BarrettDriver(hand)
