@@ -21,7 +21,8 @@ from bhgrasp.barrett.transmission import (
     MAX_MOTOR_TORQUE,
     WORM_EFFICIENCY,
 )
-from bhgrasp.bench.protocol import DT, STIFFNESS
+from bhgrasp.bench.protocol import DT
+from bhgrasp.bench.trial import contact_law
 from bhgrasp.model.objects import Box, FixedBox, SpringMounted
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
@@ -30,14 +31,7 @@ from bhgrasp.sim.scene import Scene
 
 F3_PROXIMAL, F3_DISTAL = 6, 7
 BAND = (15.0, 25.0)  # [N] Barrett's stalled fingertip force (urdf/README.md)
-# the grasp benchmark's contact law: stiff, so the stall is not lost in centimetres of penetration
-LAW = SpringDamper(
-    stiffness=STIFFNESS,
-    damping=2e-3 * STIFFNESS,
-    friction=0.8,
-    tangential_stiffness=0.1 * STIFFNESS,
-    tangential_damping=2e-4 * STIFFNESS,
-)
+LAW = contact_law()  # the grasp benchmark's: stiff, so the stall is not lost in centimetres of penetration
 
 
 def contact_force(trajectory: bh.Trajectory, k: int) -> float:

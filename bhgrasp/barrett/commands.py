@@ -249,8 +249,17 @@ class BarrettDriver(Controller):
         self._pending.append((name, args, kwargs))
 
     def _method(self, name: Any) -> Callable:
-        valid = ("close", "open", "trapezoidal_move", "velocity_move", "set_position_mode", "set_position",
-                 "set_torque_mode", "set_torque", "idle")  # fmt: skip
+        valid = (
+            "close",
+            "open",
+            "trapezoidal_move",
+            "velocity_move",
+            "set_position_mode",
+            "set_position",
+            "set_torque_mode",
+            "set_torque",
+            "idle",
+        )
         return getattr(self, require_name(name, valid, "command"))
 
     @staticmethod

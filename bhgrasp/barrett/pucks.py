@@ -78,8 +78,9 @@ class PuckProperties:
         for name in ("KP", "KD", "KI", "ACCEL", "MV", "MT", "TSTOP", "IPNM", "MCV", "MOV"):
             value = getattr(self, name)
             if not np.isfinite(value) or value < 0.0 or (value == 0.0 and name in ("ACCEL", "MV", "IPNM")):
-                raise InputError(f"puck property {name} must be a finite non-negative number (ACCEL, MV, IPNM > 0), "
-                                 f"got {value!r}")  # fmt: skip
+                raise InputError(
+                    f"puck property {name} must be a finite non-negative number (ACCEL, MV, IPNM > 0), got {value!r}"
+                )
         if self.HOLD not in (0, 1):
             raise InputError(f"puck property HOLD must be 0 or 1, got {self.HOLD!r}")
 

@@ -33,11 +33,25 @@ import numpy as np
 from bhgrasp._validation import as_positive
 
 CM2_PER_M2 = 1e4
-_FINGER_ROWS = ((19.5, 25.0), (25.5, 31.0), (31.5, 37.0), (37.5, 43.0), (43.5, 49.0), (49.5, 52.5), (53.0, 55.5),
-                (55.75, 57.5))  # fmt: skip  # [mm] along the distal link x
+# [mm] along the distal link x
+_FINGER_ROWS = (
+    (19.5, 25.0),
+    (25.5, 31.0),
+    (31.5, 37.0),
+    (37.5, 43.0),
+    (43.5, 49.0),
+    (49.5, 52.5),
+    (53.0, 55.5),
+    (55.75, 57.5),
+)
 _FINGER_COLUMNS = ((-7.5, -2.85), (-2.35, 2.35), (2.85, 7.55))  # [mm] along the distal joint axis z
-_PALM_ROWS = (((11.5, 21.5), (-27.0, 27.0)), ((0.5, 10.5), (-38.0, 38.0)), ((-10.5, -0.5), (-38.0, 38.0)),
-              ((-21.5, -11.5), (-27.0, 27.0)))  # fmt: skip  # [mm] GraspIt palm frame: (y band, x extent), 10 mm cells
+# [mm] GraspIt palm frame: (y band, x extent), 10 mm cells
+_PALM_ROWS = (
+    ((11.5, 21.5), (-27.0, 27.0)),
+    ((0.5, 10.5), (-38.0, 38.0)),
+    ((-10.5, -0.5), (-38.0, 38.0)),
+    ((-21.5, -11.5), (-27.0, 27.0)),
+)
 
 
 @dataclass(frozen=True)

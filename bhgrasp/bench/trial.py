@@ -54,6 +54,20 @@ def idealised_damping(hand: bh.Hand) -> np.ndarray:
     return damping
 
 
+def contact_law() -> SpringDamper:
+    """The benchmark's stiff contact law, from :data:`~bhgrasp.bench.protocol.STIFFNESS` and ``FRICTION``.
+
+    Normal stiffness STIFFNESS, tangential a tenth of it, damping 2e-3 s of each.
+    """
+    return SpringDamper(
+        stiffness=STIFFNESS,
+        damping=2e-3 * STIFFNESS,
+        friction=FRICTION,
+        tangential_stiffness=0.1 * STIFFNESS,
+        tangential_damping=2e-4 * STIFFNESS,
+    )
+
+
 def setup(trial: Trial, dt: float = DT):
     """The simulator, its start state, the mounted hand and the wrist path of a trial."""
     item = trial.item
@@ -78,14 +92,7 @@ def setup(trial: Trial, dt: float = DT):
         actuation = BarrettActuation(hand, saturate=True)
     else:  # the same motors' damping on each joint, reflected as through the worms (bench.protocol)
         actuation = FullyActuated(hand, damping=idealised_damping(hand))
-    law = SpringDamper(
-        stiffness=STIFFNESS,
-        damping=2e-3 * STIFFNESS,
-        friction=FRICTION,
-        tangential_stiffness=0.1 * STIFFNESS,
-        tangential_damping=2e-4 * STIFFNESS,
-    )
-    simulator = Simulator(scene, dt=dt, contact=law, actuation=actuation)
+    simulator = Simulator(scene, dt=dt, contact=contact_law(), actuation=actuation)
     q = hand.neutral()
     for finger in hand.fingers:
         q[hand.joint_index(f"{finger}_proximal")], q[hand.joint_index(f"{finger}_distal")] = PRESHAPE, PRESHAPE / 3
@@ -195,4 +202,13 @@ def gone(state: bh.State) -> bool:
     return bool(state.object_poses[0].translation[2] < -0.05)
 
 
-__all__ = ["BenchController", "gone", "idealised_damping", "run_trial", "setup", "shake_force", "simulate_trial"]
+__all__ = [
+    "BenchController",
+    "contact_law",
+    "gone",
+    "idealised_damping",
+    "run_trial",
+    "setup",
+    "shake_force",
+    "simulate_trial",
+]

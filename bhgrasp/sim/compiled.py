@@ -182,9 +182,18 @@ def contact_set(contacts) -> ContactSet:
     if len(contacts) == 0:
         return empty_contact_set()
     return ContactSet(
-        contacts.pair, contacts.point, contacts.normal, contacts.depth, contacts.friction, contacts.displacement,
-        contacts.weight, contacts.local_b, contacts.force, contacts.sticking, contacts.was_sliding,
-    )  # fmt: skip
+        contacts.pair,
+        contacts.point,
+        contacts.normal,
+        contacts.depth,
+        contacts.friction,
+        contacts.displacement,
+        contacts.weight,
+        contacts.local_b,
+        contacts.force,
+        contacts.sticking,
+        contacts.was_sliding,
+    )
 
 
 __all__ = [
