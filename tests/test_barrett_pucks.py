@@ -1,7 +1,7 @@
 """The BH8-280 commanded like the real one: puck firmware and libbarrett's Hand calls on a simulated hand.
 
 Truths used: the gear ratios and encoder resolution (4096 counts/rev; 125, 93.75, 17.5 : 1), the puck defaults
-(MT 2200 / IPNM 20000 = 0.11 N m, MV, ACCEL, CT), the closed-form trapezoid, the response of a first-order loop
+(MT 2200 / IPNM 103125 = 0.0213 N m, MV, ACCEL, CT), the closed-form trapezoid, the response of a first-order loop
 (the simulated motor is a damper b_m; the stated PID scale gives kp, kd), and static equilibrium under a
 disturbance.
 """
@@ -14,8 +14,10 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.barrett import FINGER_PUCK, SPREAD_PUCK, BarrettDriver, BarrettTransmission, Puck, PuckProperties
+from bhgrasp.barrett.readout import S_FINGERTIP_TORQUE, S_POSITION, S_TACT_FULL
 from bhgrasp.barrett.transmission import MAX_MOTOR_TORQUE, MOTOR_DAMPING
 from bhgrasp.data import State
+from bhgrasp.errors import InputError
 from bhgrasp.model.mount import mounted
 from bhgrasp.model.objects import Box, SpringMounted
 from bhgrasp.sim import Simulator
@@ -42,18 +44,84 @@ def _gains(kp_units: float, kd_units: float) -> tuple[float, float]:
 
 
 def test_encoders_and_link_angles_follow_the_gear_ratios() -> None:
+    """update() reads both encoders; libbarrett's link formulas read the secondary encoder (exact after breakaway)
+    unless enableBreakawayEncoders(false), whose P-only formula is right only before breakaway."""
     hand = bh.BarrettHand()
     driver = BarrettDriver(hand)
     q = hand.configuration(F1_spread=1.2, F2_spread=1.2, F1_proximal=0.8, F1_distal=0.8 / 3,
                            F2_proximal=0.5, F2_distal=0.6, F3_proximal=2.0, F3_distal=2.0 / 3)  # fmt: skip
     driver.reset(State(t=0.0, q=q, v=np.zeros(8)))
-    counts = driver.encoder_positions()
+    with pytest.raises(InputError, match=r"no reading yet: call update\(\)"):
+        driver.primary_encoder_positions()
+    driver.update()
+    counts = driver.primary_encoder_positions()
     # armed: motor = 125 q_proximal; broken away (F2): motor = 93.75 (q_proximal + q_distal); spread 17.5 q
     expected = [125 * 0.8 * CPR, 93.75 * 1.1 * CPR, 125 * 2.0 * CPR, 17.5 * 1.2 * CPR]
-    np.testing.assert_allclose(counts, expected, rtol=1e-12)
-    assert counts[0] == pytest.approx(65189.86, abs=0.01)  # 0.8 rad x 125 x 4096 / 2 pi
-    np.testing.assert_allclose(driver.inner_link_positions()[[0, 2, 3]], [0.8, 2.0, 1.2], rtol=1e-12)
-    np.testing.assert_allclose(driver.outer_link_positions()[[0, 2]], [0.8 / 3, 2.0 / 3], rtol=1e-12)
+    np.testing.assert_array_equal(counts, np.rint(expected))
+    assert counts[0] == 65190  # 0.8 rad x 125 x 4096 / 2 pi = 65189.86
+    np.testing.assert_array_equal(driver.secondary_encoder_positions(), np.rint(50 * CPR * np.array([0.8, 0.5, 2.0])))
+    resolution = 0.5 / (50 * CPR) + 0.5 / (93.75 * CPR)  # [rad] half a count of each encoder
+    np.testing.assert_allclose(driver.inner_link_positions(), [0.8, 0.5, 2.0, 1.2], atol=resolution)
+    np.testing.assert_allclose(driver.outer_link_positions()[:3], [0.8 / 3, 0.6, 2.0 / 3], atol=resolution)
+    driver.enable_breakaway_encoders(False)  # P alone: F2's 0.1 rad of breakaway travel reads as proximal
+    np.testing.assert_allclose(driver.inner_link_positions()[[0, 2]], [0.8, 2.0], atol=resolution)
+    assert driver.inner_link_positions()[1] == pytest.approx(1.1 * 93.75 / 125, abs=resolution)  # not 0.5
+
+
+def test_update_reads_the_options_the_hand_has() -> None:
+    """has*() report the options; update(flags) reads the named sensors only; an absent option's getter says so."""
+    hand = bh.BarrettHand()
+    state = State(t=0.0, q=hand.neutral(), v=np.zeros(8))
+    bare = BarrettDriver(hand, fingertip_torque_sensors=False, tactile_sensors=False)
+    assert not bare.has_fingertip_torque_sensors() and not bare.has_tact_sensors()
+    with pytest.raises(InputError, match="sensed no state yet"):
+        bare.update()
+    bare.reset(state)
+    bare.update()
+    with pytest.raises(InputError, match="this hand has no fingertip torque sensors"):
+        bare.fingertip_torque()
+    with pytest.raises(InputError, match="this hand has no tactile pads"):
+        bare.tactile()
+    full = BarrettDriver(hand)
+    assert full.has_fingertip_torque_sensors() and full.has_tact_sensors()
+    full.reset(state)
+    full.update(S_POSITION | S_FINGERTIP_TORQUE)
+    assert full.fingertip_torque().tolist() == [2064, 2064, 2064]  # unloaded: "around 2000"
+    with pytest.raises(InputError, match="no reading yet"):
+        full.tactile()
+    full.update(S_TACT_FULL)
+    assert full.tactile().shape == (4, 24) and not full.tactile().any()
+    for bad in (8, -1, True, 1.0, "S_ALL"):
+        with pytest.raises(InputError, match="`sensors` must be an OR of S_POSITION 1"):
+            full.update(bad)
+
+
+def test_initialize_homes_the_fingers_then_the_spread_and_zeroes_the_encoders() -> None:
+    """A hand powered on half closed counts 0 where it stands; initialize() opens the fingers to their stops, then
+    the spread, and zeroes there: afterwards the counts are the gear train's from the open stops (to the joint
+    stops' give), and a trapezoidal move lands where libbarrett's units say."""
+    hand = bh.BarrettHand()
+    q0 = hand.configuration(F1_spread=0.6, F2_spread=0.6, F1_proximal=0.8, F1_distal=0.8 / 3,
+                            F2_proximal=1.2, F2_distal=0.4, F3_proximal=0.5, F3_distal=0.5 / 3)  # fmt: skip
+    simulator = _sim(hand)
+    driver = BarrettDriver(hand, homed=False)
+    driver.reset(simulator.initial_state(q0))
+    driver.update()
+    assert not driver.primary_encoder_positions().any() and not driver.secondary_encoder_positions().any()
+    driver.script([(0.0, "initialize"), ("done", "trapezoidal_move", [1.0, 1.0, 1.0, 0.5])])
+    trajectory = simulator.run(driver, 3.0, state=simulator.initial_state(q0), progress=False)
+    modes = trajectory.log["puck_modes"]
+    fingers_done = int(np.argmax((modes[:, :3] == 0).all(axis=1)))  # HOLD 0: IDLE once homed
+    spread_moves = int(np.argmax(np.abs(trajectory.q[:, 0] - 0.6) > 1e-3))
+    assert 0 < fingers_done <= spread_moves  # the spread waits for the fingers (Hand::initialize)
+    assert np.abs(trajectory.q[fingers_done, [F1P, F2P, F3P]]).max() < 5e-3  # the fingers at their open stops
+    assert driver.done_moving()
+    driver.update()
+    q = trajectory.q[-1]
+    truth = np.array([q[F1P], q[F2P], q[F3P], q[0]])
+    give = 5e-3  # [rad] how far the joint stops let the links past 0 when each puck zeroed
+    np.testing.assert_allclose(driver.inner_link_positions(), truth, atol=give)
+    np.testing.assert_allclose(truth, [1.0, 1.0, 1.0, 0.5], atol=give)  # the move's targets, in absolute angles
 
 
 def test_motor_torque_never_exceeds_mt() -> None:

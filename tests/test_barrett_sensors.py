@@ -1,6 +1,8 @@
-"""The BH8-280's sensors (issue 16, item 2) against independent truths: the gear train's closed forms and libbarrett's
-published numbers (encoders), the Jacobian reaction torques of bhgrasp.grasp.sensing and r x F (fingertip torque), force
-conservation, symmetry and the hand's collision geometry (tactile pads), and a simulated grasp of a box."""
+"""The BH8-280's sensors (issue 16, item 2; issue 29, item 2) against independent truths: the gear train's closed forms
+and libbarrett's published numbers (encoders), the Jacobian reaction torques of bhgrasp.grasp.sensing and r x F
+(fingertip torque), Barrett's published strain-gauge points and libbarrett's tactile scale (counts, ranges,
+saturation), force conservation, symmetry and the hand's collision geometry (tactile pads), Newton's third law
+(a contact read the same from either side of its pair), a simulated grasp of a box and a finger stalled on a block."""
 
 from __future__ import annotations
 
@@ -10,13 +12,32 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.barrett import BarrettSensors, encoder_counts, finger_pad, link_positions, motor_angles, palm_pad
+from bhgrasp.barrett import (
+    BarrettDriver,
+    BarrettSensors,
+    digitise_pressures,
+    encoder_counts,
+    finger_pad,
+    link_positions,
+    motor_angles,
+    palm_pad,
+    strain_counts,
+    strain_torques,
+)
+from bhgrasp.barrett.transmission import DISTAL_ALONE_RATIO, MAX_MOTOR_TORQUE, WORM_EFFICIENCY
+from bhgrasp.bench.protocol import DT
+from bhgrasp.bench.trial import contact_law
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.sensing import ContactSensing
+from bhgrasp.model.objects import FixedBox
 from bhgrasp.scenarios.box_grasp import box_grasp
+from bhgrasp.sim import Simulator
+from bhgrasp.sim.actuation import BarrettActuation
+from bhgrasp.sim.scene import Scene
 
 COUNT = 2 * np.pi / 4096  # [rad] one motor count (libbarrett MotorPuck: rpc = 2 pi / CTS, CTS = 4096)
+SG_PER_NM = (3460 - 667) / 2.28  # Barrett's self-preservation points: SG 667 and 3460 at +/-1.14 N m
 FINGERS = ("F1", "F2", "F3")
 TILTED = pin.SE3(pin.exp3(np.array([0.3, -0.2, 0.5])), np.array([0.1, -0.05, 0.2]))
 
@@ -114,13 +135,81 @@ def test_fingertip_torque_is_the_distal_joints_contact_torque(hand, sensors) -> 
         for _ in range(3):
             rows.append((link, rng.uniform(-0.02, 0.05, 3), np.array([0.0, 1.0, 0.0]), rng.normal(size=3)))
     state = contacts(hand, q, rows)
-    reading = sensors.read(state)
+    loads = sensors.loads(state)
     reaction = ContactSensing(hand).reaction_torques(state)  # sum of J_p^T F_on_hand (Pinocchio Jacobians)
     distal = [hand.joint_index(f"{f}_distal") for f in FINGERS]
-    np.testing.assert_allclose(reading.fingertip_torque, reaction[distal], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(loads.fingertip_torque, reaction[distal], rtol=1e-12, atol=1e-15)
     # closed form: 4 N on the tip frame (50 mm out), pressing along the pad normal, opens the fingertip: -0.05 * 4
     push = contacts(hand, q, [("F2_distal_link", [0.05, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 4.0, 0.0])])
-    np.testing.assert_allclose(sensors.read(push).fingertip_torque, [0.0, -0.2, 0.0], atol=1e-14)
+    np.testing.assert_allclose(sensors.loads(push).fingertip_torque, [0.0, -0.2, 0.0], atol=1e-14)
+    # as the hardware reports it: SG counts rising as the tip is pushed open, 1225 per N m about "around 2000"
+    reading = sensors.read(push)
+    assert reading.fingertip_torque.dtype.kind == "i"
+    zero = (667 + 3460) / 2  # midway between Barrett's two points
+    np.testing.assert_array_equal(reading.fingertip_torque, np.rint([zero, zero + 0.2 * SG_PER_NM, zero]))
+    np.testing.assert_allclose(reading.fingertip_torque_nm, [0.0, -0.2, 0.0], atol=0.5 / SG_PER_NM)
+
+
+def test_strain_gauge_counts_follow_barretts_published_points() -> None:
+    """SG is "a number between 0 and 4095", "around 2000" unloaded, 3460 and 667 at the +/-1.14 N m of the
+    self-preservation (wiki Hand/280/KinematicsJointRangesConversionFactors); it rises as the tip is pushed open."""
+    np.testing.assert_array_equal(strain_counts([-1.14, 1.14]), [3460, 667])
+    assert abs(int(strain_counts(0.0)) - 2000) < 100
+    torques = np.linspace(-1.6, 1.6, 3201)
+    counts = strain_counts(torques)
+    assert (np.diff(counts) <= 0).all() and counts.min() > 0 and counts.max() < 4095  # +/-1 N m and more: in range
+    assert np.abs(strain_torques(counts) - torques).max() <= 0.5 / SG_PER_NM * (1 + 1e-9)  # half a count
+    np.testing.assert_array_equal(strain_counts([-3.0, 3.0, -1e6]), [4095, 0, 4095])  # saturated, never beyond
+
+
+def test_tactile_cells_report_twelve_bit_counts_over_256() -> None:
+    """libbarrett's FullTactParser: a 12-bit count / 256 [N/cm^2]: steps of 1/256, full scale 4095/256."""
+    pressures = np.array([0.0, 1.0 / 512 - 1e-9, 1.0 / 512 + 1e-9, 3.3, 15.99, 16.0, 400.0, -2.0])
+    np.testing.assert_array_equal(
+        digitise_pressures(pressures) * 256, [0, 0, 1, round(3.3 * 256), round(15.99 * 256), 4095, 4095, 0]
+    )
+
+
+def test_the_environment_pressing_a_link_reads_as_an_object_would(hand, sensors) -> None:
+    """A table, stand or wall is body a of its pair (force on the hand link b): Newton's third law says the reading
+    equals that of the same contact written the other way round (the link first, the force on the other body)."""
+    rng = np.random.default_rng(11)
+    q = hand.random_configuration(rng)
+    rows = [
+        (
+            link,
+            rng.uniform(0.0, 0.05, 3) * [1, 0.2, 0.2],
+            np.array([0.0, 1.0, 0.0]),
+            rng.normal(size=3) + np.array([0, 3, 0]),
+        )
+        for link in ("F1_distal_link", "F3_distal_link", "palm_surface")
+        for _ in range(2)
+    ]
+    as_object = contacts(hand, q, rows)
+    as_environment = State(
+        0.0,
+        q,
+        np.zeros(hand.nv),
+        contact_points=as_object.contact_points,
+        contact_normals=-as_object.contact_normals,
+        contact_forces=-as_object.contact_forces,
+        contact_bodies=tuple(("table", link) for link, _ in as_object.contact_bodies),
+    )
+    first, second = sensors.loads(as_object), sensors.loads(as_environment)
+    np.testing.assert_allclose(second.fingertip_torque, first.fingertip_torque, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(second.tactile, first.tactile, rtol=1e-12, atol=1e-15)
+    assert np.abs(first.fingertip_torque[[0, 2]]).min() > 1e-3 and first.tactile.sum() > 0
+    # two objects touching each other touch no sensor
+    apart = State(
+        0.0,
+        q,
+        np.zeros(hand.nv),
+        contact_points=as_object.contact_points[:1],
+        contact_normals=as_object.contact_normals[:1],
+        contact_forces=as_object.contact_forces[:1],
+        contact_bodies=(("cup", "box"),),
+    )
+    assert not sensors.loads(apart).fingertip_torque.any() and not sensors.loads(apart).tactile.any()
 
 
 # ------------------------------------------------------------------ tactile pads
@@ -149,7 +238,7 @@ def test_cells_conserve_the_pads_normal_force(hand, sensors, pad) -> None:
             force = rng.uniform(0.5, 3.0) * normal + rng.normal(scale=0.3, size=3)
             rows.append((link, point, normal, force))
             pressing += max(normal @ force, 0.0)
-    reading = sensors.read(contacts(hand, q, rows))
+    reading = sensors.loads(contacts(hand, q, rows))
     index = ("F1", "F2", "F3", "palm").index(pad.name)
     assert cell_forces(reading, pad).sum() == pytest.approx(pressing, rel=1e-12)
     assert (np.delete(reading.tactile, index, axis=0) == 0).all()
@@ -167,23 +256,23 @@ def test_contacts_off_the_pads_read_nothing(hand, sensors) -> None:
         (*pad_point("palm", 0.033, 0.017, 0.0), [0, 0, 1], [0, 0, 5]),  # a palm corner without cells
         ("palm", [0.0, 0.05, 0.09], [0, 0, 1], [0, 0, 5]),  # F3's knuckle housing
     ]
-    reading = sensors.read(contacts(hand, q, rows))
+    reading = sensors.loads(contacts(hand, q, rows))
     assert (reading.tactile == 0).all()
     on = [("F1_distal_link", [0.03, 0.01, 0.0], *press), (*pad_point("palm", 0.02, 0.005, 0.0), [0, 0, 1], [0, 0, 5])]
-    assert (sensors.read(contacts(hand, q, on)).tactile.sum(axis=1) > 0).tolist() == [True, False, False, True]
+    assert (sensors.loads(contacts(hand, q, on)).tactile.sum(axis=1) > 0).tolist() == [True, False, False, True]
 
 
 def test_a_contact_between_two_equal_cells_splits_equally(hand, sensors) -> None:
     q = hand.neutral()
     palm = palm_pad()
     # palm row 0 cells 1 and 2 span u = [-16, -6] and [-5, 5] mm: midway at u = -5.5 mm, row centre w = 16.5 mm
-    reading = sensors.read(contacts(hand, q, [(*pad_point("palm", -0.0055, 0.0165, 0.0005), [0, 0, 1], [0, 0, 6])]))
+    reading = sensors.loads(contacts(hand, q, [(*pad_point("palm", -0.0055, 0.0165, 0.0005), [0, 0, 1], [0, 0, 6])]))
     forces = cell_forces(reading, palm)
     np.testing.assert_allclose(forces[[1, 2]], [3.0, 3.0], rtol=1e-12)
     assert forces.sum() == pytest.approx(6.0, rel=1e-12)
     # fingertip rows 0 and 1 span x = [19.5, 25] and [25.5, 31] mm: midway at x = 25.25 mm, on the middle column
     finger = finger_pad("F3")
-    reading = sensors.read(contacts(hand, q, [(*pad_point("F3", 0.02525, 0.0, 0.0105), [0, 1, 0], [0, 4, 0])]))
+    reading = sensors.loads(contacts(hand, q, [(*pad_point("F3", 0.02525, 0.0, 0.0105), [0, 1, 0], [0, 4, 0])]))
     forces = cell_forces(reading, finger)
     np.testing.assert_allclose(forces[0:3], forces[3:6], rtol=1e-12)
     np.testing.assert_allclose(forces[[0, 3]], forces[[2, 5]], rtol=1e-2)  # side columns 4.65 vs 4.7 mm wide
@@ -198,7 +287,7 @@ def test_the_centroid_of_the_cell_forces_is_at_the_contact(hand, sensors, pad) -
     box = (np.array([22e-3, -4e-3]), np.array([46e-3, 4e-3])) if pad.name != "palm" else (-0.02, 0.02)
     index = ("F1", "F2", "F3", "palm").index(pad.name)
     for uw in rng.uniform(*box, size=(20, 2)):
-        reading = sensors.read(contacts(hand, q, [(*pad_point(pad.name, *uw, 0.0005), pad_normal(pad.name),
+        reading = sensors.loads(contacts(hand, q, [(*pad_point(pad.name, *uw, 0.0005), pad_normal(pad.name),
                                                    2.0 * pad_normal(pad.name))]))  # fmt: skip
         forces = cell_forces(reading, pad)
         centroid = forces @ pad.centres / forces.sum()
@@ -245,12 +334,17 @@ def test_a_simulated_grasp_of_a_box_lights_the_fingertip_pads() -> None:
     simulator, state = setup.simulator, setup.state
     sensors = BarrettSensors(setup.hand)
     for _ in range(500):
-        state, _ = simulator.step(state, np.array([0.0, 0.05, 0.05, 0.05]))
-    reading = sensors.read(state)
+        state, _ = simulator.step(state, np.array([0.0, 0.05, 0.05, 0.05]))  # beyond MT: a test of the pads
+    reading, loads = sensors.read(state), sensors.loads(state)
     reaction = ContactSensing(setup.hand).reaction_torques(state)
     distal = [setup.hand.joint_index(f"{f}_distal") for f in FINGERS]
-    np.testing.assert_allclose(reading.fingertip_torque, reaction[distal], rtol=1e-10, atol=1e-12)
-    assert (reading.fingertip_torque < 0).all()  # the box pushes every fingertip open
+    np.testing.assert_allclose(loads.fingertip_torque, reaction[distal], rtol=1e-10, atol=1e-12)
+    assert (loads.fingertip_torque < 0).all()  # the box pushes every fingertip open
+    np.testing.assert_array_equal(reading.fingertip_torque, strain_counts(loads.fingertip_torque))
+    beyond = loads.fingertip_torque < -(4095 - (667 + 3460) / 2) / SG_PER_NM  # past the SG's top count
+    np.testing.assert_array_equal(reading.strain_saturated, beyond)
+    np.testing.assert_array_equal(reading.tactile_saturated, loads.tactile >= 4095 / 256)  # flagged where beyond
+    np.testing.assert_array_equal(reading.tactile, digitise_pressures(loads.tactile))
     normals = np.einsum("ij,ij->i", state.contact_normals, state.contact_forces)
     for f, finger in enumerate(FINGERS):
         link = f"{finger}_distal_link"
@@ -259,7 +353,7 @@ def test_a_simulated_grasp_of_a_box_lights_the_fingertip_pads() -> None:
         x, y, z = placement.rotation.T @ (state.contact_points[rows] - placement.translation).T  # link frame
         strip = (x >= 0.01925) & (x <= 0.05775) & (np.abs(z) <= 0.0078) & (y >= 0)  # GraspIt's cells, 0.25 mm margin
         assert strip.any()  # (the box's face may also touch the link's edges, beside the pad)
-        total = cell_forces(reading, finger_pad(finger)).sum()
+        total = cell_forces(loads, finger_pad(finger)).sum()
         assert total == pytest.approx(np.maximum(normals[rows][strip], 0).sum(), rel=1e-12) and total > 0.1
         assert (reading.tactile[f] > 0).sum() >= 2
     assert (reading.tactile[3] == 0).all()  # nothing touches the palm
@@ -267,6 +361,30 @@ def test_a_simulated_grasp_of_a_box_lights_the_fingertip_pads() -> None:
     q = np.asarray(state.q)
     assert np.abs(inner[:3] - q[[setup.hand.joint_index(f"{f}_proximal") for f in FINGERS]]).max() < COUNT / 50
     assert np.abs(outer[:3] - q[distal]).max() < COUNT / 50 + COUNT / 93.75
+
+
+def test_a_finger_stalled_on_a_block_reads_its_push_within_the_sensors_ranges() -> None:
+    """F3 closed by close() onto a fixed block (environment, body a of its pair): at rest the worm's 1 N m holds the
+    contact, so the SG reads about 1225 counts over its zero, inside 0..4095, through the driver's update()."""
+    hand = bh.BarrettHand()
+    block = FixedBox(size=(0.06, 0.03, 0.02), pose=pin.SE3(np.eye(3), np.array([0.0, 0.035, 0.185])), name="block")
+    actuation = BarrettActuation(hand, saturate=True)
+    simulator = Simulator(Scene(hand, [], environment=[block]), dt=DT, contact=contact_law(), actuation=actuation)
+    driver = BarrettDriver(hand)
+    driver.script([(0.0, "close", "F3")])
+    trajectory = simulator.run(driver, 0.8, progress=False)
+    assert {tuple(b) for b in trajectory.contacts_at(len(trajectory) - 1)["bodies"]} == {("block", "F3_distal_link")}
+    driver.update()
+    counts = driver.fingertip_torque()
+    # Newton at rest about the distal axis: the contact's moment is the worm's torque less the tip's weight
+    q = trajectory.q[-1]
+    worm = WORM_EFFICIENCY * DISTAL_ALONE_RATIO * MAX_MOTOR_TORQUE  # 1 N m
+    moment = hand.gravity_torques(q)[7] - worm  # [N m] on the fingertip, opening
+    assert abs(strain_torques(counts[2]) - moment) < 2e-3 and 3000 < counts[2] < 4095  # HSG 3000 is "~1 kg"
+    assert counts[0] == counts[1] == strain_counts(0.0)  # the idle fingers feel nothing
+    pads = driver.tactile()
+    assert pads[2].sum() > 0 and not pads[[0, 1, 3]].any()  # the block presses F3's pad alone
+    assert pads.max() <= 4095 / 256  # a 22 N tip load on a few cells saturates them: reported at full scale
 
 
 # ------------------------------------------------------------------ the reading and its errors

@@ -5,8 +5,9 @@ the worm drives); the simulator (:class:`~bhgrasp.sim.actuation.BarrettActuation
 (:class:`~bhgrasp.controllers.supervisor.MotorCommands`) both use it.  :mod:`bhgrasp.barrett.sensors` reads a
 :class:`~bhgrasp.data.state.State` as libbarrett reports the hand's encoders, fingertip torque sensors and tactile
 pads (:mod:`bhgrasp.barrett.tactile`).  :mod:`bhgrasp.barrett.pucks` models the motor pucks' firmware (modes, PID,
-trapezoidal and velocity moves) and :mod:`bhgrasp.barrett.commands` the libbarrett ``Hand`` calls on them
-(:class:`BarrettDriver`, a controller that outputs motor torques).
+trapezoidal and velocity moves, HI) and :mod:`bhgrasp.barrett.commands` the libbarrett ``Hand`` calls on them
+(:class:`BarrettDriver`, a controller that outputs motor torques), whose ``update()`` reads the sensors into
+:mod:`bhgrasp.barrett.readout`.
 """
 
 from typing import Any
@@ -22,14 +23,18 @@ from bhgrasp.barrett.pucks import (
     Puck,
     PuckProperties,
 )
+from bhgrasp.barrett.readout import S_ALL, S_FINGERTIP_TORQUE, S_POSITION, S_TACT_FULL
 from bhgrasp.barrett.sensors import (
     BarrettReading,
     BarrettSensors,
+    SensorLoads,
     encoder_counts,
     link_positions,
     motor_angles,
+    strain_counts,
+    strain_torques,
 )
-from bhgrasp.barrett.tactile import TactilePad, finger_pad, pad_pressures, palm_pad
+from bhgrasp.barrett.tactile import TactilePad, digitise_pressures, finger_pad, pad_pressures, palm_pad
 from bhgrasp.barrett.transmission import BarrettTransmission
 
 
@@ -48,6 +53,10 @@ __all__ = [
     "IDLE",
     "PID",
     "SPREAD_PUCK",
+    "S_ALL",
+    "S_FINGERTIP_TORQUE",
+    "S_POSITION",
+    "S_TACT_FULL",
     "TORQUE",
     "TRAPEZOIDAL",
     "VELOCITY",
@@ -57,11 +66,15 @@ __all__ = [
     "BarrettTransmission",
     "Puck",
     "PuckProperties",
+    "SensorLoads",
     "TactilePad",
+    "digitise_pressures",
     "encoder_counts",
     "finger_pad",
     "link_positions",
     "motor_angles",
     "pad_pressures",
     "palm_pad",
+    "strain_counts",
+    "strain_torques",
 ]

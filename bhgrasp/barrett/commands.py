@@ -24,10 +24,18 @@ libbarrett ``Hand`` (hand.h/.cpp)    puck properties it sets                    
 ``setTorqueMode()`` cpp:180          MODE = TORQUE (2)                          ``set_torque_mode(digits)``
 ``setTorqueCommand(jt)`` cpp:184     T = j2pt jt, j2pt = IPNM / ratio (cpp:96)  ``set_torque(torques)``
 ``idle()`` h:73                      MODE = IDLE (0), whole hand                ``idle()``
+``initialize()``                     CMD = CMD_HI (13): fingers, then spread    ``initialize()``
 ``doneMoving(digits)`` cpp:119       reads MODE: IDLE, or PID with HOLD         ``done_moving(digits)``
-``getInnerLinkPosition()`` cpp:232   P / j2pp (no breakaway encoder)            ``inner_link_positions()``
-``getOuterLinkPosition()`` cpp:233   inner 125 / 375                            ``outer_link_positions()``
-``getPrimaryEncoderPosition()``      P [counts]                                 ``encoder_positions()``
+``update(sensors)``                  reads P (both encoders), SG, TACT          ``update(sensors)``
+``getPrimaryEncoderPosition()``      P [counts]                                 ``primary_encoder_positions()``
+``getSecondaryEncoderPosition()``    inner-link encoder [counts]                ``secondary_encoder_positions()``
+``getInnerLinkPosition()``           secondary / 50 (or P / 125)                ``inner_link_positions()``
+``getOuterLinkPosition()``           P (1/125 + 1/375) - inner (or inner / 3)   ``outer_link_positions()``
+``enableBreakawayEncoders(b)``       which formula the two above use            ``enable_breakaway_encoders(b)``
+``getFingertipTorque()``             SG [counts, 0..4095]                       ``fingertip_torque()``
+``getTactilePucks()``, getFullData   TACT cells [N/cm^2]                        ``tactile()``
+``hasFingertipTorqueSensors()``      a puck with option RO_Strain               ``has_fingertip_torque_sensors()``
+``hasTactSensors()``                 a puck with option RO_Tact                 ``has_tact_sensors()``
 blocking call (``blockIf``) cpp:273  waits for ``doneMoving``                   script step ``("done", ...)``
 ===================================  =========================================  =================================
 
@@ -36,6 +44,13 @@ j2pp = 4096 / 2 pi x (125 finger, 17.5 spread) counts/rad (``hand.cpp:95-100``).
 TSTOP before them the same way.  A blocking libbarrett call is a :meth:`BarrettDriver.script` step ``"done"``.
 An IDLE puck (HOLD = 0 after a move) gives no torque: the worm drives hold the finger (the simulator's
 ``BarrettActuation(self_locking=True)``, its default); with ``self_locking=False`` an idle finger sags.
+
+Readings (libbarrett ``Hand::update``): the getters return what the last :meth:`BarrettDriver.update` read from the
+state the driver last sensed (its last control call), as libbarrett's return what its last ``update()`` received,
+through :class:`~bhgrasp.barrett.sensors.BarrettSensors` (counts, SG counts, quantised pads).  Encoders count from
+where the pucks were zeroed: a hand built ``homed=True`` (default) starts as if ``initialize()`` had run (count 0 at
+the open stops); ``homed=False`` is a hand just powered on, its counts 0 wherever it stands until ``initialize()``
+(each finger opens until it stalls on its stop, TSTOP, and zeroes there, then the spread does).
 """
 
 from __future__ import annotations
@@ -47,6 +62,7 @@ import numpy as np
 
 from bhgrasp._validation import as_vector, require_name
 from bhgrasp.barrett import pucks as fw
+from bhgrasp.barrett.readout import S_ALL, S_FINGERTIP_TORQUE, S_TACT_FULL, HandReadout
 from bhgrasp.barrett.sensors import motor_angles
 from bhgrasp.barrett.transmission import PROXIMAL_RATIO, SPREAD_RATIO, BarrettTransmission
 from bhgrasp.controllers.base import Controller
@@ -73,6 +89,9 @@ class BarrettDriver(Controller):
         spread: fw.PuckProperties = fw.SPREAD_PUCK,
         finger_gains: tuple[float, float, float] | None = None,
         spread_gains: tuple[float, float, float] | None = None,
+        fingertip_torque_sensors: bool = True,
+        tactile_sensors: bool = True,
+        homed: bool = True,
     ) -> None:
         """Four pucks for ``hand``'s motors.
 
@@ -81,9 +100,12 @@ class BarrettDriver(Controller):
             finger, spread: Firmware properties of the finger pucks and the spread puck.
             finger_gains, spread_gains: (kp [N m/rad], kd [N m s/rad], ki [N m/(rad s)]) at the motor, instead of
                 KP, KD, KI through :data:`~bhgrasp.barrett.pucks.PID_SCALE`.
+            fingertip_torque_sensors, tactile_sensors: Whether the hand has the options (libbarrett's ``has*``).
+            homed: Whether the encoders count from the open stops at power-on (module docstring).
         """
         super().__init__()
         self.drive = BarrettTransmission(hand)
+        self.readout = HandReadout(hand, fingertip_torque_sensors, tactile_sensors, homed)
         d = self.drive
         upper = hand.upper
         travel = fw.COUNTS_PER_RAD * motor_angles(upper[d.proximal], upper[d.distal], upper[d.spread[0]])
@@ -96,15 +118,20 @@ class BarrettDriver(Controller):
         self.reset_state()
 
     def reset_state(self) -> None:
-        """Clear the sensed encoders and the tick clock (the pucks keep their modes)."""
+        """Clear the sensed encoders and the tick clock (the pucks keep their modes; :meth:`reset` powers on)."""
         self._counts, self._speeds = np.zeros(4), np.zeros(4)
         self._last_tick: float | None = None
         self._u = np.zeros(self.drive.n_inputs)
         self._next, self._waiting = 0, DIGITS
+        self._home_spread = False
 
     def reset(self, state: State) -> None:
-        """Power-on at ``state``: every puck IDLE at its encoder, the script rewound (pending commands kept)."""
+        """Power-on at ``state``: every puck IDLE at its encoder, the script rewound (pending commands kept).
+
+        Un-homed (``homed=False``), each encoder counts 0 where it stands.
+        """
         self.reset_state()
+        self.readout.power_on(state)
         self._read(state)
         for puck, counts in zip(self.pucks, self._counts):
             puck.reset(counts)
@@ -146,10 +173,19 @@ class BarrettDriver(Controller):
         """Every puck IDLE (``Hand::idle``)."""
         self._command("idle", (), {"digits": "WHOLE_HAND"})
 
+    def initialize(self) -> None:
+        """Home the hand (``Hand::initialize``, CMD_HI): fingers, then the spread, open to their stops and zero there.
+
+        Done (``done_moving()``) once the spread has.
+        """
+        self._command("initialize", (), {"digits": "WHOLE_HAND"})
+
     def done_moving(self, digits: str | Sequence[str] = "WHOLE_HAND") -> bool:
         """Whether each puck of ``digits`` is IDLE or holding in PID with HOLD = 1 (``Hand::doneMoving``)."""
         chosen = self._digits(digits)
         if any(set(chosen) & set(self._digits(kw["digits"])) for _, _, kw in self._pending):
+            return False
+        if self._home_spread and DIGITS.index("SPREAD") in chosen:
             return False
         return all(self.pucks[i].done() for i in chosen)
 
@@ -157,19 +193,52 @@ class BarrettDriver(Controller):
         """MODE of each puck by name."""
         return {name: fw.MODES[puck.mode] for name, puck in zip(DIGITS, self.pucks)}
 
-    def encoder_positions(self) -> np.ndarray:
-        """Motor encoders [counts] (F1, F2, F3, SPREAD), as last sensed."""
-        return self._counts.copy()
+    # --- libbarrett's sensor calls (bhgrasp.barrett.readout) ---
+    def has_fingertip_torque_sensors(self) -> bool:
+        """Whether the hand has the fingertip torque (strain gauge) option (``Hand::hasFingertipTorqueSensors``)."""
+        return self.readout.options[S_FINGERTIP_TORQUE]
+
+    def has_tact_sensors(self) -> bool:
+        """Whether the hand has the tactile pads (``Hand::hasTactSensors``)."""
+        return self.readout.options[S_TACT_FULL]
+
+    def enable_breakaway_encoders(self, enable: bool) -> None:
+        """Link positions from the secondary encoders (default) or from P alone, valid before breakaway only."""
+        self.readout.breakaway_encoders = bool(enable)
+
+    def update(self, sensors: int = S_ALL) -> None:
+        """Read ``sensors`` at the last sensed state (``Hand::update``), skipping absent options.
+
+        ``sensors``: an OR of ``S_POSITION``, ``S_FINGERTIP_TORQUE``, ``S_TACT_FULL`` (:mod:`bhgrasp.barrett.readout`).
+        """
+        self.readout.update(sensors)
+
+    def primary_encoder_positions(self) -> np.ndarray:
+        """Motor encoders P [counts] (F1, F2, F3, SPREAD) at the last update."""
+        return self.readout.primary()
+
+    def secondary_encoder_positions(self) -> np.ndarray:
+        """Inner-link (breakaway) encoders [counts] (F1, F2, F3) at the last update."""
+        return self.readout.secondary()
 
     def inner_link_positions(self) -> np.ndarray:
-        """Inner-link (proximal) angles [rad] and the spread angle from the encoders (valid before breakaway)."""
-        return self._counts / (fw.COUNTS_PER_RAD * JOINT_RATIO)
+        """Inner-link (proximal) angles [rad] and the spread angle (F1, F2, F3, SPREAD) at the last update."""
+        return self.readout.link_positions()[0]
 
     def outer_link_positions(self) -> np.ndarray:
-        """Outer-link (distal) angles [rad]: inner 125 / 375 (the spread: its angle), valid before breakaway."""
-        outer = self.inner_link_positions()
-        outer[:3] /= 3.0
-        return outer
+        """Outer-link (distal, relative to the inner link) angles [rad] and the spread angle at the last update."""
+        return self.readout.link_positions()[1]
+
+    def fingertip_torque(self) -> np.ndarray:
+        """SG counts (0..4095) of F1, F2, F3 at the last update.
+
+        :func:`~bhgrasp.barrett.sensors.strain_torques` converts them to N m.
+        """
+        return self.readout.reading(S_FINGERTIP_TORQUE).fingertip_torque.copy()
+
+    def tactile(self) -> np.ndarray:
+        """(4, 24) pad cell pressures of F1, F2, F3 and the palm [N/cm^2] at the last update."""
+        return self.readout.reading(S_TACT_FULL).tactile.copy()
 
     def script(self, steps: Sequence[tuple]) -> None:
         """Commands to run during the next simulations: ``(when, command, *args)`` in order.
@@ -195,20 +264,34 @@ class BarrettDriver(Controller):
         for name, args, kwargs in self._pending:
             self._apply(name, args, kwargs["digits"])
         self._pending = []
+        spread = DIGITS.index("SPREAD")
+        if self._home_spread and all(self.pucks[i].done() for i in range(spread)):
+            self.pucks[spread].home(self._counts[spread])  # libbarrett: the spread homes once the fingers are done
+            self._home_spread = False
         ticks = 1.0 if self._last_tick is None else np.floor((t - self._last_tick) / fw.PERIOD + 1e-9)
         if ticks >= 1.0:
             self._last_tick = t if self._last_tick is None else self._last_tick + ticks * fw.PERIOD
             torques = [p.update(c, s, ticks) for p, c, s in zip(self.pucks, self._counts, self._speeds)]
             self._u[INPUT] = torques
+            self._rezero()
         self.log["puck_modes"] = np.array([float(p.mode) for p in self.pucks])
         self.log["motor_torques"] = self._u[INPUT].copy()
         return self._u.copy()
 
     def _read(self, state: State) -> None:
-        q, v = np.asarray(state.q, dtype=float), np.asarray(state.v, dtype=float)
+        v = np.asarray(state.v, dtype=float)
         d = self.drive
-        self._counts = fw.COUNTS_PER_RAD * motor_angles(q[d.proximal], q[d.distal], q[d.spread[0]])
+        self.readout.sensed = state
+        self._counts = self.readout.motor_counts(state.q)
         self._speeds = fw.COUNTS_PER_RAD * motor_angles(v[d.proximal], v[d.distal], v[d.spread[0]]) * 1e-3  # /ms
+
+    def _rezero(self) -> None:
+        """A puck that ended its HI counts 0 there from now on."""
+        for i, puck in enumerate(self.pucks):
+            if puck.homed_at is not None:
+                self.readout.rezero(i, puck.homed_at)
+                self._counts[i] -= puck.homed_at
+                puck.homed_at = None
 
     def _run_script(self, t: float) -> None:
         while self._next < len(self._script):
@@ -241,6 +324,11 @@ class BarrettDriver(Controller):
                 puck.set_mode(fw.TORQUE, counts)
             elif name == "set_torque":
                 puck.set_torque(args[0][i] * props.IPNM / JOINT_RATIO[i])
+            elif name == "initialize":
+                if i == DIGITS.index("SPREAD"):
+                    self._home_spread = True  # after the fingers (Hand::initialize waits between)
+                else:
+                    puck.home(counts)
             else:  # idle
                 puck.set_mode(fw.IDLE, counts)
 
@@ -259,6 +347,7 @@ class BarrettDriver(Controller):
             "set_torque_mode",
             "set_torque",
             "idle",
+            "initialize",
         )
         return getattr(self, require_name(name, valid, "command"))
 

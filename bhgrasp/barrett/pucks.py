@@ -137,13 +137,15 @@ class Puck:
         self._profile: tuple[float, float, float, float] | None = None
         self._stop_at: float | None = None
         self._start = float(position)
+        self._homing = False
+        self.homed_at: float | None = None  # where the last HI found the open stop [counts], until the driver reads it
 
     # --- commands (setting MODE and its set point) ---
     def set_mode(self, mode: int, position: float) -> None:
         """Set MODE; entering PID holds ``position`` [counts] (the motor's present one)."""
         if mode not in MODES:
             raise InputError(f"puck MODE must be one of {MODES}, got {mode!r}")
-        self.mode, self.integral, self.stalled_ms = mode, 0.0, 0.0
+        self.mode, self.integral, self.stalled_ms, self._homing = mode, 0.0, 0.0, False
         if mode == PID:
             self.reference, self.ref_velocity = self._clamp(position), 0.0
 
@@ -161,6 +163,14 @@ class Puck:
         self.velocity = float(np.clip(counts_per_ms, -limit, limit))
         self.reference, self.ref_velocity, self._stop_at = self._clamp(position), self.velocity, stop_at
         self.set_mode(VELOCITY, position)
+
+    def home(self, position: float) -> None:
+        """HI (``CMD_HI``): open at MOV (limited to MV), past any travel limit, until stalled on the open stop (TSTOP).
+
+        That position then becomes count 0 (:attr:`homed_at` keeps it for the encoder's reader).
+        """
+        self.velocity_move(-self.properties.MOV, position)
+        self._homing = True
 
     def trapezoidal_move(self, endpoint: float, position: float) -> None:
         """E [counts]: a trapezoidal profile from ``position`` at rest to E, ACCEL and MV limited."""
@@ -198,7 +208,9 @@ class Puck:
             lag = self.properties.MT / self.properties.IPNM / self.kp * COUNTS_PER_RAD  # saturating error [counts]
             ahead = float(np.clip(self.reference + self.velocity * ms, position - lag, position + lag))
             end = self.travel[1] if self.velocity > 0.0 else self.travel[0]  # the joint stop ahead
-            if self._stop_at is not None:
+            if self._homing:
+                end = -np.inf  # the puck does not know where its stop is yet
+            elif self._stop_at is not None:
                 end = self._clamp(self._stop_at)
             arrived = ahead >= end if self.velocity > 0.0 else ahead <= end
             self.reference, self.ref_velocity = (end, 0.0) if arrived else (ahead, self.velocity)
@@ -237,8 +249,14 @@ class Puck:
             self._finish(position)
 
     def _finish(self, position: float) -> None:
-        """End of a move at ``position`` [counts]: PID holding it (HOLD = 1) or IDLE (HOLD = 0)."""
+        """End of a move at ``position`` [counts]: PID holding it (HOLD = 1) or IDLE (HOLD = 0).
+
+        The end of a HI zeroes the encoder there: :attr:`homed_at` records it and the PID holds count 0.
+        """
         self._stop_at, self._profile = None, None
+        if self._homing:
+            self.homed_at, position = float(np.rint(position)), position - float(np.rint(position))
+            self._homing = False
         if self.properties.HOLD:
             self.set_mode(PID, position)
         else:

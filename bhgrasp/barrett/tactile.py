@@ -13,7 +13,9 @@ Layout (cell rectangles [mm]) from GraspIt!'s ``models/robots/BarrettBH8_280_Tac
   lies on -y: here x and y change sign), on the ``palm_surface`` frame's plane, normal +z.
 
 Readings are pressures [N/cm^2], libbarrett's ``TactilePuck::getFullData()`` unit (``tactile_test.cpp`` prints
-"N*cm^-2"; the puck sends 12 bits / 256: steps of 1/256 N/cm^2 up to 16 N/cm^2, not applied here).
+"N*cm^-2"): each cell arrives as a 12-bit count that ``TactilePuck::FullTactParser`` divides by
+``FULL_SCALE_FACTOR`` = 256 (``src/products/tactile_puck.cpp``), so a cell reads in steps of 1/256 N/cm^2 and
+saturates at 4095/256 = 16.0 N/cm^2 (:func:`digitise_pressures`).
 
 Assumptions (not from a source): the simulator gives point contacts; each point's normal force (n . F, clipped at 0:
 a pad does not feel tension) is spread uniformly over a square of half-width ``spread`` (default 3 mm, half a cell
@@ -33,6 +35,9 @@ import numpy as np
 from bhgrasp._validation import as_positive
 
 CM2_PER_M2 = 1e4
+TACTILE_SCALE = 256.0  # counts per N/cm^2 (libbarrett TactilePuck FULL_SCALE_FACTOR)
+TACTILE_MAX_COUNTS = 4095  # 12-bit cells
+TACTILE_FULL_SCALE = TACTILE_MAX_COUNTS / TACTILE_SCALE  # [N/cm^2] 16.0
 # [mm] along the distal link x
 _FINGER_ROWS = (
     (19.5, 25.0),
@@ -134,4 +139,23 @@ def pad_pressures(pad: TactilePad, points: np.ndarray, normal_forces: np.ndarray
     return forces / (pad.areas * CM2_PER_M2)
 
 
-__all__ = ["CM2_PER_M2", "TactilePad", "finger_pad", "pad_pressures", "palm_pad"]
+def digitise_pressures(pressures: np.ndarray) -> np.ndarray:
+    """Pressures [N/cm^2] as the pads report them: 12-bit counts / 256, so steps of 1/256 up to 16.0 N/cm^2.
+
+    A pad feels no tension: negative pressures read 0.
+    """
+    counts = np.clip(np.rint(np.asarray(pressures, dtype=float) * TACTILE_SCALE), 0, TACTILE_MAX_COUNTS)
+    return counts / TACTILE_SCALE
+
+
+__all__ = [
+    "CM2_PER_M2",
+    "TACTILE_FULL_SCALE",
+    "TACTILE_MAX_COUNTS",
+    "TACTILE_SCALE",
+    "TactilePad",
+    "digitise_pressures",
+    "finger_pad",
+    "pad_pressures",
+    "palm_pad",
+]
