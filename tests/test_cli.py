@@ -148,7 +148,7 @@ BAD_ARGUMENTS = {
     "experiments ch3 --output /nonexistent/dir/results": "argument --output: the folder '/nonexistent/dir' of",
     "grasp-bench --object cube:1:2": "argument --object: object kind must be one of ['box', 'cylinder', 'sphere'], "
     "got 'cube'",
-    "grasp-bench --object box:0.3x0.05x0.05:0.3": "argument --object: object dimensions must be at most 0.15 m",
+    "grasp-bench --object box:0.3x0.05x0.05:0.3": "argument --object: an object must be at most 0.15 m wide",
     "grasp-bench --grasp pinch": "argument --grasp: invalid choice: 'pinch'",
     "grasp-bench --spread 4": "argument --spread: must be an angle in [0, pi] rad (the spread's range), got '4'",
     "grasp-bench --compare /nonexistent/bench.json": "argument --compare: no such file: '/nonexistent/bench.json'",
