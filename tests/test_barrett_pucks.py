@@ -321,3 +321,23 @@ def test_bad_inputs_raise_input_errors_naming_the_value(allegro: bh.Hand) -> Non
         BarrettDriver(hand, finger_gains=(0.0, 0.0, 0.0))
     with pytest.raises(bh.InputError, match="lacks joints"):
         BarrettDriver(allegro)
+    with pytest.raises(bh.InputError, match=r"`finger` must be PuckProperties or three of them"):
+        BarrettDriver(hand, finger=(FINGER_PUCK, FINGER_PUCK))
+    with pytest.raises(bh.InputError, match="unknown puck property 'IPNM'"):
+        driver.set_property("IPNM", 1.0)
+    with pytest.raises(bh.InputError, match="MT must be a finite non-negative number .* got -5"):
+        driver.set_property("MT", -5.0, "F1")
+
+
+def test_each_puck_takes_its_own_properties_at_build_and_by_set_property() -> None:
+    """Per-finger MT (libbarrett sets properties puck by puck): a far PID set point saturates each finger's motor at
+    its own MT / IPNM, and set_property changes it at the next tick for the named digits only."""
+    hand = bh.BarrettHand()
+    state = State(t=0.0, q=hand.configuration(F1_proximal=0.5, F1_distal=0.5 / 3), v=np.zeros(8))
+    driver = BarrettDriver(hand, finger=(FINGER_PUCK.with_(MT=1100), FINGER_PUCK.with_(MT=550), FINGER_PUCK))
+    driver.reset(state)
+    driver.set_position_mode("GRASP")
+    driver.set_position([2.4, 2.4, 2.4, 0.0], "GRASP")  # far: every finger's PID saturates
+    np.testing.assert_allclose(driver(0.0, state)[1:4], [1100 / IPNM, 550 / IPNM, MT], rtol=1e-12)
+    driver.set_property("MT", 220, ["F2", "F3"])
+    np.testing.assert_allclose(driver(1e-3, state)[1:4], [1100 / IPNM, 220 / IPNM, 220 / IPNM], rtol=1e-12)

@@ -42,6 +42,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from bhgrasp.barrett.profiles import profile_at, trapezoid
 from bhgrasp.barrett.sensors import COUNTS_PER_REV
 from bhgrasp.barrett.transmission import MAX_MOTOR_TORQUE
 from bhgrasp.errors import InputError
@@ -266,32 +267,6 @@ class Puck:
         return float(np.clip(counts, *self.travel))
 
 
-def trapezoid(distance: float, v_max: float, accel: float) -> tuple[float, float, float, float]:
-    """A rest-to-rest profile over ``distance``: (signed distance, peak speed, ramp time, total time) [counts, ms]."""
-    length = abs(distance)
-    peak = min(v_max, np.sqrt(length * accel))
-    ramp = peak / accel
-    total = 2.0 * ramp + (length - peak * ramp) / peak if peak > 0 else 0.0
-    return float(distance), float(peak), float(ramp), float(total)
-
-
-def profile_at(profile: tuple[float, float, float, float], ms: float) -> tuple[float, float]:
-    """(offset [counts], velocity [counts/ms]) of a :func:`trapezoid` at ``ms`` after its start."""
-    distance, peak, ramp, total = profile
-    sign, t = np.sign(distance), min(ms, total)
-    if total == 0.0:
-        return distance, 0.0
-    accel = peak / ramp
-    if t < ramp:
-        offset, speed = 0.5 * accel * t**2, accel * t
-    elif t <= total - ramp:
-        offset, speed = 0.5 * peak * ramp + peak * (t - ramp), peak
-    else:
-        left = total - t
-        offset, speed = abs(distance) - 0.5 * accel * left**2, accel * left
-    return float(sign * offset), float(sign * speed)
-
-
 __all__ = [
     "ACCEL_UNIT",
     "COUNTS_PER_RAD",
@@ -308,6 +283,4 @@ __all__ = [
     "VELOCITY",
     "Puck",
     "PuckProperties",
-    "profile_at",
-    "trapezoid",
 ]
