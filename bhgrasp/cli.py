@@ -106,8 +106,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     bench_grasp.add_argument(
         "--object", dest="objects", action="append", type=checked.bench_object, default=None, metavar="KIND:DIMS:MASS",
         help="box:0.06x0.05x0.05:0.3 (edges, m), cylinder:0.033x0.10:0.35 (radius x height), sphere:0.035:0.2 "
-        "(radius); masses in kg; repeatable (default: the built-in set)",
+        "(radius); masses in kg; repeatable (default: both built-in sets, see --set)",
     )  # fmt: skip
+    bench_grasp.add_argument("--set", dest="sets", action="append", choices=("development", "held-out"), default=None,
+                             help="a built-in object set: development (the protocol's constants were chosen on it) or "
+                             "held-out (fixed before tuning); repeatable; with --object, added to those")  # fmt: skip
     bench_grasp.add_argument("--grasp", dest="grasps", action="append", choices=("power", "precision"), default=None,
                              help="repeatable (default: both)")  # fmt: skip
     bench_grasp.add_argument("--actuation", dest="actuations", action="append", choices=("barrett", "full"),
@@ -304,17 +307,20 @@ def _grasp_bench(args: argparse.Namespace) -> int:
     import json
 
     from bhgrasp.bench import report as bench_report
-    from bhgrasp.bench.objects import OBJECT_SET
+    from bhgrasp.bench.objects import SETS
 
-    objects = args.objects or list(OBJECT_SET)
+    names = list(dict.fromkeys(args.sets or [])) if args.sets or args.objects else list(SETS)
+    objects = [*(args.objects or []), *(item for name in names or [] for item in SETS[name])]
+    sets = [*([""] * len(args.objects or [])), *(name for name in names or [] for _ in SETS[name])]
     grasps, actuations = args.grasps or ["power", "precision"], args.actuations or ["barrett"]
     spreads = f" x spreads {args.spreads}" if args.spreads else ""
     count = len(objects) * len(grasps) * len(actuations) * len(args.spreads or [None])
     print(f"grasp benchmark: {count} trials ({len(objects)} objects x {grasps} x {actuations}{spreads}), 18 s each ...")
     trials, walls = bench_report.run_bench(objects, grasps, actuations, workers=args.workers,
-                                           progress=sys.stderr.isatty(), spreads=args.spreads)  # fmt: skip
-    for actuation, (ok, strict, total) in bench_report.success_rates(trials).items():
-        print(f"{actuation}: {ok}/{total} succeed ({strict} strict)")
+                                           progress=sys.stderr.isatty(), spreads=args.spreads, sets=sets)  # fmt: skip
+    for group in bench_report.groups(trials):
+        for actuation, (ok, strict, total) in bench_report.success_rates(trials, group).items():
+            print(f"{f'{group} set, ' if group else ''}{actuation}: {ok}/{total} succeed ({strict} strict)")
     for trial in trials:
         if not trial["success"]:
             at = f" at spread {trial['spread']:g} rad" if args.spreads else ""
@@ -337,6 +343,7 @@ def _grasp_bench(args: argparse.Namespace) -> int:
 def _bench_command(args: argparse.Namespace) -> str:
     """The ``bhgrasp grasp-bench`` command line that makes this report (without ``--workers`` and ``--compare``)."""
     parts = ["bhgrasp grasp-bench", *(f"--object {item.spec}" for item in args.objects or []),
+             *(f"--set {name}" for name in args.sets or []),
              *(f"--grasp {grasp}" for grasp in args.grasps or []),
              *(f"--actuation {actuation}" for actuation in args.actuations or []),
              *(f"--spread {spread:g}" for spread in args.spreads or [])]  # fmt: skip

@@ -1,13 +1,14 @@
 """The grasp benchmark: a wrist-mounted BH8-280 approaches, closes on, lifts, shakes and places household objects.
 
 :mod:`~bhgrasp.bench.protocol` fixes the protocol (phases, thresholds, contact law,
-:class:`~bhgrasp.bench.protocol.Trial`); :mod:`~bhgrasp.bench.objects` the object set; :mod:`~bhgrasp.bench.placement`
-where the hand goes; :mod:`~bhgrasp.bench.trial` runs one trial; :mod:`~bhgrasp.bench.metrics` scores it;
-:mod:`~bhgrasp.bench.report` runs many and writes the JSON and markdown report (``bhgrasp grasp-bench``).
+:class:`~bhgrasp.bench.protocol.Trial`); :mod:`~bhgrasp.bench.objects` the object sets (development, held-out);
+:mod:`~bhgrasp.bench.placement` where the hand goes; :mod:`~bhgrasp.bench.trial` runs one trial;
+:mod:`~bhgrasp.bench.metrics` scores it; :mod:`~bhgrasp.bench.report` runs many and writes the JSON and markdown
+report (``bhgrasp grasp-bench``).
 """
 
-from bhgrasp.bench.metrics import contact_summary, evaluate, failure_reason, relative_poses
-from bhgrasp.bench.objects import KINDS, OBJECT_SET, BenchObject
+from bhgrasp.bench.metrics import contact_summary, evaluate, failure_reason, held_forces, least_grip, relative_poses
+from bhgrasp.bench.objects import DEVELOPMENT_SET, HELD_OUT_SET, KINDS, OBJECT_SET, SETS, BenchObject
 from bhgrasp.bench.placement import (
     STAND_HEIGHT,
     STAND_MARGIN,
@@ -26,12 +27,12 @@ from bhgrasp.bench.protocol import (
     FORCE_LIMIT,
     FRICTION,
     GRASPS,
+    GRIP_MT,
     HELD_AT,
     KNUCKLE_CLEARANCE,
     LIFT,
     LIFT_AT,
     LOOSE,
-    PRECISION_MT,
     PRESHAPE,
     RELEASE,
     ROUND_SPREAD,
@@ -57,23 +58,26 @@ __all__ = [
     "ACTUATIONS",
     "APPROACH",
     "CLOSE_AT",
+    "DEVELOPMENT_SET",
     "DIRECTIONS",
     "DROP",
     "DT",
     "FORCE_LIMIT",
     "FRICTION",
     "GRASPS",
+    "GRIP_MT",
     "HELD_AT",
+    "HELD_OUT_SET",
     "KINDS",
     "KNUCKLE_CLEARANCE",
     "LIFT",
     "LIFT_AT",
     "LOOSE",
     "OBJECT_SET",
-    "PRECISION_MT",
     "PRESHAPE",
     "RELEASE",
     "ROUND_SPREAD",
+    "SETS",
     "SHAKE_TIME",
     "STAND",
     "STAND_HEIGHT",
@@ -92,7 +96,9 @@ __all__ = [
     "grasp_clearance",
     "grasp_offset",
     "hand_depth",
+    "held_forces",
     "idealised_damping",
+    "least_grip",
     "markdown",
     "relative_poses",
     "run_bench",

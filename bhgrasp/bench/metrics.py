@@ -1,8 +1,9 @@
 """A grasp-benchmark trial's record from its trajectory (:mod:`~bhgrasp.bench.protocol`).
 
-The object's pose in the palm frame through the shake against the held pose (success, strict), the lifted height,
-the placement, the hand's contacts on the object (peak force, slip) and the finger pucks' (or joints') peak torque,
-and why a trial failed.
+The object's pose in the palm frame from the closed grasp before the lift through the shake (success, strict), the
+lifted height, the grip (each finger's normal force on the object once lifted, no distal link on its stop), the
+placement, the hand's contacts on the object (peak force, slip), the finger joints' peak torque against their
+ratings, and why a trial failed.
 """
 
 from __future__ import annotations
@@ -13,21 +14,40 @@ import numpy as np
 import pinocchio as pin
 
 import bhgrasp as bh
-from bhgrasp.bench.protocol import DIRECTIONS, FORCE_LIMIT, HELD_AT, LIFT, LOOSE, SHAKE_TIME, STAND, STRICT, Trial
+from bhgrasp.bench.protocol import (
+    DIRECTIONS,
+    FORCE_LIMIT,
+    FRICTION,
+    HELD_AT,
+    LIFT,
+    LIFT_AT,
+    LOOSE,
+    SHAKE_TIME,
+    STAND,
+    STRICT,
+    Trial,
+)
+
+GRAVITY = 9.81  # [m/s^2]
+STOP_MARGIN = 0.01  # [rad] a distal joint this close to its upper limit rests on its stop
 
 
 def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
     """A trial's record from its trajectory.
 
-    Lifted height, displacement and rotation in the palm frame through the shake, the envelope (peak forces, finger
-    joint torques against their ratings), success, placement, slip, and why it failed.
+    Lifted height; displacement and rotation in the palm frame from the closed grasp before the lift (the lift's sag
+    counts) through the shake; the grip once lifted (each finger's normal force on the object against
+    :func:`least_grip`, distal joints off their stops); the envelope (peak forces, finger joint torques against their
+    ratings); success (held, gripped, inside the envelope, within the thresholds, and placed back), slip, and why
+    it failed.
     """
     t = trajectory.t
+    closed = min(int(np.searchsorted(t, LIFT_AT - 1e-9)), len(t) - 1)
     held = min(int(np.searchsorted(t, HELD_AT - 1e-9)), len(t) - 1)
     shaken = min(int(np.searchsorted(t, HELD_AT + 6 * SHAKE_TIME - 1e-9)), len(t) - 1)
     positions, rotations = relative_poses(hand, trajectory)
-    offsets = np.linalg.norm(positions[held : shaken + 1] - positions[held], axis=1)
-    turns = np.array([np.linalg.norm(pin.log3(rotations[held].T @ r)) for r in rotations[held : shaken + 1]])
+    offsets = np.linalg.norm(positions[closed : shaken + 1] - positions[closed], axis=1)
+    turns = np.array([np.linalg.norm(pin.log3(rotations[closed].T @ r)) for r in rotations[closed : shaken + 1]])
     lifted = float(trajectory.object_position[held, 0, 2] - trajectory.object_position[0, 0, 2])
     held_through = lifted > 0.5 * LIFT and t[-1] >= HELD_AT + 6 * SHAKE_TIME - 1e-9  # not stopped: still in the scene
     record = {
@@ -42,17 +62,43 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
     }
     record.update(contact_summary(trajectory, hand, held, shaken))
     record.update(joint_load(trajectory, hand))
+    forces = held_forces(trajectory, hand, held)
+    record.update({f"held_force_{finger}": float(f) for finger, f in zip(hand.fingers, forces)})
+    distal = [hand.joint_index(f"{finger}_distal") for finger in hand.fingers]
+    stops = [f for f, j in zip(hand.fingers, distal) if trajectory.q[held, j] >= hand.upper[j] - STOP_MARGIN]
+    record["on_stop"] = ", ".join(stops)
+    record["gripped"] = bool(forces.min() >= least_grip(trial.item.mass) and not stops)
     record["inside_envelope"] = bool(
         max(record["peak_contact_force"], record["peak_stand_force"]) <= FORCE_LIMIT
         and record["torque_to_rating"] <= 1.0
     )
-    kept = held_through and record["inside_envelope"]
+    final = trajectory.object_position[-1, 0, 2] - trajectory.object_position[0, 0, 2]
+    record["placed"] = bool(held_through and abs(final) < 0.005)  # set down and let go at its resting height
+    kept = held_through and record["inside_envelope"] and record["gripped"] and record["placed"]
     record["success"] = bool(kept and offsets.max() < LOOSE[0] and turns.max() < LOOSE[1])
     record["strict_success"] = bool(kept and offsets.max() < STRICT[0] and turns.max() < STRICT[1])
-    final = trajectory.object_position[-1, 0, 2] - trajectory.object_position[0, 0, 2]
-    record["placed"] = bool(record["success"] and abs(final) < 0.005)  # set down and let go at its resting height
-    record["failure"] = failure_reason(record, offsets, turns, t[held : shaken + 1], float(t[-1]))
+    record["failure"] = failure_reason(record, offsets, turns, t[closed : shaken + 1], float(t[-1]), trial.item.mass)
     return record
+
+
+def least_grip(mass: float) -> float:
+    """The least normal force [N] each of three fingers must press with, m g / (3 mu).
+
+    By friction alone (mu the protocol's :data:`~bhgrasp.bench.protocol.FRICTION`) three such presses carry the
+    object's weight.
+    """
+    return mass * GRAVITY / (3 * FRICTION)
+
+
+def held_forces(trajectory, hand: bh.Hand, k: int) -> np.ndarray:
+    """(3,) each finger's normal force [N] on the object at sample ``k``: its links' contacts (body a) on it."""
+    contacts = trajectory.contacts_at(k)
+    pressing = np.einsum("ij,ij->i", contacts["normal"], contacts["force"])  # along the normal, onto the object
+    totals = np.zeros(len(hand.fingers))
+    for (a, b), force in zip(contacts["bodies"], pressing):
+        if b == trajectory.object_names[0] and a.split("_")[0] in hand.fingers:
+            totals[hand.fingers.index(a.split("_")[0])] += max(float(force), 0.0)
+    return totals
 
 
 def relative_poses(hand: bh.Hand, trajectory) -> tuple[np.ndarray, np.ndarray]:
@@ -105,11 +151,14 @@ def joint_load(trajectory, hand: bh.Hand) -> dict:
     }
 
 
-def failure_reason(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.ndarray, end: float) -> str:
+def failure_reason(
+    record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.ndarray, end: float, mass: float = 0.0
+) -> str:
     """Why a trial failed ('' if it succeeded).
 
-    Not lifted, the push direction that moved the object too far, or the object leaving the scene (the run's
-    ``end`` [s] before the shake's).
+    Not lifted, a finger not gripping (``mass`` [kg] sets the least grip) or on its stop, outside the envelope, the
+    phase or push direction that moved the object too far (``times`` [s]: the samples of ``offsets`` and ``turns``
+    from before the lift), the object leaving the scene (the run's ``end`` [s] before the shake's), or not placed.
     """
     if record["lifted"] <= 0.5 * LIFT:
         reason = f"not lifted: the object rose {1e3 * record['lifted']:.0f} mm of the wrist's {1e3 * LIFT:.0f}"
@@ -118,6 +167,14 @@ def failure_reason(record: dict, offsets: np.ndarray, turns: np.ndarray, times: 
         return reason
     if record["success"]:
         return ""
+    if record.get("on_stop"):
+        return f"caged, not gripped: the distal joint of {record['on_stop']} rests on its stop"
+    weakest = min(("F1", "F2", "F3"), key=lambda f: record.get(f"held_force_{f}", np.inf))
+    if record.get(f"held_force_{weakest}", np.inf) < least_grip(mass):
+        return (
+            f"not gripped: {weakest} presses the object with {record[f'held_force_{weakest}']:.2f} N once lifted "
+            f"(each finger needs {least_grip(mass):.2f} N to carry its weight by friction)"
+        )
     if not record["inside_envelope"]:
         force = max(record["peak_contact_force"], record["peak_stand_force"])
         return (
@@ -126,10 +183,23 @@ def failure_reason(record: dict, offsets: np.ndarray, turns: np.ndarray, times: 
         )
     moved = np.flatnonzero((offsets >= LOOSE[0]) | (turns >= LOOSE[1]))
     if len(moved) == 0:
-        return f"the object left the scene at {end:.2f} s"
+        if end < HELD_AT + 6 * SHAKE_TIME - 1e-9:
+            return f"the object left the scene at {end:.2f} s"
+        return "not placed: the object did not end at its resting height after the release"
     k = int(moved[0])
-    direction = DIRECTIONS[min(int((times[k] - HELD_AT) // SHAKE_TIME), 5)]
-    return f"moved {1e3 * offsets[k]:.0f} mm / {math.degrees(turns[k]):.0f} deg under the {direction} push"
+    if times[k] < HELD_AT:
+        when = "during the lift"
+    else:
+        when = f"under the {DIRECTIONS[min(int((times[k] - HELD_AT) // SHAKE_TIME), 5)]} push"
+    return f"moved {1e3 * offsets[k]:.0f} mm / {math.degrees(turns[k]):.0f} deg {when}"
 
 
-__all__ = ["contact_summary", "evaluate", "failure_reason", "joint_load", "relative_poses"]
+__all__ = [
+    "contact_summary",
+    "evaluate",
+    "failure_reason",
+    "held_forces",
+    "joint_load",
+    "least_grip",
+    "relative_poses",
+]

@@ -19,11 +19,11 @@ from bhgrasp.bench.protocol import (
     DROP,
     DT,
     FRICTION,
+    GRIP_MT,
     HELD_AT,
     KNUCKLE_CLEARANCE,
     LIFT,
     LIFT_AT,
-    PRECISION_MT,
     PRESHAPE,
     RELEASE,
     SHAKE_TIME,
@@ -34,7 +34,7 @@ from bhgrasp.bench.protocol import (
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.model.mount import mounted
 from bhgrasp.model.objects import FixedBox
-from bhgrasp.motion.trajectories import PosePath
+from bhgrasp.motion.trajectories import PosePath, Reference, Sample
 from bhgrasp.motion.wrist import MountReference
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
@@ -73,8 +73,7 @@ def setup(trial: Trial, dt: float = DT):
     item = trial.item
     top = 2 * item.half_extents[2]
     clearance, spread = KNUCKLE_CLEARANCE[trial.grasp], trial.preshape_spread
-    if trial.grasp == "power":  # the fingers off the stand (precision keeps 2 cm: at 46 mm the box slips, full)
-        clearance = grasp_clearance(item, spread, clearance, PRESHAPE)
+    clearance = grasp_clearance(item, spread, clearance, PRESHAPE)  # the fingers off the stand, in both grasps
     grasp_height = top + clearance + hand_depth(spread, PRESHAPE)  # the hand base
     rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
     offset = np.array([0.0, grasp_offset(item, spread, clearance, PRESHAPE), 0.0])
@@ -111,27 +110,63 @@ def setup(trial: Trial, dt: float = DT):
     return simulator, simulator.initial_state(q), hand, path
 
 
+class HeldReference(Reference):
+    """A reference that can be stopped: from :meth:`hold` on, it stays where it was then, at rest."""
+
+    def __init__(self, reference: Reference) -> None:
+        self.reference, self.held = reference, None
+
+    @property
+    def size(self) -> int:
+        """The wrapped reference's size."""
+        return self.reference.size
+
+    def hold(self, t: float) -> None:
+        """Stop at ``t`` [s]."""
+        self.held = float(t)
+
+    def release(self) -> None:
+        """Follow the reference again."""
+        self.held = None
+
+    def __call__(self, t: float) -> Sample:
+        """The reference at ``t``, or where it stopped (zero rates)."""
+        if self.held is None or t < self.held:
+            return self.reference(t)
+        position, rate, _ = self.reference(self.held)
+        return position, np.zeros_like(rate), np.zeros_like(rate)
+
+
 class BenchController:
     """The trial's commands: the wrist on its path (MountServo), the fingers by the driver or by joint torques."""
 
     def __init__(self, trial: Trial, hand: bh.Hand, path: MountReference) -> None:
         self.trial, self.hand = trial, hand
-        self.servo = MountServo(hand, path, fingers=lambda t, s: np.zeros(hand.nv), compensate_load=False)
+        self.path = HeldReference(path)
+        self.servo = MountServo(hand, self.path, fingers=lambda t, s: np.zeros(hand.nv), compensate_load=False)
         self.spread = [hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]
-        self.place_at = HELD_AT + 6 * SHAKE_TIME + 1.0
+        self.place_from = HELD_AT + 6 * SHAKE_TIME  # the place's descent starts
+        self.place_at = self.place_from + 1.0  # open here, or where the stand takes the object's weight first
+        self.set_down = 0.5 * trial.item.mass * 9.81  # [N] the stand's push that ends the descent
         self.log: dict = {}
-        mt = PRECISION_MT if trial.grasp == "precision" else FINGER_PUCK.MT  # the finger pucks' torque limit
+        mt = GRIP_MT  # the force-limited close, in both grasps
         if trial.actuation == "barrett":
             self.driver = BarrettDriver(hand, finger=FINGER_PUCK.with_(MT=mt))
-            self.driver.script(
-                [(0.0, "set_position_mode", "SPREAD"), (CLOSE_AT, "close", "GRASP"), (self.place_at, "open", "GRASP")]
-            )
+            self.driver.script([(0.0, "set_position_mode", "SPREAD"), (CLOSE_AT, "close", "GRASP")])
             self.log = self.driver.log
         else:
             self.close_torque = WORM_EFFICIENCY * PROXIMAL_RATIO * mt / FINGER_PUCK.IPNM  # the real close's stall
 
+    def _set_down(self, state: bh.State) -> bool:
+        """Whether the stand pushes the object up with at least half its weight (a wrist force sensor's cue)."""
+        pushes = [f for f, pair in zip(state.contact_forces, state.contact_bodies) if STAND in pair
+                  and self.trial.item.name in pair]  # fmt: skip
+        return float(np.sum(pushes, axis=0)[2]) >= self.set_down if pushes else False
+
     def reset(self, state: bh.State) -> None:
         """Start a trial at ``state`` (the driver's script, the spread hold)."""
+        self.path.release()
+        self.place_at = self.place_from + 1.0
         self.servo.reset(state)
         if self.trial.actuation == "barrett":
             self.driver.reset(state)
@@ -140,6 +175,11 @@ class BenchController:
 
     def __call__(self, t: float, state: bh.State) -> np.ndarray:
         """The inputs of the trial's actuation: puck torques (or joint torques), then the wrist's."""
+        if self.path.held is None and t >= self.place_from and (t >= self.place_at or self._set_down(state)):
+            self.path.hold(t)  # the wrist stops where the stand takes the object, and the hand opens
+            self.place_at = t
+            if self.trial.actuation == "barrett":
+                self.driver.open("GRASP")
         mount = self.servo(t, state)[:6]
         if self.trial.actuation == "barrett":
             u = self.driver(t, state)
