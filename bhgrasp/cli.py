@@ -108,9 +108,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="box:0.06x0.05x0.05:0.3 (edges, m), cylinder:0.033x0.10:0.35 (radius x height), sphere:0.035:0.2 "
         "(radius); masses in kg; repeatable (default: both built-in sets, see --set)",
     )  # fmt: skip
-    bench_grasp.add_argument("--set", dest="sets", action="append", choices=("development", "held-out"), default=None,
-                             help="a built-in object set: development (the protocol's constants were chosen on it) or "
-                             "held-out (fixed before tuning); repeatable; with --object, added to those")  # fmt: skip
+    bench_grasp.add_argument(
+        "--set",
+        dest="sets",
+        action="append",
+        choices=("development", "held-out"),
+        default=None,
+        help="a built-in object set: development (the protocol's constants were chosen on it) or held-out (fixed "
+        "before tuning); repeatable; with --object, added to those",
+    )
     bench_grasp.add_argument("--grasp", dest="grasps", action="append", choices=("power", "precision"), default=None,
                              help="repeatable (default: both)")  # fmt: skip
     bench_grasp.add_argument("--actuation", dest="actuations", action="append", choices=("barrett", "full"),

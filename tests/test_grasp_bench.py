@@ -161,15 +161,19 @@ def test_the_report_compares_outcomes_and_metrics_and_renders_the_rates(tmp_path
     assert len(bench_report.compare([{**trial, "success": False}], trials)) == 1
     assert "not in the reference" in bench_report.compare([{**trial, "actuation": "full"}], trials)[0]
     assert bench_report.success_rates(trials) == {"barrett": (1, 1, 2)}
-    assert "| given | barrett | 1 (50 %) | 1 (50 %) | 2 |" in bench_report.markdown(trials)
+    assert "| given | barrett | 1 (50 %) | 1 (50 %) | 2 | 1 / 2 |" in bench_report.markdown(trials)
+    # a grasp that is the same simulation as another (equal in every outcome and metric) counts once as distinct
+    copy = {**trial, "grasp": "precision"}
+    assert bench_report.distinct([trial, copy, failed]) == [trial, failed]
+    assert "| given | barrett | 2 (67 %) | 2 (67 %) | 3 | 1 / 2 |" in bench_report.markdown([trial, copy, failed])
     assert "| 3.0/3.0/6.0 |" in bench_report.markdown(trials)  # each finger's held force
     # two sets are counted apart, each in its own row of the rates table
     sets = [{**trial, "set": "development"}, {**failed, "set": "held-out"}]
     assert bench_report.groups(sets) == ["development", "held-out"]
     assert bench_report.success_rates(sets, "held-out") == {"barrett": (0, 0, 1)}
     text = bench_report.markdown(sets)
-    assert "| development | barrett | 1 (100 %) | 1 (100 %) | 1 |" in text
-    assert "| held-out | barrett | 0 (0 %) | 0 (0 %) | 1 |" in text
+    assert "| development | barrett | 1 (100 %) | 1 (100 %) | 1 | 1 / 1 |" in text
+    assert "| held-out | barrett | 0 (0 %) | 0 (0 %) | 1 | 0 / 1 |" in text
     path = tmp_path / "bench.json"
     bench_report.write_json(trials, path)
     assert json.loads(path.read_text())["trials"] == trials
@@ -278,7 +282,7 @@ def test_a_grip_needs_every_finger_pressing_its_share_of_the_weight_and_no_dista
     # a held trial that moved nowhere and was not set back down: not placed
     placed = {**record, "held_force_F2": 2.0, "placed": False}
     assert failure_reason(placed, *args, mass=0.3) == (
-        "not placed: the object did not end at its resting height after the release"
+        "not placed: the object did not end resting on its stand at its height after the release"
     )
     # a sag during the lift is named as such
     moved = failure_reason(placed, np.array([0.0, 0.06]), np.zeros(2), np.array([LIFT_AT, LIFT_AT + 0.5]), 18.0, 0.3)
@@ -312,8 +316,10 @@ def test_the_readme_states_the_committed_benchmark_success_rates() -> None:
     labels = {"barrett": "BH8-280 (pucks, TorqueSwitch, worms)", "full": "idealised (8 joint torques)"}
     rows = 0
     for group in bench_report.groups(trials):
+        unique = bench_report.success_rates(bench_report.distinct(trials), group)
         for actuation, (good, strict, total) in bench_report.success_rates(trials, group).items():
             rates = f"{good} ({100 * good / total:.0f} %) | {strict} ({100 * strict / total:.0f} %)"
-            assert f"| {group} | {labels[actuation]} | {rates} | {total} |" in readme
+            distinct = f"{unique[actuation][0]} / {unique[actuation][2]}"
+            assert f"| {group} | {labels[actuation]} | {rates} | {total} | {distinct} |" in readme
             rows += 1
     assert rows == 3  # the real hand on both sets, the idealised hand on the development set

@@ -100,7 +100,9 @@ class PuckBus(Controller):
     def reset(self, state: State) -> None:
         """Power-on at ``state``: every puck IDLE at its encoder, the script rewound (pending commands kept).
 
-        Un-homed (``homed=False``), each encoder counts 0 where it stands.
+        ``Simulator.run`` calls it at the start of every run.  Un-homed (``homed=False``), each encoder then counts 0
+        where it stands (an earlier ``initialize()`` is forgotten); properties set by ``set_property`` stay (build a
+        new driver for the firmware's defaults).
         """
         self.reset_state()
         self.readout.power_on(state)

@@ -139,7 +139,10 @@ class BarrettDriver(PuckBus):
         return self.readout.options[S_TACT_FULL]
 
     def enable_breakaway_encoders(self, enable: bool) -> None:
-        """Link positions from the secondary encoders (default) or from P alone, valid before breakaway only."""
+        """Link positions from the secondary encoders (default) or from P alone, valid before breakaway only.
+
+        Applies from the next :meth:`update`, as libbarrett's flag does.
+        """
         self.readout.breakaway_encoders = bool(enable)
 
     def update(self, sensors: int = S_ALL) -> None:

@@ -79,8 +79,10 @@ class HandReadout:
         for flag in (S_POSITION, S_FINGERTIP_TORQUE, S_TACT_FULL):
             if sensors & flag and self.options.get(flag, True):
                 self.readings[flag] = reading
-        if sensors & S_POSITION:
+        if sensors & S_POSITION:  # the counts from the zeros, and libbarrett's link formulas, as of this update
             self._zeros_read = (self.zero.astype(np.int64), self.secondary_zero.astype(np.int64))
+            secondary = self.secondary() if self.breakaway_encoders else None
+            self._links = link_positions(self.primary(), secondary)
 
     def reading(self, flag: int) -> BarrettReading:
         """The last update's reading of sensor ``flag``.
@@ -104,8 +106,9 @@ class HandReadout:
         return self.reading(S_POSITION).secondary_encoder - self._zeros_read[1]
 
     def link_positions(self) -> tuple[np.ndarray, np.ndarray]:
-        """(inner, outer) link positions [rad] (F1, F2, F3, SPREAD) as libbarrett computes them from the counts."""
-        return link_positions(self.primary(), self.secondary() if self.breakaway_encoders else None)
+        """(inner, outer) link positions [rad] (F1, F2, F3, SPREAD) as libbarrett computed them at the last update."""
+        self.reading(S_POSITION)  # raises before the first update
+        return self._links[0].copy(), self._links[1].copy()
 
 
 __all__ = ["S_ALL", "S_FINGERTIP_TORQUE", "S_POSITION", "S_TACT_FULL", "HandReadout"]

@@ -192,8 +192,8 @@ class BarrettSensors:
         inner, outer = link_positions(primary, secondary)
         loads = self.loads(state)
         strain = strain_counts(loads.fingertip_torque)
-        return BarrettReading(float(state.t), primary, secondary, inner, outer, strain, strain_torques(strain),
-                              digitise_pressures(loads.tactile))  # fmt: skip
+        pads = digitise_pressures(loads.tactile)
+        return BarrettReading(float(state.t), primary, secondary, inner, outer, strain, strain_torques(strain), pads)
 
     def loads(self, state: State) -> SensorLoads:
         """The fingertip torques and pad pressures the contacts of ``state`` apply (module docstring).

@@ -19,10 +19,11 @@ saturates at 4095/256 = 16.0 N/cm^2 (:func:`digitise_pressures`).
 
 Assumptions (not from a source): the simulator gives point contacts; each point's normal force (n . F, clipped at 0:
 a pad does not feel tension) is spread uniformly over a square of half-width ``spread`` (default 3 mm, half a cell
-pitch, standing for the pad's compliant cover) and shared among the cells in proportion to the square's overlap
-with each cell, normalised so that the pad keeps the whole force (the 0.5 mm gaps between cells lose nothing).
-A point belongs to a pad when its body a is a frame on the pad's link, it lies within ``margin`` (half the widest
-gap) of a cell in the pad plane and not below ``floor`` along the pad normal (fingertip: the link's inner half).
+pitch, standing for the pad's compliant cover) and shared among the cells in proportion to the square's overlap with
+each cell, normalised so that the pad keeps the whole force (the 0.5 mm gaps between cells lose nothing). A point
+belongs to a pad when the hand's side of its pair (body a for an object, body b for the environment) is a frame on
+the pad's link, it lies within ``margin`` (half the widest gap) of a cell in the pad plane and not below ``floor``
+along the pad normal (fingertip: the link's inner half).
 Whether the cell order matches the pucks' TACT order and which side column 0 lies on are not verified.
 """
 
@@ -65,7 +66,7 @@ class TactilePad:
 
     Attributes:
         name: ``"F1"``, ``"F2"``, ``"F3"`` or ``"palm"``.
-        frame: The frame the pad is fixed in; contacts whose body a is a frame of the same body can touch it.
+        frame: The frame the pad is fixed in; contacts on a frame of the same body (either side of the pair) touch it.
         axes: (3, 3) rows: the pad's u, w (plane) and normal axes in ``frame`` coordinates.
         cells: (24, 4) cell rectangles (u0, u1, w0, w1) [m].
         margin: Distance [m] from a cell within which a point counts as on the pad.

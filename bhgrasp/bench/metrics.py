@@ -30,6 +30,7 @@ from bhgrasp.bench.protocol import (
 
 GRAVITY = 9.81  # [m/s^2]
 STOP_MARGIN = 0.01  # [rad] a distal joint this close to its upper limit rests on its stop
+PLACED = 0.002  # [m] placed: back within this of its resting height, the stand carrying at least half its weight
 
 
 def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
@@ -73,7 +74,8 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
         and record["torque_to_rating"] <= 1.0
     )
     final = trajectory.object_position[-1, 0, 2] - trajectory.object_position[0, 0, 2]
-    record["placed"] = bool(held_through and abs(final) < 0.005)  # set down and let go at its resting height
+    resting = stand_support(trajectory, len(t) - 1) >= 0.5 * trial.item.mass * GRAVITY
+    record["placed"] = bool(held_through and abs(final) < PLACED and resting)  # set down on its stand and let go
     kept = held_through and record["inside_envelope"] and record["gripped"] and record["placed"]
     record["success"] = bool(kept and offsets.max() < LOOSE[0] and turns.max() < LOOSE[1])
     record["strict_success"] = bool(kept and offsets.max() < STRICT[0] and turns.max() < STRICT[1])
@@ -91,14 +93,28 @@ def least_grip(mass: float) -> float:
 
 
 def held_forces(trajectory, hand: bh.Hand, k: int) -> np.ndarray:
-    """(3,) each finger's normal force [N] on the object at sample ``k``: its links' contacts (body a) on it."""
+    """(3,) each finger's normal force [N] on the object at sample ``k``: its inner and outer links' contacts.
+
+    The knuckles (on the palm's side of the proximal joints) do not grip: a knuckle pressing on an object's top is
+    not a finger's hold.
+    """
     contacts = trajectory.contacts_at(k)
     pressing = np.einsum("ij,ij->i", contacts["normal"], contacts["force"])  # along the normal, onto the object
+    links = {f"{f}_{part}_link": i for i, f in enumerate(hand.fingers) for part in ("proximal", "distal")}
     totals = np.zeros(len(hand.fingers))
     for (a, b), force in zip(contacts["bodies"], pressing):
-        if b == trajectory.object_names[0] and a.split("_")[0] in hand.fingers:
-            totals[hand.fingers.index(a.split("_")[0])] += max(float(force), 0.0)
+        if b == trajectory.object_names[0] and a in links:
+            totals[links[a]] += max(float(force), 0.0)
     return totals
+
+
+def stand_support(trajectory, k: int) -> float:
+    """The stand's upward push [N] on the object at sample ``k``."""
+    contacts = trajectory.contacts_at(k)
+    rows = [
+        i for i, (a, b) in enumerate(contacts["bodies"]) if STAND in (a, b) and trajectory.object_names[0] in (a, b)
+    ]
+    return float(contacts["force"][rows, 2].sum()) if rows else 0.0
 
 
 def relative_poses(hand: bh.Hand, trajectory) -> tuple[np.ndarray, np.ndarray]:
@@ -185,7 +201,7 @@ def failure_reason(
     if len(moved) == 0:
         if end < HELD_AT + 6 * SHAKE_TIME - 1e-9:
             return f"the object left the scene at {end:.2f} s"
-        return "not placed: the object did not end at its resting height after the release"
+        return "not placed: the object did not end resting on its stand at its height after the release"
     k = int(moved[0])
     if times[k] < HELD_AT:
         when = "during the lift"

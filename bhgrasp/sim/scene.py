@@ -77,7 +77,8 @@ class Scene:
             objects: Free rigid objects and spring-mounted (compliant) objects, in state order.
             environment: Fixed shapes (planes, fixed boxes).
             environment_touches_hand: Whether the environment also stops the hand's moving links (a table under a
-                closing finger); the hand's sensing reads object contacts only (body a a hand link).
+                closing finger); :class:`~bhgrasp.grasp.sensing.ContactSensing` reads object contacts only (body a a
+                hand link), the BH8-280's sensors (:mod:`bhgrasp.barrett.sensors`) both.
         """
         self.hand = hand
         self.objects = tuple(objects)
