@@ -79,6 +79,10 @@ TOLERANCES: dict[str, Tolerance] = {
                                                    "count either way (measured: no change)"),
     "chapter5/*slip_events": Tolerance(0.0, 1.0, "slip events count sliding samples: a contact that grazes the cone "
                                        "may switch one sample earlier or later (measured: no change)"),
+    "chapter5/synthesis/*/final_*": Tolerance(1e-6, 1e-5, "a final error of micrometres (and micro-radians) after "
+                                              "the synthesised grasp's move: on an AVX-512 machine, with OpenBLAS's "
+                                              "kernels held to Haswell's, proxsuite's runtime-dispatched ones moved "
+                                              "the box's rx-0.15 final error by 5e-7 mm of 1.5e-3 (1e-5: 10 nm)"),
 }  # fmt: skip
 
 
