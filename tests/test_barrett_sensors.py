@@ -1,4 +1,4 @@
-"""The BH8-280's sensors (issue 16, item 2; issue 29, item 2) against independent truths: the gear train's closed forms
+"""The BH8-280's sensors against independent truths: the gear train's closed forms
 and libbarrett's published numbers (encoders), the Jacobian reaction torques of bhgrasp.grasp.sensing and r x F
 (fingertip torque), Barrett's published strain-gauge points and libbarrett's tactile scale (counts, ranges,
 saturation), force conservation, symmetry and the hand's collision geometry (tactile pads), Newton's third law

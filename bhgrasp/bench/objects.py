@@ -6,7 +6,7 @@ An object is given as ``box:0.06x0.05x0.05:0.3`` (edges x, y, z [m]), ``cylinder
 - :data:`DEVELOPMENT_SET` (also ``OBJECT_SET``), on which the protocol's constants were chosen: the issue's three
   examples (a box, a soup-can-sized cylinder, a ball) and three more of household sizes (a flat box, a slim bottle, a
   larger ball);
-- :data:`HELD_OUT_SET`, fixed in the repository (issue 29) before anything was tuned against it, to quote success
+- :data:`HELD_OUT_SET`, fixed in the repository before anything was tuned against it, to quote success
   rates on: ten household objects named after items of the YCB object set (Calli et al. 2015) - a short wide can, a
   wide can, a tall chips can, a tall bottle and a tall narrow box, a flat and a deep box, three balls of 33-42 mm -
   with approximate sizes and masses of such items, not the set's measured values.
@@ -106,7 +106,7 @@ DEVELOPMENT_SET = (
     BenchObject("sphere", (0.045,), 0.15, "large ball"),
 )
 OBJECT_SET = DEVELOPMENT_SET
-# Fixed before tuning (issue 29): change it only to add objects, never to drop one that fails.
+# Fixed before tuning: change it only to add objects, never to drop one that fails.
 HELD_OUT_SET = (
     BenchObject("cylinder", (0.043, 0.033), 0.17, "tuna can"),
     BenchObject("cylinder", (0.051, 0.139), 0.41, "coffee can"),

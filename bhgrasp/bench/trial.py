@@ -11,7 +11,7 @@ import bhgrasp as bh
 from bhgrasp.barrett.commands import BarrettDriver
 from bhgrasp.barrett.pucks import FINGER_PUCK
 from bhgrasp.barrett.transmission import PROXIMAL_RATIO, WORM_EFFICIENCY, BarrettTransmission
-from bhgrasp.bench.metrics import evaluate
+from bhgrasp.bench.metrics import GRAVITY, evaluate
 from bhgrasp.bench.placement import STAND_HEIGHT, grasp_clearance, grasp_offset, hand_depth
 from bhgrasp.bench.protocol import (
     APPROACH,
@@ -147,7 +147,7 @@ class BenchController:
         self.spread = [hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]
         self.place_from = HELD_AT + 6 * SHAKE_TIME  # the place's descent starts
         self.place_at = self.place_from + 1.0  # open here, or where the stand takes the object's weight first
-        self.set_down = 0.5 * trial.item.mass * 9.81  # [N] the stand's push that ends the descent
+        self.set_down = 0.5 * trial.item.mass * GRAVITY  # [N] the stand's push that ends the descent
         self.log: dict = {}
         mt = GRIP_MT  # the force-limited close, in both grasps
         if trial.actuation == "barrett":
