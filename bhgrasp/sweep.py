@@ -14,12 +14,11 @@ in :mod:`bhgrasp.scenarios.rollouts`.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import json
-import os
-import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -27,6 +26,7 @@ from typing import Any, Literal
 import numpy as np
 
 from bhgrasp.errors import InputError
+from bhgrasp.parallel import Outcome, describe_error, executor_for, parallel_map, progress_bar
 
 Rollout = Callable[[dict[str, Any], int], Mapping[str, Any]]
 RESERVED = ("case", "seed", "status", "error", "wall_time")
@@ -130,88 +130,51 @@ def run_sweep(
     path = None if log is None else Path(log)
     rows = _read_log(path, cases, seeds) if path is not None else {}
     todo = [i for i in range(len(cases)) if i not in rows]
-    bar = _progress(progress, len(cases), len(rows))
-    for row in _execute(rollout, cases, seeds, todo, executor, workers):
-        rows[row["case"]] = row
-        if path is not None:
-            _append(path, row)
-        if bar is not None:
-            bar.update(1)
-    if bar is not None:
+    bar = progress_bar(len(cases), "sweep", "case", initial=len(rows), enabled=progress)
+    if isinstance(rollout, BatchedRollout):
+        function, batch = functools.partial(_call_batch, rollout.function), rollout.size
+    else:
+        function, batch = functools.partial(_call, rollout), None
+    try:
+        with executor_for(executor, workers) as runner:
+            items = [(cases[i], seeds[i]) for i in todo]
+            for outcome in parallel_map(function, items, runner, batch=batch, ordered=False):
+                if outcome.lost:  # the executor broke: nothing is logged for the case, a rerun resumes it
+                    raise outcome.error
+                index = todo[outcome.index]
+                rows[index] = _row(index, cases[index], seeds[index], outcome)
+                if path is not None:
+                    _append(path, rows[index])
+                bar.update(1)
+    finally:
         bar.close()
     return pd.DataFrame([rows[i] for i in sorted(rows)])
 
 
-def _execute(rollout, cases, seeds, todo, executor, workers):
-    if isinstance(rollout, BatchedRollout):
-        chunks = [todo[k : k + rollout.size] for k in range(0, len(todo), rollout.size)]
-        tasks = [(_run_chunk, rollout.function, chunk, [cases[i] for i in chunk], [seeds[i] for i in chunk])
-                 for chunk in chunks]  # fmt: skip
-    else:
-        tasks = [(_run_case, rollout, i, cases[i], seeds[i]) for i in todo]
-    if executor == "serial":
-        for task in tasks:
-            yield from _rows(task[0](*task[1:]))
-        return
-    owned = executor is None
-    if owned:
-        executor = ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1)
-    elif not isinstance(executor, Executor):
-        raise InputError(f"`executor` must be None, 'serial' or a concurrent.futures.Executor, got {executor!r}")
-    try:
-        futures: list[Future] = [executor.submit(*task) for task in tasks]
-        for future in as_completed(futures):
-            yield from _rows(future.result())  # the runners never raise: failures come back as rows
-    finally:
-        if owned:
-            executor.shutdown(cancel_futures=True)
+def _call(rollout: Rollout, item: tuple[dict[str, Any], int]) -> dict[str, Any]:
+    """One case's metrics (runs in a worker, or here)."""
+    parameters, seed = item
+    return dict(rollout(dict(parameters), seed))
 
 
-def _run_case(rollout: Rollout, index: int, parameters: dict[str, Any], seed: int) -> dict[str, Any]:
-    """One case as a row; an exception becomes ``status = "failed"`` with its message."""
+def _call_batch(function: Callable, items: list[tuple[dict[str, Any], int]]) -> list[dict[str, Any]]:
+    """A batched rollout's cases' metrics, in order (runs in a worker, or here)."""
+    return [dict(metrics) for metrics in function([dict(case) for case, _ in items], [seed for _, seed in items])]
+
+
+def _row(index: int, parameters: dict[str, Any], seed: int, outcome: Outcome) -> dict[str, Any]:
+    """Case ``index``'s row: its parameters, ``status``, ``error``, metrics and ``wall_time``."""
     row: dict[str, Any] = {"case": index, "seed": seed, **parameters}
-    start = time.perf_counter()
-    try:
-        metrics = dict(rollout(dict(parameters), seed))
-    except Exception as error:
-        row.update(status="failed", error=f"{type(error).__name__}: {error}")
+    if outcome.error is not None:
+        row.update(status="failed", error=describe_error(outcome.error))
     else:
-        clash = [name for name in metrics if name in RESERVED or name in parameters]
+        clash = [name for name in outcome.value if name in RESERVED or name in parameters]
         if clash:
             row.update(status="failed", error=f"rollout returned reserved or parameter names {clash}")
         else:
-            row.update(status="ok", error="", **{k: _plain(v) for k, v in metrics.items()})
-    row["wall_time"] = time.perf_counter() - start
+            row.update(status="ok", error="", **{k: _plain(v) for k, v in outcome.value.items()})
+    row["wall_time"] = outcome.wall_time
     return row
-
-
-def _rows(result: dict[str, Any] | list[dict[str, Any]]) -> list[dict[str, Any]]:
-    return result if isinstance(result, list) else [result]
-
-
-def _run_chunk(function, indices: list[int], parameters: list[dict[str, Any]], seeds: list[int]) -> list[dict]:
-    """Cases of a batched rollout as rows; an exception fails every case of the chunk with its message."""
-    start = time.perf_counter()
-    rows = [{"case": i, "seed": seed, **case} for i, case, seed in zip(indices, parameters, seeds)]
-    try:
-        results = list(function([dict(case) for case in parameters], list(seeds)))
-        if len(results) != len(rows):
-            raise InputError(f"the batched rollout returned {len(results)} results for {len(rows)} cases")
-    except Exception as error:
-        for row in rows:
-            row.update(status="failed", error=f"{type(error).__name__}: {error}")
-    else:
-        for row, case, metrics in zip(rows, parameters, results):
-            metrics = dict(metrics)
-            clash = [name for name in metrics if name in RESERVED or name in case]
-            if clash:
-                row.update(status="failed", error=f"rollout returned reserved or parameter names {clash}")
-            else:
-                row.update(status="ok", error="", **{k: _plain(v) for k, v in metrics.items()})
-    wall = (time.perf_counter() - start) / len(rows)  # the chunk's time, shared
-    for row in rows:
-        row["wall_time"] = wall
-    return rows
 
 
 def _plain(value: Any) -> Any:
@@ -260,14 +223,6 @@ def _append(path: Path, row: dict[str, Any]) -> None:
     with path.open("a") as stream:
         stream.write(json.dumps(row) + "\n")
         stream.flush()
-
-
-def _progress(enabled: bool, total: int, done: int):
-    if not enabled:
-        return None
-    from tqdm import tqdm
-
-    return tqdm(total=total, initial=done, desc="sweep", unit="case")
 
 
 __all__ = ["BatchedRollout", "case_seeds", "grid", "random_design", "run_sweep"]

@@ -24,13 +24,12 @@ the process pool are imported only when :func:`cma_es` runs.
 
 from __future__ import annotations
 
-import asyncio
 import math
 import numbers
 import os
 import pickle
 from collections.abc import Callable
-from concurrent.futures import BrokenExecutor, CancelledError, Executor
+from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -38,9 +37,9 @@ import numpy as np
 
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.errors import BhgraspError, InputError
+from bhgrasp.parallel import describe_error, executor_for, parallel_map, progress_bar
 
 Objective = Callable[[np.ndarray], float]
-EXECUTOR_FAILURES = (BrokenExecutor, CancelledError, asyncio.CancelledError)  # a future lost to its executor
 PENALTY_FACTOR = 10.0  # a failed candidate counts as PENALTY_FACTOR x the worst finite fitness seen so far
 PENALTY_WITHOUT_FITNESS = 1e6  # ... or this, when no finite positive fitness has been seen yet
 
@@ -145,7 +144,7 @@ class _History:
             self.fitness.append(outcome.fitness)
             if outcome.error is not None:
                 error = outcome.error
-                self.failures.append(f"generation {generation}, candidate {outcome.index}: {_describe(error)}")
+                self.failures.append(f"generation {generation}, candidate {outcome.index}: {describe_error(error)}")
 
     def worst_finite(self) -> float | None:
         """The largest finite fitness recorded, or ``None`` if there is none."""
@@ -247,15 +246,9 @@ def cma_es(
     _check_objective_and_executor(objective, executor)
     strategy = _strategy(x0, sigma0, seed, population, lower, upper, options)
     run = _Run(objective, strategy, max_generations, failure_fitness, progress)
-    if executor is not None:
-        return run.execute(None if executor == "serial" else executor)
-    from concurrent.futures import ProcessPoolExecutor
-
-    pool = ProcessPoolExecutor(max_workers=min(strategy.popsize, os.cpu_count() or 1))
-    try:
-        return run.execute(pool)
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+    workers = min(strategy.popsize, os.cpu_count() or 1)
+    with executor_for(executor, workers) as runner:
+        return run.execute(runner)
 
 
 class _Run:
@@ -271,34 +264,27 @@ class _Run:
         self.progress = progress
         self.history = _History(strategy.N)
 
-    def execute(self, executor: Executor | None) -> TuningResult:
-        """Run every generation, evaluating in this process if ``executor`` is ``None``."""
-        bar = _progress_bar(self.max_generations) if self.progress else None
+    def execute(self, executor: Executor | Literal["serial"]) -> TuningResult:
+        """Run every generation, evaluating on ``executor`` (``"serial"``: in this process)."""
+        bar = progress_bar(self.max_generations, "CMA-ES", "generation", enabled=self.progress)
         try:
             for generation in range(self.max_generations):
                 stop = self._generation(generation, executor)
-                if bar is not None:
-                    bar.set_postfix(best=f"{min(self.history.generation_best):.6g}", refresh=False)
-                    bar.update()
+                bar.set_postfix(best=f"{min(self.history.generation_best):.6g}", refresh=False)
+                bar.update()
                 if stop:
                     return self.history.result(stop, self.strategy.stop())
             return self.history.result("max_generations", self.strategy.stop())
         finally:
-            if bar is not None:
-                bar.close()
+            bar.close()
 
-    def _generation(self, generation: int, executor: Executor | None) -> str:
+    def _generation(self, generation: int, executor: Executor | Literal["serial"]) -> str:
         """Ask, evaluate and tell one generation; return why to stop, or ``""`` to go on."""
         candidates = self.strategy.ask()
-        if isinstance(self.objective, BatchedObjective):
-            outcomes, broken = _evaluate_batches(executor, self.objective, candidates)
-        elif executor is None:
-            outcomes, broken = [_evaluate(self.objective, i, x) for i, x in enumerate(candidates)], None
-        else:
-            outcomes, broken = _evaluate_with(executor, self.objective, candidates)
+        outcomes, broken = _evaluate(executor, self.objective, candidates)
         self.history.record(generation, candidates, outcomes)
         if broken is not None:
-            message = f"the executor failed in generation {generation}: {_describe(broken)}"
+            message = f"the executor failed in generation {generation}: {describe_error(broken)}"
             raise TuningError(message, self.history.result(message)) from broken
         if all(outcome.error is not None for outcome in outcomes):
             first = self.history.failures[-len(outcomes)]
@@ -320,88 +306,29 @@ class _Run:
         return min(PENALTY_FACTOR * worst, float(np.finfo(np.float64).max))
 
 
-def _evaluate(objective: Objective, index: int, x: np.ndarray) -> _Outcome:
-    """Evaluate one candidate in this process (on a copy, so the objective cannot alter what CMA-ES is told)."""
-    try:
-        return _Outcome(index, fitness=_as_fitness(objective(x.copy())))
-    except Exception as error:
-        return _Outcome(index, error=error)
-
-
-def _evaluate_with(
-    executor: Executor, objective: Objective, candidates: list[np.ndarray]
+def _evaluate(
+    executor: Executor | Literal["serial"], objective: Objective, candidates: list[np.ndarray]
 ) -> tuple[list[_Outcome], BaseException | None]:
-    """Submit every candidate, then collect the results in candidate order.
+    """A generation's evaluations in candidate order, and the executor's failure (``None`` if it worked).
 
-    Returns:
-        The finished evaluations, and the executor's failure (``None`` if it worked).  After a failure, the
-        evaluations already submitted are still collected, so finished ones are not lost.
+    Each candidate is evaluated on a copy, so an objective cannot alter what CMA-ES is told; after an executor's
+    failure the evaluations already finished are kept.  A :class:`BatchedObjective` is called with ``size``
+    candidates at a time, one task each.
     """
-    futures = []
-    broken: BaseException | None = None
-    for x in candidates:
-        try:
-            futures.append(executor.submit(objective, x.copy()))
-        except Exception as error:
-            broken = error
-            break
-    outcomes = []
-    for index, future in enumerate(futures):
-        try:
-            value = future.result()
-        except EXECUTOR_FAILURES as error:
-            broken = broken or error
-            continue
-        except Exception as error:
-            outcomes.append(_Outcome(index, error=error))
-            continue
-        try:
-            outcomes.append(_Outcome(index, fitness=_as_fitness(value)))
-        except Exception as error:
-            outcomes.append(_Outcome(index, error=error))
-    return outcomes, broken
-
-
-def _evaluate_chunk(function: Callable, indices: list[int], xs: list[np.ndarray]) -> list[_Outcome]:
-    """Candidates ``indices`` (values ``xs``) of a batched objective, as outcomes; runs in a worker or here."""
-    try:
-        values = list(function(xs))
-        if len(values) != len(xs):
-            raise ValueError(f"the batched objective returned {len(values)} values for {len(xs)} candidates")
-    except Exception as error:
-        return [_Outcome(index, error=error) for index in indices]
-    outcomes = []
-    for index, value in zip(indices, values):
-        try:
-            outcomes.append(_Outcome(index, fitness=_as_fitness(value)))
-        except Exception as error:
-            outcomes.append(_Outcome(index, error=error))
-    return outcomes
-
-
-def _evaluate_batches(
-    executor: Executor | None, objective: BatchedObjective, candidates: list[np.ndarray]
-) -> tuple[list[_Outcome], BaseException | None]:
-    """A generation in calls of ``objective.size`` candidates, here or one task per call; outcomes in order."""
-    chunks = [
-        list(range(k, min(k + objective.size, len(candidates)))) for k in range(0, len(candidates), objective.size)
-    ]
-    tasks = [(objective.function, chunk, [candidates[i].copy() for i in chunk]) for chunk in chunks]
-    if executor is None:
-        return [outcome for task in tasks for outcome in _evaluate_chunk(*task)], None
-    futures, broken = [], None
-    for task in tasks:
-        try:
-            futures.append(executor.submit(_evaluate_chunk, *task))
-        except Exception as error:
-            broken = error
-            break
-    outcomes = []
-    for future in futures:
-        try:
-            outcomes += future.result()
-        except EXECUTOR_FAILURES as error:
-            broken = broken or error
+    batched = isinstance(objective, BatchedObjective)
+    function = objective.function if batched else objective
+    outcomes, broken = [], None
+    xs = [x.copy() for x in candidates]
+    for outcome in parallel_map(function, xs, executor, batch=objective.size if batched else None):
+        if outcome.lost:
+            broken = broken or outcome.error
+        elif outcome.error is not None:
+            outcomes.append(_Outcome(outcome.index, error=outcome.error))
+        else:
+            try:
+                outcomes.append(_Outcome(outcome.index, fitness=_as_fitness(outcome.value)))
+            except Exception as error:
+                outcomes.append(_Outcome(outcome.index, error=error))
     return outcomes, broken
 
 
@@ -417,11 +344,6 @@ def _as_fitness(value: Any) -> float:
     return number
 
 
-def _describe(error: BaseException) -> str:
-    """``"<ExceptionType>: <message>"``."""
-    return f"{type(error).__name__}: {error}"
-
-
 def _stop_reason(strategy: Any) -> str:
     """Why cma stops now, ``""`` if it does not; its ``maxiter`` (our ``max_generations``) gets our name."""
     criteria = dict(strategy.stop())
@@ -429,13 +351,6 @@ def _stop_reason(strategy: Any) -> str:
         return ""
     criteria.pop("maxiter", None)
     return str(criteria) if criteria else "max_generations"
-
-
-def _progress_bar(total: int) -> Any:
-    """A tqdm bar over ``total`` generations."""
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc="CMA-ES", unit="generation")
 
 
 def _strategy(

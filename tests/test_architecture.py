@@ -27,6 +27,7 @@ BELOW_THE_SIMULATOR = ("model", "motion", "data", "grasp", "controllers", "barre
 FLOORS = (
     ("bhgrasp.errors",),
     ("bhgrasp._validation", "bhgrasp._native"),
+    ("bhgrasp.parallel",),
     ("bhgrasp.metrics", "bhgrasp.sweep", "bhgrasp.tuning"),
     ("bhgrasp.model",),
     ("bhgrasp.motion", "bhgrasp.data"),

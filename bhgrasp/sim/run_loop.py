@@ -9,7 +9,7 @@ and the run stops early at the first state ``until`` accepts.  The loop steps th
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -22,11 +22,32 @@ from bhgrasp.sim.sensor_model import SensorModel, Sensors
 from bhgrasp.sim.step_output import StepInfo
 
 if TYPE_CHECKING:
-    from bhgrasp.sim.simulator import Simulator
+    from bhgrasp.sim.actuation import Actuation
+    from bhgrasp.sim.scene import Scene
+
+
+class Stepper(Protocol):
+    """What the loop needs of a :class:`~bhgrasp.sim.simulator.Simulator`: its step, scene, actuation and dt."""
+
+    dt: float
+    scene: Scene
+    actuation: Actuation
+
+    def initial_state(self) -> State:
+        """The scene's start state."""
+        ...
+
+    def check_state(self, state: State) -> State:
+        """``state`` if it belongs to this scene, else an ``InputError``."""
+        ...
+
+    def step(self, state: State, u: Any, disturbance: Any = None, object_forces: Any = None) -> tuple[State, StepInfo]:
+        """One physics step from ``state`` under inputs ``u``."""
+        ...
 
 
 def run(
-    simulator: Simulator,
+    simulator: Stepper,
     controller: Callable[[float, State], Any],
     duration: float,
     state: State | None = None,
@@ -120,4 +141,4 @@ def _control(controller: Callable[[float, State], Any], t: float, sensed: State)
         raise InputError(f"the controller must return numbers (the inputs u), got {u!r} at t = {t:.6g} s") from error
 
 
-__all__ = ["run"]
+__all__ = ["Stepper", "run"]

@@ -6,16 +6,24 @@ Python engine, or the compiled engine's ``Contacts``/``Memory``) and are convert
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from bhgrasp.data import ContactMemory, ContactSet, State, empty_contact_set
-from bhgrasp.sim.scene_layout import object_states
+from bhgrasp.sim.scene_layout import SceneLayout, object_states
 
 if TYPE_CHECKING:
     from bhgrasp.sim.engine import Engine
-    from bhgrasp.sim.simulator import Simulator
+    from bhgrasp.sim.scene import Scene
+
+
+class StepSource(Protocol):
+    """What a state's derived fields are read from: the stepping simulator's scene, layout and engine."""
+
+    scene: Scene
+    layout: SceneLayout
+    engine: Engine
 
 
 class StepInfo:
@@ -52,7 +60,7 @@ class StepOutput:
 
     __slots__ = ("contacts", "memory", "simulator")
 
-    def __init__(self, simulator: Simulator, contacts: Any, memory: Any) -> None:
+    def __init__(self, simulator: StepSource, contacts: Any, memory: Any) -> None:
         self.simulator, self.contacts, self.memory = simulator, contacts, memory
 
     def derive(self, name: str, state: State) -> dict[str, Any]:
@@ -80,4 +88,4 @@ class StepOutput:
         }
 
 
-__all__ = ["StepInfo", "StepOutput"]
+__all__ = ["StepInfo", "StepOutput", "StepSource"]

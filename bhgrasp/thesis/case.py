@@ -8,6 +8,8 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from bhgrasp.parallel import progress_bar
+
 T = TypeVar("T")
 
 
@@ -41,13 +43,14 @@ class Case:
 
 
 def case_progress(items: Iterable[T], total: int, label: str, progress: bool) -> Iterator[T]:
-    """``items`` (a chapter's cases), behind a tqdm bar named ``label`` when ``progress`` (on stderr)."""
-    if not progress:
-        yield from items
-        return
-    from tqdm import tqdm
-
-    yield from tqdm(items, total=total, desc=label, unit="case", mininterval=0.5)
+    """``items`` (a chapter's cases), behind a bar named ``label`` when ``progress`` (on stderr)."""
+    bar = progress_bar(total, label, "case", enabled=progress)
+    try:
+        for item in items:
+            yield item
+            bar.update()
+    finally:
+        bar.close()
 
 
 __all__ = ["Case", "case_progress"]

@@ -36,12 +36,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from bhgrasp.parallel import executor_for, parallel_map, progress_bar
 from bhgrasp.scenarios.finger_press import (
     CONTACT,
     IMPACT_WINDOW,
     OBJECT_MASS,
 )
-from bhgrasp.thesis.case import Case, case_progress
+from bhgrasp.thesis.case import Case
 from bhgrasp.thesis.chapter4_closed_form import as_printed, friction_offset, inner_loop_stiffness, steady_force
 from bhgrasp.thesis.chapter4_contact import f3_push, one_link_contact
 from bhgrasp.thesis.chapter4_fim import f3_force, planar_impedance, three_fingers
@@ -80,25 +81,33 @@ def _run_cases(scale: float, executor: Any, progress: bool = False) -> list[Case
     another, or any Executor (as :func:`tuning`'s).  Results do not depend on it.  ``progress``: a bar over the
     cases (the tuning, the longest, counted first).
     """
-    from concurrent.futures import ProcessPoolExecutor
-
-    if executor == "serial":
-        return [
-            make(scale, executor) if key == "tuning" else make(scale)
-            for key, make in case_progress(CASES.items(), len(CASES), "ch4", progress)
-        ]
-    pool = ProcessPoolExecutor(max_workers=min(6, os.cpu_count() or 1)) if executor is None else None
-    runner = pool if executor is None else executor
+    bar = progress_bar(len(CASES), "ch4", "case", enabled=progress)
+    others = [key for key in CASES if key != "tuning"]
+    done = {}
     try:
-        others = {key: runner.submit(make, scale) for key, make in CASES.items() if key != "tuning"}
-        order = [key for key in CASES if key == "tuning"] + list(others)  # tune while the others run
-        done = {}
-        for key in case_progress(order, len(order), "ch4", progress):
-            done[key] = tuning(scale, runner) if key == "tuning" else others[key].result()
-        return [done[key] for key in CASES]
+        with executor_for(executor, min(6, os.cpu_count() or 1)) as runner:
+            if runner == "serial":
+                for key, make in CASES.items():
+                    done[key] = make(scale, runner) if key == "tuning" else make(scale)
+                    bar.update()
+                return [done[key] for key in CASES]
+            running = parallel_map(_make_case, [(key, scale) for key in others], runner)  # submitted now
+            done["tuning"] = tuning(scale, runner)  # tune while the others run
+            bar.update()
+            for outcome in running:
+                if outcome.error is not None:
+                    raise outcome.error
+                done[others[outcome.index]] = outcome.value
+                bar.update()
     finally:
-        if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
+        bar.close()
+    return [done[key] for key in CASES]
+
+
+def _make_case(item: tuple[str, float]) -> Case:
+    """Case ``key`` of :data:`CASES` at ``scale`` (runs in a worker, or here)."""
+    key, scale = item
+    return CASES[key](scale)
 
 
 def _markdown_table(header: list[str], rows: list[list[str]]) -> list[str]:

@@ -18,6 +18,7 @@ import numpy as np
 from bhgrasp.controllers.workspace import workspace_dynamics
 from bhgrasp.errors import InputError
 from bhgrasp.model.hand import Hand
+from bhgrasp.parallel import Outcome, executor_for, parallel_map
 from bhgrasp.scenarios.press_fitness import (
     TUNING_DURATION,
     TUNING_FORCE,
@@ -69,12 +70,17 @@ def tuning_plan(scale: float) -> tuple[list[tuple[tuple[float, float], int]], in
     return pairs[:count], max(12, round(TUNING_MAX_EVALUATIONS * scale**2))
 
 
-def _submit_all(executor: Any, calls: list[tuple[Callable[..., Any], tuple[Any, ...]]]) -> list[Any]:
-    """Run ``fn(*args)`` for every call, on ``executor`` (``"serial"``: here), results in call order."""
-    if executor == "serial":
-        return [fn(*args) for fn, args in calls]
-    futures = [executor.submit(fn, *args) for fn, args in calls]
-    return [future.result() for future in futures]
+def _call(call: tuple[Callable[..., Any], tuple[Any, ...]]) -> Any:
+    """``fn(*args)`` of ``call = (fn, args)`` (runs in a worker, or here)."""
+    function, arguments = call
+    return function(*arguments)
+
+
+def _value(outcome: Outcome) -> Any:
+    """An outcome's value, or its error raised."""
+    if outcome.error is not None:
+        raise outcome.error
+    return outcome.value
 
 
 def _workers(executor: Any) -> str:
@@ -103,7 +109,7 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
     serial, the runs go side by side (one thread each, all feeding the executor), so that no worker waits for the
     slowest candidate of a generation.
     """
-    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+    from concurrent.futures import ThreadPoolExecutor
 
     from bhgrasp.tuning import cma_es
 
@@ -113,25 +119,23 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
     pairs, cap = tuning_plan(scale)
     lower, upper = np.log10(TUNING_BOUNDS[0]), np.log10(TUNING_BOUNDS[1])
     starts = list(dict.fromkeys(start for start, _ in pairs))
-    pool = ProcessPoolExecutor(max_workers=min(6, os.cpu_count() or 1)) if executor is None else None
-    runner = pool if executor is None else executor
     clock = time.perf_counter()
 
-    def search(start: tuple[float, float], seed: int) -> tuple[Any, ...]:
-        began = time.perf_counter()
+    def search(pair: tuple[tuple[float, float], int]) -> tuple[Any, ...]:
+        (start, seed), began = pair, time.perf_counter()
         x0 = np.clip(np.log10(start), lower, upper)
         result = cma_es(impedance_fitness, x0, TUNING_SIGMA, seed=seed, max_generations=100_000,
                         bounds=(lower, upper), executor=runner, tol_fun=TUNING_TOL_FUN, tol_x=TUNING_TOL_X,
                         max_evaluations=cap)  # fmt: skip
         return start, 10.0**x0, seed, result, time.perf_counter() - began
 
-    try:
+    with executor_for(executor, min(6, os.cpu_count() or 1)) as runner:
         if runner == "serial":
-            runs = [search(start, seed) for start, seed in pairs]
+            runs = [search(pair) for pair in pairs]
         else:
             threads = ThreadPoolExecutor(max_workers=len(pairs))
             try:
-                runs = list(threads.map(search, *zip(*pairs)))
+                runs = [_value(outcome) for outcome in parallel_map(search, pairs, threads)]
             finally:  # on an error, shutting the pool down below ends the other searches
                 threads.shutdown(wait=False, cancel_futures=True)
         searched = time.perf_counter() - clock
@@ -144,10 +148,7 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
             untuned, tuned = tuple(best[start][1]), tuple(10.0 ** best[start][3].best)
             for desired in (4.0, 6.0, 8.0):
                 calls += [(_evaluate, (untuned, desired)), (_evaluate, (tuned, desired))]
-        outcomes = _submit_all(runner, calls)
-    finally:
-        if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
+        outcomes = [_value(outcome) for outcome in parallel_map(_call, calls, runner)]
     wall = time.perf_counter() - clock
     at_start = dict(zip(starts, outcomes[: len(starts)]))
     at_thesis = dict(zip(thesis, outcomes[len(starts) : len(starts) + len(thesis)]))
