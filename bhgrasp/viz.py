@@ -306,6 +306,19 @@ class SceneViewer:
             process.wait()
 
 
+def save_replay(scene: Scene, trajectory: Trajectory, path: str | Path) -> Path:
+    """Write ``trajectory`` on ``scene`` as one self-contained HTML replay at ``path``; returns the path.
+
+    A viewer is started for it on localhost, and stopped.
+    """
+    viewer = SceneViewer(scene, quiet=True)  # its server ends with this call: no address to print
+    try:
+        viewer.replay(trajectory)
+        return viewer.save_html(path)
+    finally:
+        viewer.close()
+
+
 class LiveView(Controller):
     """Wrap a controller so that the viewer shows the run as it goes, in real time.
 
@@ -471,4 +484,4 @@ def _meshcat_shape(item: RigidObject) -> mg.Geometry | None:
     return None
 
 
-__all__ = ["LiveView", "SceneViewer"]
+__all__ = ["LiveView", "SceneViewer", "save_replay"]

@@ -265,9 +265,9 @@ def demo_figure() -> Figure:
 
 def workspace_figure() -> Figure:
     """bhgrasp tour's workspace.png at 500 samples per finger (as tests/test_cli.py runs the tour)."""
-    from bhgrasp.cli import _workspace_figure
+    from bhgrasp.scenarios.tour import workspace_figure
 
-    return _workspace_figure(bh.BarrettHand(), 500, 3)
+    return workspace_figure(bh.BarrettHand(), 500, 3)
 
 
 def test_chapter5_cone_figure_is_linear_and_shows_both_distributions():

@@ -134,7 +134,7 @@ def test_written_json_round_trips_and_the_cli_compares_folders(tmp_path: Path, c
     assert main(["experiments", "compare", str(new), "--reference", str(reference)]) == 1
     out = capsys.readouterr().out
     assert "1 of 4 values outside tolerance" in out and "smc/mass_kg" in out and "1.0008" in out
-    assert results.main(["compare", str(tmp_path / "empty"), "--reference", str(reference)]) == 1
+    assert main(["experiments", "compare", str(tmp_path / "empty"), "--reference", str(reference)]) == 1
     assert main(["experiments", "compare"]) == 2  # the folder is required
 
 

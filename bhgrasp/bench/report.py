@@ -165,6 +165,24 @@ def groups(trials: list[dict[str, Any]]) -> list[str]:
     return list(dict.fromkeys(t.get("set", "") for t in trials))
 
 
+def summary_lines(trials: list[dict[str, Any]], walls: Sequence[float] = (), spreads: bool = False) -> list[str]:
+    """What ``bhgrasp grasp-bench`` prints: the success per set and actuation, each failure's reason, wall times.
+
+    ``spreads``: a spread study (each failure names its spread).
+    """
+    lines = []
+    for group in groups(trials):
+        for actuation, (ok, strict, total) in success_rates(trials, group).items():
+            lines.append(f"{f'{group} set, ' if group else ''}{actuation}: {ok}/{total} succeed ({strict} strict)")
+    for trial in trials:
+        if not trial["success"]:
+            at = f" at spread {trial['spread']:g} rad" if spreads else ""
+            lines.append(f"  {trial['object']} {trial['grasp']} {trial['actuation']}{at}: {trial['failure']}")
+    if walls:
+        lines.append(f"wall time per trial: {min(walls):.1f}-{max(walls):.1f} s")
+    return lines
+
+
 COMMAND = (
     "bhgrasp grasp-bench --set development --set held-out --json docs/results/grasp_benchmark.json "
     "--report docs/results/grasp_benchmark.md"

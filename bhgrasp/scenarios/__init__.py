@@ -1,15 +1,15 @@
 """Reusable scenes: hands, objects and controllers set up for a run, for users, tests, notebooks and studies.
 
-The reference hold (:mod:`~bhgrasp.scenarios.hold`), the chapter-5 box grasp (:mod:`~bhgrasp.scenarios.box_grasp`),
-the Allegro box grasp (:mod:`~bhgrasp.scenarios.allegro_grasp`), any object grasped as the synthesis plans it
+The reference hold (:mod:`~bhgrasp.scenarios.hold`), the chapter-5 box grasp (:mod:`~bhgrasp.scenarios.box_grasp`), the
+Allegro box grasp (:mod:`~bhgrasp.scenarios.allegro_grasp`), any object grasped as the synthesis plans it
 (:mod:`~bhgrasp.scenarios.object_grasp`), the grasp demo and its result (:mod:`~bhgrasp.scenarios.grasp_demo`,
 :mod:`~bhgrasp.scenarios.demo_result`), its controllers by name (:mod:`~bhgrasp.scenarios.grasp_controllers`) and
-uncertainties (:mod:`~bhgrasp.scenarios.uncertainty`), the ideal object loop (:mod:`~bhgrasp.scenarios.object_loop`),
-the identification runs (:mod:`~bhgrasp.scenarios.identification`), grasped objects carried along paths
-(:mod:`~bhgrasp.scenarios.carry`), a finger pressing a spring-mounted box (:mod:`~bhgrasp.scenarios.finger_press`,
-chapter 4's benches) and the fitness that tunes its impedance (:mod:`~bhgrasp.scenarios.press_fitness`), and the
-sweep rollouts built on them (:mod:`~bhgrasp.scenarios.rollouts`); joint tracking with the thesis' joint
-controllers by name (:mod:`~bhgrasp.scenarios.joint_tracking`).
+uncertainties (:mod:`~bhgrasp.scenarios.uncertainty`), the tour of the hand (:mod:`~bhgrasp.scenarios.tour`), the ideal
+object loop (:mod:`~bhgrasp.scenarios.object_loop`), the identification runs (:mod:`~bhgrasp.scenarios.identification`),
+grasped objects carried along paths (:mod:`~bhgrasp.scenarios.carry`), a finger pressing a spring-mounted box
+(:mod:`~bhgrasp.scenarios.finger_press`, chapter 4's benches) and the fitness that tunes its impedance
+(:mod:`~bhgrasp.scenarios.press_fitness`), and the sweep rollouts built on them (:mod:`~bhgrasp.scenarios.rollouts`);
+joint tracking with the thesis' joint controllers by name (:mod:`~bhgrasp.scenarios.joint_tracking`).
 """
 
 from bhgrasp.scenarios.allegro_grasp import allegro_box_grasp, allegro_hand
@@ -26,6 +26,7 @@ from bhgrasp.scenarios.object_grasp import OBJECTS, ObjectGrasp, object_grasp, r
 from bhgrasp.scenarios.object_loop import ObjectLoopRun, ideal_object_loop
 from bhgrasp.scenarios.press_fitness import impedance_fitness
 from bhgrasp.scenarios.rollouts import check_grasp_case, grasp_rollout, hold_rollout
+from bhgrasp.scenarios.tour import hold_lines, save_workspace_figure, tripod_lines
 from bhgrasp.scenarios.uncertainty import UNCERTAINTIES, sensor_model
 
 __all__ = [
@@ -58,6 +59,7 @@ __all__ = [
     "grasp_controller",
     "grasp_rollout",
     "grasp_scene",
+    "hold_lines",
     "hold_rollout",
     "ideal_object_loop",
     "identification_run",
@@ -70,6 +72,8 @@ __all__ = [
     "run_object_grasp",
     "run_path",
     "save_demo",
+    "save_workspace_figure",
     "sensor_model",
+    "tripod_lines",
     "waypoints",
 ]

@@ -20,12 +20,10 @@ repository root::
 
 from __future__ import annotations
 
-import argparse
 import fnmatch
 import json
 import math
 import re
-import sys
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -351,36 +349,9 @@ def update_readme(readme: Path, folder: Path = REFERENCE) -> bool:
     return True
 
 
-# ---------------------------------------------------------------------------------------------------- command line
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m bhgrasp.thesis.results compare NEW_DIR [--reference DIR]`` or ``readme-table``."""
-    parser = argparse.ArgumentParser(prog="python -m bhgrasp.thesis.results", description=__doc__.split("\n")[0])
-    parser.add_argument("command", choices=["compare", "readme-table"])
-    parser.add_argument("folder", nargs="?", type=Path, help="compare: the new run's folder (chapterN.json)")
-    parser.add_argument("--reference", type=Path, default=REFERENCE, help="committed results [docs/results]")
-    parser.add_argument("--readme", type=Path, default=None, help="readme-table: rewrite this README's table")
-    args = parser.parse_args(argv)
-    if args.command == "compare":
-        if args.folder is None:
-            parser.error("compare needs the new run's folder")
-        ok, report = compare_folders(args.folder, args.reference)
-        print(report)
-        return 0 if ok else 1
-    if args.readme is None:
-        print(render_readme_table(args.reference), end="")
-        return 0
-    changed = update_readme(args.readme, args.reference)
-    print(f"{args.readme}: results table {'rewritten' if changed else 'already up to date'}")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
-
-
 __all__ = [
     "DEFAULT_TOLERANCE", "README_ROWS", "TOLERANCES", "Difference", "Tolerance", "allowed_difference",
     "chapter4_figures", "compare", "compare_folders", "dumps", "figures_of_merit", "fill", "format_differences",
-    "load", "load_folder", "main", "readme_table", "render_readme_table", "results_document", "slug",
+    "load", "load_folder", "readme_table", "render_readme_table", "results_document", "slug",
     "table_values", "tolerance_for", "update_readme", "write_results",
 ]  # fmt: skip
