@@ -1,4 +1,11 @@
-"""The compiled extension ``bhgrasp._core``: one loader, and the kernels built once per model they copy.
+"""The compiled extension ``bhgrasp._core``: one loader, one engine switch, and the kernels built once per model.
+
+Every computation that has a compiled kernel and a Python twin runs the compiled one, unless asked otherwise: per
+object with ``engine="python"`` (``Simulator``, ``ContactForceQP``, ``SMCAdaptiveGrasp``), or everywhere with the
+environment variable ``BHGRASP_ENGINE=python`` (read when bhgrasp is imported: a machine without a C++ compiler, or
+a check of the twins).  ``engine=None`` means that default.  Nothing falls back silently: where the default is the
+compiled engine and ``bhgrasp._core`` does not load, the call raises
+:class:`~bhgrasp.errors.CompiledEngineUnavailable` saying how to rebuild, or how to switch.
 
 A module of its own, outside :mod:`bhgrasp.sim`, so that the model, grasp and controller modules use the compiled
 kernels without importing the simulator (DESIGN.md: controllers never import the simulator).
@@ -6,6 +13,7 @@ kernels without importing the simulator (DESIGN.md: controllers never import the
 
 from __future__ import annotations
 
+import os
 import sys
 import weakref
 from collections.abc import Callable
@@ -14,29 +22,67 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from bhgrasp.errors import CompiledEngineUnavailable
+from bhgrasp.errors import CompiledEngineUnavailable, InputError
 
+ENGINES = ("compiled", "python")
+ENGINE_VARIABLE = "BHGRASP_ENGINE"
+DEFAULT_ENGINE = os.environ.get(ENGINE_VARIABLE, "compiled")  # checked where it is used: importing never fails
 _KERNELS: weakref.WeakKeyDictionary[Any, dict[str, Any]] = weakref.WeakKeyDictionary()
 _MISSING = object()
 
 
-def optional_core() -> ModuleType | None:
-    """``bhgrasp._core``, or ``None`` when it does not load (the callers then run their Python twins)."""
+def default_engine() -> str:
+    """The engine of ``engine=None``: ``"compiled"``, or ``"python"`` with ``BHGRASP_ENGINE=python``.
+
+    Raises:
+        InputError: ``BHGRASP_ENGINE`` holds another value.
+    """
+    if DEFAULT_ENGINE not in ENGINES:
+        raise InputError(f"{ENGINE_VARIABLE}={DEFAULT_ENGINE!r}: expected one of {ENGINES} (unset: compiled)")
+    return DEFAULT_ENGINE
+
+
+def engine_name(engine: str | None) -> str:
+    """``engine`` checked, ``None`` resolved to :func:`default_engine`.
+
+    Raises:
+        InputError: ``engine`` is not None, ``"compiled"`` or ``"python"``.
+    """
+    if engine is None:
+        return default_engine()
+    if engine not in ENGINES:
+        raise InputError(f"`engine` must be one of {ENGINES} or None (the default engine), got {engine!r}")
+    return engine
+
+
+def default_core() -> ModuleType | None:
+    """``bhgrasp._core`` for a computation on the default engine; ``None`` when the default is Python.
+
+    Raises:
+        CompiledEngineUnavailable: The default is the compiled engine and the core does not load.
+    """
     loaded = sys.modules.get("bhgrasp._core")  # the per-step callers' fast path: imported before
-    if loaded is not None:
+    if loaded is not None and DEFAULT_ENGINE == "compiled":
         return loaded
-    try:
-        from bhgrasp import _core
-    except ImportError:
+    if default_engine() == "python":
         return None
-    return _core
+    return required_core("the compiled core")
+
+
+def core_loads() -> bool:
+    """True if ``bhgrasp._core`` loads (whatever the default engine)."""
+    try:
+        from bhgrasp import _core  # noqa: F401
+    except ImportError:
+        return False
+    return True
 
 
 def required_core(what: str) -> ModuleType:
     """``bhgrasp._core`` for ``what`` (e.g. "the compiled engine").
 
     Raises:
-        CompiledEngineUnavailable: It does not load; the message says why, how to rebuild, and the Python fallback.
+        CompiledEngineUnavailable: It does not load; the message says why, how to rebuild, and how to run Python.
     """
     try:
         from bhgrasp import _core
@@ -51,7 +97,8 @@ def required_core(what: str) -> ModuleType:
             ) from error
         raise CompiledEngineUnavailable(
             f"{what} (bhgrasp._core) does not load ({error}); reinstall with `pip install -e .` (it needs a C++17 "
-            "compiler, e.g. Debian's g++), or pass engine='python' to use the Python reference"
+            f"compiler, e.g. Debian's g++), or run the Python reference: engine='python' for one object, "
+            f"{ENGINE_VARIABLE}=python for everything"
         ) from error
     return _core
 
@@ -78,7 +125,10 @@ def _shadowed_install(package: Path | None = None, distribution: metadata.Distri
 
 
 def kernel(owner: Any, name: str, build: Callable[[ModuleType], Any]) -> Any:
-    """The compiled kernel ``name`` of ``owner`` (e.g. a Hand), ``build(core)`` on first use; ``None`` without the core.
+    """The compiled kernel ``name`` of ``owner`` (e.g. a Hand), ``build(core)`` on first use (:func:`default_core`).
+
+    ``None`` when the default engine is Python; :class:`~bhgrasp.errors.CompiledEngineUnavailable` when it is the
+    compiled one and the core does not load.
 
     Kept beside ``owner``, not in it (copies and pickles of the owner build their own); a kernel holds a copy of
     the owner's model, which must not change in place afterwards.
@@ -88,9 +138,19 @@ def kernel(owner: Any, name: str, build: Callable[[ModuleType], Any]) -> Any:
         kernels = _KERNELS[owner] = {}
     found = kernels.get(name, _MISSING)
     if found is _MISSING:
-        core = optional_core()
+        core = default_core()
         found = kernels[name] = None if core is None else build(core)
     return found
 
 
-__all__ = ["kernel", "optional_core", "required_core"]
+__all__ = [
+    "DEFAULT_ENGINE",
+    "ENGINES",
+    "ENGINE_VARIABLE",
+    "core_loads",
+    "default_core",
+    "default_engine",
+    "engine_name",
+    "kernel",
+    "required_core",
+]

@@ -26,7 +26,7 @@ BELOW_THE_SIMULATOR = ("model", "motion", "data", "grasp", "controllers", "barre
 # everything it re-exports.
 FLOORS = (
     ("bhgrasp.errors",),
-    ("bhgrasp._validation", "bhgrasp._native"),
+    ("bhgrasp._validation", "bhgrasp._native", "bhgrasp._twins"),
     ("bhgrasp.parallel",),
     ("bhgrasp.metrics", "bhgrasp.sweep", "bhgrasp.tuning"),
     ("bhgrasp.model",),

@@ -215,3 +215,23 @@ def test_changed_actuation_parameters_reach_the_compiled_step() -> None:
     reference, _ = python.step(hold.state, u)
     other, _ = compiled.step(hold.state, u)
     np.testing.assert_allclose(other.scene_v, reference.scene_v, rtol=0, atol=TOLERANCE)
+
+
+def test_the_recorders_join_is_its_numpy_twin(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A compiled run's contacts, joined in C++ (src/recording.cpp) and by NumPy: the same arrays, bit for bit."""
+    from bhgrasp import _native
+    from bhgrasp.sim.recorder import Recorder
+
+    hold = reference_hold()
+    state, parts = hold.state, []
+    for _ in range(300):
+        state, info = hold.simulator.step(state, hold.controller(state.t, state))
+        parts.append(info.contact_arrays)
+    assert sum(len(part) for part in parts) >= 900  # three pads in contact throughout
+    recorder = Recorder(hold.simulator.scene, hold.simulator.actuation)
+    joined = recorder._contact_arrays(parts)
+    monkeypatch.setattr(_native, "DEFAULT_ENGINE", "python")
+    python = recorder._contact_arrays(parts)
+    assert joined.keys() == python.keys()
+    for name in joined:
+        assert joined[name].dtype == python[name].dtype and np.array_equal(joined[name], python[name]), name

@@ -37,6 +37,7 @@ import pytest
 
 import bhgrasp
 import bhgrasp.grasp.forces as grasp_forces
+from bhgrasp import _native
 from bhgrasp.errors import CompiledEngineUnavailable, InputError
 from bhgrasp.grasp import ContactForceQP, default_torque_scale, friction_cone_edges, grasp_map
 
@@ -254,8 +255,15 @@ def test_engine_selection(monkeypatch):
     assert ContactForceQP(3, 0.5, engine="python").engine == "python"
     with pytest.raises(InputError, match="`engine` must be one of"):
         ContactForceQP(3, 0.5, engine="c++")
-    monkeypatch.delattr(bhgrasp, "_core")  # the core does not load
+    monkeypatch.setattr(_native, "DEFAULT_ENGINE", "c")
+    with pytest.raises(InputError, match="BHGRASP_ENGINE='c': expected one of"):
+        ContactForceQP(3, 0.5)
+    monkeypatch.setattr(_native, "DEFAULT_ENGINE", "compiled")
+    monkeypatch.delattr(bhgrasp, "_core")  # the core does not load: no silent fallback
     monkeypatch.setitem(sys.modules, "bhgrasp._core", None)
+    for engine in (None, "compiled"):
+        with pytest.raises(CompiledEngineUnavailable, match="engine='python' for one object"):
+            ContactForceQP(3, 0.5, engine=engine)
+    assert ContactForceQP(3, 0.5, engine="python").engine == "python"
+    monkeypatch.setattr(_native, "DEFAULT_ENGINE", "python")  # BHGRASP_ENGINE=python
     assert ContactForceQP(3, 0.5).engine == "python"
-    with pytest.raises(CompiledEngineUnavailable, match="engine='python'"):
-        ContactForceQP(3, 0.5, engine="compiled")

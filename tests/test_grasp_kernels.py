@@ -22,6 +22,7 @@ import pytest
 
 import bhgrasp as bh
 import bhgrasp.grasp.kinematics as kinematics_module
+from bhgrasp import _native
 from bhgrasp.grasp import ObjectState, contact_frames, contact_kinematics, contact_kinematics_python, grasp_kinematics
 from bhgrasp.scenarios.allegro_grasp import allegro_hand
 from bhgrasp.scenarios.hold import reference_hold
@@ -207,15 +208,20 @@ def test_compiled_kernel_reads_the_base_placement_of_each_call():
     assert not np.allclose(contact_kinematics(hand, *grasp).joint_map, before.joint_map)
 
 
-def test_contact_kinematics_falls_back_to_the_python_twin_without_the_compiled_core(monkeypatch):
-    monkeypatch.setitem(__import__("sys").modules, "bhgrasp._core", None)  # import of it now fails
-    monkeypatch.delattr(bh, "_core", raising=False)
+def test_without_the_compiled_core_the_kinematics_say_so_unless_python_is_the_default(monkeypatch):
+    """No silent fallback: the default engine (compiled) raises, naming the switch; BHGRASP_ENGINE=python runs the
+    twin (it used to fall back to the twin without a word)."""
     hand = bh.BarrettHand()
     grasp = world_grasp(hand, list(hand.fingertip_frames.values()), np.random.default_rng(3))
+    monkeypatch.setitem(__import__("sys").modules, "bhgrasp._core", None)  # import of it now fails
+    monkeypatch.delattr(bh, "_core", raising=False)
+    with pytest.raises(bh.CompiledEngineUnavailable, match="BHGRASP_ENGINE=python for everything"):
+        contact_kinematics(hand, *grasp)
+    monkeypatch.setattr(_native, "DEFAULT_ENGINE", "python")
     assert kinematics_module._kernel(hand) is None
-    fallback, python = contact_kinematics(hand, *grasp), contact_kinematics_python(hand, *grasp)
+    python_default, python = contact_kinematics(hand, *grasp), contact_kinematics_python(hand, *grasp)
     for name in MAPS:
-        np.testing.assert_array_equal(getattr(fallback, name), getattr(python, name))
+        np.testing.assert_array_equal(getattr(python_default, name), getattr(python, name))
 
 
 def test_compiled_kernel_rejects_arrays_of_the_wrong_size():

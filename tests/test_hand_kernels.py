@@ -14,10 +14,10 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp._native import optional_core
+from bhgrasp._native import core_loads
 from bhgrasp.scenarios.allegro_grasp import allegro_hand
 
-pytestmark = pytest.mark.skipif(optional_core() is None, reason="bhgrasp._core is not built")
+pytestmark = pytest.mark.skipif(not core_loads(), reason="bhgrasp._core is not built")
 
 
 def hands():

@@ -15,7 +15,7 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp._native import optional_core
+from bhgrasp._native import core_loads
 from bhgrasp.controllers.adaptive_grasp import object_parameters, object_regressor, object_regressor_python
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.frames import _frames, _unit_normals, contact_frames
@@ -24,7 +24,7 @@ from bhgrasp.scenarios.hold import reference_hold
 
 RELATIVE = 1e-14
 
-pytestmark = pytest.mark.skipif(optional_core() is None, reason="bhgrasp._core is not built")
+pytestmark = pytest.mark.skipif(not core_loads(), reason="bhgrasp._core is not built")
 
 
 def random_state(rng: np.random.Generator, hand: bh.Hand, m: int) -> bh.State:

@@ -22,6 +22,7 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp
+from bhgrasp import _native
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.supervisor import GraspSupervisor
@@ -178,13 +179,17 @@ def test_copies_and_pickles_build_their_own_compiled_law(run):
     np.testing.assert_array_equal(twin(t, state), law(t, state))
 
 
-def test_without_the_core_the_default_is_the_python_law(barrett, monkeypatch):
+def test_without_the_core_the_law_says_so_unless_python_is_the_default(barrett, monkeypatch):
+    """No silent fallback (the default used to become the Python law without a word)."""
     box = Box(size=(0.06, 0.05, 0.05), mass=0.3)
     monkeypatch.delattr(bhgrasp, "_core")  # the core does not load
     monkeypatch.setitem(sys.modules, "bhgrasp._core", None)
+    for engine in (None, "compiled"):
+        with pytest.raises(CompiledEngineUnavailable, match="BHGRASP_ENGINE=python for everything"):
+            SMCAdaptiveGrasp(barrett, box, engine=engine)
+    assert SMCAdaptiveGrasp(barrett, box, engine="python").engine == "python"
+    monkeypatch.setattr(_native, "DEFAULT_ENGINE", "python")  # BHGRASP_ENGINE=python
     assert SMCAdaptiveGrasp(barrett, box).engine == "python"
-    with pytest.raises(CompiledEngineUnavailable, match="engine='python'"):
-        SMCAdaptiveGrasp(barrett, box, engine="compiled")
 
 
 def opposed(state):

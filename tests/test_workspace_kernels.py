@@ -18,7 +18,7 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp._native import optional_core
+from bhgrasp._native import core_loads
 from bhgrasp.controllers import WorkspaceComputedTorque, workspace_dynamics
 from bhgrasp.controllers._workspace_terms import (
     _finger_terms,
@@ -38,7 +38,7 @@ RELATIVE = 1e-12
 MAX_CONDITION = 100.0
 FIELDS = ("basis", "jacobian", "mass", "coriolis", "gravity")
 
-pytestmark = pytest.mark.skipif(optional_core() is None, reason="bhgrasp._core is not built")
+pytestmark = pytest.mark.skipif(not core_loads(), reason="bhgrasp._core is not built")
 
 
 def hands():

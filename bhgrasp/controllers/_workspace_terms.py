@@ -2,9 +2,9 @@
 
 What :mod:`bhgrasp.controllers.workspace` builds on: the compiled kernel ``_core.FingerDynamics``
 (``src/workspace.cpp``: the joint-space terms tip position, J, M_f, G_f, C q_dot, J_dot q_dot; the SVD, inverse and
-products that turn them into B, J_t, M_x, C_x, G_x; the computed torque) when ``bhgrasp._core`` loads, and its Python
-twins :func:`_finger_terms_python` (equal to the bit), :func:`_workspace_dynamics` and :func:`_fingertip_torque`
-(NumPy: equal to round-off, tests/test_workspace_kernels.py).
+products that turn them into B, J_t, M_x, C_x, G_x; the computed torque) on the default engine (:mod:`bhgrasp._native`),
+and its Python twins :func:`_finger_terms_python` (equal to the bit), :func:`_workspace_dynamics` and
+:func:`_fingertip_torque` (NumPy: equal to round-off, tests/test_workspace_kernels.py).
 """
 
 from __future__ import annotations
@@ -155,7 +155,7 @@ def _finger_terms_python(hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, 
 
 
 def _kernel(hand: Hand) -> Any:
-    """The hand's compiled ``_core.FingerDynamics``, built on first use; ``None`` if ``bhgrasp._core`` is missing.
+    """The hand's compiled ``_core.FingerDynamics``, built on first use; ``None`` when the default engine is Python.
 
     It holds a copy of the hand's model (the hand's inertias must not change in place afterwards); gravity is passed at
     every call.

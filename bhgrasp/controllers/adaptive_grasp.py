@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from bhgrasp._native import optional_core, required_core
+from bhgrasp._native import engine_name, required_core
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.controllers._smc_law import CompiledSMCLaw
 from bhgrasp.controllers.base import gain_vector
@@ -50,8 +50,6 @@ from bhgrasp.errors import InputError
 from bhgrasp.model.hand import Hand
 from bhgrasp.model.objects import RigidObject
 from bhgrasp.motion.trajectories import Reference
-
-ENGINES = (None, "compiled", "python")
 
 
 class SMCAdaptiveGrasp(ObjectGraspController):
@@ -108,9 +106,10 @@ class SMCAdaptiveGrasp(ObjectGraspController):
                 printed in (5.57)).
             mu, squeeze, min_normal_force, approach_torque, gravity, distribution: As in
                 :class:`~bhgrasp.controllers.grasping.ObjectGraspController`.
-            engine: ``None`` (default): the compiled law when ``bhgrasp._core`` loads and it covers the options
-                (``hand_adaptation=None``, ``distribution="qp"``, no subclass overriding a step of the law), else
-                the Python one; ``"compiled"`` (raises if it does not load or cover them) or ``"python"``.
+            engine: ``None`` (default): the default engine (:func:`~bhgrasp._native.default_engine`) where the
+                compiled law covers the options (``hand_adaptation=None``, ``distribution="qp"``, no subclass
+                overriding a step of the law), else the Python one; ``"compiled"`` (raises if the core does not
+                load or the law does not cover the options) or ``"python"``.
             identification: Composite adaptation of sigma_o
                 (:class:`~bhgrasp.controllers.object_identification.ObjectIdentification`: the measured contact
                 wrench's prediction error joins (5.52), P(0) = Gamma_o); ``None``: the thesis' law (5.52) alone.
@@ -138,8 +137,7 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         self.hand_adaptation = None if hand_adaptation is None else as_positive(hand_adaptation, "hand_adaptation")
         self._hand_rates = None if hand_adaptation is None else self.hand_adaptation * parameter_scales(nominal) ** 2
         self.force_error = force_error
-        if engine not in ENGINES:
-            raise InputError(f"`engine` must be one of {ENGINES}, got {engine!r}")
+        chosen = engine_name(engine)
         self._compiled: CompiledSMCLaw | None = None
         self._initial_object = object_parameters(nominal_object.mass, nominal_object.inertia)
         self.object_estimate = self._initial_object.copy()
@@ -153,11 +151,8 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         uncovered = self._python_only()
         if engine == "compiled" and uncovered:
             raise InputError(f"engine='compiled' does not cover {uncovered}; pass engine='python' (or None)")
-        core = None
-        if engine != "python" and not uncovered:
-            core = required_core("the compiled SMC-adaptive law") if engine == "compiled" else optional_core()
-        if core is not None:
-            self._compiled = CompiledSMCLaw(self, core)
+        if chosen == "compiled" and not uncovered:
+            self._compiled = CompiledSMCLaw(self, required_core("the compiled SMC-adaptive law"))
         self.engine = "python" if self._compiled is None else "compiled"
 
     def _python_only(self) -> str:

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._native import optional_core
+from bhgrasp._native import default_core
 
 # Body-frame inertia basis B_k matching sigma_o[1:] = (I_xx, I_xy, I_xz, I_yy, I_yz, I_zz).
 _INERTIA_BASIS = np.zeros((6, 3, 3))
@@ -33,13 +33,13 @@ def object_parameters(mass: float, inertia: Any) -> np.ndarray:
 def object_regressor(rotation: Any, twist: Any, v_r: Any, a_r: Any, gravity: Any) -> np.ndarray:
     """Y_o (6, 7) with Y_o sigma_o = M_o a_r + C_o(omega) v_r + N_o at the COM (world; see the module docstring).
 
-    Computed by the compiled kernel (``src/sensing.cpp``) when ``bhgrasp._core`` loads, otherwise by
+    Computed by the compiled kernel (``src/sensing.cpp``) on the default engine (:mod:`bhgrasp._native`), by
     its readable twin :func:`object_regressor_python` (the same sums; tests/test_sensing_kernels.py holds them
     together).
     """
     rotation, omega = np.asarray(rotation, dtype=float), np.asarray(twist, dtype=float)[3:]
     v_r, a_r = np.asarray(v_r, dtype=float), np.asarray(a_r, dtype=float)
-    core = optional_core()
+    core = default_core()
     if core is None:
         return object_regressor_python(rotation, twist, v_r, a_r, gravity)
     return core.object_regressor(rotation, omega, v_r, a_r, np.asarray(gravity, dtype=float))

@@ -11,8 +11,8 @@ tip position within the column space of J (an orthonormal basis B, J_t = B^T J),
 that plane.  Joints outside the controlled fingers are held by joint-space computed torque.
 
 The whole chain (the joint-space terms, B, J_t, M_x, C_x, G_x and the computed torque) runs in a compiled kernel
-(``src/workspace.cpp``) when ``bhgrasp._core`` loads; :mod:`bhgrasp.controllers._workspace_terms` holds it and its
-Python twins.
+(``src/workspace.cpp``) on the default engine (:mod:`bhgrasp._native`); :mod:`bhgrasp.controllers._workspace_terms`
+holds it and its Python twins.
 """
 
 from __future__ import annotations

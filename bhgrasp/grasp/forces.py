@@ -31,9 +31,9 @@ the cycles of ``benchmarks/bench_qp.py`` from scratch), the check: the QP from s
 test.  After an infeasible call the next one tries the nearest problem first, so a persistently infeasible
 request costs one warm-started solve per cycle.
 
-This runs compiled (``src/force_qp.cpp``, proxsuite's C++ API, the same problems, settings and steps) when
-``bhgrasp._core`` loads, otherwise in Python (``bhgrasp/grasp/_force_qp.py``, the readable twin; ``engine="python"``
-picks it); ``tests/test_force_qp_twin.py`` holds the two in lockstep.
+This runs compiled (``src/force_qp.cpp``, proxsuite's C++ API, the same problems, settings and steps) when the default
+engine is the compiled one (:mod:`bhgrasp._native`), otherwise in Python (``bhgrasp/grasp/_force_qp.py``, the readable
+twin; ``engine="python"`` picks it); ``tests/test_force_qp_twin.py`` holds the two in lockstep.
 
 :func:`pseudo_inverse_forces` is the thesis' baseline (5.45), f = G^+ w + (I - G^+ G) f_d: it meets G f = w
 exactly whenever G has full row rank but ignores the cones, so it can command slipping forces.
@@ -47,7 +47,7 @@ from typing import Any
 
 import numpy as np
 
-from bhgrasp._native import optional_core, required_core
+from bhgrasp._native import engine_name, required_core
 from bhgrasp._validation import as_array, as_real, as_vector
 from bhgrasp.errors import InputError
 from bhgrasp.grasp._force_qp import (  # noqa: F401  (the constants are part of this module's API)
@@ -61,8 +61,6 @@ from bhgrasp.grasp._force_qp import (  # noqa: F401  (the constants are part of 
     ContactForceQPPython,
 )
 from bhgrasp.grasp.cones import friction_pyramid
-
-ENGINES = (None, "compiled", "python")
 
 
 @dataclass(frozen=True)
@@ -126,27 +124,24 @@ class ContactForceQP:
                 ``CHECK_ITER`` times more (feasible problems from scratch: <= 17 outer iterations in 3300 random
                 and control-loop cases, one case 79).
             max_iter_in: Inner (semi-smooth Newton) iterations per outer one, >= 1.
-            engine: ``None`` (default): the compiled solver of ``bhgrasp._core`` when it loads, else the Python
-                one; ``"compiled"``: the compiled one; ``"python"``: the Python twin.  :attr:`engine` tells which.
+            engine: ``None`` (default): the default engine (:func:`~bhgrasp._native.default_engine`, compiled
+                unless ``BHGRASP_ENGINE=python``); ``"compiled"``: the compiled solver of ``bhgrasp._core``;
+                ``"python"``: the Python twin.  :attr:`engine` tells which.
 
         Raises:
             InputError: A bad argument.
-            CompiledEngineUnavailable: ``engine="compiled"`` but ``bhgrasp._core`` does not load.
+            CompiledEngineUnavailable: The engine is the compiled one but ``bhgrasp._core`` does not load.
         """
         if int(n_contacts) < 1:
             raise InputError(f"`n_contacts` must be >= 1, got {n_contacts!r}")
         for name, value in (("max_iter", max_iter), ("max_iter_in", max_iter_in)):
             if not isinstance(value, (int, np.integer)) or value < 1:
                 raise InputError(f"`{name}` must be an integer >= 1, got {value!r}")
-        if engine not in ENGINES:
-            raise InputError(f"`engine` must be one of {ENGINES}, got {engine!r}")
+        engine = engine_name(engine)
         args = solver_arguments(n_contacts, mu, facets, min_normal_force, tolerance, max_iter, max_iter_in)
         self.n, self.mu, pyramid, _, self.min_normal_force, _, self.max_iter, self.max_iter_in = args
         self.facets = len(pyramid)
-        if engine == "python":
-            core = None
-        else:
-            core = required_core("the compiled QP") if engine == "compiled" else optional_core()
+        core = required_core("the compiled QP") if engine == "compiled" else None
         self._solver = ContactForceQPPython(*args) if core is None else core.ContactForceQP(*args)
         self.engine = "python" if core is None else "compiled"
         self._no_desired = np.zeros(3 * self.n)

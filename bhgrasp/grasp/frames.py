@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from bhgrasp._native import optional_core
+from bhgrasp._native import default_core
 from bhgrasp._validation import as_array, as_vector
 from bhgrasp.errors import InputError
 from bhgrasp.model.hand import Hand
@@ -54,7 +54,7 @@ def contact_frames(normals: Any) -> np.ndarray:
         InputError: Wrong shape, or a zero or non-finite normal (the message names the contact index).
     """
     normals = _rows(normals, "normals")
-    core = optional_core()
+    core = default_core()
     if core is None:
         return _frames(_unit_normals(normals))
     frames, zero = core.contact_frames(normals, ZERO_NORMAL, TANGENT_SWITCH)  # src/sensing.cpp, _frames' twin

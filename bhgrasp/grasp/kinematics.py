@@ -228,7 +228,7 @@ def _hand_index(hand: Hand) -> _HandIndex:
 
 
 def _kernel(hand: Hand) -> Any:
-    """The hand's compiled ``_core.GraspKinematics``, built on first use; ``None`` if ``bhgrasp._core`` is missing."""
+    """The hand's compiled ``_core.GraspKinematics``, built on first use; ``None`` when the default engine is Python."""
     refuse_couplings(hand.couplings, "the grasp kinematics (grasp map, P = J_h^+ G^T and its rate)")
     return kernel(hand, "GraspKinematics", lambda core: core.GraspKinematics(hand.model.saveToString()))
 

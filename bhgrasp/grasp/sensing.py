@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bhgrasp._native import optional_core
+from bhgrasp._native import default_core
 from bhgrasp._validation import as_array, as_vector
 from bhgrasp.data import State
 from bhgrasp.model.hand import Hand
@@ -72,10 +72,10 @@ class ContactSensing:
     def fingers(self, state: State) -> dict[str, FingerContact]:
         """Per finger (every finger of the hand), its contacts in ``state``.
 
-        Sums in the compiled kernel (``src/sensing.cpp``) when ``bhgrasp._core`` loads, otherwise in
+        Sums in the compiled kernel (``src/sensing.cpp``) on the default engine (:mod:`bhgrasp._native`), else in
         :meth:`_fingers_python` (the same sums; tests/test_sensing_kernels.py holds them together).
         """
-        core = optional_core()
+        core = default_core()
         if core is None:
             return self._fingers_python(state)
         bodies = state.contact_bodies
@@ -125,10 +125,10 @@ class ContactSensing:
     def reaction_torques(self, state: State) -> np.ndarray:
         """Joint torques the contact forces exert on the hand, sum of J_p^T F_on_hand over contacts [N m], (nv,).
 
-        J_p is the translational Jacobian of the contact point on its link; F_on_hand = -(force on the object).
-        The hand's dynamics read M q_dd + C q_d + G = tau + this.  Summed in the compiled kernel
-        (``src/dynamics.cpp``) when ``bhgrasp._core`` loads, otherwise in :meth:`_reaction_torques_python` (equal to
-        round-off: tests/test_sensing_kernels.py).
+        J_p is the translational Jacobian of the contact point on its link; F_on_hand = -(force on the object). The
+        hand's dynamics read M q_dd + C q_d + G = tau + this.  Summed in the compiled kernel (``src/dynamics.cpp``) on
+        the default engine (:mod:`bhgrasp._native`), else in :meth:`_reaction_torques_python` (equal to round-off:
+        tests/test_sensing_kernels.py).
         """
         hand = self.hand
         joint_of = self._joint_of

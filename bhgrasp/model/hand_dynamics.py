@@ -28,7 +28,7 @@ class HandDynamics(HandKinematics):
     """A :class:`~bhgrasp.model.hand_kinematics.HandKinematics` with rigid-body dynamics (Pinocchio's algorithms)."""
 
     def _dynamics(self) -> Any:
-        """The compiled ``_core.HandDynamics`` of this hand's model, built on first use (``None`` without the core).
+        """The compiled ``_core.HandDynamics`` of this hand's model, built on first use; ``None`` on the Python engine.
 
         It holds a copy of the model: the hand's inertias must not be changed in place afterwards
         (:meth:`perturbed` makes a new hand); gravity is passed at every call.

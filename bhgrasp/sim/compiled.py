@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from bhgrasp._native import optional_core, required_core
+from bhgrasp._native import required_core
 from bhgrasp.data import ContactMemory, ContactSet, empty_contact_set
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.engine import DriveTerms, StepResult
@@ -206,5 +206,4 @@ __all__ = [
     "memory_of",
     "native_drive",
     "native_memory",
-    "optional_core",
 ]

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._native import optional_core
+from bhgrasp._native import default_core
 from bhgrasp.data import State, Trajectory
 from bhgrasp.sim.actuation import Actuation
 from bhgrasp.sim.scene import Scene
@@ -92,7 +92,7 @@ class Recorder:
 
         A compiled run's contacts are joined in C++ (one call instead of six array reads per sample).
         """
-        core = optional_core()
+        core = default_core()
         if core is not None and parts and all(isinstance(part, core.Contacts) for part in parts):
             parts = [core.concatenate(parts)]
         arrays = {}

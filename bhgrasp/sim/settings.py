@@ -9,11 +9,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from bhgrasp._native import ENGINES, engine_name
 from bhgrasp._validation import as_positive, as_real
 from bhgrasp.errors import InputError
 
 INTEGRATORS = ("implicit", "semi-implicit", "rk4")
-ENGINES = ("compiled", "python")
 
 
 @dataclass(frozen=True)
@@ -30,7 +30,8 @@ class SimulatorSettings:
         max_coordinate: Largest |coordinate| [m or rad] of a scene configuration: a state beyond it is refused
             and a step that reaches it has diverged (collision queries lose all precision far out, and coal's
             narrow phase crashes near 1e155 m).
-        engine: ``"compiled"`` (the C++ step of ``bhgrasp._core``) or ``"python"`` (the readable reference).
+        engine: ``"compiled"`` (the C++ step of ``bhgrasp._core``) or ``"python"`` (the readable reference);
+            ``None`` is stored as the default engine (:func:`~bhgrasp._native.default_engine`).
     """
 
     dt: float = 1e-3
@@ -40,14 +41,13 @@ class SimulatorSettings:
     max_penetration: float = 0.02
     max_speed: float = 100.0
     max_coordinate: float = 1e4
-    engine: str = "compiled"
+    engine: str | None = None
 
     def __post_init__(self) -> None:
         """Check every setting and store it as a float (or one of the allowed names)."""
         if self.integrator not in INTEGRATORS:
             raise InputError(f"`integrator` must be one of {INTEGRATORS}, got {self.integrator!r}")
-        if self.engine not in ENGINES:
-            raise InputError(f"`engine` must be one of {ENGINES}, got {self.engine!r}")
+        object.__setattr__(self, "engine", engine_name(self.engine))
         for name in ("dt", "joint_limit_stiffness", "max_penetration", "max_speed", "max_coordinate"):
             object.__setattr__(self, name, as_positive(getattr(self, name), name))
         object.__setattr__(self, "joint_limit_damping", as_real(self.joint_limit_damping, "joint_limit_damping"))

@@ -66,7 +66,7 @@ class Simulator:
         joint_limit_damping: float = 0.05,
         max_penetration: float = 0.02,
         max_speed: float = 100.0,
-        engine: str = "compiled",
+        engine: str | None = None,
         max_coordinate: float = 1e4,
     ) -> None:
         """Set up the simulation.
@@ -82,13 +82,14 @@ class Simulator:
             max_penetration: Contact depth [m] beyond which the run is declared diverged.
             max_speed: Joint or object speed [m/s or rad/s] beyond which the run is declared diverged.
             engine: ``"compiled"`` (the C++ step of ``bhgrasp._core``) or ``"python"`` (the readable reference
-                implementation; the same physics, tests/test_compiled.py holds them in lockstep).
+                implementation; the same physics, tests/test_compiled.py holds them in lockstep); ``None``
+                (default): the default engine, compiled unless ``BHGRASP_ENGINE=python``.
             max_coordinate: Largest |coordinate| [m or rad] of a state: beyond it a state is refused and a step
                 has diverged.
 
         Raises:
             InputError: A setting out of range, or an actuation built for another hand.
-            CompiledEngineUnavailable: ``engine="compiled"`` but the C++ core was not built.
+            CompiledEngineUnavailable: The engine is the compiled one but the C++ core does not load.
         """
         settings = SimulatorSettings(
             dt=dt,
