@@ -9,12 +9,14 @@
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
+#include "barrett.hpp"
 #include "batch.hpp"
 #include "dynamics.hpp"
 #include "engine.hpp"
 #include "force_qp.hpp"
 #include "grasp.hpp"
 #include "model_io.hpp"
+#include "options.hpp"
 #include "recording.hpp"
 #include "sensing.hpp"
 #include "smc_law.hpp"
@@ -23,57 +25,30 @@
 namespace nb = nanobind;
 using namespace nb::literals;
 
+// An option struct of options.hpp bound from its field list: a default constructor, each field read-write, and the
+// tuple FIELDS of their names (bhgrasp/sim/native_options.py fills every one of them).
+#define BHGRASP_DEF_RW(type, name) .def_rw(#name, &Self::name)
+#define BHGRASP_NAME(type, name) #name,
+#define BHGRASP_BIND_OPTIONS(module, Struct, FIELDS)                                                \
+  [&] {                                                                                             \
+    using Self = Struct;                                                                            \
+    nb::class_<Self> options(module, #Struct);                                                      \
+    options.def(nb::init<>()) FIELDS(BHGRASP_DEF_RW);                                               \
+    options.attr("FIELDS") = nb::cast(std::vector<std::string>{FIELDS(BHGRASP_NAME)});              \
+  }()
+
 NB_MODULE(_core, m) {
   using namespace bhgrasp;
   m.doc() =
       "bhgrasp's compiled core: the simulation step and the grasp kinematics on Pinocchio's and coal's C++ API, the "
       "internal-force QP on proxsuite's.";
-  nb::class_<ContactLaw>(m, "ContactLaw")
-      .def(nb::init<>())
-      .def_rw("stiffness", &ContactLaw::stiffness).def_rw("damping", &ContactLaw::damping)
-      .def_rw("tangential_stiffness", &ContactLaw::tangential_stiffness)
-      .def_rw("tangential_damping", &ContactLaw::tangential_damping).def_rw("hunt_crossley", &ContactLaw::hunt_crossley)
-      .def_rw("exponent", &ContactLaw::exponent).def_rw("tanh_friction", &ContactLaw::tanh_friction)
-      .def_rw("slip_velocity", &ContactLaw::slip_velocity)
-      .def_rw("match_radius", &ContactLaw::match_radius);
-
-  nb::class_<Pair>(m, "Pair")
-      .def(nb::init<>())
-      .def_rw("geom_a", &Pair::geom_a).def_rw("geom_b", &Pair::geom_b)
-      .def_rw("joint_a", &Pair::joint_a).def_rw("joint_b", &Pair::joint_b)
-      .def_rw("friction", &Pair::friction);
-
-  nb::class_<Query>(m, "Query")
-      .def(nb::init<>())
-      .def_rw("num_max_contacts", &Query::num_max_contacts).def_rw("security_margin", &Query::security_margin)
-      .def_rw("break_distance", &Query::break_distance).def_rw("tolerance", &Query::tolerance)
-      .def_rw("max_num_patch", &Query::max_num_patch)
-      .def_rw("num_samples_curved_shapes", &Query::num_samples_curved_shapes)
-      .def_rw("patch_tolerance", &Query::patch_tolerance);
-
-  nb::class_<Spinning>(m, "Spinning")
-      .def(nb::init<>())
-      .def_rw("angular", &Spinning::angular).def_rw("axes", &Spinning::axes)
-      .def_rw("moments", &Spinning::moments);
-
-  nb::class_<Settings>(m, "Settings")
-      .def(nb::init<>())
-      .def_rw("dt", &Settings::dt).def_rw("integrator", &Settings::integrator)
-      .def_rw("nq_hand", &Settings::nq_hand).def_rw("nv_hand", &Settings::nv_hand)
-      .def_rw("lower", &Settings::lower).def_rw("upper", &Settings::upper)
-      .def_rw("limit_stiffness", &Settings::limit_stiffness).def_rw("limit_damping", &Settings::limit_damping)
-      .def_rw("max_coordinate", &Settings::max_coordinate)
-      .def_rw("joint_stiffness", &Settings::joint_stiffness).def_rw("joint_damping", &Settings::joint_damping)
-      .def_rw("spring_q", &Settings::spring_q).def_rw("spring_v", &Settings::spring_v)
-      .def_rw("spinning", &Settings::spinning).def_rw("pairs", &Settings::pairs)
-      .def_rw("law", &Settings::law)
-      .def_rw("queries", &Settings::queries);
-
-  nb::class_<Drive>(m, "Drive")
-      .def(nb::init<>())
-      .def_rw("transmission", &Drive::transmission).def_rw("joint_damping", &Drive::joint_damping)
-      .def_rw("friction", &Drive::friction)
-      .def_rw("motor_damping", &Drive::motor_damping);
+  BHGRASP_BIND_OPTIONS(m, ContactLaw, BHGRASP_CONTACT_LAW);
+  BHGRASP_BIND_OPTIONS(m, Pair, BHGRASP_PAIR);
+  BHGRASP_BIND_OPTIONS(m, Query, BHGRASP_QUERY);
+  BHGRASP_BIND_OPTIONS(m, Spinning, BHGRASP_SPINNING);
+  BHGRASP_BIND_OPTIONS(m, Settings, BHGRASP_SETTINGS);
+  BHGRASP_BIND_OPTIONS(m, Drive, BHGRASP_DRIVE);
+  BHGRASP_BIND_OPTIONS(m, Barrett, BHGRASP_BARRETT);
 
   nb::class_<Memory>(m, "Memory")
       .def(nb::init<>())
@@ -136,19 +111,6 @@ NB_MODULE(_core, m) {
       .def("detect", &Engine::detect, "q"_a, "memory"_a)
       .def_prop_ro("nq", &Engine::nq)
       .def_prop_ro("nv", &Engine::nv);
-
-  nb::class_<Barrett>(m, "Barrett")
-      .def(nb::init<>())
-      .def_rw("nv_hand", &Barrett::nv_hand).def_rw("spread_first", &Barrett::spread_first)
-      .def_rw("spread_second", &Barrett::spread_second).def_rw("proximal", &Barrett::proximal)
-      .def_rw("distal", &Barrett::distal).def_rw("spread_ratio", &Barrett::spread_ratio)
-      .def_rw("proximal_ratio", &Barrett::proximal_ratio).def_rw("distal_ratio", &Barrett::distal_ratio)
-      .def_rw("distal_alone_ratio", &Barrett::distal_alone_ratio).def_rw("max_motor_torque", &Barrett::max_motor_torque)
-      .def_rw("breakaway_torque", &Barrett::breakaway_torque).def_rw("motor_damping", &Barrett::motor_damping)
-      .def_rw("saturate", &Barrett::saturate)
-      .def_rw("efficiency", &Barrett::efficiency).def_rw("self_locking", &Barrett::self_locking)
-      .def_rw("damping", &Barrett::damping).def_rw("friction", &Barrett::friction)
-      .def_rw("lower", &Barrett::lower);
 
   nb::class_<Batch>(m, "Batch")
       .def(nb::init<const std::string&, const std::string&, const Settings&, int>(), "model"_a, "geometry"_a,

@@ -69,7 +69,7 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
     request.break_distance = query.break_distance;
     request.gjk_tolerance = request.epa_tolerance = query.tolerance;
     requests_.push_back(request);
-    request.gjk_tolerance = request.epa_tolerance = 1e-6;  // contact.py _FALLBACK_TOLERANCE
+    request.gjk_tolerance = request.epa_tolerance = query.fallback_tolerance;
     fallback_requests_.push_back(request);
     patch_requests_.emplace_back(static_cast<std::size_t>(query.max_num_patch),
                                  static_cast<std::size_t>(query.num_samples_curved_shapes), query.patch_tolerance);

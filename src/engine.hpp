@@ -19,77 +19,13 @@
 #include <pinocchio/geometry.hpp>
 #include <pinocchio/multibody.hpp>
 
+#include "options.hpp"
+
 namespace bhgrasp {
 
-using Vector = Eigen::VectorXd;
-using Matrix = Eigen::MatrixXd;
-using Vector3 = Eigen::Vector3d;
-using Matrix3 = Eigen::Matrix3d;
 using Points = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;  // (m, 3)
 using Indices = Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>;
 using Flags = Eigen::Matrix<bool, Eigen::Dynamic, 1>;
-
-// The contact force law (bhgrasp.sim.contact_law.SpringDamper).
-struct ContactLaw {
-  double stiffness = 1e4;             // k [N/m] (Hunt-Crossley: [N/m^e])
-  double damping = 20.0;              // c [N s/m]
-  double tangential_stiffness = 1e4;  // k_t [N/m]
-  double tangential_damping = 20.0;   // c_t [N s/m]
-  bool hunt_crossley = false;         // normal law: linear or Hunt-Crossley
-  double exponent = 1.5;              // Hunt-Crossley exponent e
-  bool tanh_friction = false;         // friction law: stick-slip or regularised tanh
-  double slip_velocity = 1e-3;        // v_s of the tanh law [m/s]
-  double match_radius = 3e-3;         // contacts match last step's within this distance on body b [m]
-};
-
-// One collision pair: forces act on body b along the normal from a to b (bhgrasp.sim.scene.CollisionPair).
-struct Pair {
-  int geom_a = 0, geom_b = 0;    // geometry indices
-  int joint_a = 0, joint_b = 0;  // joints carrying the bodies (0: the world or the fixed palm)
-  double friction = 0.8;         // Coulomb coefficient of the pair
-};
-
-// A free body's angular velocity coordinates and principal axes (for the implicit-midpoint gyroscopic torque).
-struct Spinning {
-  int angular = 0;                        // index of its first angular velocity coordinate in v
-  Matrix3 axes = Matrix3::Identity();     // principal axes (columns) in the body frame
-  Vector3 moments = Vector3::Zero();      // principal moments [kg m^2]
-};
-
-// Collision and contact-patch query settings of one pair (coal's CollisionRequest, ContactPatchRequest).
-struct Query {
-  int num_max_contacts = 4;
-  double security_margin = 0.0, break_distance = 1e-3;
-  double tolerance = 1e-10;  // GJK and EPA
-  int max_num_patch = 1, num_samples_curved_shapes = 12;
-  double patch_tolerance = 1e-3;
-};
-
-// Everything fixed for a simulator: sizes, integrator, joint stops and springs, contact settings.
-struct Settings {
-  double dt = 1e-3;                   // [s]
-  int integrator = 0;                 // 0 implicit, 1 semi-implicit, 2 RK4
-  int nq_hand = 0, nv_hand = 0;
-  Vector lower, upper;                // hand joint limits [rad]
-  double limit_stiffness = 1e3;       // [N m/rad]
-  double limit_damping = 0.05;        // [N m s/rad]
-  double max_coordinate = std::numeric_limits<double>::infinity();  // largest |q_i| [m or rad] (SimulatorSettings sets it)
-  Vector joint_stiffness;             // (nv,) springs of spring-mounted objects [N/m]
-  Vector joint_damping;               // (nv,) [N s/m]
-  std::vector<int> spring_q, spring_v;  // coordinates of spring-mounted objects
-  std::vector<Spinning> spinning;
-  std::vector<Pair> pairs;
-  ContactLaw law;
-  std::vector<Query> queries;  // per pair
-};
-
-// The actuation of one step (bhgrasp.sim.actuation.Actuation in its current mode).
-struct Drive {
-  Matrix transmission;    // (nv_hand, n_driven) T: v_hand = T w
-  Vector joint_damping;   // (nv_hand,) passive + drive damping [N m s/rad]
-  Vector friction;        // (nv_hand,) Coulomb joint friction [N m]
-  Vector motor_damping;   // (nv_hand,) the drive's own damping (joint_damping minus the passive joints')
-};
 
 // What a run carries from one step to the next about its contacts (bhgrasp.data.contacts.ContactMemory).
 struct Memory {

@@ -6,6 +6,7 @@ import ast
 import importlib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from bhgrasp._native import core_loads
@@ -49,3 +50,45 @@ def test_each_twin_exists_and_its_lockstep_test_too(entry) -> None:
     file, test = entry.lockstep.split("::")
     tree = ast.parse((TESTS.parent / file).read_text())
     assert test in {node.name for node in tree.body if isinstance(node, ast.FunctionDef)}, entry.lockstep
+
+
+def is_zero(value: object) -> bool:
+    """Zero, false, empty, all-zero arrays, or an option struct whose fields all are."""
+    fields = getattr(type(value), "FIELDS", None)
+    if fields is not None:
+        return all(is_zero(getattr(value, field)) for field in fields)
+    if isinstance(value, (bool, int, float)):
+        return value == 0
+    return not np.any(np.asarray(value))
+
+
+OPTION_STRUCTS = ("ContactLaw", "Pair", "Query", "Spinning", "Settings", "Drive", "Barrett")
+
+
+@pytest.mark.skipif(not core_loads(), reason="bhgrasp._core is not built (CI requires it)")
+@pytest.mark.parametrize("name", OPTION_STRUCTS)
+def test_an_option_struct_holds_no_defaults_of_its_own_and_is_filled_whole(name: str) -> None:
+    """The defaults live in Python: a new struct is all zeros, and filling it misses no field (src/options.hpp)."""
+    from bhgrasp.sim.native_options import filled
+
+    struct = getattr(importlib.import_module("bhgrasp._core"), name)
+    assert is_zero(struct()), name
+    first, *rest = struct.FIELDS
+    with pytest.raises(TypeError, match=rf"missing here \['{first}'\], unknown there \['spare'\]"):
+        filled(struct, spare=1, **dict.fromkeys(rest, 0))
+
+
+@pytest.mark.skipif(not core_loads(), reason="bhgrasp._core is not built (CI requires it)")
+def test_the_engine_settings_carry_pythons_values() -> None:
+    """What the compiled engine is given is what the Python side declares (its tolerances included)."""
+    from bhgrasp.scenarios.hold import reference_hold
+    from bhgrasp.sim.compiled import engine_settings
+    from bhgrasp.sim.contact import FALLBACK_TOLERANCE, NARROW_TOLERANCE
+
+    simulator = reference_hold().simulator
+    native = engine_settings(simulator.scene, simulator.layout, simulator.law, simulator.settings, 3e-3)
+    assert native.dt == simulator.dt and native.limit_damping == simulator.settings.joint_limit_damping
+    assert native.law.stiffness == simulator.law.stiffness and native.law.match_radius == 3e-3
+    assert {(query.tolerance, query.fallback_tolerance) for query in native.queries} == {
+        (NARROW_TOLERANCE, FALLBACK_TOLERANCE)
+    }

@@ -16,8 +16,10 @@ import numpy as np
 
 from bhgrasp._native import required_core
 from bhgrasp.data import ContactMemory, ContactSet, empty_contact_set
+from bhgrasp.sim.contact import FALLBACK_TOLERANCE, NARROW_TOLERANCE
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.engine import DriveTerms, StepResult
+from bhgrasp.sim.native_options import filled
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_layout import SceneLayout
 from bhgrasp.sim.settings import SimulatorSettings
@@ -88,56 +90,80 @@ def engine_settings(
 ):
     """A scene's sizes, the settings, the contact law and the collision queries as the C++ engine's ``Settings``."""
     core = core_module()
-    result = core.Settings()
-    result.dt = settings.dt
-    result.integrator = _INTEGRATORS[settings.integrator]
-    result.nq_hand, result.nv_hand = scene.nq_hand, scene.nv_hand
-    result.lower, result.upper = scene.hand.lower, scene.hand.upper
-    result.limit_stiffness, result.limit_damping = settings.joint_limit_stiffness, settings.joint_limit_damping
-    result.max_coordinate = settings.max_coordinate
-    result.joint_stiffness, result.joint_damping = scene.joint_stiffness, scene.joint_damping
-    result.spring_q = [int(i) for i in layout.spring_q]
-    result.spring_v = [int(i) for i in layout.spring_v]
-    spinning = []
-    for angular, axes, moments in layout.spinning_bodies:
-        body = core.Spinning()
-        body.angular, body.axes, body.moments = angular.start, axes, np.array(moments)
-        spinning.append(body)
-    result.spinning = spinning
-    contact = core.ContactLaw()
-    contact.stiffness, contact.damping = law.stiffness, law.damping
-    contact.tangential_stiffness, contact.tangential_damping = law.k_t, law.c_t
-    contact.hunt_crossley, contact.exponent = law.normal_law == "hunt-crossley", law.exponent
-    contact.tanh_friction, contact.slip_velocity = law.friction_law == "tanh", law.slip_velocity
-    contact.match_radius = match_radius
-    result.law = contact
+    spinning = [
+        filled(core.Spinning, angular=angular.start, axes=axes, moments=np.array(moments))
+        for angular, axes, moments in layout.spinning_bodies
+    ]
+    contact = filled(
+        core.ContactLaw,
+        stiffness=law.stiffness,
+        damping=law.damping,
+        tangential_stiffness=law.k_t,
+        tangential_damping=law.c_t,
+        hunt_crossley=law.normal_law == "hunt-crossley",
+        exponent=law.exponent,
+        tanh_friction=law.friction_law == "tanh",
+        slip_velocity=law.slip_velocity,
+        match_radius=match_radius,
+    )
     pairs, queries = [], []
     for pair in scene.pairs:
-        item = core.Pair()
-        item.geom_a, item.geom_b, item.joint_a, item.joint_b = pair.geom_a, pair.geom_b, pair.joint_a, pair.joint_b
-        item.friction = pair.friction(law.friction)
-        pairs.append(item)
+        pairs.append(
+            filled(
+                core.Pair,
+                geom_a=pair.geom_a,
+                geom_b=pair.geom_b,
+                joint_a=pair.joint_a,
+                joint_b=pair.joint_b,
+                friction=pair.friction(law.friction),
+            )
+        )
         request = scene.geometry_data.collisionRequests[pair.index]
         patch = scene.geometry_data.contactPatchRequests[pair.index]
-        query = core.Query()
-        query.num_max_contacts = request.num_max_contacts
-        query.security_margin, query.break_distance = request.security_margin, request.break_distance
-        query.max_num_patch = patch.max_num_patch
-        query.num_samples_curved_shapes = patch.getNumSamplesCurvedShapes()
-        query.patch_tolerance = patch.getPatchTolerance()
-        queries.append(query)
-    result.pairs, result.queries = pairs, queries
-    return result
+        queries.append(
+            filled(
+                core.Query,
+                num_max_contacts=request.num_max_contacts,
+                security_margin=request.security_margin,
+                break_distance=request.break_distance,
+                tolerance=NARROW_TOLERANCE,
+                fallback_tolerance=FALLBACK_TOLERANCE,
+                max_num_patch=patch.max_num_patch,
+                num_samples_curved_shapes=patch.getNumSamplesCurvedShapes(),
+                patch_tolerance=patch.getPatchTolerance(),
+            )
+        )
+    return filled(
+        core.Settings,
+        dt=settings.dt,
+        integrator=_INTEGRATORS[settings.integrator],
+        nq_hand=scene.nq_hand,
+        nv_hand=scene.nv_hand,
+        lower=scene.hand.lower,
+        upper=scene.hand.upper,
+        limit_stiffness=settings.joint_limit_stiffness,
+        limit_damping=settings.joint_limit_damping,
+        max_coordinate=settings.max_coordinate,
+        joint_stiffness=scene.joint_stiffness,
+        joint_damping=scene.joint_damping,
+        spring_q=[int(i) for i in layout.spring_q],
+        spring_v=[int(i) for i in layout.spring_v],
+        spinning=spinning,
+        pairs=pairs,
+        law=contact,
+        queries=queries,
+    )
 
 
 def native_drive(terms: DriveTerms):
     """A drive's terms as the C++ engine's ``Drive``."""
-    drive = core_module().Drive()
-    drive.transmission = terms.transmission
-    drive.joint_damping = terms.joint_damping
-    drive.friction = terms.friction
-    drive.motor_damping = terms.motor_damping
-    return drive
+    return filled(
+        core_module().Drive,
+        transmission=terms.transmission,
+        joint_damping=terms.joint_damping,
+        friction=terms.friction,
+        motor_damping=terms.motor_damping,
+    )
 
 
 def drive_of(actuation: Actuation):
@@ -149,19 +175,28 @@ def barrett_of(actuation: BarrettActuation):
     """A Barrett actuation's parameters as the C++ ``Barrett`` of the batch (its modes are per environment)."""
     from bhgrasp.barrett import transmission as model
 
-    barrett = core_module().Barrett()
-    barrett.nv_hand = actuation.hand.nv
     drive = actuation.drive
-    barrett.spread_first, barrett.spread_second = drive.spread
-    barrett.proximal, barrett.distal = list(drive.proximal), list(drive.distal)
-    barrett.spread_ratio, barrett.proximal_ratio = model.SPREAD_RATIO, model.PROXIMAL_RATIO
-    barrett.distal_ratio, barrett.distal_alone_ratio = model.DISTAL_RATIO, model.DISTAL_ALONE_RATIO
-    barrett.max_motor_torque, barrett.breakaway_torque = model.MAX_MOTOR_TORQUE, actuation.breakaway_torque
-    barrett.motor_damping = actuation.motor_damping
-    barrett.saturate = actuation.saturate
-    barrett.efficiency, barrett.self_locking = actuation.drive.efficiency, actuation.self_locking
-    barrett.damping, barrett.friction, barrett.lower = actuation.damping, actuation.friction, actuation.hand.lower
-    return barrett
+    return filled(
+        core_module().Barrett,
+        nv_hand=actuation.hand.nv,
+        spread_first=drive.spread[0],
+        spread_second=drive.spread[1],
+        proximal=list(drive.proximal),
+        distal=list(drive.distal),
+        spread_ratio=model.SPREAD_RATIO,
+        proximal_ratio=model.PROXIMAL_RATIO,
+        distal_ratio=model.DISTAL_RATIO,
+        distal_alone_ratio=model.DISTAL_ALONE_RATIO,
+        max_motor_torque=model.MAX_MOTOR_TORQUE,
+        breakaway_torque=actuation.breakaway_torque,
+        motor_damping=actuation.motor_damping,
+        efficiency=drive.efficiency,
+        saturate=actuation.saturate,
+        self_locking=actuation.self_locking,
+        damping=actuation.damping,
+        friction=actuation.friction,
+        lower=actuation.hand.lower,
+    )
 
 
 def native_memory(memory: ContactMemory):

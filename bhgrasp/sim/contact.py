@@ -22,12 +22,12 @@ from bhgrasp.sim.scene import Scene
 LOCAL_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _IDENTITY3 = np.eye(3)
 
-_NARROW_TOLERANCE = 1e-10  # GJK/EPA: coal's default 1e-6 tilts a box-on-box normal by up to 0.027 (1.5 deg)
+NARROW_TOLERANCE = 1e-10  # GJK/EPA: coal's default 1e-6 tilts a box-on-box normal by up to 0.027 (1.5 deg)
 # At 1e-10 coal 3.0.3's EPA may stop unconverged (a box edge in a cylinder: depth -1.8e308, point 0); such a query is
 # asked again at coal's default tolerance, which converged there (depth 0.53 mm, as coal.distance gives).
 # It may also stop at a depth no contact has: a can's rim on its stand read 307 mm at 1e-10 (0.029 mm at 1e-8 and 1e-6),
 # so a depth beyond the smaller shape's bounding diameter is asked again too.
-_FALLBACK_TOLERANCE = 1e-6
+FALLBACK_TOLERANCE = 1e-6
 _MAX_DEPTH = 1.0  # [m] a reported penetration beyond this is a failed query, not a contact (half-spaces, planes)
 _NO_MEMORY = ContactMemory.empty()
 
@@ -54,7 +54,7 @@ def _plausible_depth(shape_a: coal.CollisionGeometry, shape_b: coal.CollisionGeo
     return min(2.0 * min(radii), _MAX_DEPTH)
 
 
-def _fresh_request(template: coal.CollisionRequest, tolerance: float = _NARROW_TOLERANCE) -> coal.CollisionRequest:
+def _fresh_request(template: coal.CollisionRequest, tolerance: float = NARROW_TOLERANCE) -> coal.CollisionRequest:
     """A collision request of our own with ``template``'s settings (Pinocchio may store GJK guesses in its own).
 
     GJK and EPA run to 1e-10: with coal's default 1e-6, the normal of a box resting on a box came out up to 0.027
@@ -106,7 +106,7 @@ class ContactEngine(ContactForces):
             )
             for pair in scene.pairs
         ]  # fmt: skip
-        self._fallback = [_fresh_request(request, _FALLBACK_TOLERANCE) for _, _, _, _, request, *_ in self._narrow]
+        self._fallback = [_fresh_request(request, FALLBACK_TOLERANCE) for _, _, _, _, request, *_ in self._narrow]
         self._max_depth = [_plausible_depth(shape_a, shape_b) for shape_a, shape_b, *_ in self._narrow]
         self._probe = coal.Sphere(1e-12)  # a point, for signed-distance queries
         self._probe_placement = coal.Transform3s()
@@ -286,4 +286,4 @@ class ContactEngine(ContactForces):
         return jacobians
 
 
-__all__ = ["ContactEngine"]
+__all__ = ["FALLBACK_TOLERANCE", "NARROW_TOLERANCE", "ContactEngine"]
