@@ -25,7 +25,8 @@ import pinocchio as pin
 
 import bhgrasp as bh
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
-from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
+from bhgrasp.controllers.motor_commands import MotorCommands
+from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.model.objects import Box, FixedBox, Plane
 from bhgrasp.scenarios.allegro_grasp import allegro_box_grasp
 from bhgrasp.scenarios.box_grasp import box_grasp

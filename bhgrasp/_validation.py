@@ -39,9 +39,11 @@ def as_vector(value: Any, name: str, size: int | None = None) -> np.ndarray:
 def as_array(value: Any, name: str, shape: tuple[int | None, ...]) -> np.ndarray:
     """Return ``value`` as a finite float64 array whose shape matches ``shape`` (``None`` = any length)."""
     if (
-        type(value) is np.ndarray and value.dtype == np.float64 and value.ndim == len(shape)
+        type(value) is np.ndarray
+        and value.dtype == np.float64
+        and value.ndim == len(shape)
         and all(s is None or s == a for s, a in zip(shape, value.shape))
-    ):  # fmt: skip
+    ):
         flat = value.reshape(-1)
         if math.isfinite(np.dot(flat, flat)):  # fast path, as in as_vector (an overflow takes the full check)
             return value

@@ -21,7 +21,7 @@ from bhgrasp.barrett.transmission import (
     BarrettTransmission,
     switch_modes,
 )
-from bhgrasp.controllers.supervisor import MotorCommands
+from bhgrasp.controllers.motor_commands import MotorCommands
 from bhgrasp.model.transmission import DirectDrive
 from bhgrasp.sim.actuation import Actuation, BarrettActuation
 

@@ -82,8 +82,8 @@ def test_an_option_struct_holds_no_defaults_of_its_own_and_is_filled_whole(name:
 def test_the_engine_settings_carry_pythons_values() -> None:
     """What the compiled engine is given is what the Python side declares (its tolerances included)."""
     from bhgrasp.scenarios.hold import reference_hold
+    from bhgrasp.sim.coal_queries import FALLBACK_TOLERANCE, NARROW_TOLERANCE
     from bhgrasp.sim.compiled import engine_settings
-    from bhgrasp.sim.contact import FALLBACK_TOLERANCE, NARROW_TOLERANCE
 
     simulator = reference_hold().simulator
     native = engine_settings(simulator.scene, simulator.layout, simulator.law, simulator.settings, 3e-3)

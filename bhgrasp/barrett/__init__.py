@@ -2,7 +2,7 @@
 
 :mod:`bhgrasp.barrett.transmission` holds the hand's own facts (gear ratios, puck limits, the TorqueSwitch rule,
 the worm drives); the simulator (:class:`~bhgrasp.sim.actuation.BarrettActuation`) and the controllers
-(:class:`~bhgrasp.controllers.supervisor.MotorCommands`) both use it.  :mod:`bhgrasp.barrett.sensors` reads a
+(:class:`~bhgrasp.controllers.motor_commands.MotorCommands`) both use it.  :mod:`bhgrasp.barrett.sensors` reads a
 :class:`~bhgrasp.data.state.State` as libbarrett reports the hand's encoders, fingertip torque sensors and tactile
 pads (:mod:`bhgrasp.barrett.tactile`).  :mod:`bhgrasp.barrett.pucks` models the motor pucks' firmware (modes, PID,
 trapezoidal and velocity moves, HI) and :mod:`bhgrasp.barrett.commands` the libbarrett ``Hand`` calls on them

@@ -18,11 +18,12 @@ from bhgrasp.controllers.impedance import (
 )
 from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter
 from bhgrasp.controllers.joint import ComputedTorque, PDGravity
+from bhgrasp.controllers.motor_commands import MotorCommands
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.sliding import AdaptiveSlidingMode, SlidingMode, SlidingSurface, lyapunov, parameter_scales
-from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
+from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.controllers.workspace import WorkspaceComputedTorque, WorkspaceDynamics, workspace_dynamics
 
 __all__ = [

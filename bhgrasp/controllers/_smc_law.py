@@ -32,10 +32,23 @@ _ROW_CACHE = 256  # contact-body tuples whose finger and joint rows are kept (a 
 
 def log_layout(nv: int, fingers: int) -> list[tuple[str, Any]]:
     """(key, index into the buffer) in the order ``src/smc_law.hpp`` writes them; (F, 3) entries as (start, stop)."""
-    keys = [("tau", nv), ("object_error", 6), ("wrench", 6), ("feasible", 0), ("infeasible_cycles", 0),
-            ("wrench_residual", 0), ("qp_iterations", 0), ("cone_margin", 0), ("commanded_normal", fingers),
-            ("contacts", 0), ("object_sliding", 6), ("joint_sliding", nv), ("force_error", (fingers, 3)),
-            ("desired_force", (fingers, 3)), ("object_parameters", 7)]  # fmt: skip
+    keys = [
+        ("tau", nv),
+        ("object_error", 6),
+        ("wrench", 6),
+        ("feasible", 0),
+        ("infeasible_cycles", 0),
+        ("wrench_residual", 0),
+        ("qp_iterations", 0),
+        ("cone_margin", 0),
+        ("commanded_normal", fingers),
+        ("contacts", 0),
+        ("object_sliding", 6),
+        ("joint_sliding", nv),
+        ("force_error", (fingers, 3)),
+        ("desired_force", (fingers, 3)),
+        ("object_parameters", 7),
+    ]
     layout, start = [], 0
     for key, size in keys:
         if size == 0:  # a 0-d view
@@ -68,8 +81,11 @@ class CompiledSMCLaw:
         layout = log_layout(nv, fingers)
         self._tau = layout[0][1]
         self._flat = [(key, index) for key, index in layout[1:] if not isinstance(index, tuple) or index[1] is Ellipsis]
-        self._blocks = [(key, slice(*index), (fingers, 3)) for key, index in layout if isinstance(index, tuple)
-                        and index[1] is not Ellipsis]  # fmt: skip
+        self._blocks = [
+            (key, slice(*index), (fingers, 3))
+            for key, index in layout
+            if isinstance(index, tuple) and index[1] is not Ellipsis
+        ]
         self._wrench = dict(layout)["wrench"]
         parameters = dict(layout)["object_parameters"]
         self._mass = slice(parameters.start, parameters.start + 1)
@@ -81,15 +97,29 @@ class CompiledSMCLaw:
         """Copy ``law``'s gains, QP settings and initial estimate into the kernel, and reset it."""
         arguments = solver_arguments(1, law.mu, min_normal_force=law.min_normal_force)[1:]
         rates = law.object_adaptation if law.identification is None else np.zeros(7)  # then updated in identify()
-        self.kernel.configure(law.rho, law.k_o, rates, law.force_gain, law.force_integral, law.k_f,
-                              law.force_error == "normal", law.squeeze, law.gravity, law._initial_object, *arguments,
-                              ZERO_NORMAL, TANGENT_SWITCH)  # fmt: skip
+        self.kernel.configure(
+            law.rho,
+            law.k_o,
+            rates,
+            law.force_gain,
+            law.force_integral,
+            law.k_f,
+            law.force_error == "normal",
+            law.squeeze,
+            law.gravity,
+            law._initial_object,
+            *arguments,
+            ZERO_NORMAL,
+            TANGENT_SWITCH,
+        )
 
     def _index(self, bodies: tuple) -> tuple[np.ndarray, np.ndarray]:
         """The finger (-1: none) and parent joint of every contact row (ContactSensing's and parent_joints' maps)."""
         finger_of, joint_of = self._finger_of, self._joint_of
-        rows = (np.array([finger_of.get(link, -1) for link, _ in bodies], dtype=np.int64),
-                np.array([joint_of.get(link, -1) for link, _ in bodies], dtype=np.int64))  # fmt: skip
+        rows = (
+            np.array([finger_of.get(link, -1) for link, _ in bodies], dtype=np.int64),
+            np.array([joint_of.get(link, -1) for link, _ in bodies], dtype=np.int64),
+        )
         if len(self._rows) >= _ROW_CACHE:
             self._rows.clear()
         self._rows[bodies] = rows
@@ -127,8 +157,19 @@ class CompiledSMCLaw:
             kernel.set_base(placement.rotation, placement.translation, gravity)
             self._base = (placement, gravity)
         out = np.empty(self._size)
-        status = kernel.grasp(q, v, pose.rotation, pose.translation, state.object_twists[0], dt, rotation_d,
-                              position_d, velocity, acceleration, out)  # fmt: skip
+        status = kernel.grasp(
+            q,
+            v,
+            pose.rotation,
+            pose.translation,
+            state.object_twists[0],
+            dt,
+            rotation_d,
+            position_d,
+            velocity,
+            acceleration,
+            out,
+        )
         if status in (1, 2, 3):
             self._raise(law, state, status, out)
         log.update([(key, out[index]) for key, index in self._flat])
@@ -151,9 +192,16 @@ class CompiledSMCLaw:
         hand = law.nominal
         law._hold = None
         estimate, zeros = self.kernel.object_estimate, np.zeros((len(hand.fingers), 3))
-        law.log.update(joint_sliding=np.zeros(hand.nv), force_error=zeros, desired_force=zeros,
-                       object_sliding=np.zeros(6), object_parameters=estimate, mass_estimate=estimate[:1],
-                       contacts=np.array(float(touching)), commanded_normal=np.zeros(len(hand.fingers)))  # fmt: skip
+        law.log.update(
+            joint_sliding=np.zeros(hand.nv),
+            force_error=zeros,
+            desired_force=zeros,
+            object_sliding=np.zeros(6),
+            object_parameters=estimate,
+            mass_estimate=estimate[:1],
+            contacts=np.array(float(touching)),
+            commanded_normal=np.zeros(len(hand.fingers)),
+        )
         return hand.gravity_torques(q) + law._closing
 
     def _raise(self, law: Any, state: Any, status: int, out: np.ndarray) -> None:

@@ -94,14 +94,26 @@ def _workspace_dynamics(
     mass_x = inverse.T @ mass_f @ inverse
     bias = basis.T @ bias
     coriolis_x = inverse.T @ velocity_f - mass_x @ bias
-    return _Workspace(positions[number], jacobian_all, basis, task_jacobian, 0.5 * (mass_x + mass_x.T), coriolis_x,
-                      inverse.T @ gravity_f)  # fmt: skip
+    return _Workspace(
+        positions[number],
+        jacobian_all,
+        basis,
+        task_jacobian,
+        0.5 * (mass_x + mass_x.T),
+        coriolis_x,
+        inverse.T @ gravity_f,
+    )
 
 
 def _fingertip_torque(
-    terms: Any, velocity: np.ndarray, x_d: np.ndarray, xd_d: np.ndarray, xdd_d: np.ndarray, kp: np.ndarray,
+    terms: Any,
+    velocity: np.ndarray,
+    x_d: np.ndarray,
+    xd_d: np.ndarray,
+    xdd_d: np.ndarray,
+    kp: np.ndarray,
     kv: np.ndarray,
-) -> np.ndarray:  # fmt: skip
+) -> np.ndarray:
     """tau_f [N m] of the fingertip computed torque (module docstring) from a finger's workspace ``terms``.
 
     ``velocity``: the finger's joint velocities q_dot_f; ``x_d``, ``xd_d``, ``xdd_d``: the reference [m], [m/s],
@@ -164,7 +176,8 @@ def _kernel(hand: Hand) -> Any:
     def build(core: Any) -> Any:
         model = hand.model
         frames = [model.getFrameId(frame) for frame in hand.fingertip_frames.values()]
-        return core.FingerDynamics(model.saveToString(), frames,
-                                   [hand.finger_indices(finger).tolist() for finger in hand.fingers])  # fmt: skip
+        return core.FingerDynamics(
+            model.saveToString(), frames, [hand.finger_indices(finger).tolist() for finger in hand.fingers]
+        )
 
     return kernel(hand, "FingerDynamics", build)

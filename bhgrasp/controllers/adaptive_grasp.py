@@ -127,8 +127,9 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         self.rho = as_positive(rho, "rho")
         self.k_o = pose_gains(k_o, "k_o")
         rates = np.asarray(object_adaptation, dtype=float)
-        self.object_adaptation = gain_vector(np.repeat(rates, (1, 6)) if rates.shape == (2,) else rates, 7,
-                                             "object_adaptation", allow_zero=True)  # fmt: skip
+        self.object_adaptation = gain_vector(
+            np.repeat(rates, (1, 6)) if rates.shape == (2,) else rates, 7, "object_adaptation", allow_zero=True
+        )
         self.force_gain = as_real(force_gain, "force_gain")
         self.force_integral = as_real(force_integral, "force_integral")
         if self.force_gain < 0.0 or self.force_integral < 0.0:
@@ -157,8 +158,11 @@ class SMCAdaptiveGrasp(ObjectGraspController):
 
     def _python_only(self) -> str:
         """The options the compiled law does not cover ('' if none)."""
-        overridden = [name for name in ("grasp_torques", "distribute", "errors", "target", "touching")
-                      if getattr(type(self), name) is not getattr(SMCAdaptiveGrasp, name)]  # fmt: skip
+        overridden = [
+            name
+            for name in ("grasp_torques", "distribute", "errors", "target", "touching")
+            if getattr(type(self), name) is not getattr(SMCAdaptiveGrasp, name)
+        ]
         return ", ".join(
             [f"hand_adaptation={self.hand_adaptation}"] * (self.hand_adaptation is not None)
             + [f"distribution={self.distribution!r}"] * (self.distribution != "qp")
@@ -288,8 +292,17 @@ class SMCAdaptiveGrasp(ObjectGraspController):
             estimate = self.identification.update(self.object_estimate, dt, state, regressor, s_o, self.gravity)
         else:
             pose, (wrench, free) = state.object_poses[0], measured
-            estimate = self.identification.step(self.object_estimate, dt, pose.rotation, state.object_twists[0],
-                                                wrench, free, regressor, s_o, self.gravity)  # fmt: skip
+            estimate = self.identification.step(
+                self.object_estimate,
+                dt,
+                pose.rotation,
+                state.object_twists[0],
+                wrench,
+                free,
+                regressor,
+                s_o,
+                self.gravity,
+            )
         estimate[0] = max(estimate[0], 1e-3)  # projection: a mass stays positive
         self.object_estimate = estimate
         self.log.update(self.identification.log())
@@ -299,9 +312,14 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         for k, finger in enumerate(contacts.fingers):
             index = self.nominal.fingers.index(finger)
             per_finger_error[index], per_finger_desired[index] = force_error[k], desired[k]
-        self.log.update(object_sliding=s_o, joint_sliding=s_f, force_error=per_finger_error,
-                        desired_force=per_finger_desired, object_parameters=self.object_estimate,
-                        mass_estimate=self.object_estimate[:1])  # fmt: skip
+        self.log.update(
+            object_sliding=s_o,
+            joint_sliding=s_f,
+            force_error=per_finger_error,
+            desired_force=per_finger_desired,
+            object_parameters=self.object_estimate,
+            mass_estimate=self.object_estimate[:1],
+        )
 
 
 __all__ = ["SMCAdaptiveGrasp", "object_parameters", "object_regressor", "object_regressor_python"]

@@ -121,8 +121,11 @@ class TustinImpedanceFilter:
         e0, e1, e2 = self._outputs
         t = self.period
         tt = t * t
-        return (np.array(e0), np.array([(x0 - x1) / t for x0, x1 in zip(e0, e1)]),
-                np.array([(x0 - 2.0 * x1 + x2) / tt for x0, x1, x2 in zip(e0, e1, e2)]))  # fmt: skip
+        return (
+            np.array(e0),
+            np.array([(x0 - x1) / t for x0, x1 in zip(e0, e1)]),
+            np.array([(x0 - 2.0 * x1 + x2) / tt for x0, x1, x2 in zip(e0, e1, e2)]),
+        )
 
 
 __all__ = ["ImpedanceFilter", "TustinImpedanceFilter", "critical_damping"]

@@ -184,8 +184,11 @@ class ObjectIdentification:
 
     def log(self) -> dict[str, np.ndarray]:
         """``identifying``, ``prediction_error`` and ``parameter_information`` (P^-1) of the last cycle."""
-        return {"identifying": np.array(float(self.identifying)), "prediction_error": self.prediction_error.copy(),
-                "parameter_information": self.information_matrix()}  # fmt: skip
+        return {
+            "identifying": np.array(float(self.identifying)),
+            "prediction_error": self.prediction_error.copy(),
+            "parameter_information": self.information_matrix(),
+        }
 
 
 __all__ = ["ObjectIdentification", "contact_wrench"]

@@ -64,8 +64,9 @@ def grasp_maps(hand: Hand, state: State, contacts: GraspContacts, obj: RigidObje
     M~, C~, N~ enters through :func:`hand_part`.
     """
     pose = state.object_poses[0]
-    current = ObjectState(obj.mass, obj.inertia, pose.translation, pose.rotation,
-                          np.asarray(state.object_twists[0], dtype=float))  # fmt: skip
+    current = ObjectState(
+        obj.mass, obj.inertia, pose.translation, pose.rotation, np.asarray(state.object_twists[0], dtype=float)
+    )
     joints = parent_joints(hand, contacts.links)
     return current, contact_kinematics(hand, state.q, current, contacts.points, contacts.frames, joints)
 

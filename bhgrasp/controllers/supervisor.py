@@ -14,9 +14,8 @@ Phases (logged as ``phase``: 0 approach, 1 squeeze, 2 manipulate):
    the contacts sensed then (``planned_offset``, :meth:`GraspSupervisor._plan`); or any object ``path`` (e.g. the
    persistently exciting :class:`~bhgrasp.motion.excitation.PoseExcitation` of an identification run).
 
-:class:`MotorCommands` adapts any joint-torque controller to a drive with fewer inputs (the BH8-280's four
-motors, :mod:`bhgrasp.barrett.transmission`): u solves T^T B u = T^T tau, i.e. the motors do the same work as tau
-on every motion the transmission T allows (B: joint torques per unit motor input).
+On a drive with fewer inputs than joints, :class:`~bhgrasp.controllers.motor_commands.MotorCommands` turns its
+joint torques into motor commands.
 """
 
 from __future__ import annotations
@@ -39,7 +38,6 @@ from bhgrasp.grasp.path_check import TOLERANCE as PATH_TOLERANCE
 from bhgrasp.grasp.path_check import path_contacts
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
-from bhgrasp.model.transmission import Transmission
 from bhgrasp.motion.trajectories import PoseMotion, Reference, SmoothStep
 
 APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
@@ -139,8 +137,10 @@ class GraspSupervisor(Controller):
         self.move_time = as_positive(move_time, "move_time")
         self.plan = bool(plan)
         if path is not None and (not callable(path) or np.any(self.offset != 0.0)):
-            raise InputError(f"`path` must be a callable (pose, delay=start) -> Reference, with a zero `offset`; got "
-                             f"{path!r} and offset {self.offset.tolist()}")  # fmt: skip
+            raise InputError(
+                f"`path` must be a callable (pose, delay=start) -> Reference, with a zero `offset`; got "
+                f"{path!r} and offset {self.offset.tolist()}"
+            )
         self.path = path
         self.object_shape = object_shape
         self.approach_damping = as_real(approach_damping, "approach_damping")
@@ -242,8 +242,17 @@ class GraspSupervisor(Controller):
         self.planned_offset = self.offset.copy() if unchanged else planned
         if self.object_shape is not None:  # second order: the fingers followed to the end of the motion
             pose, labels = state.object_poses[0], list(touching)
-            followed = path_contacts(self.nominal, state.q, points, links, self.object_shape, pose, self.planned_offset,
-                                     tolerance=self.path_tolerance, labels=labels)  # fmt: skip
+            followed = path_contacts(
+                self.nominal,
+                state.q,
+                points,
+                links,
+                self.object_shape,
+                pose,
+                self.planned_offset,
+                tolerance=self.path_tolerance,
+                labels=labels,
+            )
             followed.check()
         if not unchanged:
             self.grasp.reference = PoseMotion(reference.start, planned, self.move_time, reference.delay)
@@ -251,45 +260,12 @@ class GraspSupervisor(Controller):
     def _start_grasp(self, t: float, state: State) -> None:
         self.grasp.reset(state)
         start, pose = t + self.squeeze_time, state.object_poses[0]
-        self.grasp.reference = PoseMotion(pose, self.offset, self.move_time, start) if self.path is None else (
-            self.path(pin.SE3(pose), delay=start))  # fmt: skip
+        self.grasp.reference = (
+            PoseMotion(pose, self.offset, self.move_time, start)
+            if self.path is None
+            else (self.path(pin.SE3(pose), delay=start))
+        )
         self.phase, self.switch_time = SQUEEZE, t
 
 
-class MotorCommands(Controller):
-    """Run a joint-torque controller through a drive with fewer inputs: u with T^T B u = T^T (tau + D v).
-
-    The drive model (:class:`~bhgrasp.model.transmission.Transmission`, e.g. the BH8-280's
-    :class:`~bhgrasp.barrett.transmission.BarrettTransmission`) is the hand's, not the simulator's: its mode (the
-    TorqueSwitch states) is read from the state's ``actuation_modes``, as a real hand's driver reports them.  D v
-    compensates the drive's known viscous damping (for the BH8-280 mostly the motors' torque-speed line reflected
-    through 125:1 gears, ~5.6 N m s/rad at a proximal joint, which a model-based joint law ignores).
-    """
-
-    def __init__(self, controller: Controller | Callable[[float, State], Any], drive: Transmission) -> None:
-        """Wrap ``controller`` (a :class:`Controller` or any ``(t, state) -> tau`` callable) for ``drive``."""
-        super().__init__()
-        if not isinstance(drive, Transmission):
-            raise InputError(
-                f"`drive` must be a bhgrasp Transmission (e.g. BarrettTransmission(hand), or a simulator "
-                f"actuation's .drive), got {drive!r}"
-            )
-        self.controller = controller
-        self.drive = drive
-        log = getattr(controller, "log", None)
-        if isinstance(log, dict):
-            self.log = log
-
-    def reset(self, state: State) -> None:
-        """Reset the wrapped controller (if it has a ``reset``)."""
-        if hasattr(self.controller, "reset"):
-            self.controller.reset(state)
-
-    def __call__(self, t: float, state: State) -> np.ndarray:
-        """Motor inputs for the wrapped controller's joint torques."""
-        modes = state.actuation_modes
-        tau = self.controller(t, state) + self.drive.joint_damping(modes) * np.asarray(state.v, dtype=float)
-        return self.drive.motor_inputs(tau, modes)
-
-
-__all__ = ["APPROACH", "MANIPULATE", "PLAN_LENGTH", "SQUEEZE", "GraspSupervisor", "MotorCommands"]
+__all__ = ["APPROACH", "MANIPULATE", "PLAN_LENGTH", "SQUEEZE", "GraspSupervisor"]

@@ -62,8 +62,9 @@ def workspace_dynamics(hand: Hand, q: Any, v: Any, finger: str) -> WorkspaceDyna
     q, v = as_vector(q, "q", hand.nq), as_vector(v, "v", hand.nv)
     index = hand.finger_indices(finger)
     terms = _workspace(hand, q, v, finger, index, hand.fingers.index(finger))
-    return WorkspaceDynamics(*(np.array(value) for value in (terms.basis, terms.task_jacobian, terms.mass,
-                                                              terms.coriolis, terms.gravity)))  # fmt: skip
+    return WorkspaceDynamics(
+        *(np.array(value) for value in (terms.basis, terms.task_jacobian, terms.mass, terms.coriolis, terms.gravity))
+    )
 
 
 class WorkspaceComputedTorque(Controller):
@@ -111,8 +112,10 @@ class WorkspaceComputedTorque(Controller):
         self._joint_kv = float(np.trace(self.kv)) / 3.0
         self.q_rest = None if q_rest is None else as_vector(q_rest, "q_rest", nominal.nq)
         self._hold = self.q_rest
-        self._fingers = [(finger, reference, nominal.finger_indices(finger), nominal.fingers.index(finger))
-                         for finger, reference in self.references.items()]  # fmt: skip
+        self._fingers = [
+            (finger, reference, nominal.finger_indices(finger), nominal.fingers.index(finger))
+            for finger, reference in self.references.items()
+        ]
 
     def reset(self, state: State) -> None:
         """Hold uncontrolled joints at ``q_rest`` or at the state's configuration."""

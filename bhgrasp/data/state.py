@@ -59,9 +59,18 @@ class State:
 
 
 DERIVED_FIELDS = frozenset(
-    ("q", "v", "object_poses", "object_twists", "contact_points", "contact_normals", "contact_forces",
-     "contact_bodies", "contact_memory")
-)  # fmt: skip
+    (
+        "q",
+        "v",
+        "object_poses",
+        "object_twists",
+        "contact_points",
+        "contact_normals",
+        "contact_forces",
+        "contact_bodies",
+        "contact_memory",
+    )
+)
 
 
 class SimulatedState(State):

@@ -139,9 +139,13 @@ class Trajectory:
         contacts["contact_offsets"] = offsets
         log = {name: values[start:stop] for name, values in self.log.items()}
         return Trajectory(
-            **sample, **contacts, log=log, joint_names=self.joint_names, object_names=self.object_names,
+            **sample,
+            **contacts,
+            log=log,
+            joint_names=self.joint_names,
+            object_names=self.object_names,
             pair_bodies=self.pair_bodies,
-        )  # fmt: skip
+        )
 
     # ------------------------------------------------------------------ files
     def save(self, path: str | Path) -> Path:
@@ -188,9 +192,12 @@ class Trajectory:
                     f"{str(path)!r} holds pickled objects, which are never loaded (untrusted code): {error}"
                 ) from error
             return cls(
-                **arrays, log=log, joint_names=tuple(str(n) for n in names[0]),
-                object_names=tuple(str(n) for n in names[1]), pair_bodies=names[2],
-            )  # fmt: skip
+                **arrays,
+                log=log,
+                joint_names=tuple(str(n) for n in names[0]),
+                object_names=tuple(str(n) for n in names[1]),
+                pair_bodies=names[2],
+            )
 
 
 __all__ = ["Trajectory"]

@@ -48,8 +48,9 @@ def path_clearance(
         name = getattr(item, "name", None) or f"environment{index}"
         for fraction in np.linspace(0.0, 1.0, int(samples)):
             # the supervisor's path at blend ``fraction``: x_0 + b dx, exp(b dtheta) R_0 (PoseMotion)
-            pose = coal.Transform3s(pin.exp3(fraction * offset[3:]) @ start.rotation,
-                                    start.translation + fraction * offset[:3])  # fmt: skip
+            pose = coal.Transform3s(
+                pin.exp3(fraction * offset[3:]) @ start.rotation, start.translation + fraction * offset[:3]
+            )
             result.clear()
             distance = coal.distance(shape, pose, geometry, placement, request, result)
             if distance < worst[0]:
@@ -75,8 +76,11 @@ def check_clearance(
         return
     lift = _smallest_lift(shape, start, offset, fixed, samples, allowed)
     lifted = None if lift is None else offset + np.array([0.0, 0.0, lift, 0.0, 0.0, 0.0])
-    advice = (f"lift the object by {1e3 * lift:.1f} mm more (offset {np.round(lifted, 5).tolist()})" if lift is not None
-              else "no lift up to 5 cm clears it")  # fmt: skip
+    advice = (
+        f"lift the object by {1e3 * lift:.1f} mm more (offset {np.round(lifted, 5).tolist()})"
+        if lift is not None
+        else "no lift up to 5 cm clears it"
+    )
     raise UnreachableError(
         f"the motion {np.round(offset, 6).tolist()} (dx [m], dtheta [rad]) drives the object {1e3 * -distance:.2f} mm "
         f"into {name} at {100 * fraction:.0f} % of its path; {advice}",

@@ -95,8 +95,15 @@ def grasp_dynamics(
     gravity_o = np.concatenate((-obj.mass * gravity, np.zeros(3)))
     mass = mass_o + p_map.T @ mass_h @ p_map
     coriolis = coriolis_o + p_map.T @ (mass_h @ p_dot + coriolis_h @ p_map)
-    return GraspDynamics(0.5 * (mass + mass.T), coriolis, gravity_o + p_map.T @ hand.gravity_torques(q), p_map,
-                         kinematics.grasp_map, kinematics.hand_jacobian, p_dot)  # fmt: skip
+    return GraspDynamics(
+        0.5 * (mass + mass.T),
+        coriolis,
+        gravity_o + p_map.T @ hand.gravity_torques(q),
+        p_map,
+        kinematics.grasp_map,
+        kinematics.hand_jacobian,
+        p_dot,
+    )
 
 
 def grasp_mobility(grasp: Any, jacobian: Any, tolerance: float = 1e-9) -> np.ndarray:

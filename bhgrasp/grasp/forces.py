@@ -188,8 +188,16 @@ def solver_arguments(
     mu = as_real(mu, "mu")
     min_normal_force = as_real(min_normal_force, "min_normal_force")
     pyramid, _ = friction_pyramid(mu, facets)
-    return (int(n_contacts), mu, pyramid, mu * np.cos(np.pi / len(pyramid)), min_normal_force,
-            as_real(tolerance, "tolerance"), int(max_iter), int(max_iter_in))  # fmt: skip
+    return (
+        int(n_contacts),
+        mu,
+        pyramid,
+        mu * np.cos(np.pi / len(pyramid)),
+        min_normal_force,
+        as_real(tolerance, "tolerance"),
+        int(max_iter),
+        int(max_iter_in),
+    )
 
 
 def _torque_scale(grasp: np.ndarray) -> float:

@@ -87,8 +87,9 @@ class ObjectState:
     def advanced(self, dt: float) -> ObjectState:
         """The state after moving for ``dt`` [s] at constant twist (for finite differences along the motion)."""
         v, omega = self.twist[:3], self.twist[3:]
-        return ObjectState(self.mass, self.inertia_body, self.com + dt * v, pin.exp3(dt * omega) @ self.rotation,
-                           self.twist)  # fmt: skip
+        return ObjectState(
+            self.mass, self.inertia_body, self.com + dt * v, pin.exp3(dt * omega) @ self.rotation, self.twist
+        )
 
 
 def grasp_kinematics(
@@ -138,8 +139,9 @@ def contact_kinematics(
         return contact_kinematics_python(hand, q, obj, points, frames, joints)
     placement = hand.base_placement
     com, twist = np.asarray(obj.com, dtype=float), np.asarray(obj.twist, dtype=float)
-    return GraspKinematics(*kernel.compute(placement.rotation, placement.translation, q, com, twist, points,
-                                           frames.reshape(-1, 3), joints))  # fmt: skip
+    return GraspKinematics(
+        *kernel.compute(placement.rotation, placement.translation, q, com, twist, points, frames.reshape(-1, 3), joints)
+    )
 
 
 def contact_kinematics_python(

@@ -32,8 +32,14 @@ from bhgrasp.model.hand import Hand
 
 SLIDE_TOLERANCE = 2e-4  # [m] contact sliding a checked offset may need (the tracking target is 0.5 mm)
 RANK_TOLERANCE = 1e-9  # relative singular value below which a direction counts as missing
-_AXES = ("translation along x", "translation along y", "translation along z", "rotation about x",
-         "rotation about y", "rotation about z")  # fmt: skip
+_AXES = (
+    "translation along x",
+    "translation along y",
+    "translation along z",
+    "rotation about x",
+    "rotation about y",
+    "rotation about z",
+)
 
 
 @dataclass(frozen=True)

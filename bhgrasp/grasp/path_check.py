@@ -35,6 +35,7 @@ import pinocchio as pin
 from bhgrasp._validation import as_array, as_real, as_vector
 from bhgrasp.data import State
 from bhgrasp.errors import InputError, UnreachableError
+from bhgrasp.grasp.probes import coal_transform, contact_geometries, pressed_face
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
 
@@ -188,7 +189,7 @@ def path_contacts(
     links = list(links)
     model, data, geometry = hand.model, pin.Data(hand.model), hand.collision_model()
     geometry_data, items = pin.GeometryData(geometry), geometry.geometryObjects
-    pads = _pads(hand, geometry, q, points, links)
+    pads = contact_geometries(hand, geometry, q, points, links)
     others = [g for g in range(len(items)) if g not in pads]
     fractions = np.linspace(0.0, 1.0, int(steps) + 1)
     path_q, gaps = np.empty((len(fractions), hand.nq)), np.empty((len(fractions), len(pads)))
@@ -208,7 +209,7 @@ def path_contacts(
         rotation, centre = pin.exp3(b * offset[3:]) @ pose.rotation, pose.translation + b * offset[:3]
         placed_object = coal.Transform3s(rotation, centre)
         pin.updateGeometryPlacements(model, data, geometry, geometry_data, q)
-        placed = [_transform(hand.base_placement * placement) for placement in geometry_data.oMg]
+        placed = [coal_transform(hand.base_placement * placement) for placement in geometry_data.oMg]
         for i, g in enumerate(pads):  # the pads' contacts now (they roll: the point moves on both bodies)
             result.clear()
             gaps[k, i] = coal.distance(items[g].geometry, placed[g], shape, placed_object, request, result)
@@ -226,13 +227,29 @@ def path_contacts(
                 witness = np.array(result.getNearestPoint1())
                 same_joint = [i for i, pad in enumerate(pads) if items[pad].parentJoint == items[g].parentJoint]
                 spacing = min((float(np.linalg.norm(witness - contacts[i])) for i in same_joint), default=np.inf)
-                touches[g] = PathTouch(float(b), float(b * np.linalg.norm(offset[3:])), items[g].name,
-                                       model.frames[items[g].parentFrame].name,
-                                       _face(shape, rotation, result.normal), float(distance),
-                                       witness, spacing)  # fmt: skip
-    return PathContacts(fractions, path_q, gaps, drift, clearance, tuple(items[g].name for g in others),
-                        tuple(touches.values()), limit, offset.copy(),
-                        tuple(labels) if labels is not None else tuple(links), float(tolerance))  # fmt: skip
+                touches[g] = PathTouch(
+                    float(b),
+                    float(b * np.linalg.norm(offset[3:])),
+                    items[g].name,
+                    model.frames[items[g].parentFrame].name,
+                    pressed_face(shape, rotation, result.normal),
+                    float(distance),
+                    witness,
+                    spacing,
+                )
+    return PathContacts(
+        fractions,
+        path_q,
+        gaps,
+        drift,
+        clearance,
+        tuple(items[g].name for g in others),
+        tuple(touches.values()),
+        limit,
+        offset.copy(),
+        tuple(labels) if labels is not None else tuple(links),
+        float(tolerance),
+    )
 
 
 def sensed_path_contacts(
@@ -255,46 +272,18 @@ def sensed_path_contacts(
     if len(touching) < 2:
         raise InputError(f"a path check needs two or more touching fingers, got {sorted(touching)}")
     contacts = list(touching.values())
-    return path_contacts(hand, state.q, [c.point for c in contacts], [str(c.link) for c in contacts], shape,
-                         state.object_poses[0], offset, steps, tolerance, list(touching))  # fmt: skip
-
-
-def _transform(placement: pin.SE3) -> coal.Transform3s:
-    return coal.Transform3s(placement.rotation, placement.translation)
-
-
-def _pads(hand: Hand, geometry: pin.GeometryModel, q: np.ndarray, points: np.ndarray, links: list[str]) -> list[int]:
-    """The geometry carrying each contact, in order: on the contact link's joint, the one nearest the contact point."""
-    model = hand.model
-    geometry_data = pin.GeometryData(geometry)
-    pin.updateGeometryPlacements(model, pin.Data(model), geometry, geometry_data, q)
-    probe, request, result = coal.Sphere(1e-9), coal.DistanceRequest(), coal.DistanceResult()
-    pads = []
-    for point, link in zip(points, links):
-        joint = model.frames[model.getFrameId(link)].parentJoint if model.existFrame(link) else -1
-        candidates = [g for g, item in enumerate(geometry.geometryObjects) if item.parentJoint == joint]
-        if not candidates:
-            raise InputError(f"link {link!r} is not a hand frame carrying collision geometry; contacts lie on one")
-        distances = []
-        for g in candidates:
-            result.clear()
-            distances.append(coal.distance(geometry.geometryObjects[g].geometry,
-                                           _transform(hand.base_placement * geometry_data.oMg[g]), probe,
-                                           coal.Transform3s(np.eye(3), point), request, result))  # fmt: skip
-        pads.append(candidates[int(np.argmin(distances))])
-    return pads
-
-
-def _face(shape: coal.CollisionGeometry, rotation: np.ndarray, normal: Any) -> str:
-    """The face of a box ``shape`` (turned by ``rotation``) that a contact of world ``normal`` (into it) presses on.
-
-    The face whose outward normal is closest to -normal: e.g. "+y" (robust where the contact straddles an edge).
-    """
-    if not isinstance(shape, coal.Box):
-        return ""
-    outward = -(rotation.T @ np.asarray(normal, dtype=float))  # object frame
-    axis = int(np.argmax(np.abs(outward)))
-    return f"{'+' if outward[axis] >= 0 else '-'}{'xyz'[axis]}"
+    return path_contacts(
+        hand,
+        state.q,
+        [c.point for c in contacts],
+        [str(c.link) for c in contacts],
+        shape,
+        state.object_poses[0],
+        offset,
+        steps,
+        tolerance,
+        list(touching),
+    )
 
 
 __all__ = ["STEPS", "TOLERANCE", "PathContacts", "PathTouch", "path_contacts", "sensed_path_contacts"]

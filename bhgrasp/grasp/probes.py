@@ -3,17 +3,21 @@
 :class:`ObjectProbe` finds where a line of approach meets an object's surface (1 mm steps, then bisection to
 :data:`SURFACE_TOLERANCE`), the outward normal there, and whether the surface is flat around a point (no edge within
 a margin).  :class:`HandClearance` gives the least distance from an object to every collision shape of a hand except
-the fingertip pads that grasp it (a link body must not touch beside a pad).  World frame, metres.
+the fingertip pads that grasp it (a link body must not touch beside a pad).  :func:`contact_geometries` finds the
+collision geometry each contact lies on, :func:`pressed_face` the face of a box a contact presses.  World frame,
+metres.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import coal
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp.errors import InputError
 from bhgrasp.model.hand import Hand
 
 SURFACE_TOLERANCE = 1e-5  # [m] the ray's bisection
@@ -84,8 +88,10 @@ class HandClearance:
         self.data = pin.GeometryData(self.geometry)
         self.model_data = hand.model.createData()
         self.base = hand.base_placement
-        tips = {hand.model.frames[hand.model.getFrameId(frame)].parentJoint: finger
-                for finger, frame in hand.fingertip_frames.items()}  # fmt: skip
+        tips = {
+            hand.model.frames[hand.model.getFrameId(frame)].parentJoint: finger
+            for finger, frame in hand.fingertip_frames.items()
+        }
         self.pad_of = {}
         for index, item in enumerate(self.geometry.geometryObjects):
             if isinstance(item.geometry, coal.Sphere) and item.parentJoint in tips:
@@ -103,10 +109,59 @@ class HandClearance:
                 continue
             result.clear()
             world = self.base * self.data.oMg[index]
-            distance = coal.distance(item.geometry, coal.Transform3s(world.rotation, world.translation), shape,
-                                     placement, request, result)  # fmt: skip
+            distance = coal.distance(
+                item.geometry, coal.Transform3s(world.rotation, world.translation), shape, placement, request, result
+            )
             nearest = min(nearest, float(distance))
         return nearest
 
 
-__all__ = ["SURFACE_TOLERANCE", "HandClearance", "ObjectProbe"]
+def coal_transform(placement: pin.SE3) -> coal.Transform3s:
+    """``placement`` as coal's transform."""
+    return coal.Transform3s(placement.rotation, placement.translation)
+
+
+def contact_geometries(
+    hand: Hand, geometry: pin.GeometryModel, q: np.ndarray, points: np.ndarray, links: list[str]
+) -> list[int]:
+    """The geometry carrying each contact, in order: on the contact link's joint, the one nearest the contact point."""
+    model = hand.model
+    geometry_data = pin.GeometryData(geometry)
+    pin.updateGeometryPlacements(model, pin.Data(model), geometry, geometry_data, q)
+    probe, request, result = coal.Sphere(1e-9), coal.DistanceRequest(), coal.DistanceResult()
+    pads = []
+    for point, link in zip(points, links):
+        joint = model.frames[model.getFrameId(link)].parentJoint if model.existFrame(link) else -1
+        candidates = [g for g, item in enumerate(geometry.geometryObjects) if item.parentJoint == joint]
+        if not candidates:
+            raise InputError(f"link {link!r} is not a hand frame carrying collision geometry; contacts lie on one")
+        distances = []
+        for g in candidates:
+            result.clear()
+            distances.append(
+                coal.distance(
+                    geometry.geometryObjects[g].geometry,
+                    coal_transform(hand.base_placement * geometry_data.oMg[g]),
+                    probe,
+                    coal.Transform3s(np.eye(3), point),
+                    request,
+                    result,
+                )
+            )
+        pads.append(candidates[int(np.argmin(distances))])
+    return pads
+
+
+def pressed_face(shape: coal.CollisionGeometry, rotation: np.ndarray, normal: Any) -> str:
+    """The face of a box ``shape`` (turned by ``rotation``) that a contact of world ``normal`` (into it) presses on.
+
+    The face whose outward normal is closest to -normal: e.g. "+y" (robust where the contact straddles an edge).
+    """
+    if not isinstance(shape, coal.Box):
+        return ""
+    outward = -(rotation.T @ np.asarray(normal, dtype=float))  # object frame
+    axis = int(np.argmax(np.abs(outward)))
+    return f"{'+' if outward[axis] >= 0 else '-'}{'xyz'[axis]}"
+
+
+__all__ = ["SURFACE_TOLERANCE", "HandClearance", "ObjectProbe", "coal_transform", "contact_geometries", "pressed_face"]

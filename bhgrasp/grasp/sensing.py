@@ -84,8 +84,9 @@ class ContactSensing:
         fingers = self.hand.fingers
         if not len(finger):
             return dict.fromkeys(fingers, self._empty)
-        sums = core.finger_contacts(finger, len(fingers), state.contact_points, state.contact_normals,
-                                    state.contact_forces)  # fmt: skip
+        sums = core.finger_contacts(
+            finger, len(fingers), state.contact_points, state.contact_normals, state.contact_forces
+        )
         force, normal_force, normal, count = sums.force, sums.normal_force, sums.normal, sums.count
         point, strongest = sums.point, sums.strongest
         result = {}
@@ -94,8 +95,14 @@ class ContactSensing:
                 result[name] = self._empty
                 continue
             row = int(strongest[f])
-            result[name] = FingerContact(force[f].copy(), float(normal_force[f]), normal[f].copy(), int(count[f]),
-                                         point[f].copy(), bodies[row][0] if row >= 0 else None)  # fmt: skip
+            result[name] = FingerContact(
+                force[f].copy(),
+                float(normal_force[f]),
+                normal[f].copy(),
+                int(count[f]),
+                point[f].copy(),
+                bodies[row][0] if row >= 0 else None,
+            )
         return result
 
     def _fingers_python(self, state: State) -> dict[str, FingerContact]:
@@ -144,8 +151,9 @@ class ContactSensing:
         points = state.contact_points[rows]
         if not np.isfinite(points).all():
             as_array(points, "points", (len(rows), 3))  # raises, as Hand.point_jacobians does
-        return kernel.contact_torques(placement.rotation, placement.translation, q, joints, points,
-                                      state.contact_forces[rows])  # fmt: skip
+        return kernel.contact_torques(
+            placement.rotation, placement.translation, q, joints, points, state.contact_forces[rows]
+        )
 
     def _reaction_torques_python(self, state: State) -> np.ndarray:
         """:meth:`reaction_torques` by the hand's point Jacobians (the compiled sum's twin).
@@ -153,8 +161,11 @@ class ContactSensing:
         Through :meth:`~bhgrasp.model.hand.Hand.point_jacobians`.
         """
         hand = self.hand
-        rows = [k for k, (link, _) in enumerate(state.contact_bodies)
-                if link in self._finger_of or hand.model.existFrame(link)]  # fmt: skip
+        rows = [
+            k
+            for k, (link, _) in enumerate(state.contact_bodies)
+            if link in self._finger_of or hand.model.existFrame(link)
+        ]
         if not rows:
             return np.zeros(hand.nv)
         links = [state.contact_bodies[k][0] for k in rows]

@@ -153,16 +153,19 @@ def grasp_candidates(
     candidates = []
     for spread, height in itertools.product(spreads, heights):
         q_spread = _with_spread(hand, spread_joints, spread)
-        landing = {f: probe.landing(*_approach_line(hand, q_spread, f), pose.translation[2] + height) for f in
-                   {f for group in sets for f in group}}  # fmt: skip
+        landing = {
+            f: probe.landing(*_approach_line(hand, q_spread, f), pose.translation[2] + height)
+            for f in {f for group in sets for f in group}
+        }
         for group in sets:
             if any(landing[f] is None for f in group):
                 continue
             points = np.array([landing[f][0] for f in group])
             outward = np.array([landing[f][1] for f in group])
             try:
-                q = ik(hand, {f: p + pad_radius * n for f, p, n in zip(group, points, outward)}, q_spread,
-                       tolerance=1e-6).q  # fmt: skip
+                q = ik(
+                    hand, {f: p + pad_radius * n for f, p, n in zip(group, points, outward)}, q_spread, tolerance=1e-6
+                ).q
             except UnreachableError:
                 continue
             if shapes.nearest_other(q, group, shape, pose) < clearance:
@@ -173,11 +176,11 @@ def grasp_candidates(
                 continue
             if not all(probe.flat_around(p, n, edge_margin) for p, n in zip(points, outward)):
                 continue
-            if lift and not _lifts(hand, group, points, -outward, q, shapes, shape, pose, lift_offset, clearance,
-                                   joint_margin):  # fmt: skip
+            if lift and not _lifts(
+                hand, group, points, -outward, q, shapes, shape, pose, lift_offset, clearance, joint_margin
+            ):
                 continue
-            candidates.append(_candidate(hand, item, group, points, -outward, q, height, mu, opening,
-                                         squeeze, gravity))  # fmt: skip
+            candidates.append(_candidate(hand, item, group, points, -outward, q, height, mu, opening, squeeze, gravity))
     candidates.sort(key=lambda c: c.score, reverse=True)
     return candidates
 
@@ -244,8 +247,9 @@ def _least_lever(hand: Hand, fingers: Sequence[str], points: np.ndarray, q: np.n
 
 def _lifts(hand, group, points, normals, q, shapes, shape, pose, offset, clearance, joint_margin) -> bool:
     """Whether the pads alone move the object by ``offset`` (first order): no sliding, joints off their limits."""
-    space = manipulable_space(hand, q, points, normals, [hand.fingertip_frames[f] for f in group], pose.translation,
-                              group)  # fmt: skip
+    space = manipulable_space(
+        hand, q, points, normals, [hand.fingertip_frames[f] for f in group], pose.translation, group
+    )
     if np.max(space.sliding(offset)) > SLIDE_TOLERANCE:
         return False
     step, joints = space.joint_map @ offset, _flexing(hand, group)

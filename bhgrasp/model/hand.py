@@ -171,8 +171,11 @@ class Hand(HandDynamics):
             joint_id = self._model.getJointId(joint)
             mass = self._model.inertias[joint_id].mass
             prismatic = self._model.joints[joint_id].shortname().startswith("JointModelP")
-            limits = (f"{self.lower[i]:9.3f}{self.upper[i]:9.3f}" if prismatic  # a sliding joint: [m], [m/s], [N]
-                      else f"{np.degrees(self.lower[i]):9.1f}{np.degrees(self.upper[i]):9.1f}")  # fmt: skip
+            limits = (
+                f"{self.lower[i]:9.3f}{self.upper[i]:9.3f}"
+                if prismatic  # a sliding joint: [m], [m/s], [N]
+                else f"{np.degrees(self.lower[i]):9.1f}{np.degrees(self.upper[i]):9.1f}"
+            )
             lines.append(
                 f"  {joint:<16}{limits}{self.velocity_limit[i]:13.3f}{self.effort_limit[i]:15.3f}{mass:14.4f}"
                 + "  [m, N]" * prismatic

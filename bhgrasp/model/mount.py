@@ -34,8 +34,14 @@ from bhgrasp.errors import ModelError
 from bhgrasp.model.hand import Hand
 
 MOUNT_JOINTS = ("mount_x", "mount_y", "mount_z", "mount_yaw", "mount_pitch", "mount_roll")
-_JOINT_MODELS = (pin.JointModelPX, pin.JointModelPY, pin.JointModelPZ, pin.JointModelRZ, pin.JointModelRY,
-                 pin.JointModelRX)  # fmt: skip
+_JOINT_MODELS = (
+    pin.JointModelPX,
+    pin.JointModelPY,
+    pin.JointModelPZ,
+    pin.JointModelRZ,
+    pin.JointModelRY,
+    pin.JointModelRX,
+)
 PITCH_LIMIT = 1.5  # [rad] inside the Z-Y-X singularity at pi/2
 MOUNT_SPEED = (2.0, 2.0, 2.0, 2 * np.pi, 2 * np.pi, 2 * np.pi)  # [m/s, rad/s] an arm's wrist, roughly
 MOUNT_EFFORT = (500.0, 500.0, 500.0, 50.0, 50.0, 50.0)  # [N, N m]
@@ -63,9 +69,13 @@ def mounted(hand: Hand, reach: float = 1.0, name: str | None = None) -> Hand:
         wrist.addJointFrame(joint)
         wrist.appendBodyToJoint(joint, pin.Inertia.Zero(), pin.SE3.Identity())
     model, geometry = pin.appendModel(
-        wrist, hand.model, pin.GeometryModel(), hand.collision_model(), wrist.getFrameId(MOUNT_JOINTS[-1]),
+        wrist,
+        hand.model,
+        pin.GeometryModel(),
+        hand.collision_model(),
+        wrist.getFrameId(MOUNT_JOINTS[-1]),
         pin.SE3.Identity(),
-    )  # fmt: skip
+    )
     model.name = hand.model.name
     limits = {
         "lowerPositionLimit": [-reach] * 3 + [-np.pi, -PITCH_LIMIT, -np.pi],
@@ -118,8 +128,9 @@ def angular_map_rate(coordinates: Any, rates: Any) -> np.ndarray:
     yaw, pitch, yaw_dot, pitch_dot = c[3], c[4], c_dot[3], c_dot[4]
     sy, cy, sp, cp = np.sin(yaw), np.cos(yaw), np.sin(pitch), np.cos(pitch)
     y_rate = np.array([-cy, -sy, 0.0]) * yaw_dot
-    x_rate = np.array([-sy * cp * yaw_dot - cy * sp * pitch_dot, cy * cp * yaw_dot - sy * sp * pitch_dot,
-                       -cp * pitch_dot])  # fmt: skip
+    x_rate = np.array(
+        [-sy * cp * yaw_dot - cy * sp * pitch_dot, cy * cp * yaw_dot - sy * sp * pitch_dot, -cp * pitch_dot]
+    )
     return np.column_stack((np.zeros(3), y_rate, x_rate))
 
 

@@ -9,7 +9,7 @@ TorqueSwitch states, :mod:`bhgrasp.barrett.transmission`):
   through the gears, placed so that T^T D T counts each driven coordinate once.
 
 These are properties of the hand, not of a simulator: :class:`~bhgrasp.sim.actuation.Actuation` simulates a drive
-with them, and a controller that commands the inputs (:class:`~bhgrasp.controllers.supervisor.MotorCommands`) reads
+with them, and a controller that commands the inputs (:class:`~bhgrasp.controllers.motor_commands.MotorCommands`) reads
 the same model. Modes are numeric flags as a :class:`~bhgrasp.data.state.State` carries them (``actuation_modes``);
 ``None`` or an empty array means the drive's initial mode.
 """

@@ -94,10 +94,18 @@ class PoseExcitation(Reference):
         rotation = rab @ pin.exp3(c[5] * _AXES[2]) @ self.start.rotation
         turn_a, turn_b, turn_c = c_dot[3] * _AXES[0], ra @ (c_dot[4] * _AXES[1]), rab @ (c_dot[5] * _AXES[2])
         omega = turn_a + turn_b + turn_c
-        alpha = (c_ddot[3] * _AXES[0] + ra @ (c_ddot[4] * _AXES[1]) + np.cross(turn_a, turn_b)
-                 + rab @ (c_ddot[5] * _AXES[2]) + np.cross(turn_a + turn_b, turn_c))  # fmt: skip
-        return (np.concatenate((position, pin.log3(rotation))), np.concatenate((velocity, omega)),
-                np.concatenate((acceleration, alpha)))  # fmt: skip
+        alpha = (
+            c_ddot[3] * _AXES[0]
+            + ra @ (c_ddot[4] * _AXES[1])
+            + np.cross(turn_a, turn_b)
+            + rab @ (c_ddot[5] * _AXES[2])
+            + np.cross(turn_a + turn_b, turn_c)
+        )
+        return (
+            np.concatenate((position, pin.log3(rotation))),
+            np.concatenate((velocity, omega)),
+            np.concatenate((acceleration, alpha)),
+        )
 
     def extremes(self) -> np.ndarray:
         """(13, 6) offsets from ``start`` the path reaches at most: the lift, and the lift +- each amplitude.

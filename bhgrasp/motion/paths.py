@@ -102,8 +102,11 @@ class PoseCircle(Reference):
         velocity = blend_rate / self.lift_time * self.lift + tangent * phi_dot
         acceleration = blend_curvature / self.lift_time**2 * self.lift + inward * phi_dot**2 + tangent * phi_ddot
         zero = np.zeros(3)
-        return (np.concatenate((position, pin.log3(self.start.rotation))), np.concatenate((velocity, zero)),
-                np.concatenate((acceleration, zero)))  # fmt: skip
+        return (
+            np.concatenate((position, pin.log3(self.start.rotation))),
+            np.concatenate((velocity, zero)),
+            np.concatenate((acceleration, zero)),
+        )
 
     def extremes(self) -> np.ndarray:
         """(8, 6) offsets from ``start`` on the path: the lift, and the circle every 45 deg after it.
@@ -144,8 +147,10 @@ class PoseWaypoints(Reference):
         self.offsets = np.array([as_vector(move[0], f"moves[{i}] offset", 6) for i, move in enumerate(moves)])
         self.durations = np.array([as_positive(move[1], f"moves[{i}] duration") for i, move in enumerate(moves)])
         if self.overlap < 0.0 or np.any(self.durations <= self.overlap):
-            raise InputError(f"`overlap` must be >= 0 and shorter than every move, got {overlap} for durations "
-                             f"{self.durations.tolist()} [s]")  # fmt: skip
+            raise InputError(
+                f"`overlap` must be >= 0 and shorter than every move, got {overlap} for durations "
+                f"{self.durations.tolist()} [s]"
+            )
         self.starts = as_real(delay, "delay") + np.concatenate(([0.0], np.cumsum(self.durations[:-1] - self.overlap)))
 
     @property
@@ -173,8 +178,11 @@ class PoseWaypoints(Reference):
             alpha = turn @ alpha + np.cross(rate[i] * dtheta[i], turn @ omega) + curvature[i] * dtheta[i]
             omega = turn @ omega + rate[i] * dtheta[i]
         position = self.start.translation + b @ dx
-        return (np.concatenate((position, pin.log3(rotation))), np.concatenate((rate @ dx, omega)),
-                np.concatenate((curvature @ dx, alpha)))  # fmt: skip
+        return (
+            np.concatenate((position, pin.log3(rotation))),
+            np.concatenate((rate @ dx, omega)),
+            np.concatenate((curvature @ dx, alpha)),
+        )
 
     def extremes(self) -> np.ndarray:
         """(n, 6) offsets from ``start`` at each waypoint (the moves' sums; rotation vectors added, first order)."""

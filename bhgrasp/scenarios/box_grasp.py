@@ -48,7 +48,7 @@ class BoxGrasp:
     ``q_close`` is the configuration the approach should drive to (``None``: the supervisor's default, the
     contact configuration closed on the non-spread joints); ``fingers`` the grasping fingers (``None``: all);
     ``cancel_damping``: the controller should cancel the drive's known viscous damping (wrap it in
-    :class:`~bhgrasp.controllers.supervisor.MotorCommands`), for hands whose links are too light for a model-based
+    :class:`~bhgrasp.controllers.motor_commands.MotorCommands`), for hands whose links are too light for a model-based
     law to ignore it.
     """
 

@@ -18,7 +18,8 @@ from typing import TYPE_CHECKING, Any
 
 from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.controllers.base import Controller
-from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
+from bhgrasp.controllers.motor_commands import MotorCommands
+from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.metrics import finger_normal_forces
 from bhgrasp.model.objects import Box

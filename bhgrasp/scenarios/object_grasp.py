@@ -24,7 +24,8 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_positive
-from bhgrasp.controllers.supervisor import GraspSupervisor, MotorCommands
+from bhgrasp.controllers.motor_commands import MotorCommands
+from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.data import State
 from bhgrasp.grasp.clearance import check_clearance
 from bhgrasp.grasp.manipulability import ManipulableSpace, manipulable_space
@@ -56,7 +57,7 @@ class ObjectGrasp:
     """A ready-to-run grasp of ``item``: simulator, start state (pre-grasp), hand and the synthesised candidate.
 
     ``cancel_damping``: the controller should cancel the drive's known viscous joint damping
-    (:class:`~bhgrasp.controllers.supervisor.MotorCommands`).
+    (:class:`~bhgrasp.controllers.motor_commands.MotorCommands`).
     """
 
     simulator: Simulator

@@ -16,7 +16,7 @@ import numpy as np
 
 from bhgrasp._native import required_core
 from bhgrasp.data import ContactMemory, ContactSet, empty_contact_set
-from bhgrasp.sim.contact import FALLBACK_TOLERANCE, NARROW_TOLERANCE
+from bhgrasp.sim.coal_queries import FALLBACK_TOLERANCE, NARROW_TOLERANCE
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.engine import DriveTerms, StepResult
 from bhgrasp.sim.native_options import filled

@@ -16,57 +16,14 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive
 from bhgrasp.data import ContactMemory, ContactSet, empty_contact_set
+from bhgrasp.sim.coal_queries import FALLBACK_TOLERANCE, converged, fresh_request, plausible_depth
 from bhgrasp.sim.contact_law import ContactForces, SpringDamper
 from bhgrasp.sim.scene import Scene
 
 LOCAL_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _IDENTITY3 = np.eye(3)
 
-NARROW_TOLERANCE = 1e-10  # GJK/EPA: coal's default 1e-6 tilts a box-on-box normal by up to 0.027 (1.5 deg)
-# At 1e-10 coal 3.0.3's EPA may stop unconverged (a box edge in a cylinder: depth -1.8e308, point 0); such a query is
-# asked again at coal's default tolerance, which converged there (depth 0.53 mm, as coal.distance gives).
-# It may also stop at a depth no contact has: a can's rim on its stand read 307 mm at 1e-10 (0.029 mm at 1e-8 and 1e-6),
-# so a depth beyond the smaller shape's bounding diameter is asked again too.
-FALLBACK_TOLERANCE = 1e-6
-_MAX_DEPTH = 1.0  # [m] a reported penetration beyond this is a failed query, not a contact (half-spaces, planes)
 _NO_MEMORY = ContactMemory.empty()
-
-
-def _converged(result: coal.CollisionResult, max_depth: float = _MAX_DEPTH) -> bool:
-    """Whether every contact of a collision query has a finite depth within ``max_depth`` [m] (EPA converged)."""
-    for i in range(result.numContacts()):
-        depth = result.getContact(i).penetration_depth
-        if not abs(depth) <= max_depth:
-            return False
-    return True
-
-
-def _plausible_depth(shape_a: coal.CollisionGeometry, shape_b: coal.CollisionGeometry) -> float:
-    """The deepest penetration [m] a query of two shapes may report: the smaller one's bounding diameter.
-
-    From coal's ``aabb_radius``; at most :data:`_MAX_DEPTH` (a half-space has no bound).
-    """
-    radii = []
-    for shape in (shape_a.clone(), shape_b.clone()):  # (the scene's own shapes untouched: its signature reads them)
-        shape.computeLocalAABB()
-        bounded = np.isfinite(shape.aabb_radius) and np.all(np.isfinite(shape.aabb_center))
-        radii.append(shape.aabb_radius if bounded else np.inf)
-    return min(2.0 * min(radii), _MAX_DEPTH)
-
-
-def _fresh_request(template: coal.CollisionRequest, tolerance: float = NARROW_TOLERANCE) -> coal.CollisionRequest:
-    """A collision request of our own with ``template``'s settings (Pinocchio may store GJK guesses in its own).
-
-    GJK and EPA run to 1e-10: with coal's default 1e-6, the normal of a box resting on a box came out up to 0.027
-    off the true one (two flush faces, ~1e-9 rad apart), and which way depended on the query before.
-    """
-    request = coal.CollisionRequest()
-    request.enable_contact = template.enable_contact
-    request.num_max_contacts = template.num_max_contacts
-    request.security_margin = template.security_margin
-    request.break_distance = template.break_distance
-    request.gjk_tolerance = request.epa_tolerance = tolerance
-    return request
 
 
 class ContactEngine(ContactForces):
@@ -100,14 +57,19 @@ class ContactEngine(ContactForces):
         geometry, data = scene.geometry, scene.geometry_data
         self._narrow = [
             (
-                geometry.geometryObjects[pair.geom_a].geometry, geometry.geometryObjects[pair.geom_b].geometry,
-                pair.geom_a, pair.geom_b, _fresh_request(data.collisionRequests[pair.index]),
-                data.contactPatchRequests[pair.index], coal.CollisionResult(), coal.ContactPatchResult(),
+                geometry.geometryObjects[pair.geom_a].geometry,
+                geometry.geometryObjects[pair.geom_b].geometry,
+                pair.geom_a,
+                pair.geom_b,
+                fresh_request(data.collisionRequests[pair.index]),
+                data.contactPatchRequests[pair.index],
+                coal.CollisionResult(),
+                coal.ContactPatchResult(),
             )
             for pair in scene.pairs
-        ]  # fmt: skip
-        self._fallback = [_fresh_request(request, FALLBACK_TOLERANCE) for _, _, _, _, request, *_ in self._narrow]
-        self._max_depth = [_plausible_depth(shape_a, shape_b) for shape_a, shape_b, *_ in self._narrow]
+        ]
+        self._fallback = [fresh_request(request, FALLBACK_TOLERANCE) for _, _, _, _, request, *_ in self._narrow]
+        self._max_depth = [plausible_depth(shape_a, shape_b) for shape_a, shape_b, *_ in self._narrow]
         self._probe = coal.Sphere(1e-12)  # a point, for signed-distance queries
         self._probe_placement = coal.Transform3s()
         self._distance_request, self._distance_result = coal.DistanceRequest(), coal.DistanceResult()
@@ -133,7 +95,7 @@ class ContactEngine(ContactForces):
             result.clear()
             if not coal.collide(shape_a, transform_a, shape_b, transform_b, request, result):
                 continue
-            if not _converged(result, self._max_depth[k]):
+            if not converged(result, self._max_depth[k]):
                 result.clear()
                 if not coal.collide(shape_a, transform_a, shape_b, transform_b, self._fallback[k], result):
                     continue
@@ -162,9 +124,16 @@ class ContactEngine(ContactForces):
         displacement, was_sliding = self._recall(pair, local, normal, memory or _NO_MEMORY)
         weight = np.array(weights)[keep]
         return ContactSet(
-            pair, point, normal, depth[keep], self._pair_friction[pair], displacement, weight, local,
+            pair,
+            point,
+            normal,
+            depth[keep],
+            self._pair_friction[pair],
+            displacement,
+            weight,
+            local,
             was_sliding=was_sliding,
-        )  # fmt: skip
+        )
 
     def _point_depths(self, k: int, points: np.ndarray, normal: np.ndarray) -> np.ndarray:
         """Penetration at each point of a multi-point patch, from signed distances to both shapes.
@@ -286,4 +255,4 @@ class ContactEngine(ContactForces):
         return jacobians
 
 
-__all__ = ["FALLBACK_TOLERANCE", "NARROW_TOLERANCE", "ContactEngine"]
+__all__ = ["ContactEngine"]

@@ -96,8 +96,11 @@ class Recorder:
         if core is not None and parts and all(isinstance(part, core.Contacts) for part in parts):
             parts = [core.concatenate(parts)]
         arrays = {}
-        for name, shape, kind in zip(self._CONTACT_FIELDS, ((-1,), (-1, 3), (-1, 3), (-1,), (-1, 3), (-1,)),
-                                     (int, float, float, float, float, bool)):  # fmt: skip
+        for name, shape, kind in zip(
+            self._CONTACT_FIELDS,
+            ((-1,), (-1, 3), (-1, 3), (-1,), (-1, 3), (-1,)),
+            (int, float, float, float, float, bool),
+        ):
             values = [getattr(part, name) for part in parts]
             arrays[name] = (np.concatenate(values) if values else np.zeros(0)).astype(kind).reshape(shape)
         return arrays
