@@ -54,6 +54,18 @@ class Outcome:
         """True if the call returned."""
         return self.error is None
 
+    def result(self) -> Any:
+        """The value, or the error raised (as ``Future.result``)."""
+        if self.error is not None:
+            raise self.error
+        return self.value
+
+
+def call(task: tuple[Callable[..., Any], tuple[Any, ...]]) -> Any:
+    """``function(*arguments)`` of ``task = (function, arguments)``: map it over tasks of different functions."""
+    function, arguments = task
+    return function(*arguments)
+
 
 class RemoteError(Exception):
     """An exception of a worker that could not travel back as itself (it does not pickle): its type and message."""
@@ -248,6 +260,7 @@ __all__ = [
     "ExecutorLike",
     "Outcome",
     "RemoteError",
+    "call",
     "describe_error",
     "executor_for",
     "parallel_map",

@@ -8,8 +8,8 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp, object_parameters, object_regressor
-from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.motor_commands import MotorCommands
+from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.grasp.metrics import finger_normal_forces, slip_events
 from bhgrasp.model.objects import Box

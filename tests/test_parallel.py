@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from bhgrasp.errors import InputError
-from bhgrasp.parallel import RemoteError, executor_for, parallel_map, progress_bar
+from bhgrasp.parallel import RemoteError, call, executor_for, parallel_map, progress_bar
 
 
 def square_or_fail(x: int) -> int:
@@ -163,3 +163,10 @@ def test_fan_out_is_written_once() -> None:
     assert fan_out_names(package / "parallel.py") == {"submit", "ProcessPoolExecutor"}  # the check sees them
     writers = {str(path.relative_to(package)): fan_out_names(path) for path in package.rglob("*.py")}
     assert {path: names for path, names in writers.items() if names and path != "parallel.py"} == {}
+
+
+def test_an_outcome_gives_its_value_or_raises_its_error_and_call_applies_a_task() -> None:
+    good, bad = parallel_map(call, [(divmod, (7, 2)), (divmod, (1, 0))])
+    assert good.result() == (3, 1)
+    with pytest.raises(ZeroDivisionError):
+        bad.result()

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from bhgrasp.cli import main
-from bhgrasp.thesis import chapter3, chapter5, results
+from bhgrasp.thesis import chapter3, chapter5, readme_rows, results, tolerances
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
@@ -40,31 +40,32 @@ def test_committed_results_are_full_runs_written_deterministically(chapter: int)
 
 
 def test_readme_table_is_the_one_rendered_from_the_committed_json() -> None:
-    assert results.readme_table(README.read_text()) == results.render_readme_table(COMMITTED)
+    assert readme_rows.readme_table(README.read_text()) == readme_rows.render_readme_table(COMMITTED)
 
 
 def test_every_number_of_the_readme_table_comes_from_the_json() -> None:
-    documents = results.load_folder(COMMITTED)
-    for _, _, ours, _ in results.README_ROWS:
-        assert not re.search(r"\d", results._FIELD.sub("", ours)), ours  # the words around the fields: no digits
-        for match in results._FIELD.finditer(ours):
+    documents = readme_rows.load_folder(COMMITTED)
+    for _, _, ours, _ in readme_rows.README_ROWS:
+        assert not re.search(r"\d", readme_rows._FIELD.sub("", ours)), ours  # the words around the fields: no digits
+        for match in readme_rows._FIELD.finditer(ours):
             assert match[2] in documents[int(match[1])]["values"], match[0]
     # and read back from the README itself: each number of the "ours" column is a formatted JSON value
-    rows = [line.split(" | ") for line in results.readme_table(README.read_text()).splitlines()[4:]]
-    assert len(rows) == len(results.README_ROWS)
-    for row, (_, _, ours, _) in zip(rows, results.README_ROWS):
+    rows = [line.split(" | ") for line in readme_rows.readme_table(README.read_text()).splitlines()[4:]]
+    assert len(rows) == len(readme_rows.README_ROWS)
+    for row, (_, _, ours, _) in zip(rows, readme_rows.README_ROWS):
         shown = re.findall(r"-?\d+(?:\.\d+)?", row[2])
-        fields = [results.fill(field[0], documents) for field in results._FIELD.finditer(ours)]
+        fields = [readme_rows.fill(field[0], documents) for field in readme_rows._FIELD.finditer(ours)]
         assert shown == fields
 
 
 def test_readme_table_is_rewritten_in_place(tmp_path: Path) -> None:
     readme = tmp_path / "README.md"
-    stale = README.read_text().replace(results.readme_table(README.read_text()), results.README_MARK + "\n\n| x |\n")
+    text = README.read_text()
+    stale = text.replace(readme_rows.readme_table(text), readme_rows.README_MARK + "\n\n| x |\n")
     readme.write_text(stale)
-    assert results.update_readme(readme, COMMITTED)
+    assert readme_rows.update_readme(readme, COMMITTED)
     assert readme.read_text() == README.read_text()
-    assert not results.update_readme(readme, COMMITTED)
+    assert not readme_rows.update_readme(readme, COMMITTED)
 
 
 # ---------------------------------------------------------------------------------------------------- comparer
@@ -89,11 +90,11 @@ def test_compare_refuses_runs_of_another_scale() -> None:
 
 
 def test_tolerances_default_tight_overrides_by_pattern_with_reasons() -> None:
-    assert results.DEFAULT_TOLERANCE.rel <= 1e-6 and results.DEFAULT_TOLERANCE.abs <= 1e-9
-    assert all(tolerance.reason for tolerance in results.TOLERANCES.values())
-    assert results.tolerance_for(5, "smc/mass_estimate_kg") is results.DEFAULT_TOLERANCE
-    assert results.tolerance_for(3, "ctc/joint_steps/F1_distal/settling_s").abs >= 1e-3
-    assert results.tolerance_for(5, "mass/1.0kg/pinv/slip_events").abs >= 1
+    assert tolerances.DEFAULT_TOLERANCE.rel <= 1e-6 and tolerances.DEFAULT_TOLERANCE.abs <= 1e-9
+    assert all(tolerance.reason for tolerance in tolerances.TOLERANCES.values())
+    assert tolerances.tolerance_for(5, "smc/mass_estimate_kg") is tolerances.DEFAULT_TOLERANCE
+    assert tolerances.tolerance_for(3, "ctc/joint_steps/F1_distal/settling_s").abs >= 1e-3
+    assert tolerances.tolerance_for(5, "mass/1.0kg/pinv/slip_events").abs >= 1
     assert results.allowed_difference(4, "x", 10.0, resolution=0.01) == pytest.approx(0.01)  # printed digits
 
 
@@ -140,7 +141,7 @@ def test_written_json_round_trips_and_the_cli_compares_folders(tmp_path: Path, c
 
 def test_readme_table_command_prints_the_rendered_table(capsys) -> None:
     assert main(["experiments", "readme-table", "--reference", str(COMMITTED)]) == 0
-    assert capsys.readouterr().out == results.render_readme_table(COMMITTED)
+    assert capsys.readouterr().out == readme_rows.render_readme_table(COMMITTED)
 
 
 # ---------------------------------------------------------------------------------------------------- producers

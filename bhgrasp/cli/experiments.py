@@ -87,7 +87,7 @@ def _compare(args: argparse.Namespace) -> int:
 
 
 def _readme_table(args: argparse.Namespace) -> int:
-    from bhgrasp.thesis.results import render_readme_table
+    from bhgrasp.thesis.readme_rows import render_readme_table
 
     if args.folder is not None:
         raise InputError("`bhgrasp experiments readme-table` takes no folder; use --reference")
@@ -99,7 +99,7 @@ def _readme_table(args: argparse.Namespace) -> int:
 
 
 def _rewrite_readme(readme: Path, folder: Path) -> None:
-    from bhgrasp.thesis.results import update_readme
+    from bhgrasp.thesis.readme_rows import update_readme
 
     try:
         changed = update_readme(readme, folder)

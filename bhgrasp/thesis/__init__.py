@@ -1,7 +1,7 @@
 """Reproductions of the thesis' results, chapters 2-5: one module per chapter, one ``Case`` per experiment.
 
 ``bhgrasp experiments chN`` runs a chapter (:func:`~bhgrasp.thesis.runner.run_chapter`);
-:mod:`~bhgrasp.thesis.results` writes, compares and tabulates its figures of merit (``docs/results``).
+:mod:`~bhgrasp.thesis.results` writes and compares its figures of merit (``docs/results``).
 """
 
 from bhgrasp.thesis.case import Case, case_progress

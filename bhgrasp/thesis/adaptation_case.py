@@ -41,8 +41,9 @@ def ideal_run(law: str, duration: float = IDEAL_DURATION, dt: float = IDEAL_DT) 
     """The ideal loop with ``law`` on the 0.6 kg box told 0.3 kg, along :data:`EXCITATION`: the run and k_o."""
     true, nominal = Box(size=BOX_SIZE, mass=MASS), Box(size=BOX_SIZE, mass=ESTIMATE)
     identification = ObjectIdentification() if law == "composite" else None
-    grasp = SMCAdaptiveGrasp(BarrettHand(), nominal, object_adaptation=RATES, identification=identification,
-                             engine="python")  # fmt: skip
+    grasp = SMCAdaptiveGrasp(
+        BarrettHand(), nominal, object_adaptation=RATES, identification=identification, engine="python"
+    )
     start = pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.17]))
     grasp.reference = PoseExcitation(start, lift=(0.0, 0.0, 0.0), **EXCITATION)
     return ideal_object_loop(grasp, true, start, duration, dt), grasp.k_o
@@ -54,10 +55,23 @@ def _integral(t: np.ndarray, values: np.ndarray) -> float:
 
 def adaptation_case(scale: float = 1.0):
     """The chapter-5 case (``scale`` < 1 shortens every run)."""
-    header = ["setting", "law", "sensing / plant", "mass error [%]", "I_xx / I_yy / I_zz error [%]",
-              "V_o end / start", "V_o rises [% of samples]", "V rises [% of samples]", "slip samples"]  # fmt: skip
-    case = Case("adaptation", "Adaptation: learning the object online, and the Lyapunov function (5.63)",
-                "parameters converge; V_dot <= 0 (5.65)", header)  # fmt: skip
+    header = [
+        "setting",
+        "law",
+        "sensing / plant",
+        "mass error [%]",
+        "I_xx / I_yy / I_zz error [%]",
+        "V_o end / start",
+        "V_o rises [% of samples]",
+        "V rises [% of samples]",
+        "slip samples",
+    ]
+    case = Case(
+        "adaptation",
+        "Adaptation: learning the object online, and the Lyapunov function (5.63)",
+        "parameters converge; V_dot <= 0 (5.65)",
+        header,
+    )
     for law in ("thesis", "composite"):
         run, k_o = ideal_run(law, IDEAL_DURATION * scale)
         lyapunov = run.lyapunov
@@ -68,8 +82,13 @@ def adaptation_case(scale: float = 1.0):
         summary = IdentificationRun(law, False, run.t, run.estimate, _truth(), lyapunov, 0)
         _row(case, f"ideal/{law}", "ideal loop", summary, "exact")
         case.values.update({f"ideal/{law}/largest_rise_rel": rise, f"ideal/{law}/balance_error_pct": balance})
-    settings = [("thesis", False, {}), ("composite", False, {}), ("thesis", True, {}), ("thesis", False, FRICTION),
-                ("composite", False, FRICTION)]  # fmt: skip
+    settings = [
+        ("thesis", False, {}),
+        ("composite", False, {}),
+        ("thesis", True, {}),
+        ("thesis", False, FRICTION),
+        ("composite", False, FRICTION),
+    ]
     duration = 8.0 * scale
     for law, noisy, plant in settings:
         run = identification_run(law, noisy, duration, plant=plant)
@@ -98,16 +117,38 @@ def _row(case, key: str, setting: str, run: IdentificationRun, sensing: str) -> 
     axes = run.axis_errors()
     ratio = float(run.lyapunov[-1] / run.lyapunov[0])
     total = "-" if run.finger_lyapunov is None else f"{100.0 * run.total_rising:.1f}"  # the ideal loop has no fingers
-    case.table.append([setting, run.law, sensing, f"{run.mass_error():.3f}", " / ".join(f"{a:+.1f}" for a in axes),
-                       f"{ratio:.3f}", f"{100.0 * run.rising:.1f}", total, f"{run.slip_events}"])  # fmt: skip
-    case.values.update({f"{key}/mass_error_pct": run.mass_error(), f"{key}/I_xx_error_pct": float(axes[0]),
-                        f"{key}/I_yy_error_pct": float(axes[1]), f"{key}/I_zz_error_pct": float(axes[2]),
-                        f"{key}/lyapunov_end_to_start": ratio, f"{key}/rising_pct": 100.0 * run.rising,
-                        f"{key}/slip_events": float(run.slip_events)})  # fmt: skip
+    case.table.append(
+        [
+            setting,
+            run.law,
+            sensing,
+            f"{run.mass_error():.3f}",
+            " / ".join(f"{a:+.1f}" for a in axes),
+            f"{ratio:.3f}",
+            f"{100.0 * run.rising:.1f}",
+            total,
+            f"{run.slip_events}",
+        ]
+    )
+    case.values.update(
+        {
+            f"{key}/mass_error_pct": run.mass_error(),
+            f"{key}/I_xx_error_pct": float(axes[0]),
+            f"{key}/I_yy_error_pct": float(axes[1]),
+            f"{key}/I_zz_error_pct": float(axes[2]),
+            f"{key}/lyapunov_end_to_start": ratio,
+            f"{key}/rising_pct": 100.0 * run.rising,
+            f"{key}/slip_events": float(run.slip_events),
+        }
+    )
     if run.finger_lyapunov is not None:
-        case.values.update({f"{key}/total_rising_pct": 100.0 * run.total_rising,
-                            f"{key}/finger_lyapunov_max_J": float(run.finger_lyapunov.max()),
-                            f"{key}/object_lyapunov_max_J": float(run.lyapunov.max())})  # fmt: skip
+        case.values.update(
+            {
+                f"{key}/total_rising_pct": 100.0 * run.total_rising,
+                f"{key}/finger_lyapunov_max_J": float(run.finger_lyapunov.max()),
+                f"{key}/object_lyapunov_max_J": float(run.lyapunov.max()),
+            }
+        )
 
 
 def _notes(values: dict[str, float], hand: dict[str, float], noisy: list[IdentificationRun]) -> list[str]:

@@ -49,9 +49,13 @@ from bhgrasp.thesis.chapter4_fim import f3_force, planar_impedance, three_finger
 from bhgrasp.thesis.chapter4_tuning import fingertip_mass_range, tuning, tuning_plan
 
 CASES: dict[str, Callable[..., Case]] = {
-    "one_link": one_link_contact, "f3_push": f3_push, "planar": planar_impedance, "f3_force": f3_force,
-    "three": three_fingers, "tuning": tuning,
-}  # fmt: skip
+    "one_link": one_link_contact,
+    "f3_push": f3_push,
+    "planar": planar_impedance,
+    "f3_force": f3_force,
+    "three": three_fingers,
+    "tuning": tuning,
+}
 
 
 def run_chapter4(
@@ -95,9 +99,7 @@ def _run_cases(scale: float, executor: Any, progress: bool = False) -> list[Case
             done["tuning"] = tuning(scale, runner)  # tune while the others run
             bar.update()
             for outcome in running:
-                if outcome.error is not None:
-                    raise outcome.error
-                done[others[outcome.index]] = outcome.value
+                done[others[outcome.index]] = outcome.result()
                 bar.update()
     finally:
         bar.close()

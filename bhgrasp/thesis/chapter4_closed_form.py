@@ -92,8 +92,9 @@ def _closed_form(
     window = slice(len(traj) - max(2, len(traj) // 20), None)  # the samples force_metrics' 'final' averages
     q = traj.q[-1]
     inner = inner_loop_stiffness(setup, q, kp)
-    offset = friction_offset(setup, q, np.mean(traj.log["reaction_torque"][window], axis=0),
-                             float(np.mean(force[window])), kp)  # fmt: skip
+    offset = friction_offset(
+        setup, q, np.mean(traj.log["reaction_torque"][window], axis=0), float(np.mean(force[window])), kp
+    )
     args = (law.force, law.stiffness, inner, law.environment_stiffness, feedforward)
     return inner, steady_force(*args), steady_force(*args, offset=offset)
 
@@ -134,6 +135,11 @@ def _why_printed(
 
 
 __all__ = [
-    "CLOSED_FORM_HEADER", "PRINTED_GAMMA", "PRINTED_NOTE", "as_printed", "friction_offset", "inner_loop_stiffness",
+    "CLOSED_FORM_HEADER",
+    "PRINTED_GAMMA",
+    "PRINTED_NOTE",
+    "as_printed",
+    "friction_offset",
+    "inner_loop_stiffness",
     "steady_force",
-]  # fmt: skip
+]

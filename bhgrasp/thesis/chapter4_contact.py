@@ -59,8 +59,15 @@ def _reaction_torques(setup: Setup, traj: Trajectory) -> np.ndarray:
     out = np.zeros((len(traj), setup.hand.nv))
     for k in range(len(traj)):
         c = traj.contacts_at(k)
-        state = State(traj.t[k], traj.q[k], traj.v[k], contact_points=c["point"], contact_normals=c["normal"],
-                      contact_forces=c["force"], contact_bodies=tuple(map(tuple, c["bodies"])))  # fmt: skip
+        state = State(
+            traj.t[k],
+            traj.q[k],
+            traj.v[k],
+            contact_points=c["point"],
+            contact_normals=c["normal"],
+            contact_forces=c["force"],
+            contact_bodies=tuple(map(tuple, c["bodies"])),
+        )
         out[k] = sensing.reaction_torques(state)
     return out
 

@@ -77,18 +77,24 @@ def planar_impedance(scale: float = 1.0) -> Case:
     profile = SmoothStep([15.0], [30.0], 0.3, delay=0.5 * duration)
     adaptive = AdaptiveForceImpedance(still, setup.normal, profile, *start, search_speed=0.05, **impedance)
     gamma = (PRINTED_GAMMA[0] / start[1], PRINTED_GAMMA[1] / start[1])
-    printed = as_printed(AdaptiveForceImpedance(still, setup.normal, 30.0, *start, gamma=gamma, estimator="gradient",
-                                                search_speed=0.05, **impedance))  # fmt: skip
+    printed = as_printed(
+        AdaptiveForceImpedance(
+            still, setup.normal, 30.0, *start, gamma=gamma, estimator="gradient", search_speed=0.05, **impedance
+        )
+    )
     runs: list[tuple[str, Controller, ForceImpedance | None, float | None]] = [
-        ("uncontrolled (5 cm in)", plain, None, None), ("PIM", pim, None, None),
-    ]  # fmt: skip
+        ("uncontrolled (5 cm in)", plain, None, None),
+        ("PIM", pim, None, None),
+    ]
     for name, law, desired, forward in (
-        ("FIM, f_d = 10 N", fim(), 10.0, True), ("FIM as printed, f_d = 10 N", as_printed(fim()), 10.0, False),
+        ("FIM, f_d = 10 N", fim(), 10.0, True),
+        ("FIM as printed, f_d = 10 N", as_printed(fim()), 10.0, False),
         ("adaptive FIM, f_d = 15 -> 30 N", adaptive, 30.0, True),
         ("adaptive FIM as printed, f_d = 30 N", printed, 30.0, False),
-    ):  # fmt: skip
-        runs.append((name, ImpedanceController(setup.hand, {"tip": law}, *PLANAR_GAINS, feedforward=forward), law,
-                     desired))  # fmt: skip
+    ):
+        runs.append(
+            (name, ImpedanceController(setup.hand, {"tip": law}, *PLANAR_GAINS, feedforward=forward), law, desired)
+        )
     why = ""
     for name, controller, law, desired in runs:
         traj = run(setup, controller, duration)
@@ -138,13 +144,17 @@ def f3_force(scale: float = 1.0) -> Case:
         profile = SmoothStep([5.0], [10.0], 0.3, delay=0.5 * duration)
         adaptive = AdaptiveForceImpedance(still, setup.normal, profile, *start, search_speed=0.02, **F3_IMPEDANCE)
         gamma = (PRINTED_GAMMA[0] / start[1], PRINTED_GAMMA[1] / start[1])
-        printed = as_printed(AdaptiveForceImpedance(
-            still, setup.normal, 10.0, *start, gamma=gamma, estimator="gradient", search_speed=0.02, **F3_IMPEDANCE
-        ))  # fmt: skip
+        printed = as_printed(
+            AdaptiveForceImpedance(
+                still, setup.normal, 10.0, *start, gamma=gamma, estimator="gradient", search_speed=0.02, **F3_IMPEDANCE
+            )
+        )
         for name, law, forward in (
-            ("FIM", fim(), True), ("FIM as printed", as_printed(fim()), False), ("adaptive FIM", adaptive, True),
+            ("FIM", fim(), True),
+            ("FIM as printed", as_printed(fim()), False),
+            ("adaptive FIM", adaptive, True),
             ("adaptive FIM as printed", printed, False),
-        ):  # fmt: skip
+        ):
             controller = ImpedanceController(setup.hand, {"F3": law}, *F3_GAINS, feedforward=forward)
             traj = run(setup, controller, duration)
             force = normal_force(setup, traj)
@@ -178,13 +188,15 @@ def three_fingers(scale: float = 1.0) -> Case:
     case = Case("three", "FIM on all three fingers pressing one object (Fig 4.17)")
     case.header = FORCE_HEADER
     hand = BarrettHand()
-    q0 = hand.configuration(F1_proximal=0.3, F1_distal=0.5, F2_proximal=0.3, F2_distal=0.5, **{
-        "F3_proximal": 0.3, "F3_distal": 0.5})  # fmt: skip
+    q0 = hand.configuration(
+        F1_proximal=0.3, F1_distal=0.5, F2_proximal=0.3, F2_distal=0.5, **{"F3_proximal": 0.3, "F3_distal": 0.5}
+    )
     tips = hand.fingertip_positions(q0)
     half = 0.095  # [m] half-width of the box along y: 1.5 cm of travel for each fingertip sphere
     centre = np.array([0.0, 0.0, tips[2][2] + 0.05])  # its bottom level with the tips: only fingertips touch
-    box = Box(size=(0.08, 2 * half, 0.12), mass=OBJECT_MASS, friction=0.5, pose=pin.SE3(np.eye(3), centre),
-              name="object")  # fmt: skip
+    box = Box(
+        size=(0.08, 2 * half, 0.12), mass=OBJECT_MASS, friction=0.5, pose=pin.SE3(np.eye(3), centre), name="object"
+    )
     spring = SpringMounted(box, direction=(0, 0, 1), stiffness=1e3, damping=2.0 * np.sqrt(1e3 * OBJECT_MASS))
     contact = SpringDamper(stiffness=1e4, damping=50.0, friction=0.5)
     sim = Simulator(Scene(hand, objects=[spring]), dt=DT, contact=contact)
@@ -193,8 +205,9 @@ def three_fingers(scale: float = 1.0) -> Case:
         normal = np.array([0.0, -np.sign(tips[i][1]), 0.0])
         setup = Setup(hand, finger, sim, q0, tips[i], normal, 0.0, contact.stiffness)
         setup.surface = probe_surface(setup)
-        laws[finger] = ForceImpedance(Constant(tips[i]), normal, 15.0, setup.surface_point(), contact.stiffness,
-                                      **F3_IMPEDANCE)  # fmt: skip
+        laws[finger] = ForceImpedance(
+            Constant(tips[i]), normal, 15.0, setup.surface_point(), contact.stiffness, **F3_IMPEDANCE
+        )
     controller = ImpedanceController(hand, laws, *F3_GAINS)
     traj = sim.run(controller, 3.0 * scale, state=sim.initial_state(q0), progress=False)
     for finger in hand.fingers:

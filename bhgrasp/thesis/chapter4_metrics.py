@@ -13,9 +13,16 @@ from bhgrasp.scenarios.finger_press import ForceMetrics
 def force_row(name: str, m: ForceMetrics, extra: list[str] | None = None) -> list[str]:
     """One row of a force table: ``name``, the metrics ``m`` under :data:`FORCE_HEADER`, then ``extra`` cells."""
     return [
-        name, f"{m.contact_time:.2f}", f"{m.impact:.2f}", f"{m.peak:.2f}", f"{m.final:.3f}", _fmt(m.overshoot, ".1f"),
-        f"{m.settling:.3f}", "-" if np.isnan(m.error) else f"{m.error:.3f}", *(extra or []),
-    ]  # fmt: skip
+        name,
+        f"{m.contact_time:.2f}",
+        f"{m.impact:.2f}",
+        f"{m.peak:.2f}",
+        f"{m.final:.3f}",
+        _fmt(m.overshoot, ".1f"),
+        f"{m.settling:.3f}",
+        "-" if np.isnan(m.error) else f"{m.error:.3f}",
+        *(extra or []),
+    ]
 
 
 def _fmt(value: float, spec: str) -> str:

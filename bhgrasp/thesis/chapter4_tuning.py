@@ -18,7 +18,7 @@ import numpy as np
 from bhgrasp.controllers.workspace import workspace_dynamics
 from bhgrasp.errors import InputError
 from bhgrasp.model.hand import Hand
-from bhgrasp.parallel import Outcome, executor_for, parallel_map
+from bhgrasp.parallel import call, executor_for, parallel_map
 from bhgrasp.scenarios.press_fitness import (
     TUNING_DURATION,
     TUNING_FORCE,
@@ -70,19 +70,6 @@ def tuning_plan(scale: float) -> tuple[list[tuple[tuple[float, float], int]], in
     return pairs[:count], max(12, round(TUNING_MAX_EVALUATIONS * scale**2))
 
 
-def _call(call: tuple[Callable[..., Any], tuple[Any, ...]]) -> Any:
-    """``fn(*args)`` of ``call = (fn, args)`` (runs in a worker, or here)."""
-    function, arguments = call
-    return function(*arguments)
-
-
-def _value(outcome: Outcome) -> Any:
-    """An outcome's value, or its error raised."""
-    if outcome.error is not None:
-        raise outcome.error
-    return outcome.value
-
-
 def _workers(executor: Any) -> str:
     """Who evaluates on ``executor``, for the report."""
     if executor == "serial":
@@ -114,8 +101,15 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
     from bhgrasp.tuning import cma_es
 
     case = Case("tuning", "CMA-ES tuning of the discretised force impedance on F3 (Table 4.2, Figs 4.21-4.24)")
-    case.header = ["start [M_I, K_I]", "found [M_I, K_I]", "generations", "F_d [N]", "settling [s] untuned -> tuned",
-                   "overshoot % untuned -> tuned", "mean |error| [N] untuned -> tuned"]  # fmt: skip
+    case.header = [
+        "start [M_I, K_I]",
+        "found [M_I, K_I]",
+        "generations",
+        "F_d [N]",
+        "settling [s] untuned -> tuned",
+        "overshoot % untuned -> tuned",
+        "mean |error| [N] untuned -> tuned",
+    ]
     pairs, cap = tuning_plan(scale)
     lower, upper = np.log10(TUNING_BOUNDS[0]), np.log10(TUNING_BOUNDS[1])
     starts = list(dict.fromkeys(start for start, _ in pairs))
@@ -124,9 +118,18 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
     def search(pair: tuple[tuple[float, float], int]) -> tuple[Any, ...]:
         (start, seed), began = pair, time.perf_counter()
         x0 = np.clip(np.log10(start), lower, upper)
-        result = cma_es(impedance_fitness, x0, TUNING_SIGMA, seed=seed, max_generations=100_000,
-                        bounds=(lower, upper), executor=runner, tol_fun=TUNING_TOL_FUN, tol_x=TUNING_TOL_X,
-                        max_evaluations=cap)  # fmt: skip
+        result = cma_es(
+            impedance_fitness,
+            x0,
+            TUNING_SIGMA,
+            seed=seed,
+            max_generations=100_000,
+            bounds=(lower, upper),
+            executor=runner,
+            tol_fun=TUNING_TOL_FUN,
+            tol_x=TUNING_TOL_X,
+            max_evaluations=cap,
+        )
         return start, 10.0**x0, seed, result, time.perf_counter() - began
 
     with executor_for(executor, min(6, os.cpu_count() or 1)) as runner:
@@ -135,7 +138,7 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
         else:
             threads = ThreadPoolExecutor(max_workers=len(pairs))
             try:
-                runs = [_value(outcome) for outcome in parallel_map(search, pairs, threads)]
+                runs = [outcome.result() for outcome in parallel_map(search, pairs, threads)]
             finally:  # on an error, shutting the pool down below ends the other searches
                 threads.shutdown(wait=False, cancel_futures=True)
         searched = time.perf_counter() - clock
@@ -148,7 +151,7 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
             untuned, tuned = tuple(best[start][1]), tuple(10.0 ** best[start][3].best)
             for desired in (4.0, 6.0, 8.0):
                 calls += [(_evaluate, (untuned, desired)), (_evaluate, (tuned, desired))]
-        outcomes = [_value(outcome) for outcome in parallel_map(_call, calls, runner)]
+        outcomes = [outcome.result() for outcome in parallel_map(call, calls, runner)]
     wall = time.perf_counter() - clock
     at_start = dict(zip(starts, outcomes[: len(starts)]))
     at_thesis = dict(zip(thesis, outcomes[len(starts) : len(starts) + len(thesis)]))
@@ -160,45 +163,88 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
         found = 10.0**result.best
         for desired in (4.0, 6.0, 8.0):
             before, after = next(held), next(held)
-            case.table.append([
-                label, f"[{found[0]:.5f}, {found[1]:.4f}]", str(result.generations), f"{desired:g}",
-                f"{before[0].settling:.3f} -> {after[0].settling:.3f}",
-                f"{before[0].overshoot:.1f} -> {after[0].overshoot:.1f}", f"{before[1]:.3f} -> {after[1]:.3f}",
-            ])  # fmt: skip
-    case.table += [["[0.5, 0.5] (thesis)", "[0.0050, 4.7561]", "~160 shown, 1000 run", "4, 6, 8", "~0.1", "~1", "-"],
-                   ["[5, 5] (thesis)", "[0.0011, 3.1387]", "1000 run", "4, 6, 8", "~0.1", "2 - 3", "-"]]  # fmt: skip
+            case.table.append(
+                [
+                    label,
+                    f"[{found[0]:.5f}, {found[1]:.4f}]",
+                    str(result.generations),
+                    f"{desired:g}",
+                    f"{before[0].settling:.3f} -> {after[0].settling:.3f}",
+                    f"{before[0].overshoot:.1f} -> {after[0].overshoot:.1f}",
+                    f"{before[1]:.3f} -> {after[1]:.3f}",
+                ]
+            )
+    case.table += [
+        ["[0.5, 0.5] (thesis)", "[0.0050, 4.7561]", "~160 shown, 1000 run", "4, 6, 8", "~0.1", "~1", "-"],
+        ["[5, 5] (thesis)", "[0.0011, 3.1387]", "1000 run", "4, 6, 8", "~0.1", "2 - 3", "-"],
+    ]
 
-    header = ["start [M_I, K_I], seed", "found M_I [kg]", "found K_I [N/m]", "fitness [N] start -> found",
-              "generations", "evaluations", "cma stop()"]  # fmt: skip
+    header = [
+        "start [M_I, K_I], seed",
+        "found M_I [kg]",
+        "found K_I [N/m]",
+        "fitness [N] start -> found",
+        "generations",
+        "evaluations",
+        "cma stop()",
+    ]
     rows: list[list[str]] = []
     for start, x0, seed, result, _ in runs:
         clipped = "" if np.allclose(x0, start) else f" (clipped to {_pair(x0, 'g')})"
         found = 10.0**result.best
-        rows.append([
-            f"{_pair(start, 'g')}{clipped}, seed {seed}", f"{found[0]:.5f}", f"{found[1]:.4f}",
-            f"{at_start[start]:.4f} -> {result.best_fitness:.5f}", str(result.generations), str(result.evaluations),
-            str(dict(result.criteria)),
-        ])  # fmt: skip
-        case.traces[f"from {_pair(start, 'g')}, seed {seed}"] = (np.arange(result.generations), result.generation_best,
-                                                                  None)  # fmt: skip
+        rows.append(
+            [
+                f"{_pair(start, 'g')}{clipped}, seed {seed}",
+                f"{found[0]:.5f}",
+                f"{found[1]:.4f}",
+                f"{at_start[start]:.4f} -> {result.best_fitness:.5f}",
+                str(result.generations),
+                str(result.evaluations),
+                str(dict(result.criteria)),
+            ]
+        )
+        case.traces[f"from {_pair(start, 'g')}, seed {seed}"] = (
+            np.arange(result.generations),
+            result.generation_best,
+            None,
+        )
     found_all = np.array([10.0 ** r[3].best for r in runs])
     fitness_all = [r[3].best_fitness for r in runs]
     fired: dict[str, int] = {}
     for r in runs:
         for name in r[3].criteria:
             fired[name] = fired.get(name, 0) + 1
-    rows.append([
-        f"spread over {len(runs)} run(s) (min to max)", _span(found_all[:, 0], ".5f"), _span(found_all[:, 1], ".4f"),
-        _span(fitness_all, ".5f"), _span([r[3].generations for r in runs], "d"),
-        _span([r[3].evaluations for r in runs], "d"), ", ".join(f"{k} x{v}" for k, v in sorted(fired.items())),
-    ])  # fmt: skip
+    rows.append(
+        [
+            f"spread over {len(runs)} run(s) (min to max)",
+            _span(found_all[:, 0], ".5f"),
+            _span(found_all[:, 1], ".4f"),
+            _span(fitness_all, ".5f"),
+            _span([r[3].generations for r in runs], "d"),
+            _span([r[3].evaluations for r in runs], "d"),
+            ", ".join(f"{k} x{v}" for k, v in sorted(fired.items())),
+        ]
+    )
     for start, found in thesis.items():
-        rows.append([
-            f"thesis Table 4.2, from {_pair(start, 'g')}", f"{found[0]:.4f}", f"{found[1]:.4f}",
-            f"our fitness at it: {at_thesis[start]:.4f}", "1000 run", "-", "-",
-        ])  # fmt: skip
-    case.tables.append(("Every CMA-ES run: the optimum, its fitness, and the criterion in cma's stop() dictionary that"
-                        " ended it; their spread; the thesis' optima under our fitness", header, rows))  # fmt: skip
+        rows.append(
+            [
+                f"thesis Table 4.2, from {_pair(start, 'g')}",
+                f"{found[0]:.4f}",
+                f"{found[1]:.4f}",
+                f"our fitness at it: {at_thesis[start]:.4f}",
+                "1000 run",
+                "-",
+                "-",
+            ]
+        )
+    case.tables.append(
+        (
+            "Every CMA-ES run: the optimum, its fitness, and the criterion in cma's stop() dictionary that"
+            " ended it; their spread; the thesis' optima under our fitness",
+            header,
+            rows,
+        )
+    )
 
     light, heavy = fingertip_mass_range(_cached_f3_setup(TUNING_SPRING).hand, "F3")
     spread = np.ptp(np.log10(found_all), axis=0)
@@ -240,6 +286,14 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
 
 
 __all__ = [
-    "TUNING_BOUNDS", "TUNING_MAX_EVALUATIONS", "TUNING_SEEDS", "TUNING_SIGMA", "TUNING_STARTS", "TUNING_TOL_FUN",
-    "TUNING_TOL_X", "fingertip_mass_range", "tuning", "tuning_plan",
-]  # fmt: skip
+    "TUNING_BOUNDS",
+    "TUNING_MAX_EVALUATIONS",
+    "TUNING_SEEDS",
+    "TUNING_SIGMA",
+    "TUNING_STARTS",
+    "TUNING_TOL_FUN",
+    "TUNING_TOL_X",
+    "fingertip_mass_range",
+    "tuning",
+    "tuning_plan",
+]

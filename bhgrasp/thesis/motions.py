@@ -68,14 +68,17 @@ def run_motion(spacing: float, offset: Any, duration: float = DURATION) -> dict[
     return {
         "plan_shortfall_mm": 1e3 * float(np.linalg.norm(missing[:3])),
         "plan_shortfall_mrad": 1e3 * float(np.linalg.norm(missing[3:])),
-        "refused": False, "reason": "",
+        "refused": False,
+        "reason": "",
         "success": bool(result.slip_events == 0 and position < SUCCESS[0] and rotation < SUCCESS[1]),
-        "final_error_mm": 1e3 * position, "final_rotation_mrad": 1e3 * rotation,
+        "final_error_mm": 1e3 * position,
+        "final_rotation_mrad": 1e3 * rotation,
         "max_error_mm": 1e3 * float(np.max(np.linalg.norm(tracking[:, :3], axis=1), initial=0.0)),
         "max_rotation_mrad": 1e3 * float(np.max(np.linalg.norm(tracking[:, 3:], axis=1), initial=0.0)),
-        "slip_events": result.slip_events, "force_error_pct": 100 * result.force_error,
+        "slip_events": result.slip_events,
+        "force_error_pct": 100 * result.force_error,
         "planned": result.planned_offset is not None and not np.allclose(result.planned_offset, offset, 0, 1e-12),
-    }  # fmt: skip
+    }
 
 
 def _face(match: re.Match) -> str:
@@ -87,13 +90,19 @@ _REASONS = (  # (pattern in a refusal's message, its few words), first match win
     (r"joint (\S+) reaches its limit", lambda m: f"joint {m.group(1)} at its limit"),
     (r"contact (\S+) would slide or roll ([\d.]+) mm", lambda m: f"{m.group(1)} would slide {m.group(2)} mm"),
     (r"(\w+?)_link_\d+ \(\S+\) comes within ([\d.]+) mm of the object's (\S*) ?face .*? \(([\d.]+) rad\)", _face),
-    (r"only to within ([\d.]+) mm and ([\d.]+) mrad",
-     lambda m: f"the sensed contacts miss it by {m.group(1)} mm / {m.group(2)} mrad"),
-    (r"joint (\S+) leaves its limits at (\d+) % of the path",
-     lambda m: f"joint {m.group(1)} leaves its limits {m.group(2)} % along the path"),
-    (r"([\d.]+) mm into (\S+) at .*?lift the object by ([\d.]+) mm",
-     lambda m: f"{m.group(1)} mm into {m.group(2)}: lift {m.group(3)} mm first"),
-)  # fmt: skip
+    (
+        r"only to within ([\d.]+) mm and ([\d.]+) mrad",
+        lambda m: f"the sensed contacts miss it by {m.group(1)} mm / {m.group(2)} mrad",
+    ),
+    (
+        r"joint (\S+) leaves its limits at (\d+) % of the path",
+        lambda m: f"joint {m.group(1)} leaves its limits {m.group(2)} % along the path",
+    ),
+    (
+        r"([\d.]+) mm into (\S+) at .*?lift the object by ([\d.]+) mm",
+        lambda m: f"{m.group(1)} mm into {m.group(2)}: lift {m.group(3)} mm first",
+    ),
+)
 
 
 def short_reason(message: str) -> str:
@@ -107,10 +116,21 @@ def short_reason(message: str) -> str:
 
 def motions_case(scale: float = 1.0):
     """The chapter-5 case: every grasp x motion (runs of ``scale`` x 3 s)."""
-    header = ["grasp", "motion", "outcome", "final error [mm] / [mrad]", "max tracking error [mm] / [mrad]",
-              "slip samples", "force error [%]"]  # fmt: skip
-    case = Case("motions", "Object motions of the chapter-5 grasps: refused before simulating, or run",
-                "Table 5.2 asks for one motion: 10 mm and 2-9 degrees", header)  # fmt: skip
+    header = [
+        "grasp",
+        "motion",
+        "outcome",
+        "final error [mm] / [mrad]",
+        "max tracking error [mm] / [mrad]",
+        "slip samples",
+        "force error [%]",
+    ]
+    case = Case(
+        "motions",
+        "Object motions of the chapter-5 grasps: refused before simulating, or run",
+        "Table 5.2 asks for one motion: 10 mm and 2-9 degrees",
+        header,
+    )
     allowed = succeeded = 0
     failed: list[str] = []
     for grasp_key, (grasp_label, spacing) in GRASPS.items():
@@ -126,19 +146,35 @@ def motions_case(scale: float = 1.0):
             if not row["success"]:
                 failed.append(f"{motion_label} ({grasp_label}: {row['slip_events']} slip samples)")
             outcome = ("success" if row["success"] else "failed") + (" (planned)" if row["planned"] else "")
-            case.table.append([
-                grasp_label, motion_label, outcome, f"{row['final_error_mm']:.3f} / {row['final_rotation_mrad']:.2f}",
-                f"{row['max_error_mm']:.3f} / {row['max_rotation_mrad']:.2f}", str(row["slip_events"]),
-                f"{row['force_error_pct']:.2f}",
-            ])  # fmt: skip
-            for name in ("final_error_mm", "final_rotation_mrad", "max_error_mm", "max_rotation_mrad", "slip_events",
-                         "force_error_pct", "plan_shortfall_mm", "plan_shortfall_mrad"):  # fmt: skip
+            case.table.append(
+                [
+                    grasp_label,
+                    motion_label,
+                    outcome,
+                    f"{row['final_error_mm']:.3f} / {row['final_rotation_mrad']:.2f}",
+                    f"{row['max_error_mm']:.3f} / {row['max_rotation_mrad']:.2f}",
+                    str(row["slip_events"]),
+                    f"{row['force_error_pct']:.2f}",
+                ]
+            )
+            for name in (
+                "final_error_mm",
+                "final_rotation_mrad",
+                "max_error_mm",
+                "max_rotation_mrad",
+                "slip_events",
+                "force_error_pct",
+                "plan_shortfall_mm",
+                "plan_shortfall_mrad",
+            ):
                 case.values[f"{key}/{name}"] = float(row[name])
             case.values[f"{key}/success"] = float(row["success"])
     case.values["allowed_motions"] = float(allowed)
     case.values["allowed_success_pct"] = 100.0 * succeeded / allowed if allowed else float("nan")
-    shortfall = tuple(max((v for k, v in case.values.items() if k.endswith(f"plan_shortfall_{unit}")), default=0.0)
-                      for unit in ("mm", "mrad"))  # fmt: skip
+    shortfall = tuple(
+        max((v for k, v in case.values.items() if k.endswith(f"plan_shortfall_{unit}")), default=0.0)
+        for unit in ("mm", "mrad")
+    )
     case.notes += _notes(allowed, succeeded, failed, shortfall)
     return case
 

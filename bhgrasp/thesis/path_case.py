@@ -34,37 +34,63 @@ from bhgrasp.thesis.case import Case
 
 def path_case(scale: float = 1.0):
     """The chapter-5 case (paths of ``scale`` x their durations after the lift)."""
-    header = ["object and grasp", "path", "outcome", "max / rms deviation after the lift [mm]",
-              "max deviation in the lift [mm]", "max turn off the path [mrad]", "final error [mm] / [mrad]",
-              "slip samples", "least cone margin [N]"]  # fmt: skip
-    case = Case("paths", "Continuous paths: grasped objects carried around a circle and through waypoints",
-                "-", header)  # fmt: skip
+    header = [
+        "object and grasp",
+        "path",
+        "outcome",
+        "max / rms deviation after the lift [mm]",
+        "max deviation in the lift [mm]",
+        "max turn off the path [mrad]",
+        "final error [mm] / [mrad]",
+        "slip samples",
+        "least cone margin [N]",
+    ]
+    case = Case("paths", "Continuous paths: grasped objects carried around a circle and through waypoints", "-", header)
     circles: dict[str, PathRun] = {}
     for key in WAYPOINTS:
         label, item = OBJECTS[key]
         setup = object_grasp(item)
         moves = [(offset, duration * scale) for offset, duration in WAYPOINTS[key]]  # (the overlap scales too)
-        paths = {"circle": (circle(duration=CIRCLE_TIME * scale), f"circle r {1e3 * RADIUS:g} mm, y-z plane, "
-                            f"{CIRCLE_TIME * scale:g} s"),
-                 "waypoints": (waypoints(moves, OVERLAP * scale), _describe(moves))}  # fmt: skip
+        paths = {
+            "circle": (
+                circle(duration=CIRCLE_TIME * scale),
+                f"circle r {1e3 * RADIUS:g} mm, y-z plane, {CIRCLE_TIME * scale:g} s",
+            ),
+            "waypoints": (waypoints(moves, OVERLAP * scale), _describe(moves)),
+        }
         for name, (path, description) in paths.items():
             run = run_path(setup, path)
             if name == "circle":
                 circles[key] = run
-            case.table.append([
-                f"{label} (synthesised)", description, "success" if run.success else "failed",
-                f"{1e3 * run.max_deviation:.3f} / {1e3 * run.rms_deviation:.3f}", f"{1e3 * run.lift_deviation:.3f}",
-                f"{1e3 * run.max_rotation:.2f}",
-                f"{1e3 * run.final_position_error:.3f} / {1e3 * run.final_rotation_error:.2f}", str(run.slip_events),
-                f"{run.cone_margin:.2f}",
-            ])  # fmt: skip
-            case.values.update({f"{key}/{name}/{field}": value for field, value in (
-                ("success", float(run.success)), ("max_deviation_mm", 1e3 * run.max_deviation),
-                ("rms_deviation_mm", 1e3 * run.rms_deviation), ("lift_deviation_mm", 1e3 * run.lift_deviation),
-                ("max_rotation_mrad", 1e3 * run.max_rotation),
-                ("final_error_mm", 1e3 * run.final_position_error),
-                ("final_rotation_mrad", 1e3 * run.final_rotation_error), ("slip_events", float(run.slip_events)),
-                ("cone_margin_N", run.cone_margin))})  # fmt: skip
+            case.table.append(
+                [
+                    f"{label} (synthesised)",
+                    description,
+                    "success" if run.success else "failed",
+                    f"{1e3 * run.max_deviation:.3f} / {1e3 * run.rms_deviation:.3f}",
+                    f"{1e3 * run.lift_deviation:.3f}",
+                    f"{1e3 * run.max_rotation:.2f}",
+                    f"{1e3 * run.final_position_error:.3f} / {1e3 * run.final_rotation_error:.2f}",
+                    str(run.slip_events),
+                    f"{run.cone_margin:.2f}",
+                ]
+            )
+            case.values.update(
+                {
+                    f"{key}/{name}/{field}": value
+                    for field, value in (
+                        ("success", float(run.success)),
+                        ("max_deviation_mm", 1e3 * run.max_deviation),
+                        ("rms_deviation_mm", 1e3 * run.rms_deviation),
+                        ("lift_deviation_mm", 1e3 * run.lift_deviation),
+                        ("max_rotation_mrad", 1e3 * run.max_rotation),
+                        ("final_error_mm", 1e3 * run.final_position_error),
+                        ("final_rotation_mrad", 1e3 * run.final_rotation_error),
+                        ("slip_events", float(run.slip_events)),
+                        ("cone_margin_N", run.cone_margin),
+                    )
+                }
+            )
     case.notes += [
         f"Circle (`bhgrasp.motion.paths.PoseCircle`): a {1e3 * LIFT[2]:g} mm lift in {LIFT_TIME:g} s, then once "
         "around a circle through the lifted "
@@ -98,10 +124,19 @@ def _figure(runs: dict[str, PathRun]):
     figure = Figure(figsize=(9, 4), layout="tight")
     for axis, (key, run) in zip(figure.subplots(1, len(runs)), runs.items()):
         origin = run.reference[0]
-        axis.plot(1e3 * (run.reference[:, 1] - origin[1]), 1e3 * (run.reference[:, 2] - origin[2]), "k--", lw=1.0,
-                  label="path")  # fmt: skip
-        axis.plot(1e3 * (run.position[:, 1] - origin[1]), 1e3 * (run.position[:, 2] - origin[2]), lw=1.0,
-                  label="object (true)")  # fmt: skip
+        axis.plot(
+            1e3 * (run.reference[:, 1] - origin[1]),
+            1e3 * (run.reference[:, 2] - origin[2]),
+            "k--",
+            lw=1.0,
+            label="path",
+        )
+        axis.plot(
+            1e3 * (run.position[:, 1] - origin[1]),
+            1e3 * (run.position[:, 2] - origin[2]),
+            lw=1.0,
+            label="object (true)",
+        )
         axis.set(xlabel="y [mm]", ylabel="z [mm]", title=f"{key}: circle in the y-z plane", aspect="equal")
         axis.grid(alpha=0.3)
         axis.legend(fontsize=7)

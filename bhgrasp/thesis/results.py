@@ -1,4 +1,4 @@
-"""Figures of merit of the thesis chapters as JSON, their tolerances, the comparer and the README's table.
+"""Figures of merit of the thesis chapters as JSON, and the comparer.
 
 ``bhgrasp experiments chN --output DIR`` writes ``DIR/chapterN.json`` beside ``chapterN.md``: every number of the
 report's tables under a named key (units in the key: ``_pct``, ``_s``, ``_mm``, ``_N`` ...), with sorted keys.
@@ -7,10 +7,9 @@ store those; a case without one (chapter 4) has its markdown table read back (:f
 number also records its printed ``resolution`` (one unit of its last digit), because that is all it is known to.
 
 The committed ``docs/results/chapterN.json`` are full-scale runs; :func:`compare_folders` (``bhgrasp experiments
-compare NEW_DIR``) checks a new run against them within :data:`DEFAULT_TOLERANCE` or the first matching entry of
-:data:`TOLERANCES`.  The README's "Results at a glance" table is rendered from those files
-(:func:`render_readme_table`, ``bhgrasp experiments readme-table``); ``tests/test_results.py`` asserts that the
-README holds exactly that table.
+compare NEW_DIR``) checks a new run against them within the tolerances of :mod:`bhgrasp.thesis.tolerances`.  The
+README's "Results at a glance" table is rendered from those files (:mod:`bhgrasp.thesis.readme_rows`, ``bhgrasp
+experiments readme-table``); ``tests/test_results.py`` asserts that the README holds exactly that table.
 
 Regenerating every published number (reports, figures, JSON and the README table) is one command, from the
 repository root::
@@ -20,7 +19,6 @@ repository root::
 
 from __future__ import annotations
 
-import fnmatch
 import json
 import math
 import re
@@ -29,7 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bhgrasp.thesis.readme_rows import README_HEADER, README_ROWS
+from bhgrasp.thesis.tolerances import tolerance_for
 
 SCHEMA = 1
 REPOSITORY = Path(__file__).resolve().parents[2]
@@ -42,55 +40,6 @@ def _reference_folder() -> Path:
 
 
 REFERENCE = _reference_folder()
-
-
-# ---------------------------------------------------------------------------------------------------- tolerances
-@dataclass(frozen=True)
-class Tolerance:
-    """A value passes when ``|new - reference| <= max(abs, rel |reference|, resolution)``."""
-
-    rel: float
-    abs: float
-    reason: str
-
-
-DEFAULT_TOLERANCE = Tolerance(
-    1e-6, 1e-9, "measured: two runs on one machine agree bit for bit; with other OpenBLAS kernels "
-    "(OPENBLAS_CORETYPE=Prescott: ~1e-13 in a dot product) chapter 5's contact runs moved by <= 3e-11 relative, "
-    "chapter 3's (but for the override below) by <= 1e-13, chapter 4's printed numbers not at all",
-)  # fmt: skip
-
-# pattern (fnmatch on "chapterN/key", "*" also spans "/"; first match wins) -> tolerance, each with its reason
-TOLERANCES: dict[str, Tolerance] = {
-    "chapter3/*/HOSM*-[AB]/*": Tolerance(2e-3, 1e-4, "HOSM laws A and B switch at e = e_dot = 0, and the adaptive "
-                                         "ones integrate the switching: other OpenBLAS kernels moved HOSMA-A's "
-                                         "planar final error by 7e-4 relative (3e-5 % of the range)"),
-    "chapter4/tuning/*": Tolerance(1e-2, 0.0, "CMA-ES ranks candidates by a contact simulation's fitness, so a "
-                                   "near-tie can steer the search: other OpenBLAS kernels moved the found K_I by "
-                                   "7e-4 relative (6.2626 -> 6.2582)"),
-    "chapter*/*settling*_s": Tolerance(1e-6, 1.5e-3, "the last exit from a band, sampled every 1 ms: a response that "
-                                       "grazes the band's edge may leave it one sample earlier or later"),
-    "chapter*/*touched_s": Tolerance(1e-6, 1.5e-3, "the first sample with contact: a threshold crossing (1 ms)"),
-    "chapter*/*_within_*_s": Tolerance(1e-6, 1.5e-3, "the last exit from the 2 % band: a threshold crossing (1 ms)"),
-    "chapter5/robustness/*/success_pct": Tolerance(0.0, 100.0 / 12, "a share of 12 runs, each a threshold test "
-                                                   "(0.5 mm, 5 mrad, zero slip): a run that grazes a threshold may "
-                                                   "count either way (measured: no change)"),
-    "chapter5/*slip_events": Tolerance(0.0, 1.0, "slip events count sliding samples: a contact that grazes the cone "
-                                       "may switch one sample earlier or later (measured: no change)"),
-    "chapter5/synthesis/*/final_*": Tolerance(1e-6, 1e-5, "a final error of micrometres (and micro-radians) after "
-                                              "the synthesised grasp's move: on an AVX-512 machine, with OpenBLAS's "
-                                              "kernels held to Haswell's, proxsuite's runtime-dispatched ones moved "
-                                              "the box's rx-0.15 final error by 5e-7 mm of 1.5e-3 (1e-5: 10 nm)"),
-}  # fmt: skip
-
-
-def tolerance_for(chapter: int, key: str) -> Tolerance:
-    """The tolerance of ``key`` of chapter ``chapter``: the first matching pattern of TOLERANCES, else the default."""
-    name = f"chapter{chapter}/{key}"
-    for pattern, tolerance in TOLERANCES.items():
-        if fnmatch.fnmatchcase(name, pattern):
-            return tolerance
-    return DEFAULT_TOLERANCE
 
 
 # ---------------------------------------------------------------------------------------------------- extraction
@@ -171,7 +120,8 @@ def _encode(value: float | int) -> float | int | str:
     return value if isinstance(value, int) or math.isfinite(value) else str(value)  # "inf", "-inf", "nan"
 
 
-def _decode(value: Any) -> float | int:
+def decode(value: Any) -> float | int:
+    """A stored value back as a number (non-finite floats are stored as text)."""
     return float(value) if isinstance(value, str) else value
 
 
@@ -207,7 +157,7 @@ def write_results(output: Path, chapter: int, cases: Iterable[Any], scale: float
 def load(path: Path) -> dict[str, Any]:
     """A chapter's JSON document with its values decoded (non-finite values back to floats)."""
     document = json.loads(Path(path).read_text())
-    document["values"] = {key: _decode(value) for key, value in document["values"].items()}
+    document["values"] = {key: decode(value) for key, value in document["values"].items()}
     return document
 
 
@@ -242,8 +192,8 @@ def compare(new: Mapping[str, Any], reference: Mapping[str, Any]) -> list[Differ
     differences = []
     if float(new.get("scale", 1.0)) != float(reference.get("scale", 1.0)):
         differences.append(Difference("(scale)", float(reference["scale"]), float(new["scale"]), 0.0))
-    old_values = {key: _decode(value) for key, value in reference["values"].items()}
-    new_values = {key: _decode(value) for key, value in new["values"].items()}
+    old_values = {key: decode(value) for key, value in reference["values"].items()}
+    new_values = {key: decode(value) for key, value in new["values"].items()}
     printed = {**new.get("resolution", {}), **reference.get("resolution", {})}
     for key in sorted(old_values.keys() | new_values.keys()):
         if key not in new_values or key not in old_values:
@@ -263,8 +213,10 @@ def compare(new: Mapping[str, Any], reference: Mapping[str, Any]) -> list[Differ
 def format_differences(name: str, differences: Sequence[Difference], count: int) -> str:
     """A readable table of ``differences`` of ``name`` (``count`` values compared)."""
     kinds = [difference.kind for difference in differences]
-    lines = [f"{name}: {kinds.count('outside')} of {count} values outside tolerance, {kinds.count('missing')} "
-             f"missing, {kinds.count('extra')} extra"]  # fmt: skip
+    lines = [
+        f"{name}: {kinds.count('outside')} of {count} values outside tolerance, {kinds.count('missing')} "
+        f"missing, {kinds.count('extra')} extra"
+    ]
     if not differences:
         return lines[0]
     width = max(len("key"), *(len(difference.key) for difference in differences))
@@ -297,61 +249,19 @@ def compare_folders(new: Path, reference: Path = REFERENCE) -> tuple[bool, str]:
     return ok, "\n".join(parts)
 
 
-# ---------------------------------------------------------------------------------------------------- README table
-_FIELD = re.compile(r"\{(\d+):([^:{}]+):([^{}]*)\}")
-README_MARK = "<!-- generated from docs/results/chapterN.json by `bhgrasp experiments readme-table` -->"
-
-
-def fill(template: str, documents: Mapping[int, Mapping[str, Any]]) -> str:
-    """``template`` with each ``{N:key:format}`` replaced by that value of chapter N (KeyError: no such key)."""
-
-    def value(match: re.Match) -> str:
-        chapter, key, spec = int(match[1]), match[2], match[3]
-        number = _decode(documents[chapter]["values"][key])
-        if not (isinstance(number, int) or math.isfinite(number)):
-            return str(number)
-        return format(number, spec)
-
-    # the literal "%" of the templates survives: fields are replaced one by one, no str.format over the whole
-    return _FIELD.sub(value, template)
-
-
-def load_folder(folder: Path = REFERENCE) -> dict[int, dict[str, Any]]:
-    """Every ``chapterN.json`` of ``folder``, by chapter number."""
-    return {int(path.stem[7:]): load(path) for path in sorted(Path(folder).glob("chapter*.json"))}
-
-
-def render_readme_table(folder: Path = REFERENCE) -> str:
-    """The README's "Results at a glance" table (marker comment and markdown table) from the JSON in ``folder``."""
-    documents = load_folder(folder)
-    lines = [README_MARK, "", "| " + " | ".join(README_HEADER) + " |", "|" + "---|" * len(README_HEADER)]
-    for chapter, case, ours, thesis in README_ROWS:
-        lines.append(f"| {chapter} | {case} | {fill(ours, documents)} | {thesis} |")
-    return "\n".join(lines) + "\n"
-
-
-def readme_table(readme_text: str) -> str:
-    """The generated part of a README: from the marker comment to the end of the table after it."""
-    start = readme_text.index(README_MARK)
-    lines = readme_text[start:].splitlines()
-    end = next(i for i in range(3, len(lines) + 1) if i == len(lines) or not lines[i].startswith("|"))
-    return "\n".join(lines[:end]) + "\n"
-
-
-def update_readme(readme: Path, folder: Path = REFERENCE) -> bool:
-    """Rewrite the README's generated table from ``folder``; True if the file changed."""
-    text = Path(readme).read_text()
-    current = readme_table(text)
-    fresh = render_readme_table(folder)
-    if current == fresh:
-        return False
-    Path(readme).write_text(text.replace(current, fresh, 1))
-    return True
-
-
 __all__ = [
-    "DEFAULT_TOLERANCE", "README_ROWS", "TOLERANCES", "Difference", "Tolerance", "allowed_difference",
-    "chapter4_figures", "compare", "compare_folders", "dumps", "figures_of_merit", "fill", "format_differences",
-    "load", "load_folder", "readme_table", "render_readme_table", "results_document", "slug",
-    "table_values", "tolerance_for", "update_readme", "write_results",
-]  # fmt: skip
+    "Difference",
+    "allowed_difference",
+    "chapter4_figures",
+    "compare",
+    "compare_folders",
+    "decode",
+    "dumps",
+    "figures_of_merit",
+    "format_differences",
+    "load",
+    "results_document",
+    "slug",
+    "table_values",
+    "write_results",
+]

@@ -30,9 +30,16 @@ ESTIMATE = 0.5  # [kg] the controller's initial mass
 SEED = 17  # the sweep's seed: the masses' design and every run's noise seed
 SUCCESS = (0.5e-3, 5e-3)  # [m], [rad] true final error (with zero slip samples)
 ALL = {
-    "pose_noise": (2e-4, 2e-3), "twist_noise": (2e-3, 2e-2), "force_noise": 0.1, "sensor_noise": (1e-4, 5e-3),
-    "delay": 0.002, "joint_friction": 0.01, "joint_damping": 0.1, "torque_limit": 1.5, "friction": 0.6,
-}  # fmt: skip
+    "pose_noise": (2e-4, 2e-3),
+    "twist_noise": (2e-3, 2e-2),
+    "force_noise": 0.1,
+    "sensor_noise": (1e-4, 5e-3),
+    "delay": 0.002,
+    "joint_friction": 0.01,
+    "joint_damping": 0.1,
+    "torque_limit": 1.5,
+    "friction": 0.6,
+}
 """The combined scenario: each uncertainty at a level a real set-up has (a tracker of 0.2 mm / 2 mrad, a 2 ms bus,
 friction a fifth of the hold torques, a true mu equal to the assumed one's)."""
 SCENARIOS: dict[str, tuple[str, dict[str, Any]]] = {
@@ -71,8 +78,15 @@ def summarise(runs) -> dict[str, float]:
     """A scenario's figures: success [%], true final errors (mean, max) [mm, mrad], slip, force and mass errors."""
     done = runs[runs["status"] == "ok"] if "status" in runs else runs
     if len(done) == 0:  # every run raised: no metric columns
-        names = ("mean_error_mm", "max_error_mm", "mean_rotation_mrad", "max_rotation_mrad", "mean_slip_events",
-                 "mean_force_error_pct", "mean_mass_error_pct")  # fmt: skip
+        names = (
+            "mean_error_mm",
+            "max_error_mm",
+            "mean_rotation_mrad",
+            "max_rotation_mrad",
+            "mean_slip_events",
+            "mean_force_error_pct",
+            "mean_mass_error_pct",
+        )
         return {"success_pct": 0.0, "failed_runs": float(len(runs)), **dict.fromkeys(names, float("nan"))}
     position = 1e3 * done["true_position_error"].to_numpy(dtype=float)
     rotation = 1e3 * done["true_rotation_error"].to_numpy(dtype=float)
@@ -82,11 +96,14 @@ def summarise(runs) -> dict[str, float]:
     return {
         "success_pct": 100.0 * float(np.sum(good)) / len(runs),
         "failed_runs": float(len(runs) - len(done)),
-        "mean_error_mm": _mean(position), "max_error_mm": _max(position),
-        "mean_rotation_mrad": _mean(rotation), "max_rotation_mrad": _max(rotation),
-        "mean_slip_events": _mean(slip), "mean_force_error_pct": _mean(100 * done["force_error"].to_numpy(float)),
+        "mean_error_mm": _mean(position),
+        "max_error_mm": _max(position),
+        "mean_rotation_mrad": _mean(rotation),
+        "max_rotation_mrad": _max(rotation),
+        "mean_slip_events": _mean(slip),
+        "mean_force_error_pct": _mean(100 * done["force_error"].to_numpy(float)),
         "mean_mass_error_pct": _mean(mass_error),
-    }  # fmt: skip
+    }
 
 
 def _mean(values: np.ndarray) -> float:
@@ -112,19 +129,23 @@ def robustness(scale: float = 1.0, executor: Any = None):
         "mass estimate error (mean) [%]",
         "failed runs",
     ]
-    case = Case("robustness", "Robustness: what the controller does not know (seeded Monte-Carlo)", "-",
-                header)  # fmt: skip
+    case = Case("robustness", "Robustness: what the controller does not know (seeded Monte-Carlo)", "-", header)
     samples = SAMPLES if scale >= 1.0 else max(2, round(SAMPLES * scale))
     summaries = {}
     for key, frame in run_scenarios(DURATION * scale, executor, samples=samples).items():
         figures = summaries[key] = summarise(frame)
-        case.table.append([
-            SCENARIOS[key][0], f"{figures['success_pct']:.0f}",
-            f"{figures['mean_error_mm']:.3f} / {figures['max_error_mm']:.3f}",
-            f"{figures['mean_rotation_mrad']:.2f} / {figures['max_rotation_mrad']:.2f}",
-            f"{figures['mean_slip_events']:.1f}", f"{figures['mean_force_error_pct']:.2f}",
-            f"{figures['mean_mass_error_pct']:.2f}", f"{figures['failed_runs']:.0f}",
-        ])  # fmt: skip
+        case.table.append(
+            [
+                SCENARIOS[key][0],
+                f"{figures['success_pct']:.0f}",
+                f"{figures['mean_error_mm']:.3f} / {figures['max_error_mm']:.3f}",
+                f"{figures['mean_rotation_mrad']:.2f} / {figures['max_rotation_mrad']:.2f}",
+                f"{figures['mean_slip_events']:.1f}",
+                f"{figures['mean_force_error_pct']:.2f}",
+                f"{figures['mean_mass_error_pct']:.2f}",
+                f"{figures['failed_runs']:.0f}",
+            ]
+        )
         case.values.update({f"{key}/{name}": value for name, value in figures.items()})
     low, high = MASS_RANGE
     case.notes += [
@@ -151,8 +172,11 @@ def limits(summaries: dict[str, dict[str, float]]) -> list[str]:
     """What the table shows the controller is sensitive to, in words with the table's numbers."""
     lines = []
     pose, friction, mu = (summaries.get(key) for key in ("pose_noise", "joint_friction", "wrong_mu"))
-    others = [summaries[key]["mean_error_mm"] for key in ("twist_noise", "force_noise", "joint_noise", "delay")
-              if key in summaries]  # fmt: skip
+    others = [
+        summaries[key]["mean_error_mm"]
+        for key in ("twist_noise", "force_noise", "joint_noise", "delay")
+        if key in summaries
+    ]
     if pose is not None and others:
         lines.append(
             f"Object pose noise reaches the contact forces through the object-space feedback (force error "
@@ -175,5 +199,17 @@ def limits(summaries: dict[str, dict[str, float]]) -> list[str]:
     return lines
 
 
-__all__ = ["ALL", "ESTIMATE", "MASS_RANGE", "SAMPLES", "SCENARIOS", "SEED", "SUCCESS", "design", "limits",
-           "robustness", "run_scenarios", "summarise"]  # fmt: skip
+__all__ = [
+    "ALL",
+    "ESTIMATE",
+    "MASS_RANGE",
+    "SAMPLES",
+    "SCENARIOS",
+    "SEED",
+    "SUCCESS",
+    "design",
+    "limits",
+    "robustness",
+    "run_scenarios",
+    "summarise",
+]

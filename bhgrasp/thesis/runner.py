@@ -25,11 +25,13 @@ def run_chapter(chapter: str, output: Path, scale: float = 1.0, figures: bool = 
     cases = getattr(module, f"run_chapter{number}")(output, scale=scale, figures=figures, progress=progress)
     runs = sum(len(getattr(case, "runs", ())) for case in cases)
     counted = f", {runs} runs" if runs else ""
-    return "\n".join([
-        f"{chapter}: {len(cases)} cases{counted} in {time.perf_counter() - start:.1f} s",
-        f"report: {output / f'chapter{number}.md'}",
-        f"figures of merit: {write_results(output, int(number), cases, scale)}",
-    ])  # fmt: skip
+    return "\n".join(
+        [
+            f"{chapter}: {len(cases)} cases{counted} in {time.perf_counter() - start:.1f} s",
+            f"report: {output / f'chapter{number}.md'}",
+            f"figures of merit: {write_results(output, int(number), cases, scale)}",
+        ]
+    )
 
 
 __all__ = ["CHAPTERS", "run_chapter"]

@@ -35,8 +35,9 @@ DURATION = 3.0  # [s] each run
 def synthesis_case(scale: float = 1.0):
     """The chapter-5 case (runs of ``scale`` x 3 s)."""
     header = ["object", "synthesised grasp", "motion", "outcome", "final error [mm] / [mrad]", "slip samples"]
-    case = Case("synthesis", "Grasp synthesis: the planner's grasps of boxes, cylinders and spheres, moved",
-                "-", header)  # fmt: skip
+    case = Case(
+        "synthesis", "Grasp synthesis: the planner's grasps of boxes, cylinders and spheres, moved", "-", header
+    )
     requested = allowed = succeeded = 0
     failed: list[str] = []
     for object_key, (label, item) in OBJECTS.items():
@@ -50,11 +51,18 @@ def synthesis_case(scale: float = 1.0):
         planning = time.perf_counter() - start
         case.values[f"{object_key}/grasp_found"] = 1.0
         c = setup.candidate
-        grasp = (f"{'+'.join(c.fingers)}, spread {np.degrees(c.spread):.0f} deg, epsilon {c.quality.epsilon:.3f}, "
-                 f"weight margin {c.weight_margin:.2f} N")  # fmt: skip
-        case.values.update({f"{object_key}/spread_deg": float(np.degrees(c.spread)),
-                            f"{object_key}/epsilon": float(c.quality.epsilon), f"{object_key}/fingers": len(c.fingers),
-                            f"{object_key}/weight_margin_N": float(c.weight_margin)})  # fmt: skip
+        grasp = (
+            f"{'+'.join(c.fingers)}, spread {np.degrees(c.spread):.0f} deg, epsilon {c.quality.epsilon:.3f}, "
+            f"weight margin {c.weight_margin:.2f} N"
+        )
+        case.values.update(
+            {
+                f"{object_key}/spread_deg": float(np.degrees(c.spread)),
+                f"{object_key}/epsilon": float(c.quality.epsilon),
+                f"{object_key}/fingers": len(c.fingers),
+                f"{object_key}/weight_margin_N": float(c.weight_margin),
+            }
+        )
         case.notes.append(f"{label}: synthesised in {planning:.1f} s (wall, this machine).")
         for motion_key, (motion, offset) in MOTIONS.items():
             key = f"{object_key}/{motion_key}"
@@ -70,13 +78,29 @@ def synthesis_case(scale: float = 1.0):
             success = result.slip_events == 0 and position < SUCCESS[0] and rotation < SUCCESS[1]
             succeeded += success
             if not success:
-                failed.append(f"{label}, {motion} ({1e3 * position:.2f} mm, {1e3 * rotation:.1f} mrad, "
-                              f"{result.slip_events} slip samples)")  # fmt: skip
-            case.table.append([label, grasp, motion, "success" if success else "failed",
-                               f"{1e3 * position:.3f} / {1e3 * rotation:.2f}", str(result.slip_events)])  # fmt: skip
-            case.values.update({f"{key}/refused": 0.0, f"{key}/success": float(success),
-                                f"{key}/final_error_mm": 1e3 * position, f"{key}/final_rotation_mrad": 1e3 * rotation,
-                                f"{key}/slip_events": float(result.slip_events)})  # fmt: skip
+                failed.append(
+                    f"{label}, {motion} ({1e3 * position:.2f} mm, {1e3 * rotation:.1f} mrad, "
+                    f"{result.slip_events} slip samples)"
+                )
+            case.table.append(
+                [
+                    label,
+                    grasp,
+                    motion,
+                    "success" if success else "failed",
+                    f"{1e3 * position:.3f} / {1e3 * rotation:.2f}",
+                    str(result.slip_events),
+                ]
+            )
+            case.values.update(
+                {
+                    f"{key}/refused": 0.0,
+                    f"{key}/success": float(success),
+                    f"{key}/final_error_mm": 1e3 * position,
+                    f"{key}/final_rotation_mrad": 1e3 * rotation,
+                    f"{key}/slip_events": float(result.slip_events),
+                }
+            )
     case.values["requested_motions"] = float(requested)
     case.values["refused_motions"] = float(requested - allowed)
     case.values["allowed_motions"] = float(allowed)
