@@ -42,7 +42,7 @@ _EXPORTS = {
     "SimulatorSettings": "bhgrasp.sim.settings",
     "Sphere": "bhgrasp.model.objects",
     "SpringDamper": "bhgrasp.sim.contact_law",
-    "SpringMounted": "bhgrasp.model.objects",
+    "SpringMounted": "bhgrasp.model.spring_mounted",
     "State": "bhgrasp.data.state",
     "Trajectory": "bhgrasp.data.trajectory",
     "Workspace": "bhgrasp.model.ik",
@@ -165,7 +165,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported here
     )
     from bhgrasp.model.hand import BarrettHand, Hand
     from bhgrasp.model.ik import FingerIKResult, IKResult, Workspace, finger_ik, ik, workspace
-    from bhgrasp.model.objects import Box, Capsule, Cylinder, FixedBox, Plane, Sphere, SpringMounted, table, wall
+    from bhgrasp.model.objects import Box, Capsule, Cylinder, FixedBox, Plane, Sphere, table, wall
     from bhgrasp.model.orientation import rotation_from_zyz, zyz_from_rotation
     from bhgrasp.model.planar import (
         planar_finger,
@@ -174,6 +174,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported here
         thesis_two_link_finger,
     )
     from bhgrasp.model.resources import barrett_urdf_path, example_robot_data_dir, example_robot_data_urdf
+    from bhgrasp.model.spring_mounted import SpringMounted
     from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
     from bhgrasp.sim.contact_law import SpringDamper
     from bhgrasp.sim.scene import Scene

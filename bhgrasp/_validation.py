@@ -111,3 +111,21 @@ def require_rotation(rotation: np.ndarray, name: str) -> None:
             f"{ROTATION_TOLERANCE:g}), got max |R^T R - I| = {error:.3g}, det R = {determinant:.6g}: "
             f"R = {np.round(rotation, 6).tolist()}"
         )
+
+
+def as_unit(value: Any, name: str) -> np.ndarray:
+    """``value`` as a unit 3-vector (normalised); a zero vector is refused."""
+    vector = as_vector(value, name, 3)
+    norm = float(np.linalg.norm(vector))
+    if norm < 1e-12:
+        raise InputError(f"`{name}` must be a non-zero 3-vector, got {vector.tolist()}")
+    return vector / norm
+
+
+def as_generator(rng: Any, name: str = "rng") -> np.random.Generator:
+    """``rng`` if it is a numpy Generator, else a new one seeded with the integer ``rng``."""
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if isinstance(rng, (int, np.integer)) and not isinstance(rng, bool):
+        return np.random.default_rng(int(rng))
+    raise InputError(f"`{name}` must be a numpy.random.Generator or an integer seed, got {rng!r}")

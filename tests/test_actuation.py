@@ -8,7 +8,8 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.barrett.transmission import MAX_MOTOR_TORQUE, PROXIMAL_RATIO
-from bhgrasp.model.objects import Box, SpringMounted
+from bhgrasp.model.objects import Box
+from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
 from bhgrasp.sim.contact_law import SpringDamper

@@ -19,7 +19,8 @@ from bhgrasp.barrett.transmission import MAX_MOTOR_TORQUE, MOTOR_DAMPING
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.model.mount import mounted
-from bhgrasp.model.objects import Box, SpringMounted
+from bhgrasp.model.objects import Box
+from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
 from bhgrasp.sim.contact_law import SpringDamper

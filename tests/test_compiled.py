@@ -17,7 +17,8 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.errors import InputError
-from bhgrasp.model.objects import Box, Plane, SpringMounted
+from bhgrasp.model.objects import Box, Plane
+from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.scenarios.allegro_grasp import allegro_box_grasp
 from bhgrasp.scenarios.box_grasp import box_grasp
 from bhgrasp.scenarios.hold import reference_hold

@@ -23,7 +23,8 @@ from bhgrasp.barrett.transmission import (
 )
 from bhgrasp.bench.protocol import DT
 from bhgrasp.bench.trial import contact_law
-from bhgrasp.model.objects import Box, FixedBox, SpringMounted
+from bhgrasp.model.objects import Box, FixedBox
+from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
 from bhgrasp.sim.contact_law import SpringDamper

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.controllers.grasping import GraspContacts, GraspForceController
+from bhgrasp.controllers.grasp_force import GraspForceController
+from bhgrasp.controllers.grasping import GraspContacts
 from bhgrasp.motion.trajectories import Quintic
 from bhgrasp.scenarios.hold import BOX_MASS, reference_hold
 

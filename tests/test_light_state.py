@@ -18,7 +18,8 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.data import DERIVED_FIELDS, ContactMemory, SimulatedState
-from bhgrasp.model.objects import Box, SpringMounted
+from bhgrasp.model.objects import Box
+from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import FullyActuated

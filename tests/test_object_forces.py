@@ -7,7 +7,8 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.model.objects import Box, Sphere, SpringMounted
+from bhgrasp.model.objects import Box, Sphere
+from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.scene import Scene
 

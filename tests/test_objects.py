@@ -21,10 +21,10 @@ from bhgrasp.model.objects import (
     Plane,
     RigidObject,
     Sphere,
-    SpringMounted,
     table,
     wall,
 )
+from bhgrasp.model.spring_mounted import SpringMounted
 
 SAMPLES = 1_000_000  # Monte-Carlo points per shape: relative standard error of the inertia ~0.1%
 NASTY_POSE = pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.7, 1.1), np.array([0.1, -0.2, 0.35]))

@@ -10,7 +10,8 @@ import pytest
 import bhgrasp as bh
 from bhgrasp.barrett.transmission import PROXIMAL_RATIO, WORM_EFFICIENCY
 from bhgrasp.grasp.sensing import ContactSensing
-from bhgrasp.model.objects import Box, SpringMounted
+from bhgrasp.model.objects import Box
+from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
 from bhgrasp.sim.scene import Scene

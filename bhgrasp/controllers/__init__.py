@@ -7,7 +7,8 @@ object-space and grasp laws (the SMC-adaptive grasp, object identification), the
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.base import Controller, JointTracking, inertia_gain
 from bhgrasp.controllers.design import SlidingGains, sliding_gains
-from bhgrasp.controllers.grasping import GraspForceController, ObjectGraspController
+from bhgrasp.controllers.grasp_force import GraspForceController
+from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.hosm import QuasiContinuousA, SuperTwisting, TwistingB, hosm
 from bhgrasp.controllers.impedance import (
     AdaptiveForceImpedance,

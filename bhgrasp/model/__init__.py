@@ -16,13 +16,13 @@ from bhgrasp.model.objects import (
     Plane,
     RigidObject,
     Sphere,
-    SpringMounted,
     table,
     wall,
 )
 from bhgrasp.model.orientation import rotation_from_zyz, zyz_from_rotation
 from bhgrasp.model.planar import planar_finger, thesis_impedance_finger, thesis_one_link_finger, thesis_two_link_finger
 from bhgrasp.model.resources import barrett_urdf_path, example_robot_data_dir, example_robot_data_urdf
+from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.model.transmission import DirectDrive, Transmission
 
 __all__ = [

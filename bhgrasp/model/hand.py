@@ -25,7 +25,6 @@ from bhgrasp._validation import as_vector
 from bhgrasp.errors import InputError, ModelError
 from bhgrasp.model.hand_dynamics import HandDynamics
 from bhgrasp.model.hand_model import STANDARD_GRAVITY
-from bhgrasp.model.hand_model import _generator as _generator  # re-exported: bhgrasp.model.ik imports it from here
 from bhgrasp.model.resources import barrett_urdf_path, leaf_links
 from bhgrasp.model.urdf import _build_model
 

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_array, as_vector, require_name, require_rotation
+from bhgrasp._validation import as_array, as_generator, as_vector, require_name, require_rotation
 from bhgrasp.errors import InputError, ModelError
 from bhgrasp.model.couplings import Coupling, check_couplings, coupled_model, independent_model, model_couplings
 
@@ -233,7 +233,7 @@ class HandModel:
         Args:
             rng: A NumPy generator or an integer seed (there is no unseeded default).
         """
-        generator = _generator(rng)
+        generator = as_generator(rng)
         return generator.uniform(self._model.lowerPositionLimit, self._model.upperPositionLimit)
 
     def configuration(self, **joint_values: float) -> np.ndarray:
@@ -293,11 +293,3 @@ class HandModel:
         if not isinstance(frame, str) or not self._model.existFrame(frame):
             require_name(frame, self.frame_names(), "frame")
         return self._model.getFrameId(frame)
-
-
-def _generator(rng: np.random.Generator | int) -> np.random.Generator:
-    if isinstance(rng, np.random.Generator):
-        return rng
-    if isinstance(rng, (int, np.integer)) and not isinstance(rng, bool):
-        return np.random.default_rng(int(rng))
-    raise InputError(f"`rng` must be a numpy.random.Generator or an integer seed, got {rng!r}")

@@ -16,9 +16,9 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_positive, as_vector, require_name
+from bhgrasp._validation import as_generator, as_positive, as_vector, require_name
 from bhgrasp.errors import InputError, ModelError, UnreachableError
-from bhgrasp.model.hand import Hand, _generator
+from bhgrasp.model.hand import Hand
 
 _LIMIT_SLACK = 1e-9  # [rad] joint-limit tolerance for solutions exactly on a limit
 
@@ -304,7 +304,7 @@ def ik(
     if restarts and rng is None:
         raise InputError("`restarts` needs a seeded `rng` (an integer or numpy Generator)")
     start = 0.5 * (hand.lower + hand.upper) if q0 is None else as_vector(q0, "q0", hand.nq)
-    generator = _generator(rng) if rng is not None else None
+    generator = as_generator(rng) if rng is not None else None
     best: IKResult | None = None
     q = start
     for attempt in range(restarts + 1):
@@ -356,7 +356,7 @@ def workspace(hand: Hand, finger: str, n: int, rng: np.random.Generator | int, q
     require_name(finger, hand.fingers, "finger")
     if not isinstance(n, (int, np.integer)) or n < 1:
         raise InputError(f"`n` must be a positive integer, got {n!r}")
-    generator = _generator(rng)
+    generator = as_generator(rng)
     q = hand.neutral() if q_rest is None else as_vector(q_rest, "q_rest", hand.nq)
     indices = hand.finger_indices(finger)
     samples = generator.uniform(hand.lower[indices], hand.upper[indices], size=(int(n), len(indices)))

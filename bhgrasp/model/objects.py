@@ -19,10 +19,10 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_positive, as_real, as_vector, require_rotation
+from bhgrasp._validation import as_positive, as_real, as_unit, as_vector, require_rotation
 from bhgrasp.errors import InputError
 
-__all__ = ["Box", "Capsule", "Cylinder", "FixedBox", "Plane", "RigidObject", "Sphere", "SpringMounted", "table", "wall"]
+__all__ = ["Box", "Capsule", "Cylinder", "FixedBox", "Plane", "RigidObject", "Sphere", "table", "wall"]
 
 _COMMON = ("mass", "density", "pose", "velocity", "friction", "name")
 
@@ -38,15 +38,7 @@ def _as_pose(value: Any, name: str = "pose") -> pin.SE3:
     return pin.SE3(value)  # a copy: SE3 is mutable
 
 
-def _as_unit(value: Any, name: str) -> np.ndarray:
-    vector = as_vector(value, name, 3)
-    norm = float(np.linalg.norm(vector))
-    if norm < 1e-12:
-        raise InputError(f"`{name}` must be a non-zero 3-vector, got {vector.tolist()}")
-    return _frozen_array(vector / norm)
-
-
-def _frozen_array(array: np.ndarray) -> np.ndarray:
+def frozen_array(array: np.ndarray) -> np.ndarray:
     array = np.array(array, dtype=np.float64)  # always a copy
     array.setflags(write=False)
     return array
@@ -91,7 +83,7 @@ class RigidObject(ABC):
         else:
             object.__setattr__(self, "mass", as_positive(self.mass, "mass"))
         object.__setattr__(self, "pose", _as_pose(self.pose))
-        object.__setattr__(self, "velocity", _frozen_array(as_vector(self.velocity, "velocity", 6)))
+        object.__setattr__(self, "velocity", frozen_array(as_vector(self.velocity, "velocity", 6)))
         object.__setattr__(self, "friction", as_real(self.friction, "friction"))
 
     @property
@@ -208,7 +200,7 @@ def _as_size(value: Any) -> np.ndarray:
     size = as_vector(value, "size", 3)
     if np.any(size <= 0.0):
         raise InputError(f"`size` must hold 3 positive edge lengths [m], got {size.tolist()}")
-    return _frozen_array(size)
+    return frozen_array(size)
 
 
 @dataclass(frozen=True, eq=False)
@@ -228,7 +220,7 @@ class Plane:
     name: str | None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "normal", _as_unit(self.normal, "normal"))
+        object.__setattr__(self, "normal", frozen_array(as_unit(self.normal, "normal")))
         object.__setattr__(self, "offset", as_real(self.offset, "offset", nonnegative=False))
         object.__setattr__(self, "friction", as_real(self.friction, "friction"))
 
@@ -273,61 +265,5 @@ def table(height: float = 0.0, friction: float = 0.8) -> Plane:
 
 def wall(point: Any, normal: Any, friction: float = 0.8) -> Plane:
     """A plane through ``point`` [m] (world) with outward ``normal``; the solid lies on the side opposite ``normal``."""
-    unit = _as_unit(normal, "normal")
+    unit = frozen_array(as_unit(normal, "normal"))
     return Plane(normal=unit, offset=float(unit @ as_vector(point, "point", 3)), friction=friction, name="wall")
-
-
-@dataclass(frozen=True, eq=False)
-class SpringMounted:
-    """A body that can only translate along ``direction``, held at its initial pose by a spring-damper.
-
-    The compliant environment of the thesis (4.3)-(4.7): ``m_o z'' + D_s z' + K_s (z_o - z_c) = F_o`` with
-    ``z_o`` the displacement along ``direction`` and ``z_c`` its rest value (the initial pose); the thesis has
-    no damper (``damping = 0``).  This is a description only; the scene turns it into a prismatic joint.
-
-    Attributes:
-        body: The rigid body (its ``pose`` is the rest pose).
-        direction: Unit direction of motion in the world frame (normalised on construction).
-        stiffness: Spring stiffness K_s [N/m] (> 0).
-        damping: Viscous damping D_s [N s/m] (>= 0).
-        name: Display name; defaults to the body's name.
-    """
-
-    body: RigidObject
-    direction: np.ndarray
-    stiffness: float
-    damping: float = 0.0
-    name: str | None = None
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.body, RigidObject):
-            raise InputError(f"`body` must be a RigidObject (Sphere, Box, ...), got {type(self.body).__name__}")
-        object.__setattr__(self, "direction", _as_unit(self.direction, "direction"))
-        object.__setattr__(self, "stiffness", as_positive(self.stiffness, "stiffness"))
-        object.__setattr__(self, "damping", as_real(self.damping, "damping"))
-        if self.name is None:
-            object.__setattr__(self, "name", self.body.name)
-
-    @property
-    def mass(self) -> float:
-        """Mass of the body [kg]."""
-        return self.body.mass
-
-    @property
-    def friction(self) -> float:
-        """Friction coefficient of the body."""
-        return self.body.friction
-
-    @property
-    def pose(self) -> pin.SE3:
-        """Rest pose of the body, ``transform_body_to_world``."""
-        return self.body.pose
-
-    @property
-    def natural_frequency(self) -> float:
-        """Undamped natural frequency sqrt(K_s / m_o) [rad/s]."""
-        return math.sqrt(self.stiffness / self.mass)
-
-    def geometry(self) -> coal.ShapeBase:
-        """A new coal shape of the body."""
-        return self.body.geometry()

@@ -23,8 +23,9 @@ from bhgrasp.controllers.base import Controller
 from bhgrasp.data import Trajectory
 from bhgrasp.errors import InputError
 from bhgrasp.model.hand import BarrettHand, Hand
-from bhgrasp.model.objects import Box, SpringMounted
+from bhgrasp.model.objects import Box
 from bhgrasp.model.planar import thesis_impedance_finger, thesis_one_link_finger
+from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.motion.trajectories import Reference
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.contact_law import SpringDamper

@@ -5,7 +5,8 @@ from __future__ import annotations
 from typing import Any
 
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
-from bhgrasp.controllers.grasping import GraspForceController, ObjectGraspController
+from bhgrasp.controllers.grasp_force import GraspForceController
+from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.errors import InputError

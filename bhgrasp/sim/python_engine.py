@@ -34,7 +34,7 @@ from bhgrasp.data import ContactMemory, ContactSet
 from bhgrasp.sim.contact import ContactEngine
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.engine import DriveTerms, StepResult, divergence
-from bhgrasp.sim.integrators import gyroscopic_torque, spin_midpoint
+from bhgrasp.sim.integrators import implicit_gyroscopic, increment_rate
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_layout import SceneLayout
 from bhgrasp.sim.settings import SimulatorSettings
@@ -98,36 +98,6 @@ class PythonEngine:
         return StepResult(q_next, v_next, contacts, torques, memory, checked, load)
 
     # ------------------------------------------------------------------ joint space
-    def _implicit_gyroscopic(self, v: np.ndarray, bias: np.ndarray) -> None:
-        """Replace each free body's explicit gyroscopic torque ``w x I w`` in ``bias`` by the implicit midpoint one.
-
-        The torque-free spin over the step solves ``I (w+ - w) / dt + m x I m = 0`` with ``m = (w + w+) / 2``
-        (Newton, to round-off); dotting with ``m`` and ``I m`` shows that it keeps the kinetic energy
-        ``w.I w / 2`` and the body angular momentum's length ``|I w|`` exactly, at any step (explicit ``w x I w``
-        gains energy at every step).  The step then uses ``m x I m`` as the body's gyroscopic torque.
-        """
-        for angular, axes, moments in self._spinning:
-            w = axes.T @ v[angular]  # in the principal axes
-            if moments[0] == moments[1] == moments[2] or not w.any():
-                continue  # a sphere's (or a resting body's) gyroscopic torque is 0
-            explicit = gyroscopic_torque(moments, w)
-            middle = spin_midpoint(moments, w, 0.5 * self.settings.dt)
-            bias[angular] += axes @ (gyroscopic_torque(moments, middle) - explicit)
-
-    def _increment_rate(self, increment: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Rate of the increment ``theta`` in ``q (+) theta`` at velocity ``v``.
-
-        A body's rotation ``R exp(theta)`` turns at body rate ``w`` when ``theta`` changes at
-        ``dexp^-1_{-theta}(w) = w + theta x w / 2 + theta x (theta x w) / 12`` (to O(theta^3), enough for RK4); hand
-        joints and translations are vector spaces, whose increments change at ``v``.
-        """
-        rate = v.copy()
-        for angular, _, _ in self._spinning:
-            theta, w = increment[angular], v[angular]
-            half = np.cross(theta, w)
-            rate[angular] = w + 0.5 * half + np.cross(theta, half) / 12.0
-        return rate
-
     def _mass_matrix(self, q: np.ndarray) -> np.ndarray:
         mass = pin.crba(self.scene.model, self.data, q).copy()
         mass[self._lower_triangle] = mass.T[self._lower_triangle]
@@ -179,7 +149,7 @@ class PythonEngine:
         pin.computeJointJacobians(model, data, q)
         mass = self._mass_matrix(q)
         bias = pin.nonLinearEffects(model, data, q, v).copy()
-        self._implicit_gyroscopic(v, bias)
+        implicit_gyroscopic(bias, v, self._spinning, self.settings.dt)
         passive, stiffness, damping = self._passive(q, v, drive)
         tau = np.zeros(nv)
         tau[: len(tau_hand)] = tau_hand  # hand joint torques, or with external forces on the objects' coordinates
@@ -257,15 +227,15 @@ class PythonEngine:
             )
             v2 = v + dt / 2 * k1
             q2 = pin.integrate(model, q, v * dt / 2)
-            rate2 = self._increment_rate(v * dt / 2, v2)
+            rate2 = increment_rate(v * dt / 2, v2, self._spinning)
             k2 = self._acceleration(q2, v2, tau, transmission, drive, memory)[0]
             v3 = v + dt / 2 * k2
             q3 = pin.integrate(model, q, rate2 * dt / 2)
-            rate3 = self._increment_rate(rate2 * dt / 2, v3)
+            rate3 = increment_rate(rate2 * dt / 2, v3, self._spinning)
             k3 = self._acceleration(q3, v3, tau, transmission, drive, memory)[0]
             v4 = v + dt * k3
             q4 = pin.integrate(model, q, rate3 * dt)
-            rate4 = self._increment_rate(rate3 * dt, v4)
+            rate4 = increment_rate(rate3 * dt, v4, self._spinning)
             k4 = self._acceleration(q4, v4, tau, transmission, drive, memory)[0]
             v_next = v + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
             q_next = pin.integrate(model, q, dt / 6 * (v + 2 * rate2 + 2 * rate3 + rate4))
@@ -298,7 +268,7 @@ class PythonEngine:
         mass = self._mass_matrix(q)
         bias = pin.nonLinearEffects(model, data, q, v).copy()
         if self.settings.integrator == "semi-implicit":  # RK4's explicit stages are accurate to O(dt^4) as they are
-            self._implicit_gyroscopic(v, bias)
+            implicit_gyroscopic(bias, v, self._spinning, self.settings.dt)
         reduced = transmission.T @ mass @ transmission
         acceleration = transmission @ np.linalg.solve(reduced, transmission.T @ (total + generalized - bias))
         inertial = mass @ acceleration

@@ -1,13 +1,13 @@
 """Scene: the hand, free rigid objects and a fixed environment as one Pinocchio model plus coal collision geometry.
 
 Layout of the state: ``q = (q_hand, q_object_1, ...)``, ``v = (v_hand, v_object_1, ...)``.  A free object adds a
-translation joint and a spherical joint below it (7 coordinates: position [m] and quaternion (x, y, z, w), as a
-free flyer's; 6 velocities: the linear velocity [m/s] of its centre of mass in the *world* frame, then its angular
-velocity [rad/s] in its *body* frame).  Translating world-aligned keeps the translational dynamics free of Coriolis
-terms (``m dv/dt = f`` exactly), so the integrators conserve linear momentum; Pinocchio's free flyer would step the
-linear velocity in the rotating body frame, where the explicit ``w x v`` term pumps energy.  A spring-mounted object
-(:class:`~bhgrasp.model.objects.SpringMounted`) adds one prismatic coordinate: its displacement [m] from rest along
-its direction.  World = the frame the hand base is placed in (``hand.base_placement``); gravity is the hand's.
+translation joint and a spherical joint below it (7 coordinates: position [m] and quaternion (x, y, z, w), as a free
+flyer's; 6 velocities: the linear velocity [m/s] of its centre of mass in the *world* frame, then its angular velocity
+[rad/s] in its *body* frame).  Translating world-aligned keeps the translational dynamics free of Coriolis terms (``m
+dv/dt = f`` exactly), so the integrators conserve linear momentum; Pinocchio's free flyer would step the linear velocity
+in the rotating body frame, where the explicit ``w x v`` term pumps energy.  A spring-mounted object
+(:class:`~bhgrasp.model.spring_mounted.SpringMounted`) adds one prismatic coordinate: its displacement [m] from rest
+along its direction.  World = the frame the hand base is placed in (``hand.base_placement``); gravity is the hand's.
 """
 
 from __future__ import annotations
@@ -21,7 +21,8 @@ import pinocchio as pin
 
 from bhgrasp.errors import InputError
 from bhgrasp.model.hand import Hand
-from bhgrasp.model.objects import FixedBox, Plane, RigidObject, SpringMounted
+from bhgrasp.model.objects import FixedBox, Plane, RigidObject
+from bhgrasp.model.spring_mounted import SpringMounted
 
 Environment = Plane | FixedBox
 

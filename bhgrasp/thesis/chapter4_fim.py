@@ -20,7 +20,8 @@ from bhgrasp.controllers.impedance import (
     PositionImpedance,
 )
 from bhgrasp.model.hand import BarrettHand
-from bhgrasp.model.objects import Box, SpringMounted
+from bhgrasp.model.objects import Box
+from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.motion.trajectories import Constant, Reference, SmoothStep, exponential_approach
 from bhgrasp.scenarios.finger_press import (
     DT,
