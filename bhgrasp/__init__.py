@@ -35,7 +35,7 @@ _EXPORTS = {
     "FullyActuated": "bhgrasp.sim.actuation",
     "GraspQuality": "bhgrasp.grasp",
     "Hand": "bhgrasp.model.hand",
-    "IKResult": "bhgrasp.model.ik",
+    "IKResult": "bhgrasp.model.hand_ik",
     "Plane": "bhgrasp.model.objects",
     "Scene": "bhgrasp.sim.scene",
     "Simulator": "bhgrasp.sim.simulator",
@@ -54,7 +54,7 @@ _EXPORTS = {
     "grasp_map": "bhgrasp.grasp",
     "grasp_quality": "bhgrasp.grasp",
     "hand_jacobian": "bhgrasp.grasp",
-    "ik": "bhgrasp.model.ik",
+    "ik": "bhgrasp.model.hand_ik",
     "internal_forces": "bhgrasp.grasp",
     "is_force_closure": "bhgrasp.grasp",
     "planar_finger": "bhgrasp.model.planar",
@@ -164,7 +164,8 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported here
         pseudo_inverse_forces,
     )
     from bhgrasp.model.hand import BarrettHand, Hand
-    from bhgrasp.model.ik import FingerIKResult, IKResult, Workspace, finger_ik, ik, workspace
+    from bhgrasp.model.hand_ik import IKResult, ik
+    from bhgrasp.model.ik import FingerIKResult, Workspace, finger_ik, workspace
     from bhgrasp.model.objects import Box, Capsule, Cylinder, FixedBox, Plane, Sphere, table, wall
     from bhgrasp.model.orientation import rotation_from_zyz, zyz_from_rotation
     from bhgrasp.model.planar import (

@@ -26,7 +26,7 @@ class UnreachableError(BhgraspError, ValueError):
     """A target lies outside the reachable set (joint limits or link lengths).
 
     Attributes:
-        result: Optional diagnostic payload (e.g. the best :class:`~bhgrasp.model.ik.IKResult` found).
+        result: Optional diagnostic payload (e.g. the best :class:`~bhgrasp.model.hand_ik.IKResult` found).
     """
 
     def __init__(self, message: str, result: Any = None) -> None:

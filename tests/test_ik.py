@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.model.ik import finger_ik, ik, workspace
+from bhgrasp.model.hand_ik import ik
+from bhgrasp.model.ik import finger_ik, workspace
 
 
 @pytest.mark.parametrize("finger", ["F1", "F2", "F3"])

@@ -12,12 +12,12 @@ import pytest
 from scipy.signal import cont2discrete, lfilter
 
 import bhgrasp as bh
+from bhgrasp.controllers.adaptive_impedance import AdaptiveForceImpedance
 from bhgrasp.controllers.impedance import (
-    AdaptiveForceImpedance,
     ForceImpedance,
-    ImpedanceController,
     PositionImpedance,
 )
+from bhgrasp.controllers.impedance_controller import ImpedanceController
 from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter, critical_damping
 from bhgrasp.grasp.sensing import ContactSensing, FingerContact
 from bhgrasp.motion.trajectories import Constant, SmoothStep

@@ -21,7 +21,8 @@ from bhgrasp.model.mount import (
     mounted,
 )
 from bhgrasp.model.objects import Box
-from bhgrasp.motion.trajectories import PoseMotion, Quintic
+from bhgrasp.motion.pose_references import PoseMotion
+from bhgrasp.motion.trajectories import Quintic
 from bhgrasp.motion.wrist import MountReference
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation

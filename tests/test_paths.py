@@ -9,7 +9,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.motion.paths import PoseCircle, PoseWaypoints
-from bhgrasp.motion.trajectories import PosePath
+from bhgrasp.motion.pose_references import PosePath
 from bhgrasp.scenarios.carry import PLANES, WAYPOINTS, circle, run_path, waypoints
 from bhgrasp.scenarios.object_grasp import OBJECTS, object_grasp
 

@@ -28,7 +28,7 @@ from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.errors import CompiledEngineUnavailable, InputError
 from bhgrasp.model.objects import Box
-from bhgrasp.motion.trajectories import PoseMotion
+from bhgrasp.motion.pose_references import PoseMotion
 from bhgrasp.scenarios.box_grasp import box_grasp
 from bhgrasp.scenarios.demo_result import MU_ASSUMED
 from bhgrasp.scenarios.grasp_controllers import SQUEEZE

@@ -9,11 +9,10 @@ import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
+from bhgrasp.motion.fingertip_reference import CartesianReference
+from bhgrasp.motion.pose_references import PoseMotion, PosePath
 from bhgrasp.motion.trajectories import (
-    CartesianReference,
     Constant,
-    PoseMotion,
-    PosePath,
     Quintic,
     Reference,
     Sinusoid,

@@ -28,7 +28,8 @@ from bhgrasp.controllers._workspace_terms import (
     _workspace,
     _workspace_dynamics,
 )
-from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
+from bhgrasp.controllers.impedance import ForceImpedance
+from bhgrasp.controllers.impedance_controller import ImpedanceController
 from bhgrasp.errors import InputError
 from bhgrasp.model.planar import thesis_impedance_finger, thesis_one_link_finger
 from bhgrasp.motion.trajectories import Constant

@@ -34,7 +34,8 @@ from bhgrasp.bench.protocol import (
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.model.mount import mounted
 from bhgrasp.model.objects import FixedBox
-from bhgrasp.motion.trajectories import PosePath, Reference, Sample
+from bhgrasp.motion.pose_references import PosePath
+from bhgrasp.motion.trajectories import Reference, Sample
 from bhgrasp.motion.wrist import MountReference
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation, FullyActuated

@@ -5,18 +5,18 @@ object-space and grasp laws (the SMC-adaptive grasp, object identification), the
 """
 
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
+from bhgrasp.controllers.adaptive_impedance import AdaptiveForceImpedance
 from bhgrasp.controllers.base import Controller, JointTracking, inertia_gain
 from bhgrasp.controllers.design import SlidingGains, sliding_gains
 from bhgrasp.controllers.grasp_force import GraspForceController
 from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.hosm import QuasiContinuousA, SuperTwisting, TwistingB, hosm
 from bhgrasp.controllers.impedance import (
-    AdaptiveForceImpedance,
     ForceImpedance,
-    ImpedanceController,
     ImpedanceLaw,
     PositionImpedance,
 )
+from bhgrasp.controllers.impedance_controller import ImpedanceController
 from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter
 from bhgrasp.controllers.joint import ComputedTorque, PDGravity
 from bhgrasp.controllers.motor_commands import MotorCommands

@@ -1,17 +1,19 @@
 """Impedance control of thesis chapter 4: position-based (PIM), force-based (FIM) and adaptive force impedance.
 
-Each law is an *outer loop* per finger that turns the desired fingertip trajectory X_d and the sensed contact force
-into a commanded trajectory X_c = X_d - Delta X; :class:`ImpedanceController` feeds the commands of one or several
-fingers to an inner fingertip computed-torque loop.  The derivations of (4.22)-(4.26) assume the position loop is
-accurate (X = X_c).  Under a contact force F a computed-torque loop is a spring of stiffness M_x Kp (tens of N/m
-for the light BH8-280 fingertips), so while a finger touches, the controller adds the *desired* contact force as a
-feed-forward J^T f_d n: at the force set point the inner loop then has no error and X = X_c exactly.  (Cancelling
-the *measured* force instead is positive feedback through a one-sample delay and goes unstable on stiff contacts.)
+Each law is an *outer loop* per finger that turns the desired fingertip trajectory X_d and the sensed contact force into
+a commanded trajectory X_c = X_d - Delta X; :class:`~bhgrasp.controllers.impedance_controller.ImpedanceController` feeds
+the commands of one or several fingers to an inner fingertip computed-torque loop.  The derivations of (4.22)-(4.26)
+assume the position loop is accurate (X = X_c).  Under a contact force F a computed-torque loop is a spring of stiffness
+M_x Kp (tens of N/m for the light BH8-280 fingertips), so while a finger touches, the controller adds the *desired*
+contact force as a feed-forward J^T f_d n: at the force set point the inner loop then has no error and X = X_c exactly.
+(Cancelling the *measured* force instead is positive feedback through a one-sample delay and goes unstable on stiff
+contacts.)
 
 * :class:`PositionImpedance` (4.20)-(4.21): M_I dx'' + B_I dx' + K_I dx = F_c (the full force on the object).
 * :class:`ForceImpedance` (4.22)-(4.26), (4.30): along the normal n, M_I dx'' + B_I dx' + K_I dx = f - f_d with
   f = n . F_c, and the reference's normal component set to x_e + f_d / k_e, which makes the steady force error 0.
-* :class:`AdaptiveForceImpedance` (4.31)-(4.41): the same with k_e and x_e estimated online.  The environment
+* :class:`~bhgrasp.controllers.adaptive_impedance.AdaptiveForceImpedance`
+  (4.31)-(4.41): the same with k_e and x_e estimated online.  The environment
   f = k_e (x - x_e) = [x, -1] . [k_e, k_e x_e] is linear in theta = (k_e, k_e x_e), so the gradient law
   theta_hat_dot = -Gamma [x, -1]^T (f_hat - f) makes V = theta~^T Gamma^-1 theta~ / 2 non-increasing
   (V_dot = -(f_hat - f)^2).  In (k_e, x_e) this is exactly (4.40) with gamma_1, gamma_2 on the two components; the
@@ -26,34 +28,18 @@ the *measured* force instead is positive feedback through a one-sample delay and
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from bhgrasp._validation import as_positive, as_real, as_vector
-from bhgrasp.controllers.base import Controller
+from bhgrasp._validation import as_positive, as_real, as_unit, as_vector
 from bhgrasp.controllers.impedance_filter import ImpedanceFilter, TustinImpedanceFilter, critical_damping
-from bhgrasp.controllers.workspace import WorkspaceComputedTorque
-from bhgrasp.data import State
 from bhgrasp.errors import InputError
-from bhgrasp.grasp.sensing import ContactSensing, FingerContact
-from bhgrasp.model.hand import Hand
+from bhgrasp.grasp.sensing import FingerContact
 from bhgrasp.motion.trajectories import Reference
 
 Sample = tuple[np.ndarray, np.ndarray, np.ndarray]
-_SEARCH_BAND = 5e-3  # [m] a fingertip this close to its target without contact makes the surface estimate advance
 MIN_CONTACT_DAMPING_RATIO = 0.5  # force-based impedance refuses a less damped contact loop (thesis (4.19)'s intent)
-_SURFACE_UNCERTAINTY = 0.05  # [m] prior scale of x_e for the least-squares estimator ...
-_PRIOR_SCALE = 10.0  # ... and the prior's weakness: standard deviations of 10 k_e(0) and 10 k_e(0) x 5 cm
-
-
-def _unit(vector: Any, name: str) -> np.ndarray:
-    vector = as_vector(vector, name, 3)
-    norm = np.linalg.norm(vector)
-    if norm == 0.0:
-        raise InputError(f"`{name}` must be a non-zero 3-vector, got {vector}")
-    return vector / norm
 
 
 class ImpedanceLaw(ABC):
@@ -175,7 +161,7 @@ class ForceImpedance(ImpedanceLaw):
                 f" {mass:g}, K_I = {stiffness:g}, k_e = {k_e:g}"
             )
         super().__init__(reference, mass, damping, stiffness, period)
-        self.normal = _unit(normal, "normal")
+        self.normal = as_unit(normal, "normal")
         if isinstance(force, Reference):
             if force.size != 1:
                 raise InputError(f"a desired-force profile must be a Reference of size 1 [N], got size {force.size}")
@@ -213,201 +199,9 @@ class ForceImpedance(ImpedanceLaw):
         return self._filtered(desired, error * n, dt)
 
 
-class AdaptiveForceImpedance(ForceImpedance):
-    """Adaptive FIM (4.31)-(4.41): k_e and x_e estimated online from the sensed force and fingertip position."""
-
-    def __init__(
-        self,
-        reference: Reference,
-        normal: Any,
-        force: float,
-        surface_estimate: Any,
-        stiffness_estimate: float,
-        gamma: tuple[float, float] = (1.0, 0.5),
-        estimator: str = "least-squares",
-        mass: float = 0.1,
-        damping: float | None = None,
-        stiffness: float = 200.0,
-        period: float | None = None,
-        search_speed: float = 0.02,
-        min_stiffness: float = 1.0,
-        quasi_static_speed: float = 5e-3,
-    ) -> None:
-        """Set up the adaptive force loop.
-
-        Args:
-            surface_estimate, stiffness_estimate: Initial x_e [m] (a point) and k_e [N/m] estimates.
-            gamma: (gamma_1, gamma_2): gradient-law rates of k_e and of k_e x_e (thesis planar 1, 0.5), scaled by the
-                initial k_e estimate so that one pair suits soft and hard environments: Gamma = diag(gamma k0).
-            estimator: ``"gradient"`` (the thesis' law (4.40), corrected) or ``"least-squares"`` (recursive least
-                squares on the same regressor, centred on the initial surface estimate: it identifies k_e and x_e
-                from any two force levels, where the gradient law with a constant f_d only learns the one
-                operating point f = f_d).
-            search_speed: Speed [m/s] at which the estimated surface advances while there is no contact.
-            min_stiffness: Floor [N/m] of the k_e estimate (it divides f_d).
-            quasi_static_speed: Fingertip normal speed [m/s] above which samples are not used for estimation
-                (impacts and fast transients, where damping and inertia break f = k_e (x - x_e)).
-            reference, normal, force, mass, damping, stiffness, period: As :class:`ForceImpedance` (damping
-                ``None`` is critical for the *estimated* k_e at start).
-        """
-        super().__init__(
-            reference, normal, force, surface_estimate, stiffness_estimate, mass, damping, stiffness, period
-        )
-        gains = as_vector(gamma, "gamma", 2)
-        if np.any(gains <= 0.0):
-            raise InputError(f"`gamma` must be two positive rates, got {gamma!r}")
-        self.gamma = gains * self.environment_stiffness
-        if estimator not in ("gradient", "least-squares"):
-            raise InputError(f"`estimator` must be 'gradient' or 'least-squares', got {estimator!r}")
-        self.estimator = estimator
-        self.search_speed = as_real(search_speed, "search_speed")
-        self.min_stiffness = as_positive(min_stiffness, "min_stiffness")
-        self.quasi_static_speed = as_positive(quasi_static_speed, "quasi_static_speed")
-        self._initial = (self.environment_stiffness, self.surface)
-        self._centre = self.surface  # regressor phi = (x - centre, -1): well conditioned for any surface position
-        self.reset()
-
-    def reset(self) -> None:
-        """Restart the estimates at their initial values."""
-        super().reset()
-        self.environment_stiffness, self.surface = self._initial
-        k0 = self.environment_stiffness
-        self.theta = np.array([k0, k0 * (self.surface - self._centre)])  # theta = (k_e, k_e (x_e - centre))
-        self._rate = np.zeros(2)
-        self._covariance = np.diag([(_PRIOR_SCALE * k0) ** 2, (_PRIOR_SCALE * k0 * _SURFACE_UNCERTAINTY) ** 2])
-        self._last_x: np.ndarray | None = None
-
-    def command(self, t, x, contact, dt) -> Sample:  # noqa: D102
-        along = float(self.normal @ x)
-        self.theta = self.theta + dt * self._rate  # explicit Euler with the previous sample's rate (gradient law)
-        self._rate = np.zeros(2)
-        speed = abs(float(self.normal @ (x - self._last_x))) / dt if dt > 0.0 and self._last_x is not None else 0.0
-        self._last_x = np.array(x, dtype=float)
-        if contact.touching and speed <= self.quasi_static_speed:
-            measured = float(self.normal @ contact.force)
-            regressor = np.array([along - self._centre, -1.0])
-            predicted = float(regressor @ self.theta)
-            if self.estimator == "gradient":
-                self._rate = -self.gamma * regressor * (predicted - measured)
-            else:
-                gain = self._covariance @ regressor / (1.0 + regressor @ self._covariance @ regressor)
-                self.theta = self.theta + gain * (measured - predicted)
-                self._covariance = self._covariance - np.outer(gain, regressor @ self._covariance)
-            self.log["force_estimate"] = predicted
-        elif not contact.touching:
-            if along >= self.target() - _SEARCH_BAND:  # at the estimated surface + f_d/k_e, no contact: search on
-                self.theta[1] += dt * self.search_speed * self.theta[0]
-            self.log["force_estimate"] = 0.0
-        else:
-            self.log["force_estimate"] = float(np.array([along - self._centre, -1.0]) @ self.theta)
-        self.theta[0] = max(self.theta[0], self.min_stiffness)
-        self.environment_stiffness = float(self.theta[0])
-        self.surface = self._centre + float(self.theta[1] / self.theta[0])
-        self.log["stiffness_estimate"], self.log["surface_estimate"] = self.environment_stiffness, self.surface
-        return super().command(t, x, contact, dt)
-
-
-class ImpedanceController(Controller):
-    """Impedance outer loops for one or several fingers around an inner fingertip computed-torque loop.
-
-    Logged per finger ``<finger>/force`` (normal or full force), ``<finger>/x_c``, ``<finger>/delta_x`` and the
-    adaptive estimates; plus ``reaction_torque`` = J^T F of the sensed contacts (thesis (4.8)) unless turned off.
-    """
-
-    def __init__(
-        self,
-        nominal: Hand,
-        laws: Mapping[str, ImpedanceLaw],
-        kp: Any = 430.0,
-        kv: Any = 175.0,
-        feedforward: bool = True,
-        log_reaction_torque: bool = True,
-    ) -> None:
-        """Set up the loops.
-
-        Args:
-            nominal: The controller's model of the hand.
-            laws: Finger -> impedance law.
-            kp, kv: Inner fingertip computed-torque gains [1/s^2], [1/s] (thesis F3: 430, 175).
-            feedforward: Add J^T (desired contact force) while a finger touches (see the module notes).
-            log_reaction_torque: Log ``reaction_torque`` (a point Jacobian per contact and step); off for runs that
-                read only the forces, e.g. the evaluations of a tuning.
-        """
-        super().__init__()
-        if not laws:
-            raise InputError("`laws` must map at least one finger to an impedance law")
-        for finger, law in laws.items():
-            if not isinstance(law, ImpedanceLaw):
-                raise InputError(f"laws[{finger!r}] must be an ImpedanceLaw (PositionImpedance, ...), got {law!r}")
-        self.nominal = nominal
-        self.laws = dict(laws)
-        self._commands = {finger: _Commanded() for finger in self.laws}
-        self.inner = WorkspaceComputedTorque(nominal, self._commands, kp=kp, kv=kv)
-        self.sensing = ContactSensing(nominal)
-        self.feedforward = bool(feedforward)
-        self.log_reaction_torque = bool(log_reaction_torque)
-        self._time: float | None = None
-
-    def reset(self, state: State) -> None:
-        """Reset every law's filter/estimates and the inner loop."""
-        for law in self.laws.values():
-            law.reset()
-        for command in self._commands.values():
-            command.sample = None
-        self.inner.reset(state)
-        self._time = None
-
-    def __call__(self, t: float, state: State) -> np.ndarray:
-        """Joint torques [N m]."""
-        dt = 0.0 if self._time is None else t - self._time
-        if dt < 0.0:
-            raise InputError(f"time went backwards: t = {t} after {self._time}; call reset() to restart")
-        self._time = t
-        hand = self.nominal
-        q, v = as_vector(state.q, "state.q", hand.nq), as_vector(state.v, "state.v", hand.nv)
-        terms = self.inner._workspaces(q, v)
-        contacts = self.sensing.fingers(state)
-        extra = np.zeros(hand.nv)
-        for finger, law in self.laws.items():
-            contact = contacts[finger]
-            sample = law.command(t, terms[finger].position, contact, dt)
-            self._commands[finger].sample = sample
-            if self.feedforward:
-                force = np.asarray(law.feedforward(contact))
-                if np.count_nonzero(force):  # (J^T 0 adds nothing)
-                    extra += terms[finger].jacobian.T @ force  # the fingertip Jacobian (world)
-            self.log[f"{finger}/x_c"] = sample[0]
-            for key, value in law.log.items():
-                self.log[f"{finger}/{key}"] = np.array(value, dtype=float)
-        tau = self.inner._control(t, state, q, v, terms) + extra
-        if self.log_reaction_torque:
-            self.log["reaction_torque"] = (
-                self.sensing.reaction_torques(state) if state.contact_bodies else np.zeros(hand.nv)
-            )
-        return tau
-
-
-class _Commanded(Reference):
-    """The inner loop's reference: whatever the outer loop last commanded."""
-
-    def __init__(self) -> None:
-        self.sample: Sample | None = None
-
-    @property
-    def size(self) -> int:
-        return 3
-
-    def __call__(self, t: float) -> Sample:
-        if self.sample is None:
-            raise InputError("the impedance outer loop has not produced a command yet")
-        return self.sample
-
-
 __all__ = [
     "MIN_CONTACT_DAMPING_RATIO",
-    "AdaptiveForceImpedance",
     "ForceImpedance",
-    "ImpedanceController",
     "ImpedanceLaw",
     "PositionImpedance",
 ]

@@ -38,7 +38,8 @@ from bhgrasp.grasp.path_check import TOLERANCE as PATH_TOLERANCE
 from bhgrasp.grasp.path_check import path_contacts
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
-from bhgrasp.motion.trajectories import PoseMotion, Reference, SmoothStep
+from bhgrasp.motion.pose_references import PoseMotion
+from bhgrasp.motion.trajectories import Reference, SmoothStep
 
 APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
 PLAN_LENGTH = 0.1  # [m] the plan's metric (dx, L dtheta): 5 mrad weighs as 0.5 mm, the motion targets' ratio

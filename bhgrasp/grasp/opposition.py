@@ -14,8 +14,8 @@ the hand's layout (the Allegro's thumb, a gripper written in a notebook):
    line parallel to ``-d`` (or ``+d``, the other side), moved until the pad's centre lies on the finger's slot (a
    curved face tilts the normal, and the pad with it) (sphere tracing on coal distances, :data:`TOLERANCE`);
 3. **reachability**: every pad centre (contact + pad radius x outward normal) must lie within ``reach_tolerance`` of
-   its finger's cloud; the IK (:func:`~bhgrasp.model.ik.ik`, 1e-6 m) starts from the nearest samples' joint values, the
-   idle fingers at rest (zero, clipped to the limits);
+   its finger's cloud; the IK (:func:`~bhgrasp.model.hand_ik.ik`, 1e-6 m) starts from the nearest samples' joint
+   values, the idle fingers at rest (zero, clipped to the limits);
 4. **the same checks as the approach-line search**: the other collision shapes keep ``clearance`` from the object, the
    grasping joints ``joint_margin`` from their limits, each contact Jacobian ``singularity_margin`` from singular,
    the contacts ``edge_margin`` from an edge, the pads lift the object by ``lift`` without sliding; then force
@@ -61,7 +61,7 @@ from bhgrasp.grasp.synthesis import (
 )
 from bhgrasp.model.couplings import refuse_couplings
 from bhgrasp.model.hand import Hand
-from bhgrasp.model.ik import ik
+from bhgrasp.model.hand_ik import ik
 
 TOLERANCE = 1e-5  # [m] how close to the surface a traced line stops
 PAD_ITERATIONS = 40  # line moves that put a pad centre on its slot (each shrinks the miss by pad / face radius)

@@ -8,7 +8,7 @@ searches the spread joints (every joint named ``*spread*`` at one value) and the
    flexions (every non-spread joint at 0.6, then 1.4 rad, clipped to the limits) is cast at the contact height
    toward the object, and its first point on the surface (coal distances, 0.01 mm) is the finger's contact;
 2. **reachability**: the fingertip frames (the pads' centres) go one pad radius out along the surface normal there,
-   and the IK (:func:`~bhgrasp.model.ik.ik`, 1e-6 m) must reach them inside the joint limits, away from a kinematic
+   and the IK (:func:`~bhgrasp.model.hand_ik.ik`, 1e-6 m) must reach them inside the joint limits, away from a kinematic
    singularity (every joint of a grasping finger moves its contact: ``singularity_margin``);
 3. **only the pads touch**: every other collision shape of the hand keeps ``clearance`` from the object (a link
    body pressing beside the pad makes several contacts whose forces the grasp controller does not distribute), also
@@ -48,7 +48,7 @@ from bhgrasp.grasp.manipulability import SLIDE_TOLERANCE, manipulable_space
 from bhgrasp.grasp.probes import HandClearance, ObjectProbe
 from bhgrasp.grasp.quality import GraspQuality, grasp_quality
 from bhgrasp.model.hand import Hand
-from bhgrasp.model.ik import ik
+from bhgrasp.model.hand_ik import ik
 
 FLEXIONS = (0.6, 1.4)  # [rad] the two closings that give a finger's line of approach
 

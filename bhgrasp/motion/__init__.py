@@ -6,19 +6,10 @@ persistent excitation (:mod:`~bhgrasp.motion.excitation`) and the wrist's refere
 """
 
 from bhgrasp.motion.excitation import PoseExcitation
+from bhgrasp.motion.fingertip_reference import CartesianReference
 from bhgrasp.motion.paths import PoseCircle, PoseWaypoints
-from bhgrasp.motion.trajectories import (
-    CartesianReference,
-    Constant,
-    PoseMotion,
-    PosePath,
-    Quintic,
-    Reference,
-    Sample,
-    Sinusoid,
-    SmoothStep,
-    exponential_approach,
-)
+from bhgrasp.motion.pose_references import PoseMotion, PosePath
+from bhgrasp.motion.trajectories import Constant, Quintic, Reference, Sample, Sinusoid, SmoothStep, exponential_approach
 from bhgrasp.motion.wrist import MountReference
 
 __all__ = [

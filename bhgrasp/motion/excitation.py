@@ -15,7 +15,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.errors import InputError
-from bhgrasp.motion.trajectories import Reference, Sample, _time, minimum_jerk
+from bhgrasp.motion.trajectories import Reference, Sample, minimum_jerk, time_of
 
 _AXES = np.eye(3)
 
@@ -69,7 +69,7 @@ class PoseExcitation(Reference):
 
     def channels(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The six oscillation channels c, c_dot, c_ddot at time ``t`` [s] (zero until the lift ends)."""
-        tau = _time(t) - self.delay - self.lift_time
+        tau = time_of(t) - self.delay - self.lift_time
         if tau <= 0.0:
             return np.zeros(6), np.zeros(6), np.zeros(6)
         w, w_dot, w_ddot = minimum_jerk(min(tau / self.ramp, 1.0))
@@ -83,7 +83,7 @@ class PoseExcitation(Reference):
 
     def __call__(self, t: float) -> Sample:
         """Pose (x, log R), world twist and its derivative at time ``t`` [s]."""
-        s = min(max((_time(t) - self.delay) / self.lift_time, 0.0), 1.0)
+        s = min(max((time_of(t) - self.delay) / self.lift_time, 0.0), 1.0)
         blend, blend_rate, blend_curvature = minimum_jerk(s)
         c, c_dot, c_ddot = self.channels(t)
         position = self.start.translation + blend * self.lift + c[:3]

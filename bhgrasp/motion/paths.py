@@ -24,7 +24,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.errors import InputError
-from bhgrasp.motion.trajectories import Reference, Sample, _time, minimum_jerk
+from bhgrasp.motion.trajectories import Reference, Sample, minimum_jerk, time_of
 
 _EXTREME_ANGLES = np.arange(1, 8) * np.pi / 4  # the circle's points checked by :meth:`PoseCircle.extremes`
 
@@ -82,7 +82,7 @@ class PoseCircle(Reference):
 
     def arc(self, t: float) -> tuple[float, float, float]:
         """The arc angle phi [rad] and its first two time derivatives at ``t`` [s]."""
-        s = min(max((_time(t) - self.delay - self.lift_time) / self.duration, 0.0), 1.0)
+        s = min(max((time_of(t) - self.delay - self.lift_time) / self.duration, 0.0), 1.0)
         blend, rate, curvature = minimum_jerk(s)
         full = 2.0 * np.pi * self.turns
         return full * blend, full * rate / self.duration, full * curvature / self.duration**2
@@ -93,7 +93,7 @@ class PoseCircle(Reference):
 
     def __call__(self, t: float) -> Sample:
         """Pose (x, log R), world twist and its derivative at time ``t`` [s]."""
-        s = min(max((_time(t) - self.delay) / self.lift_time, 0.0), 1.0)
+        s = min(max((time_of(t) - self.delay) / self.lift_time, 0.0), 1.0)
         blend, blend_rate, blend_curvature = minimum_jerk(s)
         phi, phi_dot, phi_ddot = self.arc(t)
         tangent = self.radius * (self.u * np.sin(phi) + self.v * np.cos(phi))  # d displacement / d phi
@@ -165,7 +165,7 @@ class PoseWaypoints(Reference):
 
     def __call__(self, t: float) -> Sample:
         """Pose (x, log R), world twist and its derivative at time ``t`` [s]."""
-        t = _time(t)
+        t = time_of(t)
         blends = [minimum_jerk(min(max((t - t0) / d, 0.0), 1.0)) for t0, d in zip(self.starts, self.durations)]
         b = np.array([blend for blend, _, _ in blends])
         rate = np.array([r / d for (_, r, _), d in zip(blends, self.durations)])

@@ -9,10 +9,10 @@ references in [rad], [rad/s], [rad/s^2]; Cartesian ones in [m], [m/s], [m/s^2] i
 - :func:`exponential_approach`: the same curve written with a rate, as in thesis (4.29).
 - :class:`Sinusoid`: ``offset + amplitude sin(2 pi f t + phase)``.
 - :class:`Quintic`: minimum-jerk point-to-point motion (zero velocity and acceleration at both ends).
-- :class:`PoseMotion`: minimum-jerk motion of a rigid-body pose by a world offset (twist as its velocity).
 - :class:`Constant`: a set point.
-- :class:`CartesianReference`: a fingertip reference in the world turned into a joint reference of a whole hand
-  by closed-form IK and the finger Jacobian.
+
+Pose references (:mod:`bhgrasp.motion.pose_references`) and fingertip references turned into joint ones
+(:mod:`bhgrasp.motion.fingertip_reference`) build on :class:`Reference` and the helpers here.
 
 Scalar arguments broadcast against per-component arrays; arrays must all have the same length.  Arguments are
 validated at construction and raise :class:`~bhgrasp.errors.InputError` naming the argument, the value and what
@@ -25,12 +25,9 @@ from abc import ABC, abstractmethod
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
-from bhgrasp._validation import as_positive, as_real, as_vector, require_name
-from bhgrasp.errors import InputError, ModelError
-from bhgrasp.model.hand import Hand
-from bhgrasp.model.ik import finger_ik
+from bhgrasp._validation import as_real, as_vector
+from bhgrasp.errors import InputError
 
 Sample = tuple[np.ndarray, np.ndarray, np.ndarray]  # (position, velocity, acceleration), each of shape (size,)
 
@@ -74,11 +71,11 @@ class SmoothStep(Reference):
             time_constant: ``a`` [s] > 0, scalar or per component (63 % of the way after one ``a``).
             delay: Start time [s] >= 0, scalar or per component.
         """
-        self.start, self.goal, self.time_constant, self.delay = _components(
+        self.start, self.goal, self.time_constant, self.delay = components(
             start=start, goal=goal, time_constant=time_constant, delay=delay
         )
-        _require(self.time_constant > 0.0, "time_constant", self.time_constant, "> 0 [s]")
-        _require(self.delay >= 0.0, "delay", self.delay, ">= 0 [s]")
+        require_all(self.time_constant > 0.0, "time_constant", self.time_constant, "> 0 [s]")
+        require_all(self.delay >= 0.0, "delay", self.delay, ">= 0 [s]")
 
     @property
     def size(self) -> int:
@@ -87,7 +84,7 @@ class SmoothStep(Reference):
 
     def __call__(self, t: float) -> Sample:
         """Position, velocity and acceleration at time ``t`` [s]."""
-        elapsed = _time(t) - self.delay
+        elapsed = time_of(t) - self.delay
         moving = elapsed >= 0.0
         scaled = np.where(moving, elapsed, 0.0) / self.time_constant
         decay = np.where(moving, np.exp(-scaled), 0.0)
@@ -109,8 +106,8 @@ def exponential_approach(start: Any, goal: Any, rate: Any) -> SmoothStep:
         goal: ``x_f``, scalar or shape (n,).
         rate: ``a`` [1/s] > 0, scalar or per component.
     """
-    (rates,) = _components(rate=rate)
-    _require(rates > 0.0, "rate", rates, "> 0 [1/s]")
+    (rates,) = components(rate=rate)
+    require_all(rates > 0.0, "rate", rates, "> 0 [1/s]")
     return SmoothStep(start, goal, 1.0 / rates if np.ndim(rate) else 1.0 / float(rate))
 
 
@@ -126,10 +123,10 @@ class Sinusoid(Reference):
             frequency: Frequency [Hz] >= 0, scalar or per component.
             phase: Phase at ``t = 0`` [rad], scalar or per component.
         """
-        self.offset, self.amplitude, self.frequency, self.phase = _components(
+        self.offset, self.amplitude, self.frequency, self.phase = components(
             offset=offset, amplitude=amplitude, frequency=frequency, phase=phase
         )
-        _require(self.frequency >= 0.0, "frequency", self.frequency, ">= 0 [Hz]")
+        require_all(self.frequency >= 0.0, "frequency", self.frequency, ">= 0 [Hz]")
 
     @property
     def size(self) -> int:
@@ -139,7 +136,7 @@ class Sinusoid(Reference):
     def __call__(self, t: float) -> Sample:
         """Position, velocity and acceleration at time ``t`` [s]."""
         omega = 2.0 * np.pi * self.frequency
-        angle = omega * _time(t) + self.phase
+        angle = omega * time_of(t) + self.phase
         sine = self.amplitude * np.sin(angle)
         return self.offset + sine, self.amplitude * omega * np.cos(angle), -(omega**2) * sine
 
@@ -161,11 +158,11 @@ class Quintic(Reference):
             duration: Time to go from start to goal [s] > 0, scalar or per component.
             delay: Start time [s] >= 0, scalar or per component.
         """
-        self.start, self.goal, self.duration, self.delay = _components(
+        self.start, self.goal, self.duration, self.delay = components(
             start=start, goal=goal, duration=duration, delay=delay
         )
-        _require(self.duration > 0.0, "duration", self.duration, "> 0 [s]")
-        _require(self.delay >= 0.0, "delay", self.delay, ">= 0 [s]")
+        require_all(self.duration > 0.0, "duration", self.duration, "> 0 [s]")
+        require_all(self.delay >= 0.0, "delay", self.delay, ">= 0 [s]")
 
     @property
     def size(self) -> int:
@@ -174,7 +171,7 @@ class Quintic(Reference):
 
     def __call__(self, t: float) -> Sample:
         """Position, velocity and acceleration at time ``t`` [s]."""
-        s = np.clip((_time(t) - self.delay) / self.duration, 0.0, 1.0)
+        s = np.clip((time_of(t) - self.delay) / self.duration, 0.0, 1.0)
         change = self.goal - self.start
         blend, rate, curvature = minimum_jerk(s)
         position = np.where(s >= 1.0, self.goal, self.start + change * blend)
@@ -191,101 +188,12 @@ def minimum_jerk(s: Any) -> tuple[Any, Any, Any]:
     return square * s * (10.0 + s * (-15.0 + 6.0 * s)), 30.0 * square * rest * rest, 60.0 * s * rest * (1.0 - 2.0 * s)
 
 
-class PoseMotion(Reference):
-    """Minimum-jerk motion of a rigid-body pose by a world offset: the object reference of the grasp supervisor.
-
-    With the minimum-jerk blend b(t) of :class:`Quintic` (0 -> 1 over ``duration`` after ``delay``):
-    ``x(t) = x_0 + b dx`` and ``R(t) = exp(b dtheta) R_0`` (a rotation about the fixed world axis of
-    ``dtheta``).  The sample is (x [m], rotation vector log(R) [rad]); the velocity and acceleration are the world
-    twist (v [m/s], omega [rad/s]) and its derivative, omega = b' dtheta, which is what the object-space
-    controllers read.  (Adding ``dtheta`` to the rotation vector of R_0 instead, as a :class:`Quintic` on the six
-    components would, turns about the wrong axis unless R_0 = I.)
-    """
-
-    def __init__(self, start: Any, offset: Any, duration: float, delay: float = 0.0) -> None:
-        """Build the motion.
-
-        Args:
-            start: Initial pose as a ``pinocchio.SE3`` (world <- body).
-            offset: (dx [m], dtheta [rad]): translation and rotation vector of the change, world.
-            duration: Time of the motion [s] > 0.
-            delay: Start time [s] >= 0.
-        """
-        if not isinstance(start, pin.SE3):
-            raise InputError(f"`start` must be a pinocchio.SE3, got {type(start).__name__}")
-        self.start = pin.SE3(start)
-        self.offset = as_vector(offset, "offset", 6)
-        self.duration, self.delay = as_positive(duration, "duration"), as_real(delay, "delay")
-
-    @property
-    def size(self) -> int:
-        """Six: position and rotation vector."""
-        return 6
-
-    def __call__(self, t: float) -> Sample:
-        """Pose (x, log R), twist (v, omega) and its derivative at time ``t`` [s]."""
-        s = min(max((_time(t) - self.delay) / self.duration, 0.0), 1.0)  # the blend of Quintic(0, 1, ...), in floats
-        blend, rate, curvature = minimum_jerk(s)
-        rate, curvature = rate / self.duration, curvature / (self.duration * self.duration)
-        rotation = pin.exp3(blend * self.offset[3:]) @ self.start.rotation
-        position = np.concatenate((self.start.translation + blend * self.offset[:3], pin.log3(rotation)))
-        return position, rate * self.offset, curvature * self.offset
-
-
-class PosePath(Reference):
-    """Back-to-back minimum-jerk moves of a rigid-body pose: waypoints joined at rest.
-
-    E.g. a wrist's approach, lift, hold and place.
-    Move i starts when move i-1 ends (the first after ``delay``) and changes the pose by its world offset (dx [m],
-    dtheta [rad]) as :class:`PoseMotion` does; a zero offset is a pause.  The sample and its derivatives are
-    :class:`PoseMotion`'s, from the pose the earlier moves reached; every move starts and ends at rest, so the
-    path is C2 at the joins.
-    """
-
-    def __init__(self, start: Any, moves: Any, delay: float = 0.0) -> None:
-        """Build the path.
-
-        Args:
-            start: Initial pose, a ``pinocchio.SE3`` (world <- body).
-            moves: Sequence of (offset (6,), duration [s] > 0).
-            delay: Start time of the first move [s] >= 0.
-        """
-        if not isinstance(start, pin.SE3):
-            raise InputError(f"`start` must be a pinocchio.SE3, got {type(start).__name__}")
-        moves = list(moves)
-        if not moves:
-            raise InputError("`moves` must hold at least one (offset, duration) pair")
-        self.segments: list[PoseMotion] = []
-        pose, begin = pin.SE3(start), as_real(delay, "delay")
-        for i, move in enumerate(moves):
-            if len(move) != 2:
-                raise InputError(f"`moves[{i}]` must be an (offset (6,), duration [s]) pair, got {move!r}")
-            offset, duration = as_vector(move[0], f"moves[{i}] offset", 6), as_positive(move[1], f"moves[{i}] duration")
-            self.segments.append(PoseMotion(pose, offset, duration, begin))
-            pose = pin.SE3(pin.exp3(offset[3:]) @ pose.rotation, pose.translation + offset[:3])
-            begin += duration
-        self.end_time, self.end = begin, pose
-
-    @property
-    def size(self) -> int:
-        """Six: position and rotation vector."""
-        return 6
-
-    def __call__(self, t: float) -> Sample:
-        """Pose (x, log R), world twist and its derivative at time ``t`` [s]."""
-        t = _time(t)
-        for segment in self.segments:
-            if t < segment.delay + segment.duration:
-                return segment(t)
-        return self.segments[-1](t)
-
-
 class Constant(Reference):
     """A set point: ``value`` with zero velocity and acceleration."""
 
     def __init__(self, value: Any) -> None:
         """Build the set point from a scalar (size 1) or an array of shape (n,)."""
-        (self.value,) = _components(value=value)
+        (self.value,) = components(value=value)
 
     @property
     def size(self) -> int:
@@ -294,96 +202,16 @@ class Constant(Reference):
 
     def __call__(self, t: float) -> Sample:
         """The value, and zero velocity and acceleration, at any finite ``t`` [s]."""
-        _time(t)
+        time_of(t)
         return self.value.copy(), np.zeros(self.size), np.zeros(self.size)
 
 
-class CartesianReference(Reference):
-    """A fingertip reference in the world [m] turned into a joint reference of the whole hand (size ``nv``).
-
-    At each time the finger's joints come from the closed-form :func:`~bhgrasp.model.ik.finger_ik`, seeded with the
-    previous solution (``q_rest`` at first and after :meth:`reset`) so that the IK branch stays continuous along
-    the path.  With ``J`` the finger's columns of :meth:`Hand.fingertip_jacobian` (world-aligned):
-    ``qdot = J^+ xdot`` and ``qddot = J^+ (xddot - Jdot qdot)``, where ``Jdot qdot`` is the classical fingertip
-    acceleration at zero joint acceleration, in the world.  ``J^+`` is a least-squares solve, so a finger with
-    two joints works: its fingertip (e.g. Barrett F3, proximal and distal only) moves in a fixed plane, and the
-    Cartesian reference must lie in that plane (as a straight line between two reachable in-plane points does);
-    a point farther than ``plane_tolerance`` from it raises :class:`~bhgrasp.errors.UnreachableError` from
-    ``finger_ik``.  Every other joint is held at ``q_rest`` with zero velocity and acceleration.
-
-    Evaluation is stateful (the IK seed) and uses the hand's Pinocchio data: one reference per thread.  Near a
-    finger singularity (stretched finger) ``J`` is ill-conditioned and the joint rates grow accordingly.
-    """
-
-    def __init__(
-        self, hand: Hand, finger: str, reference: Reference, q_rest: Any, *, plane_tolerance: float = 1e-6
-    ) -> None:
-        """Build the joint reference.
-
-        Args:
-            hand: A hand whose finger is Barrett-like (optional spread, then two parallel-axis joints) and whose
-                joints are all 1-DOF (``nq == nv``).
-            finger: Finger name, e.g. ``"F1"``.
-            reference: Fingertip position reference of size 3, world frame [m].
-            q_rest: Hand configuration [rad], shape (nq,): the other joints' positions and the first IK seed.
-            plane_tolerance: Largest distance [m] of the target from a two-joint finger's plane.
-
-        Raises:
-            InputError: Not a :class:`Hand`, unknown finger, a reference not of size 3, a bad ``q_rest`` or
-                ``plane_tolerance``.
-            ModelError: The hand has joints with ``nq != nv``.
-        """
-        if not isinstance(hand, Hand):
-            raise InputError(f"`hand` must be a bhgrasp Hand, got {type(hand).__name__}")
-        require_name(finger, hand.fingers, "finger")
-        if not isinstance(reference, Reference) or reference.size != 3:
-            got = f"size {reference.size}" if isinstance(reference, Reference) else type(reference).__name__
-            raise InputError(f"`reference` must be a Reference of size 3 (fingertip position [m]), got {got}")
-        if hand.nq != hand.nv:
-            raise ModelError(f"CartesianReference needs nq == nv (1-DOF joints), got nq={hand.nq}, nv={hand.nv}")
-        self.hand = hand
-        self.finger = finger
-        self.reference = reference
-        self.q_rest = as_vector(q_rest, "q_rest", hand.nq).copy()
-        self.plane_tolerance = as_positive(plane_tolerance, "plane_tolerance")
-        self._indices = hand.finger_indices(finger)
-        self._seed = self.q_rest.copy()
-
-    @property
-    def size(self) -> int:
-        """``hand.nv``: one component per joint."""
-        return self.hand.nv
-
-    def reset(self) -> None:
-        """Seed the next IK with ``q_rest`` again (e.g. before replaying the reference from its start)."""
-        self._seed = self.q_rest.copy()
-
-    def __call__(self, t: float) -> Sample:
-        """Joint position [rad], velocity [rad/s] and acceleration [rad/s^2] at time ``t`` [s].
-
-        Raises:
-            InputError: ``t`` is not finite.
-            UnreachableError: The fingertip target is out of reach, or out of a two-joint finger's plane.
-        """
-        x, xdot, xddot = self.reference(t)
-        hand, indices = self.hand, self._indices
-        solution = finger_ik(hand, self.finger, x, q0=self._seed, plane_tolerance=self.plane_tolerance)
-        q = solution.apply(self.q_rest)
-        self._seed = q.copy()
-        jacobian = hand.fingertip_jacobian(q, self.finger)[:, indices]
-        v = np.zeros(hand.nv)
-        v[indices] = np.linalg.lstsq(jacobian, xdot, rcond=None)[0]
-        a = np.zeros(hand.nv)
-        bias = hand.fingertip_bias_acceleration(q, v, self.finger)
-        a[indices] = np.linalg.lstsq(jacobian, xddot - bias, rcond=None)[0]
-        return q, v, a
-
-
-def _time(t: Any) -> float:
+def time_of(t: Any) -> float:
+    """``t`` [s] as a finite float (any sign)."""
     return as_real(t, "t", nonnegative=False)
 
 
-def _components(**values: Any) -> list[np.ndarray]:
+def components(**values: Any) -> list[np.ndarray]:
     """Each argument (scalar or 1-D) as a finite float64 array of the common length (scalars broadcast)."""
     arrays = {}
     for name, value in values.items():
@@ -401,21 +229,23 @@ def _components(**values: Any) -> list[np.ndarray]:
     return [np.broadcast_to(array, (size,)).copy() for array in arrays.values()]
 
 
-def _require(condition: np.ndarray, name: str, value: np.ndarray, expected: str) -> None:
+def require_all(condition: np.ndarray, name: str, value: np.ndarray, expected: str) -> None:
+    """Raise an :class:`~bhgrasp.errors.InputError` naming ``name``, ``value`` and ``expected`` unless all hold."""
     if not np.all(condition):
         shown = value.tolist() if value.size > 1 else float(value[0])
         raise InputError(f"`{name}` must be {expected}, got {shown!r}")
 
 
 __all__ = [
-    "CartesianReference",
     "Constant",
-    "PoseMotion",
-    "PosePath",
     "Quintic",
     "Reference",
     "Sample",
     "Sinusoid",
     "SmoothStep",
+    "components",
     "exponential_approach",
+    "minimum_jerk",
+    "require_all",
+    "time_of",
 ]

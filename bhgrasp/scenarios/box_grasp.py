@@ -23,7 +23,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.grasp.clearance import check_clearance
 from bhgrasp.grasp.manipulability import ManipulableSpace, manipulable_space
 from bhgrasp.model.hand import BarrettHand, Hand
-from bhgrasp.model.ik import ik
+from bhgrasp.model.hand_ik import ik
 from bhgrasp.model.objects import Box, FixedBox
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import Actuation, BarrettActuation, FullyActuated

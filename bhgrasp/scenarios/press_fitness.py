@@ -13,7 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from bhgrasp.controllers.impedance import ForceImpedance, ImpedanceController
+from bhgrasp.controllers.impedance import ForceImpedance
+from bhgrasp.controllers.impedance_controller import ImpedanceController
 from bhgrasp.errors import SimulationDiverged
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.motion.trajectories import Constant

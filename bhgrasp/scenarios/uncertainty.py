@@ -31,7 +31,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.errors import InputError
-from bhgrasp.motion.trajectories import PoseMotion
+from bhgrasp.motion.pose_references import PoseMotion
 from bhgrasp.sim.sensor_model import SensorModel
 
 SENSED = ("pose_noise", "twist_noise", "force_noise", "delay")

@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from bhgrasp.controllers import PDGravity, WorkspaceComputedTorque
-from bhgrasp.controllers.impedance import ImpedanceController, PositionImpedance
+from bhgrasp.controllers.impedance import PositionImpedance
+from bhgrasp.controllers.impedance_controller import ImpedanceController
 from bhgrasp.data import State, Trajectory
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.motion.trajectories import Constant, Quintic

@@ -12,13 +12,13 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp.controllers import WorkspaceComputedTorque
+from bhgrasp.controllers.adaptive_impedance import AdaptiveForceImpedance
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.impedance import (
-    AdaptiveForceImpedance,
     ForceImpedance,
-    ImpedanceController,
     PositionImpedance,
 )
+from bhgrasp.controllers.impedance_controller import ImpedanceController
 from bhgrasp.model.hand import BarrettHand
 from bhgrasp.model.objects import Box
 from bhgrasp.model.spring_mounted import SpringMounted

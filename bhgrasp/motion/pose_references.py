@@ -1,0 +1,104 @@
+"""References of a rigid-body pose: a minimum-jerk motion by a world offset, and an SE(3) path followed in time."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp._validation import as_positive, as_real, as_vector
+from bhgrasp.errors import InputError
+from bhgrasp.motion.trajectories import Reference, Sample, minimum_jerk, time_of
+
+
+class PoseMotion(Reference):
+    """Minimum-jerk motion of a rigid-body pose by a world offset: the object reference of the grasp supervisor.
+
+    With the minimum-jerk blend b(t) of :class:`Quintic` (0 -> 1 over ``duration`` after ``delay``):
+    ``x(t) = x_0 + b dx`` and ``R(t) = exp(b dtheta) R_0`` (a rotation about the fixed world axis of
+    ``dtheta``).  The sample is (x [m], rotation vector log(R) [rad]); the velocity and acceleration are the world
+    twist (v [m/s], omega [rad/s]) and its derivative, omega = b' dtheta, which is what the object-space
+    controllers read.  (Adding ``dtheta`` to the rotation vector of R_0 instead, as a :class:`Quintic` on the six
+    components would, turns about the wrong axis unless R_0 = I.)
+    """
+
+    def __init__(self, start: Any, offset: Any, duration: float, delay: float = 0.0) -> None:
+        """Build the motion.
+
+        Args:
+            start: Initial pose as a ``pinocchio.SE3`` (world <- body).
+            offset: (dx [m], dtheta [rad]): translation and rotation vector of the change, world.
+            duration: Time of the motion [s] > 0.
+            delay: Start time [s] >= 0.
+        """
+        if not isinstance(start, pin.SE3):
+            raise InputError(f"`start` must be a pinocchio.SE3, got {type(start).__name__}")
+        self.start = pin.SE3(start)
+        self.offset = as_vector(offset, "offset", 6)
+        self.duration, self.delay = as_positive(duration, "duration"), as_real(delay, "delay")
+
+    @property
+    def size(self) -> int:
+        """Six: position and rotation vector."""
+        return 6
+
+    def __call__(self, t: float) -> Sample:
+        """Pose (x, log R), twist (v, omega) and its derivative at time ``t`` [s]."""
+        s = min(max((time_of(t) - self.delay) / self.duration, 0.0), 1.0)  # the blend of Quintic(0, 1, ...), in floats
+        blend, rate, curvature = minimum_jerk(s)
+        rate, curvature = rate / self.duration, curvature / (self.duration * self.duration)
+        rotation = pin.exp3(blend * self.offset[3:]) @ self.start.rotation
+        position = np.concatenate((self.start.translation + blend * self.offset[:3], pin.log3(rotation)))
+        return position, rate * self.offset, curvature * self.offset
+
+
+class PosePath(Reference):
+    """Back-to-back minimum-jerk moves of a rigid-body pose: waypoints joined at rest.
+
+    E.g. a wrist's approach, lift, hold and place.
+    Move i starts when move i-1 ends (the first after ``delay``) and changes the pose by its world offset (dx [m],
+    dtheta [rad]) as :class:`PoseMotion` does; a zero offset is a pause.  The sample and its derivatives are
+    :class:`PoseMotion`'s, from the pose the earlier moves reached; every move starts and ends at rest, so the
+    path is C2 at the joins.
+    """
+
+    def __init__(self, start: Any, moves: Any, delay: float = 0.0) -> None:
+        """Build the path.
+
+        Args:
+            start: Initial pose, a ``pinocchio.SE3`` (world <- body).
+            moves: Sequence of (offset (6,), duration [s] > 0).
+            delay: Start time of the first move [s] >= 0.
+        """
+        if not isinstance(start, pin.SE3):
+            raise InputError(f"`start` must be a pinocchio.SE3, got {type(start).__name__}")
+        moves = list(moves)
+        if not moves:
+            raise InputError("`moves` must hold at least one (offset, duration) pair")
+        self.segments: list[PoseMotion] = []
+        pose, begin = pin.SE3(start), as_real(delay, "delay")
+        for i, move in enumerate(moves):
+            if len(move) != 2:
+                raise InputError(f"`moves[{i}]` must be an (offset (6,), duration [s]) pair, got {move!r}")
+            offset, duration = as_vector(move[0], f"moves[{i}] offset", 6), as_positive(move[1], f"moves[{i}] duration")
+            self.segments.append(PoseMotion(pose, offset, duration, begin))
+            pose = pin.SE3(pin.exp3(offset[3:]) @ pose.rotation, pose.translation + offset[:3])
+            begin += duration
+        self.end_time, self.end = begin, pose
+
+    @property
+    def size(self) -> int:
+        """Six: position and rotation vector."""
+        return 6
+
+    def __call__(self, t: float) -> Sample:
+        """Pose (x, log R), world twist and its derivative at time ``t`` [s]."""
+        t = time_of(t)
+        for segment in self.segments:
+            if t < segment.delay + segment.duration:
+                return segment(t)
+        return self.segments[-1](t)
+
+
+__all__ = ["PoseMotion", "PosePath"]
