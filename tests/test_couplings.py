@@ -363,7 +363,7 @@ def test_coupled_trees_pinocchio_cannot_compute_are_refused_by_name(tmp_path, ha
 def test_a_negative_multiplier_and_the_finger_maps(tmp_path, hand):
     """The twin's speed limits are magnitudes (|multiplier| x the source's); contact sensing puts a mimic joint's
     link on its own finger; the opposition search, one IK per finger, refuses a coupled hand by name."""
-    from bhgrasp.grasp.opposition import knuckles
+    from bhgrasp.grasp.pad_placement import knuckles
     from bhgrasp.grasp.sensing import ContactSensing
 
     path = tmp_path / "mirror.urdf"

@@ -17,8 +17,9 @@ from urdf_parts import rod
 
 import bhgrasp as bh
 from bhgrasp.grasp.metrics import finger_normal_forces
-from bhgrasp.grasp.opposition import TOLERANCE, first_hit, opposed_grasp, opposed_grasps, pad_radii
-from bhgrasp.grasp.probes import ObjectProbe
+from bhgrasp.grasp.opposition import opposed_grasp, opposed_grasps
+from bhgrasp.grasp.pad_placement import pad_radii
+from bhgrasp.grasp.probes import TRACE_TOLERANCE, ObjectProbe, first_hit
 from bhgrasp.scenarios.object_grasp import object_grasp, run_object_grasp
 
 KNUCKLES = {  # finger -> knuckle x, y [m] on the palm, and the sign of its joint axes along y (-1 closes toward -x)
@@ -92,11 +93,11 @@ def test_traced_lines_meet_the_closed_forms() -> None:
     start = centre + offset + np.array([0.2, 0.0, 0.0])
     point, normal = first_hit(probe, start, np.array([-1.0, 0.0, 0.0]), 0.5)
     expected = centre + offset + np.array([np.sqrt(radius**2 - offset @ offset), 0.0, 0.0])
-    np.testing.assert_allclose(point, expected, atol=TOLERANCE)
+    np.testing.assert_allclose(point, expected, atol=TRACE_TOLERANCE)
     np.testing.assert_allclose(normal, (expected - centre) / radius, atol=1e-3)
     box_probe = ObjectProbe(BOX.geometry(), BOX.pose)
     point, normal = first_hit(box_probe, np.array([-0.2, 0.01, 0.11]), np.array([1.0, 0.0, 0.0]), 0.5)
-    np.testing.assert_allclose(point, [-0.025, 0.01, 0.11], atol=TOLERANCE)
+    np.testing.assert_allclose(point, [-0.025, 0.01, 0.11], atol=TRACE_TOLERANCE)
     np.testing.assert_allclose(normal, [-1.0, 0.0, 0.0], atol=1e-9)
     assert first_hit(box_probe, np.array([-0.2, 0.05, 0.11]), np.array([1.0, 0.0, 0.0]), 0.5) is None  # passes by
     assert first_hit(box_probe, BOX.pose.translation, np.array([1.0, 0.0, 0.0]), 0.5) is None  # starts inside

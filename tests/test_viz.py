@@ -11,7 +11,8 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.scenarios.hold import reference_hold
-from bhgrasp.viz import MAX_FPS, LiveView, SceneViewer, _contact_overlays, _frame_samples
+from bhgrasp.viz import MAX_FPS, LiveView, SceneViewer
+from bhgrasp.viz.drawing import contact_overlays, frame_samples
 
 
 @pytest.fixture(scope="module")
@@ -46,7 +47,7 @@ def test_placements_match_the_scene_collision_geometry(held):
 
 def test_contact_overlays_draw_the_force_and_the_friction_cone():
     point, normal, force = np.array([0.1, 0.0, 0.2]), np.array([0.0, 1.0, 0.0]), np.array([0.3, 4.0, 0.0])
-    overlays = _contact_overlays(point, normal, force, True, force_scale=0.01, mu=0.5)
+    overlays = contact_overlays(point, normal, force, True, force_scale=0.01, mu=0.5)
     transform, scale, visible = overlays["stick"]
     assert visible and not overlays["slip"][2]
     length = scale[1]
@@ -61,7 +62,7 @@ def test_contact_overlays_draw_the_force_and_the_friction_cone():
 
 def test_frames_are_decimated_to_at_most_60_per_second():
     t = np.arange(0.0, 2.0 + 1e-9, 1e-3)
-    frames = _frame_samples(t, 30.0)
+    frames = frame_samples(t, 30.0)
     assert len(frames) == 61 and frames[0] == 0 and frames[-1] == len(t) - 1
     np.testing.assert_allclose(np.diff(t[frames]), 1.0 / 30.0, atol=1e-3)
     assert MAX_FPS == 60.0
@@ -134,11 +135,11 @@ def test_live_view_keeps_real_time(held, monkeypatch, frame_cost: float, step_co
     """A run faster than real time waits for the wall clock; frames that cost more than their period are dropped so
     the view stays within a frame or two of real time; a run slower than real time still shows >= 4 frames a second.
     (The demo's live view simulated 3 s in 68 s of wall time: a frame cost ~0.45 s and none was dropped.)"""
-    import bhgrasp.viz
+    import bhgrasp.viz.live_view
 
     *_, viewer = held
     clock = FakeClock()
-    monkeypatch.setattr(bhgrasp.viz, "time", clock)
+    monkeypatch.setattr(bhgrasp.viz.live_view, "time", clock)
     shown: list[float] = []
 
     def display(state) -> None:

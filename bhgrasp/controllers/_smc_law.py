@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp._native import required_core
 from bhgrasp._validation import as_array, as_vector
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.forces import solver_arguments
@@ -217,3 +218,43 @@ class CompiledSMCLaw:
         else:
             as_vector(out[self._wrench], "wrench", 6)
         raise InputError(f"{type(law).__name__}: the compiled law found non-finite values (status {status})")
+
+
+def compiled_state(law: Any, state: dict) -> dict:
+    """``state`` (a copy of ``law.__dict__``) for pickling an SMC-adaptive law, its compiled kernel left out.
+
+    :func:`restore_compiled` rebuilds the kernel; refused once the law has run grasp cycles since its reset.
+    """
+    compiled = state["_compiled"]
+    if compiled is not None:
+        if law._time is not None:
+            raise InputError(
+                "a compiled SMCAdaptiveGrasp that has run grasp cycles cannot be copied or pickled (its force "
+                "integrals and QP warm starts live in C++): call reset() first, or use engine='python'"
+            )
+        state.update(_compiled=None, _object_estimate=compiled.kernel.object_estimate, _rebuild=True)
+    return state
+
+
+def restore_compiled(law: Any, state: dict) -> None:
+    """Restore ``law`` from :func:`compiled_state`'s ``state``, building its own compiled kernel if it had one."""
+    rebuild = state.pop("_rebuild", False)
+    law.__dict__.update(state)
+    if rebuild:
+        estimate = law._object_estimate
+        law._compiled = CompiledSMCLaw(law, required_core("the compiled SMC-adaptive law"))
+        law.object_estimate = estimate
+
+
+def uncovered_options(law: Any, base: type) -> str:
+    """The options of ``law`` (an SMC-adaptive law; ``base`` its class) the compiled law does not cover ('' if none)."""
+    overridden = [
+        name
+        for name in ("grasp_torques", "distribute", "errors", "target", "touching")
+        if getattr(type(law), name) is not getattr(base, name)
+    ]
+    return ", ".join(
+        [f"hand_adaptation={law.hand_adaptation}"] * (law.hand_adaptation is not None)
+        + [f"distribution={law.distribution!r}"] * (law.distribution != "qp")
+        + [f"a subclass overriding {name}" for name in overridden]
+    )

@@ -38,7 +38,7 @@ import numpy as np
 
 from bhgrasp._native import engine_name, required_core
 from bhgrasp._validation import as_positive, as_real, as_vector
-from bhgrasp.controllers._smc_law import CompiledSMCLaw
+from bhgrasp.controllers._smc_law import CompiledSMCLaw, compiled_state, restore_compiled, uncovered_options
 from bhgrasp.controllers.base import gain_vector
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
 from bhgrasp.controllers.object_identification import ObjectIdentification
@@ -149,47 +149,20 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         self.identification = identification
         if identification is not None:
             identification.bind(nominal, self.object_adaptation)
-        uncovered = self._python_only()
+        uncovered = uncovered_options(self, SMCAdaptiveGrasp)
         if engine == "compiled" and uncovered:
             raise InputError(f"engine='compiled' does not cover {uncovered}; pass engine='python' (or None)")
         if chosen == "compiled" and not uncovered:
             self._compiled = CompiledSMCLaw(self, required_core("the compiled SMC-adaptive law"))
         self.engine = "python" if self._compiled is None else "compiled"
 
-    def _python_only(self) -> str:
-        """The options the compiled law does not cover ('' if none)."""
-        overridden = [
-            name
-            for name in ("grasp_torques", "distribute", "errors", "target", "touching")
-            if getattr(type(self), name) is not getattr(SMCAdaptiveGrasp, name)
-        ]
-        return ", ".join(
-            [f"hand_adaptation={self.hand_adaptation}"] * (self.hand_adaptation is not None)
-            + [f"distribution={self.distribution!r}"] * (self.distribution != "qp")
-            + [f"a subclass overriding {name}" for name in overridden]
-        )
-
     def __getstate__(self) -> dict:
         """Copies and pickles rebuild the compiled law; refused once it has run grasp cycles since :meth:`reset`."""
-        state = self.__dict__.copy()
-        compiled = state["_compiled"]
-        if compiled is not None:
-            if self._time is not None:
-                raise InputError(
-                    "a compiled SMCAdaptiveGrasp that has run grasp cycles cannot be copied or pickled (its force "
-                    "integrals and QP warm starts live in C++): call reset() first, or use engine='python'"
-                )
-            state.update(_compiled=None, _object_estimate=compiled.kernel.object_estimate, _rebuild=True)
-        return state
+        return compiled_state(self, self.__dict__.copy())
 
     def __setstate__(self, state: dict) -> None:
         """Restore a copy, building its own compiled law if the original had one."""
-        rebuild = state.pop("_rebuild", False)
-        self.__dict__.update(state)
-        if rebuild:
-            estimate = self._object_estimate
-            self._compiled = CompiledSMCLaw(self, required_core("the compiled SMC-adaptive law"))
-            self.object_estimate = estimate
+        restore_compiled(self, state)
 
     @property
     def object_estimate(self) -> np.ndarray:

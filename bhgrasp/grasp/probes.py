@@ -21,6 +21,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.model.hand import Hand
 
 SURFACE_TOLERANCE = 1e-5  # [m] the ray's bisection
+TRACE_TOLERANCE = 1e-5  # [m] how close to the surface a traced line stops
 
 
 class ObjectProbe:
@@ -164,4 +165,40 @@ def pressed_face(shape: coal.CollisionGeometry, rotation: np.ndarray, normal: An
     return f"{'+' if outward[axis] >= 0 else '-'}{'xyz'[axis]}"
 
 
-__all__ = ["SURFACE_TOLERANCE", "HandClearance", "ObjectProbe", "coal_transform", "contact_geometries", "pressed_face"]
+def first_hit(probe: ObjectProbe, start: np.ndarray, direction: np.ndarray, reach: float) -> tuple | None:
+    """The first surface point of a convex object along ``start + t direction`` (0 <= t <= reach), and its normal.
+
+    Sphere tracing: each step is the distance to the surface.  ``None`` if the line misses (or starts inside).
+    """
+    t = 0.0
+    for _ in range(200):
+        point = start + t * direction
+        distance, nearest = probe.distance(point)
+        if distance < 0.0:
+            return None  # started inside
+        if distance < TRACE_TOLERANCE:
+            normal = point - nearest
+            return nearest, normal / float(np.linalg.norm(normal))
+        t += distance - 0.5 * TRACE_TOLERANCE  # stop outside, where the nearest point gives the normal
+        if t > reach:
+            return None
+    return None
+
+
+def bounding_radius(shape: coal.ShapeBase) -> float:
+    """The radius [m] of the sphere about ``shape``'s origin that holds its bounding box."""
+    shape.computeLocalAABB()
+    return float(np.linalg.norm(np.maximum(np.abs(shape.aabb_local.min_), np.abs(shape.aabb_local.max_))))
+
+
+__all__ = [
+    "SURFACE_TOLERANCE",
+    "TRACE_TOLERANCE",
+    "HandClearance",
+    "ObjectProbe",
+    "bounding_radius",
+    "coal_transform",
+    "contact_geometries",
+    "first_hit",
+    "pressed_face",
+]

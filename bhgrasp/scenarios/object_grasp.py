@@ -27,10 +27,11 @@ from bhgrasp._validation import as_positive
 from bhgrasp.controllers.motor_commands import MotorCommands
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.data import State
+from bhgrasp.grasp.candidates import GraspCandidate
 from bhgrasp.grasp.clearance import check_clearance
 from bhgrasp.grasp.manipulability import ManipulableSpace, manipulable_space
 from bhgrasp.grasp.opposition import opposed_grasp
-from bhgrasp.grasp.synthesis import GraspCandidate, synthesize
+from bhgrasp.grasp.synthesis import synthesize
 from bhgrasp.model.hand import BarrettHand, Hand
 from bhgrasp.model.objects import Box, Cylinder, FixedBox, Sphere
 from bhgrasp.scenarios.box_grasp import CONTACT_HEIGHT, FRICTION, JOINT_DAMPING, STIFFNESS

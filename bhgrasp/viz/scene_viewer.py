@@ -1,29 +1,10 @@
-"""MeshCat views of a scene: live display, overlays, animated replays and self-contained HTML export.
-
-A thin layer over :class:`pinocchio.visualize.MeshcatVisualizer` (which loads the scene's hand, objects and fixed
-environment from its collision geometry, all primitives for the packaged Barrett hand).  The MeshCat server runs
-on 127.0.0.1 and no browser is opened unless asked (``open=True``).  The object is drawn translucent so that the
-contact forces and cones inside it show; a light plate marks the ground (world z = 0); the camera frames the
-first object.  Overlays:
-
-- contact force arrows (force on the object, ``force_scale`` [m/N]), green while sticking, red while sliding;
-- friction cones at the contacts (apex at the contact point, axis along the normal, half-angle atan(mu));
-- the object's desired pose (a translucent ghost) from a grasp controller's logged ``object_error``;
-- fingertip references (small spheres) from a joint controller's logged ``q_d``.
-
-:meth:`SceneViewer.replay` turns a recorded :class:`~bhgrasp.data.trajectory.Trajectory` into a MeshCat animation
-decimated to at most 60 frames per second that loops endlessly (in the live viewer and in the exported page alike);
-:meth:`SceneViewer.save_html` writes the scene and its animation as one HTML file that works offline (meshcat's
-``static_html``: the JavaScript is inlined).  ``bhgrasp.viz`` is not imported by ``import bhgrasp``.
-"""
+"""The scene viewer: a scene in MeshCat, its states displayed, its recorded runs replayed and saved as HTML."""
 
 from __future__ import annotations
 
 import contextlib
 import html
 import io
-import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -35,21 +16,12 @@ from meshcat.animation import Animation
 from pinocchio.visualize import MeshcatVisualizer
 
 from bhgrasp._validation import as_positive
-from bhgrasp.controllers.base import Controller
 from bhgrasp.data import State, Trajectory
 from bhgrasp.errors import InputError
-from bhgrasp.model.objects import Box, Capsule, Cylinder, RigidObject, Sphere
 from bhgrasp.sim.scene import Scene
+from bhgrasp.viz import drawing
 
-MAX_FPS = 60.0
-LOOP_FOREVER = float("inf")  # replay repetitions (msgpack float64 inf: JavaScript's Infinity)
-ROOT = "bhgrasp"
-HAND_RGBA = (0.55, 0.57, 0.62, 1.0)
-OBJECT_RGBA = (0.95, 0.55, 0.15, 0.45)  # translucent: the contact forces and cones inside it stay visible
-ENVIRONMENT_RGBA = (0.45, 0.35, 0.25, 1.0)
 STICK, SLIP, CONE, GHOST, TIP = 0x22AA44, 0xDD2222, 0x3377FF, 0xFFAA33, 0xAA33FF
-CONE_HEIGHT = 0.015  # [m] drawn friction cones
-DISPLAY_FORCE_SCALE = 0.005  # [m/N] arrows of display()
 GROUND, GROUND_SIZE = 0xD8D8D0, 0.4  # colour, edge [m] of the ground plate
 CAMERA_TARGET = (0.0, 0.0, 0.15)  # [m] between the Barrett hand's fingers (a scene without objects)
 CAMERA_OFFSET = (0.12, -0.17, 0.09)  # [m] camera position relative to its target: the grasp fills the frame
@@ -90,16 +62,17 @@ class SceneViewer:
         self.visualizer = MeshcatVisualizer(scene.model, geometry, geometry)
         with contextlib.redirect_stdout(io.StringIO()) if quiet else contextlib.nullcontext():
             self.visualizer.initViewer(viewer=viewer, open=open, zmq_url=zmq_url)  # meshcat prints its address
-        self.visualizer.loadViewerModel(rootNodeName=ROOT)
+        self.visualizer.loadViewerModel(rootNodeName=drawing.ROOT)
         self.viewer: meshcat.Visualizer = self.visualizer.viewer
         self._overlays_loaded = False
         self._overlay_visible: dict[str, bool] = {}  # what display() last set of each contact overlay
         self.viewer["/Grid"].set_property("visible", False)
         self.viewer["/Axes"].set_property("visible", False)
-        ground = self.viewer[f"{ROOT}/ground"]  # a ground reference: a light plate at world z = 0 (the hand's base)
+        # a ground reference: a light plate at world z = 0 (the hand's base)
+        ground = self.viewer[f"{drawing.ROOT}/ground"]
         plate = mg.MeshLambertMaterial(color=GROUND, opacity=0.7, transparent=True)
         ground.set_object(mg.Box([GROUND_SIZE, GROUND_SIZE, 0.001]), plate)
-        ground.set_transform(_translation([0.0, 0.0, -0.0005]))
+        ground.set_transform(drawing.translation([0.0, 0.0, -0.0005]))
         first = scene.objects[0] if scene.objects else None
         first = getattr(first, "body", first)  # a spring-mounted object's rest pose is its body's
         target = np.asarray(CAMERA_TARGET if first is None else first.pose.translation, dtype=float)
@@ -113,16 +86,16 @@ class SceneViewer:
         """
         target = np.asarray(target, dtype=float)
         offset = np.asarray(position, dtype=float) - target
-        self.viewer[ROOT].set_transform(_translation(-target))
+        self.viewer[drawing.ROOT].set_transform(drawing.translation(-target))
         # the camera node's frame is three.js's (y up): world (x, y, z) is (x, z, -y) there
         self.viewer["/Cameras/default/rotated/<object>"].set_property("position", [offset[0], offset[2], -offset[1]])
 
     def _colour(self, index: int) -> tuple[float, float, float, float]:
         if index in self.scene.object_geometries:
-            return OBJECT_RGBA
+            return drawing.OBJECT_RGBA
         if index in self.scene.environment_geometries:
-            return ENVIRONMENT_RGBA
-        return HAND_RGBA
+            return drawing.ENVIRONMENT_RGBA
+        return drawing.HAND_RGBA
 
     @property
     def url(self) -> str:
@@ -158,11 +131,11 @@ class SceneViewer:
                 point, normal, force = contacts[slot]
                 normal_force = float(force @ normal)
                 sliding = np.linalg.norm(force - normal_force * normal) >= 0.999 * mu * normal_force
-                overlays = _contact_overlays(point, normal, force, not sliding, DISPLAY_FORCE_SCALE, mu)
+                overlays = drawing.contact_overlays(point, normal, force, not sliding, drawing.DISPLAY_FORCE_SCALE, mu)
             else:
-                overlays = _hidden_overlays()
+                overlays = drawing.hidden_overlays()
             for name, (transform, scale, visible) in overlays.items():
-                path = f"{ROOT}/contacts/{slot}/{name}"
+                path = f"{drawing.ROOT}/contacts/{slot}/{name}"
                 shown = self._overlay_visible.get(path)  # None: not known (after a replay)
                 if not visible and shown is False:
                     continue  # hidden and still hidden: nothing to send (a message costs ~1 ms)
@@ -180,7 +153,7 @@ class SceneViewer:
         if self._overlays_loaded:
             return
         for slot in range(self.max_contacts):
-            base = self.viewer[f"{ROOT}/contacts/{slot}"]
+            base = self.viewer[f"{drawing.ROOT}/contacts/{slot}"]
             arrow = mg.Cylinder(1.0, 0.0015)
             base["stick"].set_object(arrow, mg.MeshLambertMaterial(color=STICK))
             base["slip"].set_object(arrow, mg.MeshLambertMaterial(color=SLIP))
@@ -188,7 +161,7 @@ class SceneViewer:
             base["cone"].set_object(cone, mg.MeshLambertMaterial(color=CONE, opacity=0.25, transparent=True))
             for name in ("stick", "slip", "cone"):
                 base[name].set_property("visible", False)
-                self._overlay_visible[f"{ROOT}/contacts/{slot}/{name}"] = False
+                self._overlay_visible[f"{drawing.ROOT}/contacts/{slot}/{name}"] = False
         self._overlays_loaded = True
 
     def replay(
@@ -211,12 +184,12 @@ class SceneViewer:
             play: Start playing at once (otherwise the viewer's Animations/play control starts it); either way the
                 replay loops: clip time t shows the run at ``traj.t[0] + t`` and wraps to 0 after the last frame.
         """
-        fps = _checked_fps(fps)
+        fps = drawing.checked_fps(fps)
         force_scale = as_positive(force_scale, "force_scale")
         if len(traj) < 1:
             raise InputError("`traj` has no samples")
         mu = self._friction() if mu is None else as_positive(mu, "mu")
-        frames = _frame_samples(traj.t, fps)
+        frames = drawing.frame_samples(traj.t, fps)
         self._load_overlays()
         ghost = self._load_ghost(traj)
         tips = self._load_tips(traj)
@@ -224,17 +197,17 @@ class SceneViewer:
         nodes = [self.node(index) for index in range(self._geometry.ngeoms)]
         for frame, k in enumerate(frames):
             with animation.at_frame(self.viewer, frame) as view:
-                poses = _object_poses(traj, k)
+                poses = drawing.object_poses(traj, k)
                 for node, transform in zip(nodes, self.placements(traj.q[k], poses)):
                     view[node].set_transform(transform)
                 self._animate_contacts(view, traj, k, force_scale, mu, cones)
                 if ghost:
-                    _animate_ghost(view, traj, k, poses)
+                    drawing.animate_ghost(view, traj, k, poses)
                 if tips:
                     self._animate_tips(view, traj, k)
         # three.js LoopRepeat with `repetitions` passes through the clip's end: Infinity loops for ever (a finite
         # count, 0 included, stops at the end and meshcat's animator then pauses and rewinds to the first frame)
-        self.viewer.set_animation(animation, play=play, repetitions=LOOP_FOREVER)
+        self.viewer.set_animation(animation, play=play, repetitions=drawing.LOOP_FOREVER)
         self._overlay_visible.clear()  # the animation sets the overlays' visibility: display() sends it anew
         return animation
 
@@ -245,11 +218,11 @@ class SceneViewer:
             if slot < count:
                 point, force = contacts["point"][slot], contacts["force"][slot]
                 normal, sticking = contacts["normal"][slot], bool(contacts["sticking"][slot])
-                overlays = _contact_overlays(point, normal, force, sticking, force_scale, mu)
+                overlays = drawing.contact_overlays(point, normal, force, sticking, force_scale, mu)
             else:
-                overlays = _hidden_overlays()
+                overlays = drawing.hidden_overlays()
             for name, (transform, scale, visible) in overlays.items():
-                node = view[f"{ROOT}/contacts/{slot}/{name}"]
+                node = view[f"{drawing.ROOT}/contacts/{slot}/{name}"]
                 node.set_transform(transform)  # animation tracks carry position and rotation; scale on its own
                 node.set_property("scale", "vector3", list(scale))
                 node.set_property("visible", "boolean", bool(visible and (cones or name != "cone")))
@@ -257,18 +230,18 @@ class SceneViewer:
     def _load_ghost(self, traj: Trajectory) -> bool:
         if "object_error" not in traj.log or not self.scene.objects:
             return False
-        shape = _meshcat_shape(self.scene.objects[0])
+        shape = drawing.meshcat_shape(self.scene.objects[0])
         if shape is None:
             return False
         material = mg.MeshLambertMaterial(color=GHOST, opacity=0.3, transparent=True)
-        self.viewer[f"{ROOT}/desired_pose"].set_object(shape, material)
+        self.viewer[f"{drawing.ROOT}/desired_pose"].set_object(shape, material)
         return True
 
     def _load_tips(self, traj: Trajectory) -> bool:
         if "q_d" not in traj.log or traj.log["q_d"].shape[1] != self.scene.hand.nv:
             return False
         for finger in self.scene.hand.fingers:
-            self.viewer[f"{ROOT}/tip_references/{finger}"].set_object(
+            self.viewer[f"{drawing.ROOT}/tip_references/{finger}"].set_object(
                 mg.Sphere(0.004), mg.MeshLambertMaterial(color=TIP)
             )
         return True
@@ -278,8 +251,8 @@ class SceneViewer:
         visible = bool(np.all(np.isfinite(q_d)))
         tips = self.scene.hand.fingertip_positions(q_d) if visible else np.zeros((len(self.scene.hand.fingers), 3))
         for finger, tip in zip(self.scene.hand.fingers, tips):
-            node = view[f"{ROOT}/tip_references/{finger}"]
-            node.set_transform(_translation(tip))
+            node = view[f"{drawing.ROOT}/tip_references/{finger}"]
+            node.set_transform(drawing.translation(tip))
             node.set_property("visible", "boolean", visible)
 
     def static_html(self) -> str:
@@ -319,169 +292,4 @@ def save_replay(scene: Scene, trajectory: Trajectory, path: str | Path) -> Path:
         viewer.close()
 
 
-class LiveView(Controller):
-    """Wrap a controller so that the viewer shows the run as it goes, in real time.
-
-    Use it in place of the controller: ``sim.run(LiveView(controller, viewer), ...)``. A frame is shown at most
-    ``fps`` times per simulated second (looked at every ``every`` control calls). With ``realtime`` the run is paced
-    to the wall clock: a run faster than real time waits before each frame, and a frame that falls behind real time
-    by more than a frame period is skipped (but at least four frames are shown per second of wall time), so the view
-    keeps real time even when drawing a frame costs more than its period. ``fps=None`` shows every ``every``-th call.
-    """
-
-    MIN_WALL_RATE = 4.0  # [frames/s of wall time] shown even when the run falls behind real time
-
-    def __init__(
-        self,
-        controller: Callable[[float, State], Any],
-        viewer: SceneViewer,
-        every: int = 1,
-        fps: float | None = 30.0,
-        realtime: bool = True,
-    ) -> None:
-        """Wrap ``controller`` for ``viewer``.
-
-        Args:
-            controller: The controller to run.
-            viewer: Where the frames go.
-            every: Control calls between two looks at whether a frame is due.
-            fps: Frames per simulated second, at most 60; ``None``: every look shows a frame.
-            realtime: Pace the run to the wall clock (and skip frames that fall behind it).
-        """
-        super().__init__()
-        if not isinstance(viewer, SceneViewer):
-            raise InputError(f"`viewer` must be a SceneViewer, got {type(viewer).__name__}")
-        if int(every) < 1:
-            raise InputError(f"`every` must be a positive integer, got {every}")
-        fps = None if fps is None else _checked_fps(fps)
-        self.controller, self.viewer, self.every, self.fps = controller, viewer, int(every), fps
-        self.realtime = bool(realtime)
-        self.log = getattr(controller, "log", {})
-        self.shown = self.skipped = 0  # frames shown, and frames skipped to keep real time
-        self._calls = 0
-        self._start: tuple[float, float] | None = None  # (wall clock, simulated time) of the first frame
-        self._next = -np.inf  # simulated time of the next frame
-        self._last_wall = -np.inf  # wall clock of the last frame shown
-        self._behind = False  # a frame was dropped to keep real time: look at every call until one is shown
-
-    def reset(self, state: State) -> None:
-        """Reset the wrapped controller and the pacing (the next call shows a frame)."""
-        self._calls, self._start, self._next, self._last_wall, self._behind = 0, None, -np.inf, -np.inf, False
-        if hasattr(self.controller, "reset"):
-            self.controller.reset(state)
-
-    def __call__(self, t: float, state: State) -> np.ndarray:
-        """The wrapped controller's command; shows the state when a frame is due."""
-        if self._calls % self.every == 0 and self._frame_due(t):
-            self.viewer.display(state)
-            self._last_wall = time.perf_counter()
-            self.shown += 1
-        self._calls += 1
-        return self.controller(t, state)
-
-    def _frame_due(self, t: float) -> bool:
-        if self.fps is None:
-            return True
-        due = t >= self._next  # a frame's time has come (each counted once)
-        if not (due or self._behind):
-            return False
-        period = 1.0 / self.fps
-        if due:
-            self._next = t + period
-        if not self.realtime:
-            return True
-        now = time.perf_counter()
-        if self._start is None:
-            self._start = (now, t)
-        behind = (now - self._start[0]) - (t - self._start[1])  # [s] wall time past the simulated time
-        if behind < 0.0:
-            time.sleep(-behind)  # ahead of real time: wait for the wall clock
-        elif behind > period and now - self._last_wall < 1.0 / self.MIN_WALL_RATE:
-            self.skipped += due  # behind: drop this frame and look again at the next call
-            self._behind = True
-            return False
-        self._behind = False
-        return True
-
-
-def _checked_fps(fps: float) -> float:
-    """``fps`` [frames per simulated second] of a replay or a live view: positive and at most :data:`MAX_FPS`."""
-    fps = as_positive(fps, "fps")
-    if fps > MAX_FPS:
-        raise InputError(f"`fps` must be <= {MAX_FPS:g} (a set_transform costs ~0.2 ms per node), got {fps}")
-    return fps
-
-
-def _frame_samples(t: np.ndarray, fps: float) -> np.ndarray:
-    """Indices of the samples nearest to t0, t0 + 1/fps, ... up to the last sample."""
-    times = np.arange(t[0], t[-1] + 0.5 / fps, 1.0 / fps)
-    return np.unique(np.clip(np.searchsorted(t, times), 0, len(t) - 1))
-
-
-def _object_poses(traj: Trajectory, k: int) -> list[pin.SE3]:
-    poses = []
-    for position, quaternion in zip(traj.object_position[k], traj.object_quaternion[k]):
-        poses.append(pin.XYZQUATToSE3(np.concatenate((position, quaternion))))
-    return poses
-
-
-def _contact_overlays(point, normal, force, sticking: bool, force_scale: float, mu: float) -> dict[str, tuple]:
-    """(transform, scale, visible) of a contact's force arrow (stick or slip colour) and friction cone.
-
-    The arrow is the force on the object, from the contact point, ``force_scale`` [m/N] long per newton; the cone
-    has its apex at the point, its axis along the normal and radius mu * height (the friction cone's half-angle).
-    """
-    point, normal, force = (np.asarray(a, dtype=float) for a in (point, normal, force))
-    magnitude = float(np.linalg.norm(force))
-    direction = force / magnitude if magnitude > 1e-9 else normal
-    length = max(force_scale * magnitude, 1e-4)
-    arrow = _along(direction, point + 0.5 * length * direction)
-    cone = _along(normal, point + 0.5 * CONE_HEIGHT * normal)
-    return {
-        "stick": (arrow, (1.0, length, 1.0), sticking),
-        "slip": (arrow, (1.0, length, 1.0), not sticking),
-        "cone": (cone, (mu * CONE_HEIGHT, CONE_HEIGHT, mu * CONE_HEIGHT), True),
-    }
-
-
-def _hidden_overlays() -> dict[str, tuple]:
-    return dict.fromkeys(("stick", "slip", "cone"), (np.eye(4), (1.0, 1.0, 1.0), False))
-
-
-def _along(direction: np.ndarray, centre: np.ndarray) -> np.ndarray:
-    """A rigid transform whose local y axis (three.js cylinders' axis) points along ``direction``, at ``centre``."""
-    transform = np.eye(4)
-    transform[:3, :3] = pin.Quaternion.FromTwoVectors(np.array([0.0, 1.0, 0.0]), direction).toRotationMatrix()
-    transform[:3, 3] = centre
-    return transform
-
-
-def _translation(position: np.ndarray) -> np.ndarray:
-    transform = np.eye(4)
-    transform[:3, 3] = position
-    return transform
-
-
-def _animate_ghost(view, traj: Trajectory, k: int, poses: list[pin.SE3]) -> None:
-    error = traj.log["object_error"][k]
-    node = view[f"{ROOT}/desired_pose"]
-    if not (poses and np.all(np.isfinite(error))):
-        node.set_property("visible", "boolean", False)
-        return
-    pose = poses[0]
-    rotation = pin.exp3(-error[3:]) @ pose.rotation  # log(R R_d^T) = e_rot
-    node.set_transform(pin.SE3(rotation, pose.translation - error[:3]).homogeneous)
-    node.set_property("visible", "boolean", True)
-
-
-def _meshcat_shape(item: RigidObject) -> mg.Geometry | None:
-    if isinstance(item, Box):
-        return mg.Box(list(item.size))
-    if isinstance(item, Sphere):
-        return mg.Sphere(item.radius)
-    if isinstance(item, Cylinder | Capsule):
-        return None  # along z in coal, along y in three.js: not drawn as a ghost
-    return None
-
-
-__all__ = ["LiveView", "SceneViewer", "save_replay"]
+__all__ = ["CAMERA_OFFSET", "CAMERA_TARGET", "SceneViewer", "save_replay"]
