@@ -105,7 +105,7 @@ KERNELS = (
 DATA = (
     Twin("Settings", "bhgrasp.sim.settings.SimulatorSettings", _STEP),
     Twin("ContactLaw", "bhgrasp.sim.contact_law.SpringDamper", "tests/test_compiled.py::test_tanh_friction_law"),
-    Twin("Pair", "bhgrasp.sim.scene.CollisionPair", _STEP),
+    Twin("Pair", "bhgrasp.sim.collision_pair.CollisionPair", _STEP),
     Twin("Query", "bhgrasp.sim.contact.ContactEngine", _STEP),
     Twin("Spinning", "bhgrasp.sim.scene_layout.SceneLayout", "tests/test_compiled.py::test_free_flight_with_spin"),
     Twin(

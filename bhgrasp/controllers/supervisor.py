@@ -34,8 +34,8 @@ from bhgrasp.controllers.joint import ComputedTorque
 from bhgrasp.data import State
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.grasp.manipulability import manipulable_space
-from bhgrasp.grasp.path_check import TOLERANCE as PATH_TOLERANCE
 from bhgrasp.grasp.path_check import path_contacts
+from bhgrasp.grasp.path_result import TOLERANCE as PATH_TOLERANCE
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
 from bhgrasp.motion.pose_references import PoseMotion
@@ -117,7 +117,7 @@ class GraspSupervisor(Controller):
                 :class:`~bhgrasp.errors.UnreachableError`, naming the part of it the fingers cannot make; ``None``
                 tracks any plan.
             path_tolerance: With ``object_shape``: how near [m] another part of a finger may come to the object along
-                the planned motion (:data:`~bhgrasp.grasp.path_check.TOLERANCE`).
+                the planned motion (:data:`~bhgrasp.grasp.path_result.TOLERANCE`).
         """
         super().__init__()
         if not isinstance(grasp, ObjectGraspController):

@@ -43,7 +43,8 @@ from bhgrasp.grasp.kinematics import (
 )
 from bhgrasp.grasp.manipulability import ManipulableSpace, describe, manipulable_space
 from bhgrasp.grasp.metrics import finger_normal_forces, finger_of, slip_events
-from bhgrasp.grasp.path_check import PathContacts, PathTouch, path_contacts, sensed_path_contacts
+from bhgrasp.grasp.path_check import path_contacts, sensed_path_contacts
+from bhgrasp.grasp.path_result import PathContacts, PathTouch
 from bhgrasp.grasp.quality import (
     CLOSURE_TOLERANCE,
     LP_TOLERANCE,

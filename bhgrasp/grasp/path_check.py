@@ -16,8 +16,8 @@ longer hold its tangential load.  :func:`path_contacts` foresees that before the
    (5.19)), n_i the normal into the object and the last term holding each pad's signed gap g_i at its start value
    (the squeeze's penetration).  What the joints cannot make accumulates as a drift [m]: the sliding the path needs.
 3. At each step coal's signed distance between every other hand collision geometry and the object: one that comes
-   within ``tolerance`` (:data:`TOLERANCE`) is a new contact (:class:`PathTouch`); a joint outside its limits is
-   reported too.
+   within ``tolerance`` (:data:`~bhgrasp.grasp.path_result.TOLERANCE`) is a new contact
+   (:class:`~bhgrasp.grasp.path_result.PathTouch`); a joint outside its limits is reported too.
 
 Cost: ``steps + 1`` kinematics passes and (number of hand geometries) distance queries per step, a few milliseconds.
 """
@@ -25,7 +25,6 @@ Cost: ``steps + 1`` kinematics passes and (number of hand geometries) distance q
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import coal
@@ -34,121 +33,15 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_array, as_real, as_vector
 from bhgrasp.data import State
-from bhgrasp.errors import InputError, UnreachableError
+from bhgrasp.errors import InputError
+from bhgrasp.grasp.path_result import TOLERANCE, PathContacts, PathTouch
 from bhgrasp.grasp.probes import coal_transform, contact_geometries, pressed_face
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
 
-TOLERANCE = 2e-4  # [m] signed distance below which another geometry counts as meeting the object: a margin for
-# what the path model leaves out (it holds each pad's gap at its start, while the pads sink further as their forces
-# change: 0.1 mm per newton at the chapter-5 scene's 10 kN/m).  Chosen between two measurements in that scene: a
-# 0.15 rad turn of the synthesised ball grasp about y kept 0.036 mm here and F1's distal link body touched the ball
-# (0.27 N, sliding); the closest path that then ran clean kept 0.30 mm.  A stiffer scene may take less
-# (GraspSupervisor(path_tolerance=...))
 LIMIT_TOLERANCE = 2e-3  # [rad] joint motion past a limit that counts as leaving it: 0.2 mm at a 0.1 m lever, the
 # first-order check's sliding tolerance (a joint held on its stop that far makes its contact slide no more than that)
 STEPS = 40  # path steps: 0.025 of the blend, 7.5 mrad of a 0.3 rad turn
-
-
-@dataclass(frozen=True)
-class PathTouch:
-    """Where a hand geometry other than a planned contact first comes within the tolerance of the object.
-
-    Attributes:
-        fraction: Path blend b in [0, 1] (the minimum-jerk blend, not time) of the first touching step.
-        angle: Object rotation [rad] reached there, b |dtheta|.
-        geometry: The hand collision geometry's name (e.g. ``F3_distal_link_0``: the distal link's body).
-        link: The frame it hangs on.
-        face: The object's face it meets (``"+y"``: the box face normal to its +y axis; "" for another shape).
-        distance: Its signed distance [m] to the object there (negative: penetration).
-        point: (3,) the witness point on the hand geometry [m], world, at that step.
-        spacing: Distance [m] from that point to the nearest planned contact on the same joint (inf if none).
-    """
-
-    fraction: float
-    angle: float
-    geometry: str
-    link: str
-    face: str
-    distance: float
-    point: np.ndarray
-    spacing: float
-
-    def __repr__(self) -> str:
-        where = f"{self.geometry} on {self.face or 'the object'} at b={self.fraction:.3f} ({self.angle:.3f} rad)"
-        return f"PathTouch({where}, {1e3 * self.distance:.2f} mm, {1e3 * self.spacing:.1f} mm from its pad)"
-
-
-@dataclass(frozen=True)
-class PathContacts:
-    """The fingers along an object motion with rolling, non-slipping contacts, and what they meet (world frame).
-
-    Attributes:
-        fractions: (k,) path blends b of the steps, 0 to 1.
-        q: (k, nq) joint positions [rad] at each step.
-        gaps: (k, n) each planned contact's signed gap [m] (held at its start value).
-        drift: (k, n) per contact, the accumulated |J dq - demand| [m]: the sliding the joints leave (second order).
-        clearance: (k, m) signed distance [m] of each other hand geometry to the object.
-        geometries: The m other geometries' names (every hand geometry but the planned contacts').
-        touches: Where each geometry first comes within ``tolerance`` of the object (:class:`PathTouch`), in path
-            order.
-        limit: (fraction, joint) where a joint first leaves its limits, ``None`` if none does.
-        offset: The motion (dx [m], dtheta [rad]), world; contacts: a name per contact.
-        tolerance: The signed distance [m] below which a geometry counted as meeting the object.
-    """
-
-    fractions: np.ndarray
-    q: np.ndarray
-    gaps: np.ndarray
-    drift: np.ndarray
-    clearance: np.ndarray
-    geometries: tuple[str, ...]
-    touches: tuple[PathTouch, ...]
-    limit: tuple[float, str] | None
-    offset: np.ndarray
-    contacts: tuple[str, ...]
-    tolerance: float = TOLERANCE
-
-    @property
-    def touch(self) -> PathTouch | None:
-        """The first new contact along the path, ``None`` if the path keeps to the planned ones."""
-        return self.touches[0] if self.touches else None
-
-    @property
-    def ok(self) -> bool:
-        """Whether the path keeps to the planned contacts and inside the joint limits."""
-        return not self.touches and self.limit is None
-
-    def __repr__(self) -> str:
-        drift = 1e3 * float(self.drift.max(initial=0.0))
-        return f"PathContacts(ok={self.ok}, touch={self.touch!r}, limit={self.limit}, max drift {drift:.3f} mm)"
-
-    def check(self) -> None:
-        """Refuse the motion if a link comes near the object off its planned contacts, or a joint leaves its limits.
-
-        Near: within ``tolerance``.
-
-        Raises:
-            UnreachableError: The message names the geometry, its link and the object's face (or the joint), where
-                along the path (blend and angle) and how deep at the end; ``result`` is this :class:`PathContacts`.
-        """
-        motion = f"the motion {np.round(self.offset, 6).tolist()} (dx [m], dtheta [rad])"
-        if self.touches:
-            t, column = self.touches[0], self.geometries.index(self.touches[0].geometry)
-            end = self.clearance[-1, column]
-            ending = f"{1e3 * -end:.2f} mm into it" if end < 0.0 else f"{1e3 * end:.2f} mm from it"
-            raise UnreachableError(
-                f"{motion}: {t.geometry} ({t.link}) comes within {1e3 * self.tolerance:g} mm of the object's "
-                f"{t.face or ''} face {1e3 * t.spacing:.1f} mm from its pad at {100 * t.fraction:.0f} % of the path "
-                f"({t.angle:.3f} rad) and ends {ending} (second order, contacts rolling without slip)",
-                self,
-            )
-        if self.limit is not None:
-            raise UnreachableError(
-                f"{motion}: joint {self.limit[1]} leaves its limits at {100 * self.limit[0]:.0f} % of the path "
-                "(second order, contacts rolling without slip)",
-                self,
-            )
 
 
 def path_contacts(
@@ -175,17 +68,11 @@ def path_contacts(
         pose: The object's pose when the motion starts (world <- object); its origin is the motion's centre.
         offset: (dx [m], dtheta [rad]), world: the motion the controller will track (e.g. the supervisor's plan).
         steps: Path steps (blends 0, 1/steps, ..., 1).
-        tolerance: Signed distance [m] below which another geometry counts as meeting the object (:data:`TOLERANCE`).
+        tolerance: Signed distance [m] below which another geometry counts as meeting the object
+            (:data:`~bhgrasp.grasp.path_result.TOLERANCE`).
         labels: A name per contact (default: the links).
     """
-    q = np.clip(as_vector(q, "q", hand.nq), hand.lower, hand.upper)  # sensed joints past a stop are on it (noise)
-    tolerance = as_real(tolerance, "tolerance")
-    points = as_array(points, "points", (len(links), 3))
-    offset = as_vector(offset, "offset", 6)
-    if len(points) == 0 or int(steps) < 1:
-        raise InputError(f"need at least one contact and one step, got {len(points)} contacts and steps={steps}")
-    if not isinstance(pose, pin.SE3):
-        raise InputError(f"`pose` must be a pinocchio.SE3, got {type(pose).__name__}")
+    q, points, offset, tolerance = _checked(hand, q, points, links, pose, offset, steps, tolerance)
     links = list(links)
     model, data, geometry = hand.model, pin.Data(hand.model), hand.collision_model()
     geometry_data, items = pin.GeometryData(geometry), geometry.geometryObjects
@@ -199,13 +86,11 @@ def path_contacts(
     limit: tuple[float, str] | None = None
     contacts, normals, centre = np.empty((len(pads), 3)), np.empty((len(pads), 3)), pose.translation
     for k, b in enumerate(fractions):
-        if k:  # Euler step in b: J dq = (dx + dtheta x (p - c)) db + n (gap - gap_0), least squares
-            demand = (offset[:3] + np.cross(offset[3:], contacts - centre)) * (b - fractions[k - 1])
-            demand += normals * (gaps[k - 1] - gaps[0])[:, None]
-            jacobian = hand.point_jacobians(q, links, contacts).reshape(-1, hand.nv)
-            step = np.linalg.lstsq(jacobian, demand.reshape(-1), rcond=1e-10)[0]
-            q = q + step
-            drift[k] = drift[k - 1] + np.linalg.norm((jacobian @ step).reshape(-1, 3) - demand, axis=1)
+        if k:
+            q, missed = _roll(
+                hand, q, links, contacts, normals, centre, offset, gaps[k - 1] - gaps[0], b - fractions[k - 1]
+            )
+            drift[k] = drift[k - 1] + missed
         rotation, centre = pin.exp3(b * offset[3:]) @ pose.rotation, pose.translation + b * offset[:3]
         placed_object = coal.Transform3s(rotation, centre)
         pin.updateGeometryPlacements(model, data, geometry, geometry_data, q)
@@ -224,19 +109,7 @@ def path_contacts(
             distance = coal.distance(items[g].geometry, placed[g], shape, placed_object, request, result)
             clearance[k, column] = distance
             if distance < tolerance and g not in touches:
-                witness = np.array(result.getNearestPoint1())
-                same_joint = [i for i, pad in enumerate(pads) if items[pad].parentJoint == items[g].parentJoint]
-                spacing = min((float(np.linalg.norm(witness - contacts[i])) for i in same_joint), default=np.inf)
-                touches[g] = PathTouch(
-                    float(b),
-                    float(b * np.linalg.norm(offset[3:])),
-                    items[g].name,
-                    model.frames[items[g].parentFrame].name,
-                    pressed_face(shape, rotation, result.normal),
-                    float(distance),
-                    witness,
-                    spacing,
-                )
+                touches[g] = _touch(model, items, g, pads, contacts, result, distance, b, offset, shape, rotation)
     return PathContacts(
         fractions,
         path_q,
@@ -249,6 +122,54 @@ def path_contacts(
         offset.copy(),
         tuple(labels) if labels is not None else tuple(links),
         float(tolerance),
+    )
+
+
+def _checked(hand: Hand, q, points, links, pose, offset, steps, tolerance) -> tuple:
+    """:func:`path_contacts`' inputs checked: q, points (n, 3), offset (6,), tolerance [m].
+
+    q is clipped to the limits (a sensed joint past its stop is on it); at least one contact and one step, an SE3 pose.
+    """
+    q = np.clip(as_vector(q, "q", hand.nq), hand.lower, hand.upper)  # sensed joints past a stop are on it (noise)
+    tolerance = as_real(tolerance, "tolerance")
+    points = as_array(points, "points", (len(links), 3))
+    offset = as_vector(offset, "offset", 6)
+    if len(points) == 0 or int(steps) < 1:
+        raise InputError(f"need at least one contact and one step, got {len(points)} contacts and steps={steps}")
+    if not isinstance(pose, pin.SE3):
+        raise InputError(f"`pose` must be a pinocchio.SE3, got {type(pose).__name__}")
+    return q, points, offset, tolerance
+
+
+def _roll(hand: Hand, q, links, contacts, normals, centre, offset, gap_change, db: float) -> tuple:
+    """One Euler step in the blend: J dq = (dx + dtheta x (p - c)) db + n (gap - gap_0), by least squares.
+
+    Returns the joints after it and each contact's miss [m] (what the step could not make).
+    """
+    demand = (offset[:3] + np.cross(offset[3:], contacts - centre)) * db
+    demand += normals * gap_change[:, None]
+    jacobian = hand.point_jacobians(q, links, contacts).reshape(-1, hand.nv)
+    step = np.linalg.lstsq(jacobian, demand.reshape(-1), rcond=1e-10)[0]
+    return q + step, np.linalg.norm((jacobian @ step).reshape(-1, 3) - demand, axis=1)
+
+
+def _touch(model, items, g: int, pads: list[int], contacts, result, distance: float, b: float, offset, shape, rotation):
+    """The :class:`PathTouch` of geometry ``g`` meeting the object at ``distance`` [m] at blend ``b``.
+
+    ``result``: their distance query; ``pads`` and ``contacts``: the planned contacts' geometries and points.
+    """
+    witness = np.array(result.getNearestPoint1())
+    same_joint = [i for i, pad in enumerate(pads) if items[pad].parentJoint == items[g].parentJoint]
+    spacing = min((float(np.linalg.norm(witness - contacts[i])) for i in same_joint), default=np.inf)
+    return PathTouch(
+        float(b),
+        float(b * np.linalg.norm(offset[3:])),
+        items[g].name,
+        model.frames[items[g].parentFrame].name,
+        pressed_face(shape, rotation, result.normal),
+        float(distance),
+        witness,
+        spacing,
     )
 
 
@@ -286,4 +207,4 @@ def sensed_path_contacts(
     )
 
 
-__all__ = ["STEPS", "TOLERANCE", "PathContacts", "PathTouch", "path_contacts", "sensed_path_contacts"]
+__all__ = ["LIMIT_TOLERANCE", "STEPS", "path_contacts", "sensed_path_contacts"]

@@ -90,49 +90,6 @@ def engine_settings(
 ):
     """A scene's sizes, the settings, the contact law and the collision queries as the C++ engine's ``Settings``."""
     core = core_module()
-    spinning = [
-        filled(core.Spinning, angular=angular.start, axes=axes, moments=np.array(moments))
-        for angular, axes, moments in layout.spinning_bodies
-    ]
-    contact = filled(
-        core.ContactLaw,
-        stiffness=law.stiffness,
-        damping=law.damping,
-        tangential_stiffness=law.k_t,
-        tangential_damping=law.c_t,
-        hunt_crossley=law.normal_law == "hunt-crossley",
-        exponent=law.exponent,
-        tanh_friction=law.friction_law == "tanh",
-        slip_velocity=law.slip_velocity,
-        match_radius=match_radius,
-    )
-    pairs, queries = [], []
-    for pair in scene.pairs:
-        pairs.append(
-            filled(
-                core.Pair,
-                geom_a=pair.geom_a,
-                geom_b=pair.geom_b,
-                joint_a=pair.joint_a,
-                joint_b=pair.joint_b,
-                friction=pair.friction(law.friction),
-            )
-        )
-        request = scene.geometry_data.collisionRequests[pair.index]
-        patch = scene.geometry_data.contactPatchRequests[pair.index]
-        queries.append(
-            filled(
-                core.Query,
-                num_max_contacts=request.num_max_contacts,
-                security_margin=request.security_margin,
-                break_distance=request.break_distance,
-                tolerance=NARROW_TOLERANCE,
-                fallback_tolerance=FALLBACK_TOLERANCE,
-                max_num_patch=patch.max_num_patch,
-                num_samples_curved_shapes=patch.getNumSamplesCurvedShapes(),
-                patch_tolerance=patch.getPatchTolerance(),
-            )
-        )
     return filled(
         core.Settings,
         dt=settings.dt,
@@ -148,10 +105,58 @@ def engine_settings(
         joint_damping=scene.joint_damping,
         spring_q=[int(i) for i in layout.spring_q],
         spring_v=[int(i) for i in layout.spring_v],
-        spinning=spinning,
-        pairs=pairs,
-        law=contact,
-        queries=queries,
+        spinning=[
+            filled(core.Spinning, angular=angular.start, axes=axes, moments=np.array(moments))
+            for angular, axes, moments in layout.spinning_bodies
+        ],
+        pairs=[native_pair(pair, law) for pair in scene.pairs],
+        law=native_law(law, match_radius),
+        queries=[native_query(scene, pair.index) for pair in scene.pairs],
+    )
+
+
+def native_law(law: SpringDamper, match_radius: float):
+    """The contact law (and the radius [m] within which contacts match last step's) as the C++ ``ContactLaw``."""
+    return filled(
+        core_module().ContactLaw,
+        stiffness=law.stiffness,
+        damping=law.damping,
+        tangential_stiffness=law.k_t,
+        tangential_damping=law.c_t,
+        hunt_crossley=law.normal_law == "hunt-crossley",
+        exponent=law.exponent,
+        tanh_friction=law.friction_law == "tanh",
+        slip_velocity=law.slip_velocity,
+        match_radius=match_radius,
+    )
+
+
+def native_pair(pair, law: SpringDamper):
+    """A scene's :class:`~bhgrasp.sim.collision_pair.CollisionPair` as the C++ ``Pair`` (friction from ``law``'s)."""
+    return filled(
+        core_module().Pair,
+        geom_a=pair.geom_a,
+        geom_b=pair.geom_b,
+        joint_a=pair.joint_a,
+        joint_b=pair.joint_b,
+        friction=pair.friction(law.friction),
+    )
+
+
+def native_query(scene: Scene, index: int):
+    """Collision pair ``index``'s coal requests in ``scene`` (and both GJK/EPA tolerances) as the C++ ``Query``."""
+    request = scene.geometry_data.collisionRequests[index]
+    patch = scene.geometry_data.contactPatchRequests[index]
+    return filled(
+        core_module().Query,
+        num_max_contacts=request.num_max_contacts,
+        security_margin=request.security_margin,
+        break_distance=request.break_distance,
+        tolerance=NARROW_TOLERANCE,
+        fallback_tolerance=FALLBACK_TOLERANCE,
+        max_num_patch=patch.max_num_patch,
+        num_samples_curved_shapes=patch.getNumSamplesCurvedShapes(),
+        patch_tolerance=patch.getPatchTolerance(),
     )
 
 
@@ -240,5 +245,8 @@ __all__ = [
     "engine_settings",
     "memory_of",
     "native_drive",
+    "native_law",
     "native_memory",
+    "native_pair",
+    "native_query",
 ]

@@ -83,30 +83,14 @@ def run(
         sensors: What the controller's sensors get wrong (:class:`~bhgrasp.sim.sensor_model.SensorModel`: noise
             on the joints, the object's pose and twist and the contact forces, and a delay).
     """
-    duration = as_positive(duration, "duration")
-    steps = round(duration / simulator.dt)
-    hold = 1 if control_dt is None else round(as_positive(control_dt, "control_dt") / simulator.dt)
-    if hold < 1 or abs(hold * simulator.dt - (control_dt or simulator.dt)) > 1e-9 * max(1.0, hold):
-        raise InputError(f"`control_dt` must be a positive multiple of dt = {simulator.dt}, got {control_dt}")
-    if sensor_noise is not None:
-        if sensors is not None:
-            raise InputError("give `sensor_noise` or `sensors`, not both (sensor_noise is short for sensors)")
-        if seed is None:
-            raise InputError("`sensor_noise` needs a `seed` (runs are deterministic)")
-        sigma = as_vector(sensor_noise, "sensor_noise", 2)
-        sensors = SensorModel(joint_position=sigma[0], joint_velocity=sigma[1])
-    reader = Sensors(SensorModel() if sensors is None else sensors, seed)
+    steps = round(as_positive(duration, "duration") / simulator.dt)
+    hold = _control_steps(simulator.dt, control_dt)
+    reader = Sensors(_sensor_model(sensor_noise, sensors, seed), seed)
     if isinstance(record_every, bool) or not isinstance(record_every, int | np.integer) or record_every < 1:
         raise InputError(f"`record_every` must be a positive integer (physics steps per sample), got {record_every!r}")
     if disturbance is not None and not callable(disturbance):
         disturbance = joint_torques(disturbance, simulator.scene.nv_hand, "disturbance")
-    state = simulator.initial_state() if state is None else state
-    simulator.check_state(state)  # before anything runs
-    simulator.actuation.restore(state.actuation_modes, state.scene_q[: simulator.scene.nq_hand])
-    if isinstance(getattr(controller, "log", None), dict):
-        controller.log.clear()  # each run records its own internals, never the last run's
-    if hasattr(controller, "reset"):
-        controller.reset(state)
+    state = _start(simulator, controller, state)
     recorder = Recorder(simulator.scene, simulator.actuation)
     u = np.zeros(simulator.actuation.n_inputs)
     info = StepInfo(empty_contact_set(), np.zeros(simulator.scene.nv_hand))
@@ -130,6 +114,38 @@ def run(
             break
     recorder.add(state, u, info, getattr(controller, "log", None))
     return recorder.trajectory()
+
+
+def _control_steps(dt: float, control_dt: float | None) -> int:
+    """Physics steps per control period: ``control_dt`` [s] must be a positive multiple of ``dt`` (default ``dt``)."""
+    hold = 1 if control_dt is None else round(as_positive(control_dt, "control_dt") / dt)
+    if hold < 1 or abs(hold * dt - (control_dt or dt)) > 1e-9 * max(1.0, hold):
+        raise InputError(f"`control_dt` must be a positive multiple of dt = {dt}, got {control_dt}")
+    return hold
+
+
+def _sensor_model(sensor_noise: Any, sensors: SensorModel | None, seed: int | None) -> SensorModel:
+    """The run's sensor model: ``sensors``, or ``sensor_noise`` = (sigma_q, sigma_v) as one (seeded), or exact."""
+    if sensor_noise is None:
+        return SensorModel() if sensors is None else sensors
+    if sensors is not None:
+        raise InputError("give `sensor_noise` or `sensors`, not both (sensor_noise is short for sensors)")
+    if seed is None:
+        raise InputError("`sensor_noise` needs a `seed` (runs are deterministic)")
+    sigma = as_vector(sensor_noise, "sensor_noise", 2)
+    return SensorModel(joint_position=sigma[0], joint_velocity=sigma[1])
+
+
+def _start(simulator: Stepper, controller: Any, state: State | None) -> State:
+    """The run's checked start state (default the scene's), the actuation in its modes, the controller reset."""
+    state = simulator.initial_state() if state is None else state
+    simulator.check_state(state)  # before anything runs
+    simulator.actuation.restore(state.actuation_modes, state.scene_q[: simulator.scene.nq_hand])
+    if isinstance(getattr(controller, "log", None), dict):
+        controller.log.clear()  # each run records its own internals, never the last run's
+    if hasattr(controller, "reset"):
+        controller.reset(state)
+    return state
 
 
 def _control(controller: Callable[[float, State], Any], t: float, sensed: State) -> np.ndarray:

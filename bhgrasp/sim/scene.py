@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -23,41 +22,9 @@ from bhgrasp.errors import InputError
 from bhgrasp.model.hand import Hand
 from bhgrasp.model.objects import FixedBox, Plane, RigidObject
 from bhgrasp.model.spring_mounted import SpringMounted
+from bhgrasp.sim.collision_pair import CollisionPair
 
 Environment = Plane | FixedBox
-
-
-@dataclass(frozen=True)
-class CollisionPair:
-    """Two geometries that may touch: forces act on ``b`` along the contact normal (from ``a`` to ``b``).
-
-    Attributes:
-        index: Index in the geometry model's collision pairs.
-        geom_a: Geometry index of body a (a hand link, the environment, or the first object).
-        geom_b: Geometry index of body b (an object, or a hand link that the environment stops).
-        joint_a: Pinocchio joint carrying body a (0 = fixed: environment or palm).
-        joint_b: Joint carrying body b.
-        body_a: Display name of body a (link, environment or object name).
-        body_b: Display name of body b.
-        friction_a: Coulomb coefficient of surface a; ``None`` for a hand link (the contact law's pad value).
-        friction_b: Coulomb coefficient of surface b; ``None`` for a hand link.
-    """
-
-    index: int
-    geom_a: int
-    geom_b: int
-    joint_a: int
-    joint_b: int
-    body_a: str
-    body_b: str
-    friction_a: float | None
-    friction_b: float | None
-
-    def friction(self, hand_friction: float) -> float:
-        """Coefficient of the pair: the smaller of the two surfaces' (hand pads have ``hand_friction``)."""
-        first = hand_friction if self.friction_a is None else self.friction_a
-        second = hand_friction if self.friction_b is None else self.friction_b
-        return min(first, second)
 
 
 class Scene:
@@ -97,7 +64,12 @@ class Scene:
         self.model = _placed_copy(hand.model, hand.base_placement)
         self.model.gravity.linear = hand.gravity
         self.nq_hand, self.nv_hand = hand.nq, hand.nv
-        self.joint_stiffness = np.zeros(0)  # filled below: spring of spring-mounted objects [N/m]
+        self._add_objects()
+        self.data = self.model.createData()
+        self._add_geometries()
+
+    def _add_objects(self) -> None:
+        """Each object's joints in the model, their slices of q and v, and the springs of spring-mounted ones."""
         self.object_joints: list[int] = []  # the joint carrying each object's body (its spherical joint)
         self._object_root: list[int] = []  # the object's first joint (its translation joint when free)
         stiffness, damping = [], []
@@ -116,10 +88,11 @@ class Scene:
             first, body = self.model.joints[root], self.model.joints[joint]
             self._q_slices.append(slice(first.idx_q, body.idx_q + body.nq))
             self._v_slices.append(slice(first.idx_v, body.idx_v + body.nv))
-        self.joint_stiffness = np.concatenate((np.zeros(self.nv_hand), stiffness))
-        self.joint_damping = np.concatenate((np.zeros(self.nv_hand), damping))
-        self.data = self.model.createData()
+        self.joint_stiffness = np.concatenate((np.zeros(self.nv_hand), stiffness))  # springs [N/m]
+        self.joint_damping = np.concatenate((np.zeros(self.nv_hand), damping))  # [N s/m]
 
+    def _add_geometries(self) -> None:
+        """The hand's, the objects' and the environment's collision geometry, their pairs and their requests."""
         self.geometry = self._hand_geometry()
         self.hand_geometries = list(range(self.geometry.ngeoms))
         self.object_geometries = [
