@@ -22,8 +22,7 @@ def run(args: argparse.Namespace) -> int:
     """Tune within chapter 4's bounds and print the optimum."""
     import numpy as np
 
-    from bhgrasp.scenarios.press_fitness import impedance_fitness
-    from bhgrasp.thesis.chapter4_tuning import TUNING_BOUNDS, TUNING_TOL_FUN, TUNING_TOL_X
+    from bhgrasp.scenarios.press_fitness import TUNING_BOUNDS, TUNING_TOL_FUN, TUNING_TOL_X, impedance_fitness
     from bhgrasp.tuning import cma_es
 
     lower, upper = (np.log10(bound) for bound in TUNING_BOUNDS)  # physical bounds, argued in chapter 4

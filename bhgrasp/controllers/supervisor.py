@@ -123,11 +123,7 @@ class GraspSupervisor(Controller):
         if not isinstance(grasp, ObjectGraspController):
             raise InputError(f"`grasp` must be an ObjectGraspController, got {grasp!r}")
         self.nominal = nominal
-        self.q_contact = as_vector(q_contact, "q_contact", nominal.nq)
-        outside = (self.q_contact < nominal.lower - 1e-9) | (self.q_contact > nominal.upper + 1e-9)
-        if np.any(outside):
-            names = [n for n, o in zip(nominal.joint_names, outside) if o]
-            raise InputError(f"`q_contact` is outside the joint limits at {names}: {self.q_contact[outside]}")
+        self.q_contact = _within_limits(nominal, q_contact)
         self.grasp = grasp
         self.offset = as_vector(offset, "offset", 6)
         self.approach_time = as_positive(approach_time, "approach_time")
@@ -137,21 +133,13 @@ class GraspSupervisor(Controller):
         self.squeeze_time = as_positive(squeeze_time, "squeeze_time")
         self.move_time = as_positive(move_time, "move_time")
         self.plan = bool(plan)
-        if path is not None and (not callable(path) or np.any(self.offset != 0.0)):
-            raise InputError(
-                f"`path` must be a callable (pose, delay=start) -> Reference, with a zero `offset`; got "
-                f"{path!r} and offset {self.offset.tolist()}"
-            )
-        self.path = path
+        self.path = _checked_path(path, self.offset)
         self.object_shape = object_shape
         self.approach_damping = as_real(approach_damping, "approach_damping")
         if self.approach_damping < 0.0:
             raise InputError(f"`approach_damping` must be >= 0 [N m s/rad], got {approach_damping}")
         self.planned_offset: np.ndarray | None = None
-        tolerance = None if plan_tolerance is None else as_vector(plan_tolerance, "plan_tolerance", 2)
-        if tolerance is not None and not np.all(tolerance > 0.0):
-            raise InputError(f"`plan_tolerance` must be two positive numbers [m], [rad], got {tolerance.tolist()}")
-        self.plan_tolerance = tolerance
+        self.plan_tolerance = _plan_tolerance(plan_tolerance)
         self.path_tolerance = as_real(path_tolerance, "path_tolerance")
         self.kp, self.kv = as_positive(kp, "kp"), as_positive(kv, "kv")
         self.sensing = ContactSensing(nominal)
@@ -163,10 +151,7 @@ class GraspSupervisor(Controller):
         self.switch_time: float | None = None
         self._approach: ComputedTorque | None = None
         self._arrived = np.zeros(len(nominal.fingers))
-        grasping = nominal.fingers if fingers is None else [require_name(f, nominal.fingers, "finger") for f in fingers]
-        if not grasping:
-            raise InputError("`fingers` must name at least one finger of the hand")
-        self._grasping = np.array([nominal.fingers.index(f) for f in grasping])
+        self._grasping = _finger_indices(nominal, fingers)
 
     def reset(self, state: State) -> None:
         """Start over with the approach from ``state``."""
@@ -267,6 +252,42 @@ class GraspSupervisor(Controller):
             else (self.path(pin.SE3(pose), delay=start))
         )
         self.phase, self.switch_time = SQUEEZE, t
+
+
+def _within_limits(nominal: Hand, q_contact: Any) -> np.ndarray:
+    """``q_contact`` checked to lie within the hand's joint limits."""
+    q = as_vector(q_contact, "q_contact", nominal.nq)
+    outside = (q < nominal.lower - 1e-9) | (q > nominal.upper + 1e-9)
+    if np.any(outside):
+        names = [n for n, o in zip(nominal.joint_names, outside) if o]
+        raise InputError(f"`q_contact` is outside the joint limits at {names}: {q[outside]}")
+    return q
+
+
+def _checked_path(path: Any, offset: np.ndarray) -> Callable[..., Reference] | None:
+    """``path``: ``None``, or a callable ``(pose, delay=start) -> Reference`` given with a zero ``offset``."""
+    if path is not None and (not callable(path) or np.any(offset != 0.0)):
+        raise InputError(
+            f"`path` must be a callable (pose, delay=start) -> Reference, with a zero `offset`; got "
+            f"{path!r} and offset {offset.tolist()}"
+        )
+    return path
+
+
+def _plan_tolerance(plan_tolerance: Any) -> np.ndarray | None:
+    """``plan_tolerance``: ``None`` or two positive numbers [m], [rad]."""
+    tolerance = None if plan_tolerance is None else as_vector(plan_tolerance, "plan_tolerance", 2)
+    if tolerance is not None and not np.all(tolerance > 0.0):
+        raise InputError(f"`plan_tolerance` must be two positive numbers [m], [rad], got {tolerance.tolist()}")
+    return tolerance
+
+
+def _finger_indices(nominal: Hand, fingers: Sequence[str] | None) -> np.ndarray:
+    """The grasping fingers' indices in the hand (default: every finger)."""
+    grasping = nominal.fingers if fingers is None else [require_name(f, nominal.fingers, "finger") for f in fingers]
+    if not grasping:
+        raise InputError("`fingers` must name at least one finger of the hand")
+    return np.array([nominal.fingers.index(f) for f in grasping])
 
 
 __all__ = ["APPROACH", "MANIPULATE", "PLAN_LENGTH", "SQUEEZE", "GraspSupervisor"]

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import itertools
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -116,36 +116,50 @@ def search(
         float(singularity_margin),
     )
     sets = finger_sets(hand, fingers)
+    placing = _placement(hand, item, pad_radius, samples, reach_tolerance, rng)
+    shape, pose = item.geometry(), item.pose
+    heights = default_heights(shape, pose) if heights is None else [float(h) for h in heights]
+    candidates, seen, rejected = [], set(), Counter()
+    layouts = _layouts(placing, sets, _grasp_axes(pose, directions), heights, tilts)
+    for group, height, placed in layouts:
+        if placed is None:
+            rejected["out of reach"] += 1
+            continue
+        points, normals, seed = placed
+        key = (group, tuple(np.round(np.concatenate([points[f] for f in group]), 4)))
+        if key in seen:
+            continue
+        seen.add(key)
+        outcome = placing.check(group, points, normals, seed, height, checks)
+        if isinstance(outcome, str):
+            rejected[outcome] += 1
+        else:
+            candidates.append(outcome)
+    candidates.sort(key=lambda c: c.score, reverse=True)
+    return candidates, rejected
+
+
+def _placement(hand: Hand, item: Any, pad_radius, samples, reach_tolerance, rng) -> Placement:
+    """The pads' placement for ``item``: each finger's pad radius (given, or its collision sphere's), its reach."""
     if pad_radius is None:
         radii = pad_radii(hand)
     else:
         radii = dict.fromkeys(hand.fingers, as_positive(pad_radius, "pad_radius"))
     reach = FingerReach(hand, int(as_positive(samples, "samples")), np.random.default_rng(rng))
-    placing = Placement(hand, item, radii, reach, float(reach_tolerance))
-    shape, pose = item.geometry(), item.pose
-    heights = default_heights(shape, pose) if heights is None else [float(h) for h in heights]
-    axes = _grasp_axes(pose, directions)
-    candidates, seen, rejected = [], set(), Counter()
+    return Placement(hand, item, radii, reach, float(reach_tolerance))
+
+
+def _layouts(placing: Placement, sets: list, axes: list, heights: list, tilts: int) -> Iterator[tuple]:
+    """Every (finger group, height, placed pads or None) of the search.
+
+    In its order: groups, splits, axes, heights, tilts, then the rows' shifts.
+    """
     for group in sets:
         for split in _splits(group):
             rows = range(tilts if max(map(len, split)) > 1 else 1)  # one finger a side: no row to tilt
             for axis, height, tilt in itertools.product(axes, heights, rows):
                 for placed in placing.layouts(split, axis, height, _layout(axis, tilt, tilts)):
-                    if placed is None:
-                        rejected["out of reach"] += 1
-                        continue
-                    points, normals, seed = placed
-                    key = (group, tuple(np.round(np.concatenate([points[f] for f in group]), 4)))
-                    if key in seen:
-                        continue
-                    seen.add(key)
-                    outcome = placing.check(group, points, normals, seed, height, checks)
-                    if isinstance(outcome, str):
-                        rejected[outcome] += 1
-                    else:
-                        candidates.append(outcome)
-    candidates.sort(key=lambda c: c.score, reverse=True)
-    return candidates, rejected
+                    yield group, height, placed
 
 
 def opposed_grasp(hand: Hand, item: Any, mu: float = 0.6, **options: Any) -> GraspCandidate:

@@ -95,11 +95,7 @@ def path_contacts(
         placed_object = coal.Transform3s(rotation, centre)
         pin.updateGeometryPlacements(model, data, geometry, geometry_data, q)
         placed = [coal_transform(hand.base_placement * placement) for placement in geometry_data.oMg]
-        for i, g in enumerate(pads):  # the pads' contacts now (they roll: the point moves on both bodies)
-            result.clear()
-            gaps[k, i] = coal.distance(items[g].geometry, placed[g], shape, placed_object, request, result)
-            contacts[i] = 0.5 * (np.asarray(result.getNearestPoint1()) + np.asarray(result.getNearestPoint2()))
-            normals[i] = result.normal
+        _pad_contacts(items, pads, placed, shape, placed_object, request, result, gaps[k], contacts, normals)
         path_q[k] = q
         outside = (q < hand.lower - LIMIT_TOLERANCE) | (q > hand.upper + LIMIT_TOLERANCE)
         if limit is None and outside.any():
@@ -151,6 +147,18 @@ def _roll(hand: Hand, q, links, contacts, normals, centre, offset, gap_change, d
     jacobian = hand.point_jacobians(q, links, contacts).reshape(-1, hand.nv)
     step = np.linalg.lstsq(jacobian, demand.reshape(-1), rcond=1e-10)[0]
     return q + step, np.linalg.norm((jacobian @ step).reshape(-1, 3) - demand, axis=1)
+
+
+def _pad_contacts(items, pads, placed, shape, placed_object, request, result, gaps, contacts, normals) -> None:
+    """Each pad's gap [m], contact point and normal now, written into ``gaps``, ``contacts``, ``normals``.
+
+    The pads roll: the contact point moves on both bodies.
+    """
+    for i, g in enumerate(pads):
+        result.clear()
+        gaps[i] = coal.distance(items[g].geometry, placed[g], shape, placed_object, request, result)
+        contacts[i] = 0.5 * (np.asarray(result.getNearestPoint1()) + np.asarray(result.getNearestPoint2()))
+        normals[i] = result.normal
 
 
 def _touch(model, items, g: int, pads: list[int], contacts, result, distance: float, b: float, offset, shape, rotation):

@@ -117,20 +117,14 @@ def grasp_candidates(
     candidates = []
     for spread, height in itertools.product(spreads, heights):
         q_spread = _with_spread(hand, spread_joints, spread)
-        landing = {
-            f: probe.landing(*_approach_line(hand, q_spread, f), pose.translation[2] + height)
-            for f in {f for group in sets for f in group}
-        }
+        landing = _landings(hand, probe, q_spread, sets, pose.translation[2] + height)
         for group in sets:
             if any(landing[f] is None for f in group):
                 continue
             points = np.array([landing[f][0] for f in group])
             outward = np.array([landing[f][1] for f in group])
-            try:
-                q = ik(
-                    hand, {f: p + pad_radius * n for f, p, n in zip(group, points, outward)}, q_spread, tolerance=1e-6
-                ).q
-            except UnreachableError:
+            q = _pads_reached(hand, group, points, outward, pad_radius, q_spread)
+            if q is None:
                 continue
             if shapes.nearest_other(q, group, shape, pose) < clearance:
                 continue
@@ -147,6 +141,20 @@ def grasp_candidates(
             candidates.append(_candidate(hand, item, group, points, -outward, q, height, mu, opening, squeeze, gravity))
     candidates.sort(key=lambda c: c.score, reverse=True)
     return candidates
+
+
+def _landings(hand: Hand, probe: ObjectProbe, q_spread: np.ndarray, sets: list, z: float) -> dict:
+    """Where each finger of ``sets`` lands at height ``z`` [m] along its line of approach (``None``: it misses)."""
+    return {f: probe.landing(*_approach_line(hand, q_spread, f), z) for f in {f for group in sets for f in group}}
+
+
+def _pads_reached(hand: Hand, group, points, outward, pad_radius: float, q_spread) -> np.ndarray | None:
+    """The IK's configuration with ``group``'s pad centres one ``pad_radius`` out from ``points``, or ``None``."""
+    try:
+        targets = {f: p + pad_radius * n for f, p, n in zip(group, points, outward)}
+        return ik(hand, targets, q_spread, tolerance=1e-6).q
+    except UnreachableError:
+        return None
 
 
 def synthesize(hand: Hand, item: Any, mu: float = 0.6, **options: Any) -> GraspCandidate:

@@ -182,23 +182,9 @@ def run_grasp_demo(
     setup = grasp_scene(hand, mass, float(stiffness), **plant)
     setup.manipulable_space().check(offset)  # a motion the grasp cannot make is refused before simulating
     setup.check_clearance(offset)  # so is one that drives the box into its pedestal
-    nominal_box = Box(size=setup.box.size, mass=estimate)
-    grasp = grasp_controller(
-        controller, setup.hand, nominal_box, distribution, gains, float(uncertainty.get("mu", MU_ASSUMED)), adaptation
-    )
-    kp, kv = approach_gains
-    shape = setup.box.geometry() if hand == "barrett" else None  # the Barrett scene's motions are checked to the end
-    supervisor = GraspSupervisor(
-        setup.hand,
-        setup.q_contact,
-        grasp,
-        offset=offset,
-        kp=kp,
-        kv=kv,
-        q_close=setup.q_close,
-        fingers=setup.fingers,
-        object_shape=shape,
-    )
+    nominal_box, mu = Box(size=setup.box.size, mass=estimate), float(uncertainty.get("mu", MU_ASSUMED))
+    grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains, mu, adaptation)
+    supervisor = _supervisor(setup, grasp, offset, approach_gains, hand)
     law: Controller = MotorCommands(supervisor, setup.simulator.actuation.drive) if setup.cancel_damping else supervisor
     if viewer is not None:
         from bhgrasp.viz import LiveView
@@ -209,6 +195,23 @@ def run_grasp_demo(
     traj = setup.simulator.run(law, duration, state=setup.state, progress=progress, sensors=sensors, seed=seed)
     wall = time.perf_counter() - start
     return evaluate_demo(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
+
+
+def _supervisor(setup: BoxGrasp, grasp: Any, offset: Any, approach_gains: tuple, hand: str) -> GraspSupervisor:
+    """The demo's supervisor: approach at ``approach_gains`` = (kp, kv), then ``grasp`` moves the box by ``offset``."""
+    kp, kv = approach_gains
+    shape = setup.box.geometry() if hand == "barrett" else None  # the Barrett scene's motions are checked to the end
+    return GraspSupervisor(
+        setup.hand,
+        setup.q_contact,
+        grasp,
+        offset=offset,
+        kp=kp,
+        kv=kv,
+        q_close=setup.q_close,
+        fingers=setup.fingers,
+        object_shape=shape,
+    )
 
 
 def grasp_scene(hand: str, mass: float, stiffness: float = STIFFNESS, **plant: Any) -> BoxGrasp:

@@ -23,6 +23,11 @@ from bhgrasp.scenarios.finger_press import DT, F3_GAINS, ForceMetrics, Setup, f3
 TUNING_SPRING = 500.0  # K_s [N/m]: the thesis' k_e = 500 N/m
 TUNING_FORCE = 6.0  # f_d [N] of the fitness; 4 and 8 N are held out
 TUNING_DURATION = 1.0  # [s] simulated per evaluation: first contact at ~0.36 s, then ~0.64 s of force response
+# the CMA-ES search over (log10 M_I, log10 K_I) (thesis chapter 4.7; `bhgrasp tune` and chapter 4's tuning)
+TUNING_BOUNDS = ((1e-4, 0.1), (1.0, TUNING_SPRING))  # (lower, upper) of (M_I [kg], K_I [N/m]): chapter 4's notes
+TUNING_SIGMA = 0.5  # [decades] initial step size (thesis sigma = 0.5)
+TUNING_TOL_FUN = 1e-4  # [N] cma tolfun: 0.1 mN of mean force error
+TUNING_TOL_X = 1e-3  # [decades] cma tolx: 0.23 % of M_I and K_I
 
 
 def impedance_fitness(
@@ -135,4 +140,13 @@ def _evaluate(
     return force_metrics(t, force, desired), float(np.mean(np.abs(desired - force[start:])))
 
 
-__all__ = ["TUNING_DURATION", "TUNING_FORCE", "TUNING_SPRING", "impedance_fitness"]
+__all__ = [
+    "TUNING_BOUNDS",
+    "TUNING_DURATION",
+    "TUNING_FORCE",
+    "TUNING_SIGMA",
+    "TUNING_SPRING",
+    "TUNING_TOL_FUN",
+    "TUNING_TOL_X",
+    "impedance_fitness",
+]

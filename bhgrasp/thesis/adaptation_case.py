@@ -152,6 +152,7 @@ def _row(case, key: str, setting: str, run: IdentificationRun, sensing: str) -> 
 
 
 def _notes(values: dict[str, float], hand: dict[str, float], noisy: list[IdentificationRun]) -> list[str]:
+    """The case's notes: the set-up, the Lyapunov function in the ideal loop and in the grasp, the estimates."""
     amplitude, frequency = EXCITATION["amplitude"], EXCITATION["frequency"]
     return [
         f"The {MASS} kg box (0.06 x 0.05 x 0.05 m), the controller told {ESTIMATE} kg and the inertia of a "
@@ -175,6 +176,13 @@ def _notes(values: dict[str, float], hand: dict[str, float], noisy: list[Identif
         "start) and grows where the estimate drifts (thesis' law with joint friction: "
         f"{values['grasp/thesis/friction/lyapunov_end_to_start']:.2f}); with noise s_o is computed from the noisy "
         "readings, which keeps V_o up.",
+        *_estimate_notes(values, hand, noisy),
+    ]
+
+
+def _estimate_notes(values: dict[str, float], hand: dict[str, float], noisy: list[IdentificationRun]) -> list[str]:
+    """The notes on the finger part of the Lyapunov function, and on what each law learns."""
+    return [
         "The finger part of (5.63), 1/2 s_f^T M_f s_f + 1/2 h |eta|^2 (eta, the force errors' integrals, rebuilt "
         "from the law's log; `bhgrasp.controllers.grasp_lyapunov`), cancels that term under the proof's premises "
         "(rigid rolling contacts, J_h J_h^+ the identity on the force errors, an exact hand model, all force "

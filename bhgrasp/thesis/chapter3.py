@@ -75,6 +75,24 @@ def ctc_steps(scale: float = 1.0) -> Case:
     traj = simulate(hand, lambda: WorkspaceComputedTorque(hand, refs), q_start, duration, False)
     add_run(case, Run("fingertip CTC", False, traj, tuple(range(hand.nv)), hand.joint_names))
     case.header = ["run", "joint", "overshoot %", "rise 10-90 % [s]", "settling 2 % [s]", "max error % of step"]
+    _step_rows(case, q0, qf, qs)
+    _fingertip_rows(case, hand, start, goal)
+    case.notes += [
+        "Thesis: fingertip max error 5 % of the steady state, rise < 2 s, settling ~2 s; with spread F3 q2 overshoots"
+        " 6 %, settling 1-1.5 s (Simulink) / 2.5-3.5 s (SimMechanics).",
+        "Ours: with the exact model CTC gives the linear error dynamics e'' + 160 e' + 400 e = 0 (poles -2.6 and"
+        " -157 1/s), so the joints follow the smooth step (time constant 0.5 s, rise 0.5 ln 9 = 1.10 s) with"
+        " errors set only by the step's velocity jump at its start; there is no overshoot because the reference"
+        " has none and the loop is overdamped.  The joints start 1 deg above their stops (the thesis' initial"
+        " pose is our 0, on the stops, whose reaction CTC does not model).  The thesis' overshoot and 5 % errors"
+        " come from unmodelled"
+        " friction and the 0.5 N m s/rad distal damping of its SimMechanics model, which we do not add.",
+    ]
+    return case
+
+
+def _step_rows(case: Case, q0: np.ndarray, qf: np.ndarray, qs: np.ndarray) -> None:
+    """The joint-step runs' step responses and errors (from ``q0`` to ``qf``, or ``qs`` with the spread)."""
     for run, key in zip((case.runs["CTC joint steps"], case.runs["CTC with spread 65 deg"]), ("joint_steps", "spread")):
         t, q = run.trajectory.t, run.trajectory.q
         target = (qs if "spread" in run.name else qf)[list(run.joints)]
@@ -101,6 +119,10 @@ def ctc_steps(scale: float = 1.0) -> Case:
             )
         case.values[f"{key}/max_overshoot_pct"] = np.max(response.overshoot_percent)
         case.values[f"{key}/max_settling_s"] = np.max(response.settling_time)
+
+
+def _fingertip_rows(case: Case, hand: BarrettHand, start: np.ndarray, goal: np.ndarray) -> None:
+    """The fingertip run's largest error [% of each tip's travel from ``start`` to ``goal``], overall and late."""
     tip = case.runs["fingertip CTC"].trajectory
     x_error = np.linalg.norm(tip.log["x_error"].reshape(len(tip.t), -1, 3), axis=2)
     travel = np.linalg.norm(goal - start, axis=1)
@@ -111,18 +133,6 @@ def ctc_steps(scale: float = 1.0) -> Case:
         case.table.append(["fingertip CTC", f"{finger} tip", "-", "-", "-", f"{overall:.3f} ({after:.3f} after 0.5 s)"])
         case.values[f"fingertip/{finger}/max_error_pct_of_travel"] = overall
         case.values[f"fingertip/{finger}/max_error_after_0.5s_pct_of_travel"] = after
-    case.notes += [
-        "Thesis: fingertip max error 5 % of the steady state, rise < 2 s, settling ~2 s; with spread F3 q2 overshoots"
-        " 6 %, settling 1-1.5 s (Simulink) / 2.5-3.5 s (SimMechanics).",
-        "Ours: with the exact model CTC gives the linear error dynamics e'' + 160 e' + 400 e = 0 (poles -2.6 and"
-        " -157 1/s), so the joints follow the smooth step (time constant 0.5 s, rise 0.5 ln 9 = 1.10 s) with"
-        " errors set only by the step's velocity jump at its start; there is no overshoot because the reference"
-        " has none and the loop is overdamped.  The joints start 1 deg above their stops (the thesis' initial"
-        " pose is our 0, on the stops, whose reaction CTC does not model).  The thesis' overshoot and 5 % errors"
-        " come from unmodelled"
-        " friction and the 0.5 N m s/rad distal damping of its SimMechanics model, which we do not add.",
-    ]
-    return case
 
 
 CASES = {"ctc": ctc_steps, "planar": planar_sinusoid, "barrett": barrett_smc_asmc, "f3": f3_hosm}

@@ -62,6 +62,41 @@ def planar_impedance(scale: float = 1.0) -> Case:
     case.header = [*FORCE_HEADER, "k_e estimate [N/m] (true)", "x_e estimate [m] (true)", *CLOSED_FORM_HEADER]
     setup = planar_setup(1000.0)
     duration = 5.0 * scale
+    runs = _planar_runs(setup, duration)
+    why = ""
+    for name, controller, law, desired in runs:
+        traj = run(setup, controller, duration)
+        force = normal_force(setup, traj)
+        extra = ["-", "-", "-", "-"]
+        if isinstance(law, AdaptiveForceImpedance):
+            k_hat, x_hat = traj.log["tip/stiffness_estimate"][-1], traj.log["tip/surface_estimate"][-1]
+            extra[:2] = [f"{k_hat:.1f} ({setup.k_e:.1f})", f"{x_hat:.5f} ({setup.surface:.5f})"]
+        if law is not None:
+            assert isinstance(controller, ImpedanceController)
+            inner, *predicted = _closed_form(setup, traj, force, law, PLANAR_GAINS[0], controller.feedforward)
+            extra[2:] = [f"{value:.3f}" for value in predicted]
+            if name.startswith("FIM as printed"):
+                final = force_metrics(traj.t, force, desired).final
+                why = _why_printed(inner, PLANAR_GAINS[0], law.stiffness, setup.k_e, law.force, predicted[0], final)
+                why += "  On a frictionless face the run settles at the first column (tests/test_impedance.py)."
+        case.table.append(force_row(name, force_metrics(traj.t, force, desired), extra))
+        case.traces[name] = (traj.t, force, desired)
+    case.notes += [
+        "Thesis: without impedance > 150 N, PIM settles at 25 N; FIM converges to 10 N; adaptive FIM converges to"
+        " 30 N with k_e estimated ~409 N/m from 400 (its k_e is not stated).",
+        f"Ours: K_s = 1000 N/m (k_e = {setup.k_e:.1f} N/m as the tip sees it), object 5 cm ahead; thesis masses,"
+        " lengths, joint gains (80, 37) and impedances.  The adaptive runs start with k_e = 400 N/m and x_e 2.5 cm"
+        " short; our adaptive run's desired force steps from 15 to 30 N half way, because one constant force"
+        " identifies only the operating point f = f_d, not k_e and x_e separately (the printed run keeps 30 N, as"
+        " the thesis).",
+        PRINTED_NOTE,
+        why,
+    ]
+    return case
+
+
+def _planar_runs(setup: Setup, duration: float) -> list[tuple[str, Controller, ForceImpedance | None, float | None]]:
+    """The planar case's runs: (name, controller, its impedance law or None, desired force [N] or None)."""
     deep = setup.surface_point() + 0.05 * setup.normal
     approach = exponential_approach(setup.tip0, deep, 1.0)  # thesis a = 1
     plain = WorkspaceComputedTorque(setup.hand, {"tip": approach}, *PLANAR_GAINS)
@@ -96,36 +131,7 @@ def planar_impedance(scale: float = 1.0) -> Case:
         runs.append(
             (name, ImpedanceController(setup.hand, {"tip": law}, *PLANAR_GAINS, feedforward=forward), law, desired)
         )
-    why = ""
-    for name, controller, law, desired in runs:
-        traj = run(setup, controller, duration)
-        force = normal_force(setup, traj)
-        extra = ["-", "-", "-", "-"]
-        if isinstance(law, AdaptiveForceImpedance):
-            k_hat, x_hat = traj.log["tip/stiffness_estimate"][-1], traj.log["tip/surface_estimate"][-1]
-            extra[:2] = [f"{k_hat:.1f} ({setup.k_e:.1f})", f"{x_hat:.5f} ({setup.surface:.5f})"]
-        if law is not None:
-            assert isinstance(controller, ImpedanceController)
-            inner, *predicted = _closed_form(setup, traj, force, law, PLANAR_GAINS[0], controller.feedforward)
-            extra[2:] = [f"{value:.3f}" for value in predicted]
-            if name.startswith("FIM as printed"):
-                final = force_metrics(traj.t, force, desired).final
-                why = _why_printed(inner, PLANAR_GAINS[0], law.stiffness, setup.k_e, law.force, predicted[0], final)
-                why += "  On a frictionless face the run settles at the first column (tests/test_impedance.py)."
-        case.table.append(force_row(name, force_metrics(traj.t, force, desired), extra))
-        case.traces[name] = (traj.t, force, desired)
-    case.notes += [
-        "Thesis: without impedance > 150 N, PIM settles at 25 N; FIM converges to 10 N; adaptive FIM converges to"
-        " 30 N with k_e estimated ~409 N/m from 400 (its k_e is not stated).",
-        f"Ours: K_s = 1000 N/m (k_e = {setup.k_e:.1f} N/m as the tip sees it), object 5 cm ahead; thesis masses,"
-        " lengths, joint gains (80, 37) and impedances.  The adaptive runs start with k_e = 400 N/m and x_e 2.5 cm"
-        " short; our adaptive run's desired force steps from 15 to 30 N half way, because one constant force"
-        " identifies only the operating point f = f_d, not k_e and x_e separately (the printed run keeps 30 N, as"
-        " the thesis).",
-        PRINTED_NOTE,
-        why,
-    ]
-    return case
+    return runs
 
 
 def f3_force(scale: float = 1.0) -> Case:

@@ -9,7 +9,7 @@ import numpy as np
 
 from bhgrasp.grasp.metrics import finger_normal_forces
 from bhgrasp.model.hand import BarrettHand
-from bhgrasp.scenarios.demo_result import MU_ASSUMED
+from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult
 from bhgrasp.scenarios.grasp_controllers import SQUEEZE
 from bhgrasp.scenarios.grasp_demo import OFFSET, run_grasp_demo
 from bhgrasp.thesis.case import Case
@@ -98,22 +98,7 @@ def object_laws(scale: float = 1.0) -> Case:
     keys = {"ctc with G^+": "ctc_pinv", "natural, thesis gains": "natural_thesis_gains"}
     for name, law, distribution, gains in runs:
         result = run_grasp_demo(LAW_MASS, LAW_MASS, law, DURATION * scale, distribution=distribution, gains=gains)
-        m = motion_metrics(result)
-        case.table.append(
-            [
-                name,
-                pair_text(m["overshoot"], ".2f"),
-                pair_text(1e3 * m["max_error"], ".2f"),
-                pair_text(m["settling"], ".2f"),
-                pair_text(1e3 * m["final_error"], ".3f"),
-                str(result.slip_events),
-                f"{result.cone_margin:.3f}",
-            ]
-        )
-        case.runs[name] = result
-        case.values.update(motion_values(f"{keys.get(name, name)}/", m))
-        case.values[f"{keys.get(name, name)}/slip_events"] = result.slip_events
-        case.values[f"{keys.get(name, name)}/min_cone_margin_N"] = result.cone_margin
+        _law_row(case, name, keys.get(name, name), result)
     case.notes += [
         "Gains: CTC Kp = 2500 1/s^2, Kv = 100 1/s (critically damped at 50 rad/s); natural and stiffness K_p = "
         "(400 N/m, 0.5 N m/rad), K_v = (8 N s/m, 0.01 N m s/rad), lambda = 10 1/s.  With the thesis' translation gains "
@@ -212,30 +197,7 @@ def mass_sweep(scale: float = 1.0) -> Case:
     for mass in MASSES:
         qp = run_grasp_demo(mass, 0.5, "smc-adaptive", DURATION * scale)
         pinv = run_grasp_demo(mass, 0.5, "smc-adaptive", DURATION * scale, distribution="pinv")
-        case.table.append(
-            [
-                f"{mass:.1f}",
-                f"{qp.mass_estimate:.4f}",
-                f"{100 * qp.force_error:.2f}",
-                str(qp.slip_events),
-                f"{1e3 * qp.position_error:.3f}",
-                f"{pinv.cone_margin:.3f}",
-                str(pinv.slip_events),
-                f"{1e3 * pinv.position_error:.3f}",
-            ]
-        )
-        case.runs[f"QP {mass:.1f} kg"], case.runs[f"G^+ {mass:.1f} kg"] = qp, pinv
-        case.values.update(
-            {
-                f"{mass:.1f}kg/qp/mass_estimate_kg": qp.mass_estimate,
-                f"{mass:.1f}kg/qp/force_error_pct": 100 * qp.force_error,
-                f"{mass:.1f}kg/qp/slip_events": qp.slip_events,
-                f"{mass:.1f}kg/qp/final_error_mm": 1e3 * qp.position_error,
-                f"{mass:.1f}kg/pinv/min_cone_margin_N": pinv.cone_margin,
-                f"{mass:.1f}kg/pinv/slip_events": pinv.slip_events,
-                f"{mass:.1f}kg/pinv/final_error_mm": 1e3 * pinv.position_error,
-            }
-        )
+        _mass_row(case, mass, qp, pinv)
     qp_runs = [case.runs[f"QP {mass:.1f} kg"] for mass in MASSES]
     outside = [mass for mass in MASSES if case.runs[f"G^+ {mass:.1f} kg"].cone_margin < 0.0]
     case.values.update(
@@ -256,6 +218,54 @@ def mass_sweep(scale: float = 1.0) -> Case:
         "commanded forces' cone margin, 1 kg box",
     )
     return case
+
+
+def _law_row(case: Case, name: str, key: str, result: GraspDemoResult) -> None:
+    """The object-law case's row and values (under ``key``) for run ``name``."""
+    m = motion_metrics(result)
+    case.table.append(
+        [
+            name,
+            pair_text(m["overshoot"], ".2f"),
+            pair_text(1e3 * m["max_error"], ".2f"),
+            pair_text(m["settling"], ".2f"),
+            pair_text(1e3 * m["final_error"], ".3f"),
+            str(result.slip_events),
+            f"{result.cone_margin:.3f}",
+        ]
+    )
+    case.runs[name] = result
+    case.values.update(motion_values(f"{key}/", m))
+    case.values[f"{key}/slip_events"] = result.slip_events
+    case.values[f"{key}/min_cone_margin_N"] = result.cone_margin
+
+
+def _mass_row(case: Case, mass: float, qp: GraspDemoResult, pinv: GraspDemoResult) -> None:
+    """The mass sweep's row and values for ``mass`` [kg]: its QP and G^+ runs."""
+    case.table.append(
+        [
+            f"{mass:.1f}",
+            f"{qp.mass_estimate:.4f}",
+            f"{100 * qp.force_error:.2f}",
+            str(qp.slip_events),
+            f"{1e3 * qp.position_error:.3f}",
+            f"{pinv.cone_margin:.3f}",
+            str(pinv.slip_events),
+            f"{1e3 * pinv.position_error:.3f}",
+        ]
+    )
+    case.runs[f"QP {mass:.1f} kg"], case.runs[f"G^+ {mass:.1f} kg"] = qp, pinv
+    case.values.update(
+        {
+            f"{mass:.1f}kg/qp/mass_estimate_kg": qp.mass_estimate,
+            f"{mass:.1f}kg/qp/force_error_pct": 100 * qp.force_error,
+            f"{mass:.1f}kg/qp/slip_events": qp.slip_events,
+            f"{mass:.1f}kg/qp/final_error_mm": 1e3 * qp.position_error,
+            f"{mass:.1f}kg/pinv/min_cone_margin_N": pinv.cone_margin,
+            f"{mass:.1f}kg/pinv/slip_events": pinv.slip_events,
+            f"{mass:.1f}kg/pinv/final_error_mm": 1e3 * pinv.position_error,
+        }
+    )
 
 
 def _plots():

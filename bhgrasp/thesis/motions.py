@@ -145,30 +145,7 @@ def motions_case(scale: float = 1.0):
             succeeded += row["success"]
             if not row["success"]:
                 failed.append(f"{motion_label} ({grasp_label}: {row['slip_events']} slip samples)")
-            outcome = ("success" if row["success"] else "failed") + (" (planned)" if row["planned"] else "")
-            case.table.append(
-                [
-                    grasp_label,
-                    motion_label,
-                    outcome,
-                    f"{row['final_error_mm']:.3f} / {row['final_rotation_mrad']:.2f}",
-                    f"{row['max_error_mm']:.3f} / {row['max_rotation_mrad']:.2f}",
-                    str(row["slip_events"]),
-                    f"{row['force_error_pct']:.2f}",
-                ]
-            )
-            for name in (
-                "final_error_mm",
-                "final_rotation_mrad",
-                "max_error_mm",
-                "max_rotation_mrad",
-                "slip_events",
-                "force_error_pct",
-                "plan_shortfall_mm",
-                "plan_shortfall_mrad",
-            ):
-                case.values[f"{key}/{name}"] = float(row[name])
-            case.values[f"{key}/success"] = float(row["success"])
+            _record(case, key, grasp_label, motion_label, row)
     case.values["allowed_motions"] = float(allowed)
     case.values["allowed_success_pct"] = 100.0 * succeeded / allowed if allowed else float("nan")
     shortfall = tuple(
@@ -177,6 +154,34 @@ def motions_case(scale: float = 1.0):
     )
     case.notes += _notes(allowed, succeeded, failed, shortfall)
     return case
+
+
+def _record(case: Case, key: str, grasp_label: str, motion_label: str, row: dict) -> None:
+    """A motion run's row, and its values under ``key``."""
+    outcome = ("success" if row["success"] else "failed") + (" (planned)" if row["planned"] else "")
+    case.table.append(
+        [
+            grasp_label,
+            motion_label,
+            outcome,
+            f"{row['final_error_mm']:.3f} / {row['final_rotation_mrad']:.2f}",
+            f"{row['max_error_mm']:.3f} / {row['max_rotation_mrad']:.2f}",
+            str(row["slip_events"]),
+            f"{row['force_error_pct']:.2f}",
+        ]
+    )
+    for name in (
+        "final_error_mm",
+        "final_rotation_mrad",
+        "max_error_mm",
+        "max_rotation_mrad",
+        "slip_events",
+        "force_error_pct",
+        "plan_shortfall_mm",
+        "plan_shortfall_mrad",
+    ):
+        case.values[f"{key}/{name}"] = float(row[name])
+    case.values[f"{key}/success"] = float(row["success"])
 
 
 def _notes(allowed: int, succeeded: int, failed: list[str], shortfall: tuple[float, ...]) -> list[str]:

@@ -62,35 +62,7 @@ def path_case(scale: float = 1.0):
             run = run_path(setup, path)
             if name == "circle":
                 circles[key] = run
-            case.table.append(
-                [
-                    f"{label} (synthesised)",
-                    description,
-                    "success" if run.success else "failed",
-                    f"{1e3 * run.max_deviation:.3f} / {1e3 * run.rms_deviation:.3f}",
-                    f"{1e3 * run.lift_deviation:.3f}",
-                    f"{1e3 * run.max_rotation:.2f}",
-                    f"{1e3 * run.final_position_error:.3f} / {1e3 * run.final_rotation_error:.2f}",
-                    str(run.slip_events),
-                    f"{run.cone_margin:.2f}",
-                ]
-            )
-            case.values.update(
-                {
-                    f"{key}/{name}/{field}": value
-                    for field, value in (
-                        ("success", float(run.success)),
-                        ("max_deviation_mm", 1e3 * run.max_deviation),
-                        ("rms_deviation_mm", 1e3 * run.rms_deviation),
-                        ("lift_deviation_mm", 1e3 * run.lift_deviation),
-                        ("max_rotation_mrad", 1e3 * run.max_rotation),
-                        ("final_error_mm", 1e3 * run.final_position_error),
-                        ("final_rotation_mrad", 1e3 * run.final_rotation_error),
-                        ("slip_events", float(run.slip_events)),
-                        ("cone_margin_N", run.cone_margin),
-                    )
-                }
-            )
+            _record(case, f"{key}/{name}", label, description, run)
     case.notes += [
         f"Circle (`bhgrasp.motion.paths.PoseCircle`): a {1e3 * LIFT[2]:g} mm lift in {LIFT_TIME:g} s, then once "
         "around a circle through the lifted "
@@ -107,6 +79,39 @@ def path_case(scale: float = 1.0):
     ]
     case.figures["chapter5_paths.png"] = lambda: _figure(circles)
     return case
+
+
+def _record(case: Case, prefix: str, label: str, description: str, run: PathRun) -> None:
+    """A path run's row, and its values under ``prefix``."""
+    case.table.append(
+        [
+            f"{label} (synthesised)",
+            description,
+            "success" if run.success else "failed",
+            f"{1e3 * run.max_deviation:.3f} / {1e3 * run.rms_deviation:.3f}",
+            f"{1e3 * run.lift_deviation:.3f}",
+            f"{1e3 * run.max_rotation:.2f}",
+            f"{1e3 * run.final_position_error:.3f} / {1e3 * run.final_rotation_error:.2f}",
+            str(run.slip_events),
+            f"{run.cone_margin:.2f}",
+        ]
+    )
+    case.values.update(
+        {
+            f"{prefix}/{field}": value
+            for field, value in (
+                ("success", float(run.success)),
+                ("max_deviation_mm", 1e3 * run.max_deviation),
+                ("rms_deviation_mm", 1e3 * run.rms_deviation),
+                ("lift_deviation_mm", 1e3 * run.lift_deviation),
+                ("max_rotation_mrad", 1e3 * run.max_rotation),
+                ("final_error_mm", 1e3 * run.final_position_error),
+                ("final_rotation_mrad", 1e3 * run.final_rotation_error),
+                ("slip_events", float(run.slip_events)),
+                ("cone_margin_N", run.cone_margin),
+            )
+        }
+    )
 
 
 def _describe(moves) -> str:

@@ -12,6 +12,7 @@ closed, the true final pose within 0.5 mm and 5 mrad of the request).
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 
@@ -50,19 +51,7 @@ def synthesis_case(scale: float = 1.0):
             continue
         planning = time.perf_counter() - start
         case.values[f"{object_key}/grasp_found"] = 1.0
-        c = setup.candidate
-        grasp = (
-            f"{'+'.join(c.fingers)}, spread {np.degrees(c.spread):.0f} deg, epsilon {c.quality.epsilon:.3f}, "
-            f"weight margin {c.weight_margin:.2f} N"
-        )
-        case.values.update(
-            {
-                f"{object_key}/spread_deg": float(np.degrees(c.spread)),
-                f"{object_key}/epsilon": float(c.quality.epsilon),
-                f"{object_key}/fingers": len(c.fingers),
-                f"{object_key}/weight_margin_N": float(c.weight_margin),
-            }
-        )
+        grasp = _record_grasp(case, object_key, setup.candidate)
         case.notes.append(f"{label}: synthesised in {planning:.1f} s (wall, this machine).")
         for motion_key, (motion, offset) in MOTIONS.items():
             key = f"{object_key}/{motion_key}"
@@ -74,39 +63,59 @@ def synthesis_case(scale: float = 1.0):
                 case.table.append([label, grasp, motion, f"refused: {short_reason(str(error))}", "-", "-"])
                 continue
             allowed += 1
-            position, rotation = result.true_position_error, result.true_rotation_error
-            success = result.slip_events == 0 and position < SUCCESS[0] and rotation < SUCCESS[1]
-            succeeded += success
-            if not success:
-                failed.append(
-                    f"{label}, {motion} ({1e3 * position:.2f} mm, {1e3 * rotation:.1f} mrad, "
-                    f"{result.slip_events} slip samples)"
-                )
-            case.table.append(
-                [
-                    label,
-                    grasp,
-                    motion,
-                    "success" if success else "failed",
-                    f"{1e3 * position:.3f} / {1e3 * rotation:.2f}",
-                    str(result.slip_events),
-                ]
-            )
-            case.values.update(
-                {
-                    f"{key}/refused": 0.0,
-                    f"{key}/success": float(success),
-                    f"{key}/final_error_mm": 1e3 * position,
-                    f"{key}/final_rotation_mrad": 1e3 * rotation,
-                    f"{key}/slip_events": float(result.slip_events),
-                }
-            )
+            succeeded += _record_motion(case, key, label, grasp, motion, result, failed)
     case.values["requested_motions"] = float(requested)
     case.values["refused_motions"] = float(requested - allowed)
     case.values["allowed_motions"] = float(allowed)
     case.values["allowed_success_pct"] = 100.0 * succeeded / allowed if allowed else float("nan")
     case.notes += _notes(allowed, succeeded, failed)
     return case
+
+
+def _record_grasp(case: Case, object_key: str, c: Any) -> str:
+    """The synthesised grasp ``c``'s values (spread, epsilon, fingers, weight margin) and its description."""
+    case.values.update(
+        {
+            f"{object_key}/spread_deg": float(np.degrees(c.spread)),
+            f"{object_key}/epsilon": float(c.quality.epsilon),
+            f"{object_key}/fingers": len(c.fingers),
+            f"{object_key}/weight_margin_N": float(c.weight_margin),
+        }
+    )
+    return (
+        f"{'+'.join(c.fingers)}, spread {np.degrees(c.spread):.0f} deg, epsilon {c.quality.epsilon:.3f}, "
+        f"weight margin {c.weight_margin:.2f} N"
+    )
+
+
+def _record_motion(case: Case, key: str, label: str, grasp: str, motion: str, result: Any, failed: list[str]) -> bool:
+    """A motion's row and values; whether it succeeded (a failure's description goes to ``failed``)."""
+    position, rotation = result.true_position_error, result.true_rotation_error
+    success = result.slip_events == 0 and position < SUCCESS[0] and rotation < SUCCESS[1]
+    if not success:
+        failed.append(
+            f"{label}, {motion} ({1e3 * position:.2f} mm, {1e3 * rotation:.1f} mrad, {result.slip_events} slip samples)"
+        )
+    case.table.append(
+        [
+            label,
+            grasp,
+            motion,
+            "success" if success else "failed",
+            f"{1e3 * position:.3f} / {1e3 * rotation:.2f}",
+            str(result.slip_events),
+        ]
+    )
+    case.values.update(
+        {
+            f"{key}/refused": 0.0,
+            f"{key}/success": float(success),
+            f"{key}/final_error_mm": 1e3 * position,
+            f"{key}/final_rotation_mrad": 1e3 * rotation,
+            f"{key}/slip_events": float(result.slip_events),
+        }
+    )
+    return success
 
 
 def _notes(allowed: int, succeeded: int, failed: list[str]) -> list[str]:
