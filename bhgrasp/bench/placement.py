@@ -27,6 +27,7 @@ import pinocchio as pin
 
 import bhgrasp as bh
 from bhgrasp.bench.objects import BenchObject
+from bhgrasp.grasp.probes import coal_transform
 
 _FLIP = pin.rpy.rpyToMatrix(np.pi, 0.0, 0.0)  # world <- palm-down hand: an upright object's axes in the hand frame
 STAND_HEIGHT = 0.2  # [m] the stand under the object (its top the table plane z = 0)
@@ -74,7 +75,7 @@ class _Reach:
             result = coal.DistanceResult()
             gap = coal.distance(
                 self.geometry.geometryObjects[i].geometry,
-                coal.Transform3s(frame.rotation, frame.translation),
+                coal_transform(frame),
                 shape,
                 placement,
                 coal.DistanceRequest(),

@@ -29,7 +29,7 @@ class ObjectProbe:
 
     def __init__(self, shape: coal.ShapeBase, pose: pin.SE3) -> None:
         """Probe ``shape`` placed at ``pose`` (world <- object)."""
-        self.shape, self.placement = shape, coal.Transform3s(pose.rotation, pose.translation)
+        self.shape, self.placement = shape, coal_transform(pose)
         self.point, self.at = coal.Sphere(1e-9), coal.Transform3s()
         self.request, self.result = coal.DistanceRequest(), coal.DistanceResult()
 
@@ -102,7 +102,7 @@ class HandClearance:
         """The least distance [m] from the object to any hand shape but the pads of ``fingers``."""
         pin.forwardKinematics(self.hand.model, self.model_data, q)
         pin.updateGeometryPlacements(self.hand.model, self.model_data, self.geometry, self.data)
-        placement = coal.Transform3s(pose.rotation, pose.translation)
+        placement = coal_transform(pose)
         request, result = coal.DistanceRequest(), coal.DistanceResult()
         nearest = np.inf
         for index, item in enumerate(self.geometry.geometryObjects):
@@ -110,9 +110,7 @@ class HandClearance:
                 continue
             result.clear()
             world = self.base * self.data.oMg[index]
-            distance = coal.distance(
-                item.geometry, coal.Transform3s(world.rotation, world.translation), shape, placement, request, result
-            )
+            distance = coal.distance(item.geometry, coal_transform(world), shape, placement, request, result)
             nearest = min(nearest, float(distance))
         return nearest
 

@@ -58,7 +58,7 @@ class TuningRuns:
     serial: bool
 
 
-def pair_text(values: Any, spec: str = ".4g") -> str:
+def bracketed(values: Any, spec: str = ".4g") -> str:
     """``[a, b]`` of ``values`` formatted with ``spec``."""
     return "[" + ", ".join(format(float(v), spec) for v in values) + "]"
 
@@ -73,7 +73,7 @@ def held_out_table(case: Case, r: TuningRuns) -> None:
     held: Iterator[Any] = iter(r.held)
     for start in r.starts:
         x0, result = r.best[start][1], r.best[start][3]
-        label = pair_text(start, "g") + ("" if np.allclose(x0, start) else f" (clipped to {pair_text(x0, 'g')})")
+        label = bracketed(start, "g") + ("" if np.allclose(x0, start) else f" (clipped to {bracketed(x0, 'g')})")
         found = 10.0**result.best
         for desired in (4.0, 6.0, 8.0):
             before, after = next(held), next(held)
@@ -101,11 +101,11 @@ def runs_table(case: Case, r: TuningRuns) -> tuple[np.ndarray, list[float]]:
     """
     rows: list[list[str]] = []
     for start, x0, seed, result, _ in r.runs:
-        clipped = "" if np.allclose(x0, start) else f" (clipped to {pair_text(x0, 'g')})"
+        clipped = "" if np.allclose(x0, start) else f" (clipped to {bracketed(x0, 'g')})"
         found = 10.0**result.best
         rows.append(
             [
-                f"{pair_text(start, 'g')}{clipped}, seed {seed}",
+                f"{bracketed(start, 'g')}{clipped}, seed {seed}",
                 f"{found[0]:.5f}",
                 f"{found[1]:.4f}",
                 f"{r.at_start[start]:.4f} -> {result.best_fitness:.5f}",
@@ -114,7 +114,7 @@ def runs_table(case: Case, r: TuningRuns) -> tuple[np.ndarray, list[float]]:
                 str(dict(result.criteria)),
             ]
         )
-        case.traces[f"from {pair_text(start, 'g')}, seed {seed}"] = (
+        case.traces[f"from {bracketed(start, 'g')}, seed {seed}"] = (
             np.arange(result.generations),
             result.generation_best,
             None,
@@ -154,7 +154,7 @@ def _summary_rows(r: TuningRuns, found_all: np.ndarray, fitness_all: list[float]
     for start, found in r.thesis.items():
         rows.append(
             [
-                f"thesis Table 4.2, from {pair_text(start, 'g')}",
+                f"thesis Table 4.2, from {bracketed(start, 'g')}",
                 f"{found[0]:.4f}",
                 f"{found[1]:.4f}",
                 f"our fitness at it: {r.at_thesis[start]:.4f}",
@@ -186,7 +186,7 @@ def tuning_notes(
         f" cma's own criteria, tolfun {TUNING_TOL_FUN:g} N, tolx {TUNING_TOL_X:g} decades and cma's defaults"
         f" (tolstagnation, tolflatfitness, ...), with maxfevals {r.cap} as a safety cap (cma stops after the first"
         f" generation past it); the 'cma stop()' column is cma's stop() dictionary.  {len(r.runs)} run(s): starts"
-        f" {', '.join(pair_text(s, 'g') for s in r.starts)} x seeds"
+        f" {', '.join(bracketed(s, 'g') for s in r.starts)} x seeds"
         f" {', '.join(str(seed) for seed in dict.fromkeys(seed for _, seed in r.pairs))}"
         + ("" if r.scale == 1.0 else f" (scale {r.scale:g}: runs ~ scale, cap ~ scale^2)")
         + ".",
@@ -211,4 +211,4 @@ def tuning_notes(
     ]
 
 
-__all__ = ["TuningRuns", "held_out_table", "pair_text", "runs_table", "span_text", "tuning_notes"]
+__all__ = ["TuningRuns", "bracketed", "held_out_table", "runs_table", "span_text", "tuning_notes"]
