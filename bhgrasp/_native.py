@@ -72,7 +72,7 @@ def default_core() -> ModuleType | None:
 def core_loads() -> bool:
     """True if ``bhgrasp._core`` loads (whatever the default engine)."""
     try:
-        from bhgrasp import _core  # noqa: F401
+        import bhgrasp._core  # noqa: F401
     except ImportError:
         return False
     return True
@@ -85,7 +85,7 @@ def required_core(what: str) -> ModuleType:
         CompiledEngineUnavailable: It does not load; the message says why, how to rebuild, and how to run Python.
     """
     try:
-        from bhgrasp import _core
+        import bhgrasp._core as _core
     except ImportError as error:
         shadowed = _shadowed_install()
         if shadowed is not None:
