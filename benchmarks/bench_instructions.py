@@ -84,7 +84,7 @@ def grasp_law(state_file: Path):
 
     from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
     from bhgrasp.data import State
-    from bhgrasp.model.hand import BarrettHand
+    from bhgrasp.model.barrett_hand import BarrettHand
     from bhgrasp.model.objects import Box
     from bhgrasp.scenarios.box_grasp import BOX_SIZE
 

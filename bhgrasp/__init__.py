@@ -23,7 +23,7 @@ from bhgrasp.errors import (
 # public name -> the module that defines it
 _EXPORTS = {
     "BarrettActuation": "bhgrasp.sim.actuation",
-    "BarrettHand": "bhgrasp.model.hand",
+    "BarrettHand": "bhgrasp.model.barrett_hand",
     "Box": "bhgrasp.model.objects",
     "Capsule": "bhgrasp.model.objects",
     "Contact": "bhgrasp.data.contacts",
@@ -163,7 +163,8 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported here
         is_force_closure,
         pseudo_inverse_forces,
     )
-    from bhgrasp.model.hand import BarrettHand, Hand
+    from bhgrasp.model.barrett_hand import BarrettHand
+    from bhgrasp.model.hand import Hand
     from bhgrasp.model.hand_ik import IKResult, ik
     from bhgrasp.model.ik import FingerIKResult, Workspace, finger_ik, workspace
     from bhgrasp.model.objects import Box, Capsule, Cylinder, FixedBox, Plane, Sphere, table, wall

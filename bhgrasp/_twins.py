@@ -50,7 +50,7 @@ KERNELS = (
     ),
     Twin(
         "HandDynamics",
-        "bhgrasp.model.hand_dynamics.HandDynamics._slotine_li_torque_python",
+        "bhgrasp.model.hand_dynamics._slotine_li_torque_python",
         "tests/test_hand_kernels.py::test_slotine_li_torque_is_the_python_twin_to_the_bit",
     ),
     Twin(

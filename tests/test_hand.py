@@ -279,3 +279,34 @@ def test_point_jacobians_of_a_one_joint_hand_keep_their_shape() -> None:
     pin.forwardKinematics(hand.model, data, q)
     origin = hand.base_placement.act(data.oMi[1].translation)  # on the joint axis
     np.testing.assert_allclose(jacobians[0, :, 0], np.cross(axis, point - origin), atol=1e-12)
+
+
+def test_one_hand_class_offers_every_algorithm_of_its_modules_as_a_method() -> None:
+    import inspect
+
+    from bhgrasp.model import hand as hand_module
+    from bhgrasp.model import hand_dynamics, hand_joints, hand_kinematics
+
+    assert bh.Hand.__mro__ == (bh.Hand, object)  # one class, no layers
+    for module in (hand_joints, hand_kinematics, hand_dynamics):
+        for name, function in inspect.getmembers(module, inspect.isfunction):
+            if name.startswith("_") or function.__module__ != module.__name__:
+                continue
+            offered = inspect.getattr_static(bh.Hand, name)
+            assert (offered.fget if isinstance(offered, property) else offered) is function, name
+    assert "twin" not in pickle.loads(pickle.dumps(bh.BarrettHand())).__dict__  # rebuilt on first use
+    assert hand_module.Hand is bh.Hand
+
+
+def test_the_base_frame_is_new_after_each_change_and_read_only(barrett: bh.Hand) -> None:
+    hand = copy.deepcopy(barrett)
+    first = hand.base
+    assert first.at_origin and hand.base is first
+    hand.gravity = (0.0, -9.81, 0.0)
+    assert hand.base is not first
+    np.testing.assert_array_equal(hand.base.gravity, (0.0, -9.81, 0.0))
+    hand.base_placement = pin.SE3(pin.utils.rotate("x", np.pi / 2), np.array([0.1, 0.0, 0.0]))
+    assert not hand.base.at_origin
+    np.testing.assert_allclose(hand.base.gravity, (0.0, 0.0, 9.81), atol=1e-12)  # gravity in base coordinates
+    with pytest.raises(ValueError):
+        hand.base.rotation[0, 0] = 2.0

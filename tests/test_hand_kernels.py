@@ -1,6 +1,6 @@
 """The compiled hand dynamics (src/dynamics.cpp: HandDynamics) against Pinocchio's Python API.
 
-Truths: the NumPy twin (Hand._slotine_li_torque_python, the same three RNEA passes: equal to the bit), and the
+Truths: the NumPy twin (hand_dynamics._slotine_li_torque_python, the same three RNEA passes: equal to the bit), and the
 defining identity M a + C(q, v) v + G = RNEA(q, v, a) when the reference velocity is the velocity itself.
 """
 
@@ -15,6 +15,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp._native import core_loads
+from bhgrasp.model import hand_dynamics
 from bhgrasp.scenarios.allegro_grasp import allegro_hand
 
 pytestmark = pytest.mark.skipif(not core_loads(), reason="bhgrasp._core is not built")
@@ -36,7 +37,7 @@ def test_slotine_li_torque_is_the_python_twin_to_the_bit(hand: bh.Hand) -> None:
         q = pin.randomConfiguration(hand.model)
         v, v_r, a_r = (rng.normal(size=hand.nv) for _ in range(3))
         compiled = hand.slotine_li_torque(q, v, v_r, a_r)
-        np.testing.assert_array_equal(compiled, hand._slotine_li_torque_python(q, v, v_r, a_r))
+        np.testing.assert_array_equal(compiled, hand_dynamics._slotine_li_torque_python(hand, q, v, v_r, a_r))
         truth = pin.rnea(hand.model, hand.model.createData(), q, v, a_r)
         np.testing.assert_allclose(hand.slotine_li_torque(q, v, v, a_r), truth, rtol=0,
                                    atol=1e-12 * max(1.0, np.abs(truth).max()))  # fmt: skip

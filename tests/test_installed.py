@@ -55,8 +55,8 @@ def test_the_message_of_a_shadowed_install(monkeypatch: pytest.MonkeyPatch, tmp_
     real_import = builtins.__import__
 
     def no_core(name: str, globals=None, locals=None, fromlist=(), level=0):
-        if name == "bhgrasp" and fromlist and "_core" in fromlist:
-            raise ImportError("cannot import name '_core'")
+        if name == "bhgrasp._core" or (name == "bhgrasp" and fromlist and "_core" in fromlist):
+            raise ImportError("No module named 'bhgrasp._core'")
         return real_import(name, globals, locals, fromlist, level)
 
     monkeypatch.setattr(builtins, "__import__", no_core)

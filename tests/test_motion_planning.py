@@ -116,6 +116,7 @@ def _can_turn(plan_tolerance):
 
     from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
     from bhgrasp.controllers.supervisor import GraspSupervisor
+    from bhgrasp.controllers.supervisor_options import Planning
     from bhgrasp.scenarios.demo_result import evaluate_demo
     from bhgrasp.scenarios.object_grasp import OBJECTS, object_grasp
 
@@ -123,8 +124,9 @@ def _can_turn(plan_tolerance):
     grasp = SMCAdaptiveGrasp(setup.hand, replace(setup.item, density=None), mu=0.6, squeeze=5.0,
                              object_adaptation=(0.0, 0.0))  # fmt: skip
     offset = np.array(CAN_TURN)
+    planning = Planning(tolerance=plan_tolerance)
     supervisor = GraspSupervisor(setup.hand, setup.candidate.q_contact, grasp, offset=offset,
-                                 fingers=setup.candidate.fingers, plan_tolerance=plan_tolerance)  # fmt: skip
+                                 fingers=setup.candidate.fingers, planning=planning)  # fmt: skip
     traj = setup.simulator.run(supervisor, 3.0, state=setup.state, progress=False)
     return offset, evaluate_demo(traj, setup.hand, "smc-adaptive", setup.item.mass, setup.item.mass, supervisor, 0.0,
                                  setup.simulator.scene)  # fmt: skip
@@ -140,5 +142,5 @@ def test_a_request_the_sensed_contacts_make_only_in_part_is_refused_and_run_anyw
     _, result = _can_turn((2e-3, 2e-2))  # looser: it runs, tracks the plan, and ends off the request by the part
     np.testing.assert_allclose(result.planned_offset, planned, atol=1e-12)
     assert result.true_position_error == pytest.approx(shortfall, rel=0.15)
-    with pytest.raises(bh.InputError, match="plan_tolerance"):
+    with pytest.raises(bh.InputError, match="Planning.tolerance"):
         _can_turn((0.0, 5e-3))

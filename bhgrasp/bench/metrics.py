@@ -27,9 +27,9 @@ from bhgrasp.bench.protocol import (
     STRICT,
     Trial,
 )
-from bhgrasp.model.hand_model import STANDARD_GRAVITY
+from bhgrasp.model.hand import STANDARD_GRAVITY
 
-GRAVITY = -STANDARD_GRAVITY[2]  # [m/s^2] the simulated hand's (bhgrasp.model.hand_model)
+GRAVITY = -STANDARD_GRAVITY[2]  # [m/s^2] the simulated hand's (bhgrasp.model.hand)
 STOP_MARGIN = 0.01  # [rad] a distal joint this close to its upper limit rests on its stop
 PLACED = 0.002  # [m] placed: back within this of its resting height, the stand carrying at least half its weight
 

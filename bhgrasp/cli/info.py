@@ -19,7 +19,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the hand's summary."""
-    from bhgrasp.model.hand import BarrettHand, Hand
+    from bhgrasp.model.barrett_hand import BarrettHand
+    from bhgrasp.model.hand import Hand
 
     print((BarrettHand() if args.urdf is None else Hand.from_urdf(args.urdf, mimic=args.mimic)).summary())
     return 0

@@ -22,7 +22,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print each part of the tour and write the workspace figure."""
-    from bhgrasp.model.hand import BarrettHand
+    from bhgrasp.model.barrett_hand import BarrettHand
     from bhgrasp.scenarios import tour
     from bhgrasp.thesis.chapter2 import workspace_table
 

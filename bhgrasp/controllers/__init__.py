@@ -25,11 +25,13 @@ from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.sliding import AdaptiveSlidingMode, SlidingMode, SlidingSurface, lyapunov, parameter_scales
 from bhgrasp.controllers.supervisor import GraspSupervisor
+from bhgrasp.controllers.supervisor_options import Approach, Planning
 from bhgrasp.controllers.workspace import WorkspaceComputedTorque, WorkspaceDynamics, workspace_dynamics
 
 __all__ = [
     "AdaptiveForceImpedance",
     "AdaptiveSlidingMode",
+    "Approach",
     "ComputedTorque",
     "Controller",
     "ForceImpedance",
@@ -45,6 +47,7 @@ __all__ = [
     "ObjectIdentification",
     "ObjectSpaceController",
     "PDGravity",
+    "Planning",
     "PositionImpedance",
     "QuasiContinuousA",
     "SMCAdaptiveGrasp",

@@ -15,7 +15,7 @@ lockstep.
 from __future__ import annotations
 
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
@@ -27,6 +27,9 @@ from bhgrasp.grasp.forces import solver_arguments
 from bhgrasp.grasp.frames import TANGENT_SWITCH, ZERO_NORMAL, _grasp_map, contact_frames
 from bhgrasp.grasp.kinematics import _hand_index
 from bhgrasp.grasp.kinematics import _kernel as _kinematics_kernel
+
+if TYPE_CHECKING:
+    from bhgrasp.model.hand import BaseFrame
 
 _ROW_CACHE = 256  # contact-body tuples whose finger and joint rows are kept (a run meets a handful)
 
@@ -69,11 +72,11 @@ class CompiledSMCLaw:
         """Build ``core.SMCAdaptiveLaw`` on the hand's kernels and configure it from ``law``."""
         hand = law.nominal
         self._regressor = core.object_regressor
-        self.kernel = core.SMCAdaptiveLaw(_kinematics_kernel(hand), hand._dynamics(), len(hand.fingers))
+        self.kernel = core.SMCAdaptiveLaw(_kinematics_kernel(hand), hand.compiled_dynamics(), len(hand.fingers))
         self._finger_of = {link: hand.fingers.index(f) for link, f in law.sensing._finger_of.items()}
         self._joint_of = _hand_index(hand).joints
         self._rows: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
-        self._base: tuple[Any, Any] | None = None
+        self._base: BaseFrame | None = None  # the hand base the kernel was last given
         self._held: tuple[Any, np.ndarray, np.ndarray] | None = None  # law._hold and its arrays
         self._zeros = np.zeros(6)
         self._zeros.flags.writeable = False
@@ -153,10 +156,10 @@ class CompiledSMCLaw:
             sample, velocity, acceleration = law.reference(t)
             rotation_d, position_d = pin.exp3(sample[3:]), sample[:3]
         v = as_vector(state.v, "v", hand.nv)  # (Hand.slotine_li_torque's check)
-        placement, gravity = hand._placement, hand._model_gravity
-        if self._base is None or self._base[0] is not placement or self._base[1] is not gravity:
-            kernel.set_base(placement.rotation, placement.translation, gravity)
-            self._base = (placement, gravity)
+        base = hand.base  # a new one whenever the hand's placement or gravity change
+        if self._base is not base:
+            kernel.set_base(base.rotation, base.translation, base.gravity)
+            self._base = base
         out = np.empty(self._size)
         status = kernel.grasp(
             q,

@@ -55,12 +55,9 @@ def _workspace(hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, index: np.
     kernel = _kernel(hand)
     if kernel is None or len(index) > 3:
         return _workspace_dynamics(hand, q, v, finger, index, number)
-    if hand._base_at_origin:
-        rotation, translation = _IDENTITY, _ORIGIN
-    else:
-        placement = hand.base_placement
-        rotation, translation = placement.rotation, placement.translation
-    terms = kernel.workspace(number, hand._model_gravity, rotation, translation, q, v)
+    base = hand.base
+    rotation, translation = (_IDENTITY, _ORIGIN) if base.at_origin else (base.rotation, base.translation)
+    terms = kernel.workspace(number, base.gravity, rotation, translation, q, v)
     if terms.singular:
         raise _singular(finger, q[index], len(index))
     return terms

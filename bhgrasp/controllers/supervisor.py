@@ -3,10 +3,10 @@
 Phases (logged as ``phase``: 0 approach, 1 squeeze, 2 manipulate):
 
 0. **approach** — joint-space computed torque along a smooth step (5.36) from the start configuration to the
-   contact configuration (from IK) closed a little further by ``closing`` [rad] on every non-spread joint (or to a
-   given ``q_close``), so that the fingers press once they touch.  A finger counts as arrived when its sensed
-   normal force exceeds ``contact_force``; when every grasping finger has arrived (or at ``approach_timeout``) the
-   grasp controller takes over.
+   contact configuration (from IK) closed a little further by ``approach.closing`` [rad] on every non-spread joint
+   (or to a given ``q_close``), so that the fingers press once they touch.  A finger counts as arrived when its
+   sensed normal force exceeds ``approach.contact_force``; when every grasping finger has arrived (or at
+   ``approach.timeout``) the grasp controller takes over (:class:`~bhgrasp.controllers.supervisor_options.Approach`).
 1. **squeeze** — the object-space grasp controller holds the object where it was caught (its QP brings the
    contact forces to the desired squeeze) for ``squeeze_time``.
 2. **manipulate** — the grasp controller follows a minimum-jerk motion from the caught pose by ``offset``
@@ -23,19 +23,18 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
-import coal
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_positive, as_real, as_vector, require_name
+from bhgrasp._validation import as_positive, as_vector, require_name
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.joint import ComputedTorque
+from bhgrasp.controllers.supervisor_options import DEFAULT_APPROACH, DEFAULT_PLANNING, Approach, Planning
 from bhgrasp.data import State
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.grasp.manipulability import manipulable_space
 from bhgrasp.grasp.path_check import path_contacts
-from bhgrasp.grasp.path_result import TOLERANCE as PATH_TOLERANCE
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
 from bhgrasp.motion.pose_references import PoseMotion
@@ -43,9 +42,6 @@ from bhgrasp.motion.trajectories import Reference, SmoothStep
 
 APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
 PLAN_LENGTH = 0.1  # [m] the plan's metric (dx, L dtheta): 5 mrad weighs as 0.5 mm, the motion targets' ratio
-PLAN_TOLERANCE = (5e-4, 5e-3)  # [m], [rad] the most the plan may differ from the request: the final-pose
-# tolerance, as chapter 5's motion table judges success (a request the sensed contacts make only worse than that is
-# refused, not approximated)
 
 
 class GraspSupervisor(Controller):
@@ -62,22 +58,14 @@ class GraspSupervisor(Controller):
         q_contact: Any,
         grasp: ObjectGraspController,
         offset: Any = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
-        approach_time: float = 0.15,
-        closing: float = 0.1,
-        contact_force: float = 0.05,
-        approach_timeout: float = 2.0,
+        *,
+        approach: Approach = DEFAULT_APPROACH,
         squeeze_time: float = 0.3,
         move_time: float = 1.0,
-        kp: float = 400.0,
-        kv: float = 40.0,
         q_close: Any = None,
         fingers: Sequence[str] | None = None,
-        plan: bool = True,
         path: Callable[..., Reference] | None = None,
-        approach_damping: float = 0.0,
-        object_shape: coal.CollisionGeometry | None = None,
-        plan_tolerance: tuple[float, float] | None = PLAN_TOLERANCE,
-        path_tolerance: float = PATH_TOLERANCE,
+        planning: Planning = DEFAULT_PLANNING,
     ) -> None:
         """Set up the sequence.
 
@@ -86,70 +74,44 @@ class GraspSupervisor(Controller):
             q_contact: Joint configuration [rad] with the fingertips at the contact points (from IK).
             grasp: The object-space controller for squeeze and manipulation (its reference is set here).
             offset: Object motion after the squeeze: position [m] and rotation vector [rad] change, world.
-            approach_time: Time constant [s] of the approach's smooth step.
-            closing: Extra closing [rad] beyond ``q_contact`` on the non-spread joints.
-            contact_force: Normal force [N] at which a finger counts as arrived.
-            approach_timeout: Longest approach [s] before the grasp controller takes over anyway.
+            approach: How the fingers close (:class:`~bhgrasp.controllers.supervisor_options.Approach`).
             squeeze_time: Hold [s] before the motion starts.
             move_time: Duration [s] of the minimum-jerk object motion.
-            kp, kv: Joint computed-torque gains of the approach [1/s^2, 1/s].
-            q_close: Configuration [rad] the approach drives to, instead of ``q_contact`` closed by ``closing``
-                (for hands whose joint names do not say which joints spread; e.g. from IK with the contact
-                points pushed into the object).
+            q_close: Configuration [rad] the approach drives to, instead of ``q_contact`` closed by
+                ``approach.closing`` (for hands whose joint names do not say which joints spread; e.g. from IK with
+                the contact points pushed into the object).
             fingers: The fingers that grasp (default: all); the grasp starts when all of them have arrived.
-            plan: Track the part of ``offset`` the grasp can make at the contacts sensed when the motion starts
-                (:meth:`_plan`; ``planned_offset``), instead of ``offset`` as given.
             path: The object reference after the squeeze instead of the minimum-jerk ``offset`` (which must then be
                 zero; nothing is planned): called as ``path(pose, delay=start)`` with the pose the grasp caught and
                 the motion's start time [s], e.g. ``functools.partial(PoseExcitation, amplitude=..., frequency=...)``
                 (:class:`~bhgrasp.motion.excitation.PoseExcitation`).
-            approach_damping: The joints' known viscous damping [N m s/rad] the approach cancels (its computed
-                torque models the links alone, whose inertia is small next to it: at 0.05 N m s/rad a BH8-280
-                distal joint closes with a ~3 s time constant under the default gains); the grasp controller does
-                not add it.
-            object_shape: The object's coal shape (placed by its pose): when the motion starts, the planned motion is
-                also followed to its end with the sensed contacts rolling without slip
-                (:func:`~bhgrasp.grasp.path_check.path_contacts`), and refused with
-                :class:`~bhgrasp.errors.UnreachableError` (naming the link, the face and the angle) if another part
-                of a finger would meet the object or a joint leave its limits; ``None``: first order only.
-            plan_tolerance: The largest position [m] and rotation [rad] differences between the plan and ``offset``
-                (with ``plan``): a request the sensed contacts make only worse than that is refused with
-                :class:`~bhgrasp.errors.UnreachableError`, naming the part of it the fingers cannot make; ``None``
-                tracks any plan.
-            path_tolerance: With ``object_shape``: how near [m] another part of a finger may come to the object along
-                the planned motion (:data:`~bhgrasp.grasp.path_result.TOLERANCE`).
+            planning: How the motion is planned and checked
+                (:class:`~bhgrasp.controllers.supervisor_options.Planning`).
         """
         super().__init__()
         if not isinstance(grasp, ObjectGraspController):
             raise InputError(f"`grasp` must be an ObjectGraspController, got {grasp!r}")
+        if not isinstance(approach, Approach) or not isinstance(planning, Planning):
+            raise InputError(
+                f"`approach` and `planning` must be an Approach and a Planning, got {approach!r}, {planning!r}"
+            )
         self.nominal = nominal
         self.q_contact = _within_limits(nominal, q_contact)
         self.grasp = grasp
         self.offset = as_vector(offset, "offset", 6)
-        self.approach_time = as_positive(approach_time, "approach_time")
-        self.closing = float(closing)
-        self.contact_force = as_positive(contact_force, "contact_force")
-        self.approach_timeout = as_positive(approach_timeout, "approach_timeout")
+        self.approach, self.planning = approach, planning
         self.squeeze_time = as_positive(squeeze_time, "squeeze_time")
         self.move_time = as_positive(move_time, "move_time")
-        self.plan = bool(plan)
         self.path = _checked_path(path, self.offset)
-        self.object_shape = object_shape
-        self.approach_damping = as_real(approach_damping, "approach_damping")
-        if self.approach_damping < 0.0:
-            raise InputError(f"`approach_damping` must be >= 0 [N m s/rad], got {approach_damping}")
         self.planned_offset: np.ndarray | None = None
-        self.plan_tolerance = _plan_tolerance(plan_tolerance)
-        self.path_tolerance = as_real(path_tolerance, "path_tolerance")
-        self.kp, self.kv = as_positive(kp, "kp"), as_positive(kv, "kv")
         self.sensing = ContactSensing(nominal)
         if q_close is None:
             closing_joints = np.array(["spread" not in name for name in nominal.joint_names], dtype=float)
-            q_close = self.q_contact + self.closing * closing_joints
+            q_close = self.q_contact + approach.closing * closing_joints
         self.q_close = np.clip(as_vector(q_close, "q_close", nominal.nq), nominal.lower, nominal.upper)
         self.phase = APPROACH
         self.switch_time: float | None = None
-        self._approach: ComputedTorque | None = None
+        self._approach_law: ComputedTorque | None = None
         self._arrived = np.zeros(len(nominal.fingers))
         self._grasping = _finger_indices(nominal, fingers)
 
@@ -157,7 +119,7 @@ class GraspSupervisor(Controller):
         """Start over with the approach from ``state``."""
         self.phase, self.switch_time = APPROACH, None
         self.planned_offset = None
-        self._approach = None
+        self._approach_law = None
         self._arrived[:] = 0.0
         self.log.clear()
         self.grasp.log.clear()
@@ -166,22 +128,23 @@ class GraspSupervisor(Controller):
 
     def __call__(self, t: float, state: State) -> np.ndarray:
         """Joint torques [N m] of the active phase."""
-        if self._approach is None:
-            step = SmoothStep(np.asarray(state.q, dtype=float), self.q_close, self.approach_time, delay=t)
-            self._approach = ComputedTorque(self.nominal, step, kp=self.kp, kv=self.kv)
+        if self._approach_law is None:
+            approach = self.approach
+            step = SmoothStep(np.asarray(state.q, dtype=float), self.q_close, approach.time, delay=t)
+            self._approach_law = ComputedTorque(self.nominal, step, kp=approach.kp, kv=approach.kv)
         if self.phase == APPROACH:
             for finger, contact in self.sensing.fingers(state).items():
-                if contact.normal_force >= self.contact_force:
+                if contact.normal_force >= self.approach.contact_force:
                     self._arrived[self.nominal.fingers.index(finger)] = 1.0
-            if np.all(self._arrived[self._grasping]) or t >= self.approach_timeout:
+            if np.all(self._arrived[self._grasping]) or t >= self.approach.timeout:
                 self._start_grasp(t, state)
         if self.phase == SQUEEZE and t >= self.switch_time + self.squeeze_time:
             self.phase = MANIPULATE
-            if self.plan and self.path is None:
+            if self.planning.plan and self.path is None:
                 self._plan(t, state)
         if self.phase == APPROACH:
-            tau = self._approach(t, state) + self.approach_damping * np.asarray(state.v, dtype=float)
-            self.log.update(self._approach.log)
+            tau = self._approach_law(t, state) + self.approach.damping * np.asarray(state.v, dtype=float)
+            self.log.update(self._approach_law.log)
         else:
             tau = self.grasp(t, state)
             self.log.update(self.grasp.log)
@@ -197,12 +160,14 @@ class GraspSupervisor(Controller):
         sense when the motion starts (not the planned ones: a fingertip's link body may touch a little off its pad,
         e.g. 1.6 mm below the thesis box's centre, so that a turn about y through the centre would drag F3 along x);
         the nearest offset the fingers make without sliding, in the metric (dx, :data:`PLAN_LENGTH` dtheta), becomes
-        the motion (``planned_offset``).  With ``object_shape`` the motion is then checked to its end (second order).
+        the motion (``planned_offset``).  With ``planning.object_shape`` the motion is then checked to its end
+        (second order).
 
         Raises:
-            UnreachableError: The plan differs from ``offset`` by more than ``plan_tolerance``; with
-                ``object_shape``: along the motion another part of a finger would come within ``path_tolerance`` of
-                the object (e.g. a distal link's body beside its pad) or a joint would leave its limits.
+            UnreachableError: The plan differs from ``offset`` by more than ``planning.tolerance``; with
+                ``planning.object_shape``: along the motion another part of a finger would come within
+                ``planning.path_tolerance`` of the object (e.g. a distal link's body beside its pad) or a joint would
+                leave its limits.
         """
         touching = self.grasp.touching(state)
         reference = self.grasp.reference
@@ -216,27 +181,27 @@ class GraspSupervisor(Controller):
         unchanged = np.max(np.abs(planned - self.offset)) < 1e-12  # the fingers make it as asked: track it unchanged
         missing = self.offset - planned
         shortfall = np.array([np.linalg.norm(missing[:3]), np.linalg.norm(missing[3:])])
-        if self.plan_tolerance is not None and np.any(shortfall > self.plan_tolerance):
+        if self.planning.tolerance is not None and np.any(shortfall > self.planning.tolerance):
             raise UnreachableError(
                 f"at the contacts the fingers sense ({', '.join(touching)}) the grasp makes the motion "
                 f"{np.round(self.offset, 6).tolist()} (dx [m], dtheta [rad]) only to within "
                 f"{1e3 * shortfall[0]:.2f} mm and {1e3 * shortfall[1]:.2f} mrad (tolerance "
-                f"{1e3 * self.plan_tolerance[0]:g} mm, {1e3 * self.plan_tolerance[1]:g} mrad): it cannot make "
+                f"{1e3 * self.planning.tolerance[0]:g} mm, {1e3 * self.planning.tolerance[1]:g} mrad): it cannot make "
                 f"{np.round(missing, 6).tolist()}",
                 planned,
             )
         self.planned_offset = self.offset.copy() if unchanged else planned
-        if self.object_shape is not None:  # second order: the fingers followed to the end of the motion
+        if self.planning.object_shape is not None:  # second order: the fingers followed to the end of the motion
             pose, labels = state.object_poses[0], list(touching)
             followed = path_contacts(
                 self.nominal,
                 state.q,
                 points,
                 links,
-                self.object_shape,
+                self.planning.object_shape,
                 pose,
                 self.planned_offset,
-                tolerance=self.path_tolerance,
+                tolerance=self.planning.path_tolerance,
                 labels=labels,
             )
             followed.check()
@@ -272,14 +237,6 @@ def _checked_path(path: Any, offset: np.ndarray) -> Callable[..., Reference] | N
             f"{path!r} and offset {offset.tolist()}"
         )
     return path
-
-
-def _plan_tolerance(plan_tolerance: Any) -> np.ndarray | None:
-    """``plan_tolerance``: ``None`` or two positive numbers [m], [rad]."""
-    tolerance = None if plan_tolerance is None else as_vector(plan_tolerance, "plan_tolerance", 2)
-    if tolerance is not None and not np.all(tolerance > 0.0):
-        raise InputError(f"`plan_tolerance` must be two positive numbers [m], [rad], got {tolerance.tolist()}")
-    return tolerance
 
 
 def _finger_indices(nominal: Hand, fingers: Sequence[str] | None) -> np.ndarray:

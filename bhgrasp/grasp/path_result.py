@@ -13,7 +13,7 @@ TOLERANCE = 2e-4  # [m] signed distance below which another geometry counts as m
 # change: 0.1 mm per newton at the chapter-5 scene's 10 kN/m).  Chosen between two measurements in that scene: a
 # 0.15 rad turn of the synthesised ball grasp about y kept 0.036 mm here and F1's distal link body touched the ball
 # (0.27 N, sliding); the closest path that then ran clean kept 0.30 mm.  A stiffer scene may take less
-# (GraspSupervisor(path_tolerance=...))
+# (GraspSupervisor(planning=Planning(path_tolerance=...)))
 
 
 @dataclass(frozen=True)

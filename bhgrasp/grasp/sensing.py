@@ -142,7 +142,7 @@ class ContactSensing:
         rows = [k for k, (link, _) in enumerate(state.contact_bodies) if link in joint_of]
         if not rows:
             return np.zeros(hand.nv)
-        kernel = hand._dynamics()
+        kernel = hand.compiled_dynamics()
         if kernel is None:
             return self._reaction_torques_python(state)
         q = as_vector(state.q, "state.q", hand.nq)

@@ -4,8 +4,9 @@
 the drive's transmission, the wrist mount, orientation maths and inverse kinematics.
 """
 
+from bhgrasp.model.barrett_hand import BarrettHand
 from bhgrasp.model.couplings import Coupling, TwinMap
-from bhgrasp.model.hand import BarrettHand, Hand
+from bhgrasp.model.hand import BaseFrame, Hand
 from bhgrasp.model.hand_ik import IKResult, ik
 from bhgrasp.model.ik import FingerIKResult, Workspace, finger_ik, workspace
 from bhgrasp.model.mount import MOUNT_JOINTS, mount_coordinates, mount_pose, mounted
@@ -29,6 +30,7 @@ from bhgrasp.model.transmission import DirectDrive, Transmission
 __all__ = [
     "MOUNT_JOINTS",
     "BarrettHand",
+    "BaseFrame",
     "Box",
     "Capsule",
     "Coupling",

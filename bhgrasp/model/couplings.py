@@ -15,7 +15,7 @@ The **independent twin** is the same tree with every mimic joint made an ordinar
 offsets), the coupled model is the twin under the constraint ``q_twin in {G q + c}``: M = G^T M_twin G,
 tau = G^T tau_twin, J = J_twin G.  The twin also serialises whole, which the coupled model does not in Pinocchio 4.1
 (a mimic joint's extended sizes are not written: a model read back makes every algorithm read past its vectors), so
-:class:`~bhgrasp.model.hand_model.HandModel` pickles a coupled model as its twin plus its :class:`Coupling` list.
+:class:`~bhgrasp.model.hand.Hand` pickles a coupled model as its twin plus its :class:`Coupling` list.
 """
 
 from __future__ import annotations

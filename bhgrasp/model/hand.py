@@ -4,34 +4,52 @@ Conventions: SI units and radians; ``q`` (size ``nq``) and ``v`` (size ``nv``) i
 (:attr:`Hand.joint_names`).  "World" is the frame the hand base is placed in by :attr:`Hand.base_placement`
 (identity by default, so world = hand base frame W); gravity is given in world coordinates.
 
-A :class:`Hand` is built in layers, one module each: :class:`~bhgrasp.model.hand_model.HandModel` (model and data,
-fingertip frames, names, sizes, limits, world placement, gravity, configurations),
-:class:`~bhgrasp.model.hand_kinematics.HandKinematics` (frame poses, fingertip positions, Jacobians),
-:class:`~bhgrasp.model.hand_dynamics.HandDynamics` (CRBA, RNEA, ABA, Coriolis, external forces, regressors) and this
-module (loading a URDF, collision shapes, perturbed copies, the summary, the packaged :class:`BarrettHand`).  A
-URDF is read and its inertias checked by :mod:`bhgrasp.model.urdf`.
+One class, as Pinocchio keeps a model and its algorithms apart: :class:`Hand` holds the model, its data, names,
+limits, the base's placement and gravity, and the input checks; the algorithms over it are free functions, one
+module per family, that the class also offers as methods (``hand.mass_matrix(q)`` is
+``hand_dynamics.mass_matrix(hand, q)``): :mod:`~bhgrasp.model.hand_joints` (configurations, the joint table),
+:mod:`~bhgrasp.model.hand_kinematics` (frame poses, fingertip positions, Jacobians),
+:mod:`~bhgrasp.model.hand_dynamics` (CRBA, RNEA, ABA, Coriolis, external forces, regressors, perturbed copies) and
+:mod:`~bhgrasp.model.urdf` (loading a URDF, collision shapes).
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_vector
+from bhgrasp._validation import as_array, as_vector, require_name, require_rotation
 from bhgrasp.errors import InputError, ModelError
-from bhgrasp.model.hand_dynamics import HandDynamics
-from bhgrasp.model.hand_model import STANDARD_GRAVITY
-from bhgrasp.model.resources import barrett_urdf_path, leaf_links
-from bhgrasp.model.urdf import _build_model
+from bhgrasp.model import hand_dynamics, hand_joints, hand_kinematics, urdf
+from bhgrasp.model.couplings import (
+    Coupling,
+    TwinMap,
+    check_couplings,
+    coupled_model,
+    independent_model,
+    model_couplings,
+    twin_map,
+)
 
-BARRETT_FINGERTIPS = {"F1": "F1_tip", "F2": "F2_tip", "F3": "F3_tip"}
+STANDARD_GRAVITY = (0.0, 0.0, -9.81)  # [m/s^2] in world coordinates
 
 
-class Hand(HandDynamics):
+class BaseFrame(NamedTuple):
+    """The hand base in the world as the algorithms read it; a new one whenever the placement or gravity change."""
+
+    placement: pin.SE3  # transform_base_to_world
+    rotation: np.ndarray  # (3, 3) base -> world, read-only
+    translation: np.ndarray  # (3,) [m] base origin in the world, read-only
+    at_origin: bool  # the placement is the identity (world = base frame)
+    gravity: np.ndarray  # (3,) [m/s^2] gravity in base coordinates, read-only
+
+
+class Hand:
     """A fixed-base hand: Pinocchio model and data, fingertip frames, limits, kinematics and dynamics.
 
     Every method takes the configuration explicitly and validates its inputs (shape, finiteness); results are
@@ -39,119 +57,197 @@ class Hand(HandDynamics):
     is not thread-safe: give each thread or process its own (``copy.deepcopy`` works).
     """
 
-    # ------------------------------------------------------------------ construction
-    @classmethod
-    def from_urdf(
-        cls,
-        path: str | Path,
-        fingertips: Sequence[str] | Mapping[str, str] | None = None,
-        mimic: str = "coupled",
-        **kwargs: Any,
-    ) -> Hand:
-        """Load any fixed-base hand URDF.
-
-        A joint with a ``<mimic joint multiplier offset>`` tag is coupled as Pinocchio builds it (``mimic="coupled"``):
-        it has no coordinate of its own and moves as ``multiplier * q[joint] + offset``, so ``nq`` and ``nv`` count
-        the independent joints (:attr:`couplings` lists the others, :mod:`bhgrasp.model.couplings` says how dynamics and
-        pickles treat them).  ``mimic="independent"`` loads every joint as its own DOF (the coupling is then up to an
-        actuation model, as :class:`~bhgrasp.sim.actuation.BarrettActuation` does for the BH8-280's).
-
-        Args:
-            path: URDF file.  It is parsed without DTDs or entities before Pinocchio sees it.
-            fingertips: Frame names of the fingertips (finger name = frame name), or a mapping finger name ->
-                frame name; by default the URDF's leaf links below a moving joint
-                (:func:`~bhgrasp.model.resources.leaf_links`: a palm pad fixed to the base is not a fingertip).
-            mimic: ``"coupled"`` (default) or ``"independent"``, as above.
-            **kwargs: ``name``, ``base_placement``, ``gravity`` as for :class:`Hand`.
-
-        Raises:
-            ModelError: Missing/malformed/unsafe/non-UTF-8 URDF, one Pinocchio cannot build (e.g. a mimic joint that
-                mimics a mimic joint), or an ``<inertial>``
-                no rigid body has: mass missing, NaN/inf or < 0; an inertia component missing or NaN/inf; a tensor
-                that is not positive semi-definite or whose ixx, iyy, izz break the triangle inequality (the
-                message names the file and the link).  Point masses and massless links are legal.
-            InputError: A fingertip frame that the model does not have, or ``mimic`` not one of the two.
-
-        Warns:
-            UserWarning: A link whose principal moments of inertia break the triangle inequality although its
-                diagonal does not (products of inertia no body has, e.g. example-robot-data's Allegro fingertips).
-        """
-        if mimic not in ("coupled", "independent"):
-            raise InputError(f"`mimic` must be 'coupled' or 'independent', got {mimic!r}")
-        model, root = _build_model(path, mimic=mimic == "coupled")
-        if fingertips is None:
-            fingertips = leaf_links(root)
-            if not fingertips:
-                raise ModelError(f"URDF {str(path)!r} has no leaf links to use as fingertips; pass `fingertips`")
-        if not isinstance(fingertips, Mapping):
-            fingertips = {frame: frame for frame in fingertips}
-        return Hand(model, fingertips, urdf_path=Path(path), **kwargs)
-
-    def collision_model(self) -> pin.GeometryModel:
-        """A copy of the hand's collision shapes on its own model (``collision_geometry``, else its URDF's, else none).
-
-        Raises:
-            ModelError: The URDF's collision geometry does not load.
-        """
-        if self.collision_geometry is not None:
-            return self.collision_geometry.copy()
-        path = self.urdf_path
-        if path is None:
-            return pin.GeometryModel()
-        try:
-            return pin.buildGeomFromUrdfString(
-                self._model, path.read_text(), pin.GeometryType.COLLISION, None, [str(p) for p in path.parents]
-            )
-        except (ValueError, RuntimeError, OSError) as error:
-            raise ModelError(f"cannot load the collision geometry of {str(path)!r}: {error}") from error
-
-    # ------------------------------------------------------------------ model errors
-    def perturbed(
+    def __init__(
         self,
-        mass_scale: float | Sequence[float] = 1.0,
-        payload: tuple[str, float] | None = None,
+        model: pin.Model,
+        fingertips: Mapping[str, str],
+        *,
         name: str | None = None,
-    ) -> Hand:
-        """A copy of this hand with different inertial parameters: a controller's nominal model, or a plant.
-
-        Kinematics, limits and fingertips are unchanged; the copy has its own Pinocchio model and data.
+        base_placement: pin.SE3 | None = None,
+        gravity: Sequence[float] = STANDARD_GRAVITY,
+        urdf_path: Path | None = None,
+        collision_geometry: pin.GeometryModel | None = None,
+        base_joints: Sequence[str] = (),
+    ) -> None:
+        """Wrap a Pinocchio model.
 
         Args:
-            mass_scale: Factor on each moving body's mass and rotational inertia (centre of mass unchanged): one
-                number, or one per body in joint order (``nv`` values for a hand of 1-DOF joints, plus one per mimic
-                joint).  0.7 is a nominal model that underestimates every body by 30 %.
-            payload: ``(frame, mass [kg])``: a point mass rigidly attached at that frame's origin, e.g. an unknown
-                load at a fingertip.
-            name: Display name (default: this hand's name with the perturbation).
-
-        Raises:
-            InputError: Non-positive or non-finite scales, a negative payload, or an unknown frame.
+            model: Fixed-base model (no free-flyer root).
+            fingertips: Finger name -> frame name of its fingertip.
+            name: Display name; defaults to the model's name.
+            base_placement: Pose of the hand base in the world, ``transform_base_to_world``.
+            gravity: Gravity vector in world coordinates [m/s^2].
+            urdf_path: The URDF the model came from, if any (its collision geometry: :meth:`collision_model`).
+            collision_geometry: Collision shapes attached to the model's joints and frames, for a hand built
+                without a URDF (e.g. a planar finger's tip sphere); scenes use it instead of ``urdf_path``'s.
+            base_joints: Joints that move the whole hand and belong to no finger (a wrist mount's,
+                :func:`~bhgrasp.model.mount.mounted`): :meth:`finger_joints` leaves them out.
         """
-        n_bodies = self._model.njoints - 1
-        uniform = np.ndim(mass_scale) == 0
-        scales = as_vector(np.full(n_bodies, mass_scale) if uniform else mass_scale, "mass_scale", n_bodies)
-        if np.any(scales <= 0.0):
-            raise InputError(f"`mass_scale` must be positive and finite, got {mass_scale!r}")
-        model = pin.Model(self._model)
-        for joint, scale in enumerate(scales, start=1):
-            inertia = model.inertias[joint]
-            model.inertias[joint] = pin.Inertia(scale * inertia.mass, inertia.lever.copy(), scale * inertia.inertia)
-        label = f"mass x{float(mass_scale):g}" if uniform else "masses scaled"
-        if payload is not None:
-            frame, mass = payload
-            frame_id = self._frame_id(frame)
-            mass = float(mass)
-            if not np.isfinite(mass) or mass < 0.0:
-                raise InputError(f"payload mass must be a finite number >= 0 [kg], got {payload[1]!r}")
-            placement = model.frames[frame_id].placement  # frame in its parent joint's frame
-            joint = model.frames[frame_id].parentJoint
-            point = pin.Inertia(mass, placement.translation.copy(), np.zeros((3, 3)))
-            model.inertias[joint] = model.inertias[joint] + point
-            label += f", {mass:g} kg at {frame}"
+        if not fingertips:
+            raise ModelError("a hand needs at least one fingertip frame")
+        self._model = model
+        self._data = model.createData()
+        self.couplings: tuple[Coupling, ...] = model_couplings(model)  # mimic joints (no coordinate of their own)
+        check_couplings(model, self.couplings)
+        self.name = name or model.name
+        self.urdf_path = urdf_path
+        self.collision_geometry = collision_geometry
+        frame_names = [frame.name for frame in model.frames]
+        self._tip_ids: dict[str, int] = {}
+        for finger, frame in fingertips.items():
+            require_name(frame, frame_names, "frame")
+            self._tip_ids[str(finger)] = model.getFrameId(frame)
+        self.base_joints = tuple(require_name(joint, model.names[1:], "joint") for joint in base_joints)
+        self.layout = hand_joints.JointLayout.of(model, self._tip_ids, self.base_joints, self.couplings)
+        self._placement = base_placement if base_placement is not None else pin.SE3.Identity()
+        self._gravity_world = as_vector(gravity, "gravity", 3).copy()
+        self.base_placement = self._placement  # checks both and builds the base frame
+
+    from_urdf = classmethod(urdf.hand_from_urdf)
+
+    # ------------------------------------------------------------------ names, sizes, limits
+    @property
+    def model(self) -> pin.Model:
+        """The Pinocchio model (shared, do not modify while the hand is in use)."""
+        return self._model
+
+    @property
+    def data(self) -> pin.Data:
+        """The Pinocchio data that the last call filled in."""
+        return self._data
+
+    @property
+    def nq(self) -> int:
+        """Size of the configuration vector."""
+        return self._model.nq
+
+    @property
+    def nv(self) -> int:
+        """Size of the velocity/torque vector."""
+        return self._model.nv
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Names of the joints with a coordinate, in Pinocchio's order (the order of ``q``, ``v`` and ``tau``).
+
+        A mimic joint (:attr:`couplings`) has none: it moves with the joint it mimics and is not listed here.
+        """
+        return self.layout.joint_names
+
+    @property
+    def fingers(self) -> tuple[str, ...]:
+        """Finger names, e.g. ``("F1", "F2", "F3")`` for the Barrett hand."""
+        return tuple(self._tip_ids)
+
+    @property
+    def fingertip_frames(self) -> dict[str, str]:
+        """Finger name -> fingertip frame name."""
+        return {finger: self._model.frames[i].name for finger, i in self._tip_ids.items()}
+
+    @property
+    def fingertip_ids(self) -> tuple[int, ...]:
+        """Pinocchio frame ids of the fingertips, in :attr:`fingers` order."""
+        return tuple(self._tip_ids.values())
+
+    def fingertip_id(self, finger: str) -> int:
+        """Pinocchio frame id of a finger's tip (InputError naming the fingers for an unknown one)."""
+        frame_id = self._tip_ids.get(finger) if isinstance(finger, str) else None
+        if frame_id is None:
+            require_name(finger, self.fingers, "finger")  # raises
+        return frame_id
+
+    lower = property(hand_joints.lower)
+    upper = property(hand_joints.upper)
+    velocity_limit = property(hand_joints.velocity_limit)
+    effort_limit = property(hand_joints.effort_limit)
+    total_mass = property(hand_dynamics.total_mass)
+    joint_index = hand_joints.joint_index
+    finger_joints = hand_joints.finger_joints
+    finger_indices = hand_joints.finger_indices
+
+    def frame_names(self) -> tuple[str, ...]:
+        """Every frame of the model (links, joints, fixed frames)."""
+        return tuple(frame.name for frame in self._model.frames)
+
+    # ------------------------------------------------------------------ world placement and gravity
+    @property
+    def base_placement(self) -> pin.SE3:
+        """Pose of the hand base frame in the world, ``transform_base_to_world``."""
+        return self._placement.copy()
+
+    @base_placement.setter
+    def base_placement(self, placement: pin.SE3) -> None:
+        if not isinstance(placement, pin.SE3):
+            raise InputError(f"`base_placement` must be a pinocchio.SE3, got {type(placement).__name__}")
+        as_array(placement.homogeneous, "base_placement", (4, 4))
+        require_rotation(placement.rotation, "base_placement")
+        self._placement = placement.copy()
+        self._update_base()
+
+    @property
+    def gravity(self) -> np.ndarray:
+        """Gravity in world coordinates [m/s^2]; set it to mount the hand in any orientation."""
+        return self._gravity_world.copy()
+
+    @gravity.setter
+    def gravity(self, gravity: Sequence[float]) -> None:
+        self._gravity_world = as_vector(gravity, "gravity", 3).copy()
+        self._update_base()
+
+    @property
+    def base(self) -> BaseFrame:
+        """The base's placement and gravity in base coordinates, read-only (a new object after every change)."""
+        return self._base
+
+    def _update_base(self) -> None:
+        placement = self._placement
+        rotation, translation = placement.rotation, placement.translation  # views of the placement (Eigen's order)
+        gravity = rotation.T @ self._gravity_world
+        self._model.gravity.linear = gravity
+        for array in (rotation, translation, gravity):
+            array.flags.writeable = False
+        self._base = BaseFrame(placement, rotation, translation, bool(placement.isIdentity(0.0)), gravity)
+
+    # ------------------------------------------------------------------ the algorithms, as methods
+    neutral = hand_joints.neutral
+    random_configuration = hand_joints.random_configuration
+    configuration = hand_joints.configuration
+    within_limits = hand_joints.within_limits
+    summary = hand_joints.summary
+    frame_placement = hand_kinematics.frame_placement
+    fingertip_positions = hand_kinematics.fingertip_positions
+    frame_jacobian = hand_kinematics.frame_jacobian
+    fingertip_jacobian = hand_kinematics.fingertip_jacobian
+    point_jacobian = hand_kinematics.point_jacobian
+    point_jacobians = hand_kinematics.point_jacobians
+    fingertip_bias_acceleration = hand_kinematics.fingertip_bias_acceleration
+    mass_matrix = hand_dynamics.mass_matrix
+    nonlinear_effects = hand_dynamics.nonlinear_effects
+    gravity_torques = hand_dynamics.gravity_torques
+    coriolis_matrix = hand_dynamics.coriolis_matrix
+    forward_dynamics = hand_dynamics.forward_dynamics
+    inverse_dynamics = hand_dynamics.inverse_dynamics
+    external_forces = hand_dynamics.external_forces
+    regressor = hand_dynamics.regressor
+    slotine_li_torque = hand_dynamics.slotine_li_torque
+    slotine_li_regressor = hand_dynamics.slotine_li_regressor
+    inertial_parameters = hand_dynamics.inertial_parameters
+    compiled_dynamics = hand_dynamics.compiled_dynamics
+    perturbed = hand_dynamics.perturbed
+    collision_model = urdf.collision_model
+
+    @functools.cached_property
+    def twin(self) -> tuple[pin.Model, pin.Data, TwinMap]:
+        """The independent twin of a hand with mimic joints, its data and the map to it (built on first use)."""
+        twin = independent_model(self._model)
+        return twin, twin.createData(), twin_map(self._model, twin)
+
+    def with_model(self, model: pin.Model, name: str) -> Hand:
+        """This hand (fingertips, placement, gravity, URDF, collision shapes, base joints) on another model."""
         return Hand(
             model,
-            self._fingertips,
-            name=name or f"{self.name} ({label})",
+            self.fingertip_frames,
+            name=name,
             base_placement=self.base_placement,
             gravity=self.gravity,
             urdf_path=self.urdf_path,
@@ -159,54 +255,41 @@ class Hand(HandDynamics):
             base_joints=self.base_joints,
         )
 
-    # ------------------------------------------------------------------ display
-    def summary(self) -> str:
-        """A human-readable table of joints, limits, fingers and mass."""
-        lines = [f"{self.name}: {self.nv} joints, {len(self.fingers)} fingers, {self.total_mass:.4f} kg"]
-        lines.append(
-            f"  {'joint':<16}{'lower':>9}{'upper':>9}  [deg]{'vel':>8} [rad/s]{'effort':>8} [N m]{'link mass':>11} [kg]"
-        )
-        for i, joint in enumerate(self.joint_names):
-            joint_id = self._model.getJointId(joint)
-            mass = self._model.inertias[joint_id].mass
-            prismatic = self._model.joints[joint_id].shortname().startswith("JointModelP")
-            limits = (
-                f"{self.lower[i]:9.3f}{self.upper[i]:9.3f}"
-                if prismatic  # a sliding joint: [m], [m/s], [N]
-                else f"{np.degrees(self.lower[i]):9.1f}{np.degrees(self.upper[i]):9.1f}"
-            )
-            lines.append(
-                f"  {joint:<16}{limits}{self.velocity_limit[i]:13.3f}{self.effort_limit[i]:15.3f}{mass:14.4f}"
-                + "  [m, N]" * prismatic
-            )
-        for coupling in self.couplings:
-            lines.append(f"  mimic {coupling.joint}: {coupling.multiplier:g} x {coupling.mimics} + {coupling.offset:g}")
-        for finger in self.fingers:
-            lines.append(
-                f"  finger {finger}: tip {self._fingertips[finger]!r}, joints {', '.join(self.finger_joints(finger))}"
-            )
-        return "\n".join(lines)
+    # ------------------------------------------------------------------ checks of the inputs
+    def check_q(self, q: Any) -> np.ndarray:
+        """``q`` as a finite float vector of size ``nq`` (InputError otherwise)."""
+        return as_vector(q, "q", self._model.nq)
+
+    def check_v(self, v: Any, name: str = "v") -> np.ndarray:
+        """A velocity-sized vector (``v``, ``a``, ``tau``, ...) as a finite float vector of size ``nv``."""
+        return as_vector(v, name, self._model.nv)
+
+    def frame_id(self, frame: str) -> int:
+        """Pinocchio id of a frame (InputError naming the frames for an unknown one)."""
+        if not isinstance(frame, str) or not self._model.existFrame(frame):
+            require_name(frame, self.frame_names(), "frame")
+        return self._model.getFrameId(frame)
+
+    # ------------------------------------------------------------------ copies and pickles
+    def __getstate__(self) -> dict:
+        """Pickles hold the model; a model with mimic joints as its independent twin and :attr:`couplings`.
+
+        Pinocchio 4.1 does not write a mimic joint's extended sizes, and a model read back crashes every algorithm
+        (:mod:`bhgrasp.model.couplings`); its data, base frame and twin are rebuilt on load.
+        """
+        state = dict(self.__dict__)
+        for rebuilt in ("_data", "_base", "twin"):
+            state.pop(rebuilt, None)
+        if self.couplings:
+            state["_model"] = independent_model(self._model)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        if state.get("couplings"):
+            state["_model"] = coupled_model(state["_model"], state["couplings"])
+        self.__dict__.update(state)
+        self._data = self._model.createData()
+        self._update_base()
 
     def __repr__(self) -> str:
         return f"Hand({self.name!r}, nq={self.nq}, fingers={self.fingers})"
-
-
-class BarrettHand(Hand):
-    """The packaged Barrett BH8-280 (``urdf/barrett_hand.urdf``): 8 independent joints, fingers F1, F2, F3.
-
-    Joint order: F1_spread, F1_proximal, F1_distal, F2_spread, F2_proximal, F2_distal, F3_proximal, F3_distal.
-    """
-
-    def __init__(
-        self,
-        *,
-        base_placement: pin.SE3 | None = None,
-        gravity: Sequence[float] = STANDARD_GRAVITY,
-        name: str = "BarrettHand BH8-280",
-    ) -> None:
-        """Load the packaged URDF; ``base_placement`` and ``gravity`` as for :class:`Hand`."""
-        path = barrett_urdf_path()
-        model, _ = _build_model(path)
-        super().__init__(
-            model, BARRETT_FINGERTIPS, name=name, base_placement=base_placement, gravity=gravity, urdf_path=path
-        )

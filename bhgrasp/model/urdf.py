@@ -1,25 +1,31 @@
-"""A URDF as a Pinocchio model, read safely and with every inertia checked (the loader of :mod:`bhgrasp.model.hand`).
+"""A URDF as a Pinocchio model, read safely and with every inertia checked; a hand from a URDF, its collision shapes.
 
-:func:`_build_model` reads a URDF without DTDs or entities (:func:`~bhgrasp.model.resources.read_urdf`), refuses
+:func:`build_model` reads a URDF without DTDs or entities (:func:`~bhgrasp.model.resources.read_urdf`), refuses
 ``<inertial>`` blocks that urdfdom would silently drop or that no rigid body can have, builds the model (``<mimic>``
 tags applied as Pinocchio's mimic joints, or ignored: independent joints) and checks the inertias Pinocchio built
-(links merged across fixed joints).
+(links merged across fixed joints).  :func:`hand_from_urdf` is :meth:`Hand.from_urdf
+<bhgrasp.model.hand.Hand.from_urdf>`, :func:`collision_model` is :meth:`Hand.collision_model
+<bhgrasp.model.hand.Hand.collision_model>`.
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.errors import ModelError
-from bhgrasp.model.resources import read_urdf
+from bhgrasp.errors import InputError, ModelError
+from bhgrasp.model.resources import leaf_links, read_urdf
+
+if TYPE_CHECKING:
+    from bhgrasp.model.hand import Hand
 
 
-def _build_model(path: str | Path, mimic: bool = False) -> tuple[pin.Model, Any]:
+def build_model(path: str | Path, mimic: bool = False) -> tuple[pin.Model, Any]:
     """Safely read a URDF and build its Pinocchio model (``mimic``: ``<mimic>`` tags applied, else ignored)."""
     text, root = read_urdf(path)
     _check_inertials(root, path)
@@ -31,6 +37,72 @@ def _build_model(path: str | Path, mimic: bool = False) -> tuple[pin.Model, Any]
         raise ModelError(f"URDF {str(path)!r} has no moving joints")
     _check_model_inertias(model, path)
     return model, root
+
+
+def hand_from_urdf(
+    cls: type[Hand],
+    path: str | Path,
+    fingertips: Sequence[str] | Mapping[str, str] | None = None,
+    mimic: str = "coupled",
+    **kwargs: Any,
+) -> Hand:
+    """Load any fixed-base hand URDF.
+
+    A joint with a ``<mimic joint multiplier offset>`` tag is coupled as Pinocchio builds it (``mimic="coupled"``):
+    it has no coordinate of its own and moves as ``multiplier * q[joint] + offset``, so ``nq`` and ``nv`` count
+    the independent joints (:attr:`couplings` lists the others, :mod:`bhgrasp.model.couplings` says how dynamics and
+    pickles treat them).  ``mimic="independent"`` loads every joint as its own DOF (the coupling is then up to an
+    actuation model, as :class:`~bhgrasp.sim.actuation.BarrettActuation` does for the BH8-280's).
+
+    Args:
+        path: URDF file.  It is parsed without DTDs or entities before Pinocchio sees it.
+        fingertips: Frame names of the fingertips (finger name = frame name), or a mapping finger name ->
+            frame name; by default the URDF's leaf links below a moving joint
+            (:func:`~bhgrasp.model.resources.leaf_links`: a palm pad fixed to the base is not a fingertip).
+        mimic: ``"coupled"`` (default) or ``"independent"``, as above.
+        **kwargs: ``name``, ``base_placement``, ``gravity`` as for :class:`Hand`.
+
+    Raises:
+        ModelError: Missing/malformed/unsafe/non-UTF-8 URDF, one Pinocchio cannot build (e.g. a mimic joint that
+            mimics a mimic joint), or an ``<inertial>``
+            no rigid body has: mass missing, NaN/inf or < 0; an inertia component missing or NaN/inf; a tensor
+            that is not positive semi-definite or whose ixx, iyy, izz break the triangle inequality (the
+            message names the file and the link).  Point masses and massless links are legal.
+        InputError: A fingertip frame that the model does not have, or ``mimic`` not one of the two.
+
+    Warns:
+        UserWarning: A link whose principal moments of inertia break the triangle inequality although its
+            diagonal does not (products of inertia no body has, e.g. example-robot-data's Allegro fingertips).
+    """
+    if mimic not in ("coupled", "independent"):
+        raise InputError(f"`mimic` must be 'coupled' or 'independent', got {mimic!r}")
+    model, root = build_model(path, mimic=mimic == "coupled")
+    if fingertips is None:
+        fingertips = leaf_links(root)
+        if not fingertips:
+            raise ModelError(f"URDF {str(path)!r} has no leaf links to use as fingertips; pass `fingertips`")
+    if not isinstance(fingertips, Mapping):
+        fingertips = {frame: frame for frame in fingertips}
+    return cls(model, fingertips, urdf_path=Path(path), **kwargs)
+
+
+def collision_model(hand: Hand) -> pin.GeometryModel:
+    """A copy of the hand's collision shapes on its own model (``collision_geometry``, else its URDF's, else none).
+
+    Raises:
+        ModelError: The URDF's collision geometry does not load.
+    """
+    if hand.collision_geometry is not None:
+        return hand.collision_geometry.copy()
+    path = hand.urdf_path
+    if path is None:
+        return pin.GeometryModel()
+    try:
+        return pin.buildGeomFromUrdfString(
+            hand.model, path.read_text(), pin.GeometryType.COLLISION, None, [str(p) for p in path.parents]
+        )
+    except (ValueError, RuntimeError, OSError) as error:
+        raise ModelError(f"cannot load the collision geometry of {str(path)!r}: {error}") from error
 
 
 # Inertia checks: relative tolerance on the principal moments, plus an absolute floor [kg m^2] far below any real

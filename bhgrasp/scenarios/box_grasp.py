@@ -22,7 +22,8 @@ from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.clearance import check_clearance
 from bhgrasp.grasp.manipulability import ManipulableSpace, manipulable_space
-from bhgrasp.model.hand import BarrettHand, Hand
+from bhgrasp.model.barrett_hand import BarrettHand
+from bhgrasp.model.hand import Hand
 from bhgrasp.model.hand_ik import ik
 from bhgrasp.model.objects import Box, FixedBox
 from bhgrasp.sim import Simulator

@@ -22,7 +22,8 @@ from bhgrasp.controllers import WorkspaceComputedTorque
 from bhgrasp.controllers.base import Controller
 from bhgrasp.data import Trajectory
 from bhgrasp.errors import InputError
-from bhgrasp.model.hand import BarrettHand, Hand
+from bhgrasp.model.barrett_hand import BarrettHand
+from bhgrasp.model.hand import Hand
 from bhgrasp.model.objects import Box
 from bhgrasp.model.planar import thesis_impedance_finger, thesis_one_link_finger
 from bhgrasp.model.spring_mounted import SpringMounted

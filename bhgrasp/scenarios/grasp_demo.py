@@ -20,6 +20,7 @@ from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.motor_commands import MotorCommands
 from bhgrasp.controllers.supervisor import GraspSupervisor
+from bhgrasp.controllers.supervisor_options import Approach, Planning
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.metrics import finger_normal_forces
 from bhgrasp.model.objects import Box
@@ -206,11 +207,10 @@ def _supervisor(setup: BoxGrasp, grasp: Any, offset: Any, approach_gains: tuple,
         setup.q_contact,
         grasp,
         offset=offset,
-        kp=kp,
-        kv=kv,
+        approach=Approach(kp=kp, kv=kv),
         q_close=setup.q_close,
         fingers=setup.fingers,
-        object_shape=shape,
+        planning=Planning(object_shape=shape),
     )
 
 

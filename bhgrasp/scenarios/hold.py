@@ -16,7 +16,8 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp.data import State
-from bhgrasp.model.hand import BarrettHand, Hand
+from bhgrasp.model.barrett_hand import BarrettHand
+from bhgrasp.model.hand import Hand
 from bhgrasp.model.objects import Box
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import FullyActuated

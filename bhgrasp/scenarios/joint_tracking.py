@@ -27,7 +27,8 @@ from bhgrasp.controllers import (
 )
 from bhgrasp.controllers.base import Controller
 from bhgrasp.data import Trajectory
-from bhgrasp.model.hand import BarrettHand, Hand
+from bhgrasp.model.barrett_hand import BarrettHand
+from bhgrasp.model.hand import Hand
 from bhgrasp.motion.trajectories import Quintic, Reference
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.scene import Scene

@@ -26,13 +26,15 @@ import pinocchio as pin
 from bhgrasp._validation import as_positive
 from bhgrasp.controllers.motor_commands import MotorCommands
 from bhgrasp.controllers.supervisor import GraspSupervisor
+from bhgrasp.controllers.supervisor_options import Approach, Planning
 from bhgrasp.data import State
 from bhgrasp.grasp.candidates import GraspCandidate
 from bhgrasp.grasp.clearance import check_clearance
 from bhgrasp.grasp.manipulability import ManipulableSpace, manipulable_space
 from bhgrasp.grasp.opposition import opposed_grasp
 from bhgrasp.grasp.synthesis import synthesize
-from bhgrasp.model.hand import BarrettHand, Hand
+from bhgrasp.model.barrett_hand import BarrettHand
+from bhgrasp.model.hand import Hand
 from bhgrasp.model.objects import Box, Cylinder, FixedBox, Sphere
 from bhgrasp.scenarios.box_grasp import CONTACT_HEIGHT, FRICTION, JOINT_DAMPING, STIFFNESS
 from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult, evaluate_demo
@@ -155,8 +157,8 @@ def run_object_grasp(
         offset=offset,
         fingers=setup.candidate.fingers,
         q_close=setup.candidate.q_close,
-        approach_damping=0.0 if setup.cancel_damping else damping,
-        object_shape=setup.item.geometry(),
+        approach=Approach(damping=0.0 if setup.cancel_damping else damping),
+        planning=Planning(object_shape=setup.item.geometry()),
     )
     law = MotorCommands(supervisor, setup.simulator.actuation.drive) if setup.cancel_damping else supervisor
     start = time.perf_counter()

@@ -14,7 +14,7 @@ import pinocchio as pin
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_regressors import object_parameters
-from bhgrasp.model.hand import BarrettHand
+from bhgrasp.model.barrett_hand import BarrettHand
 from bhgrasp.model.objects import Box
 from bhgrasp.motion.excitation import PoseExcitation
 from bhgrasp.scenarios.box_grasp import BOX_SIZE

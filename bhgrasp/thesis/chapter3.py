@@ -27,7 +27,7 @@ from bhgrasp.controllers import (
     ComputedTorque,
     WorkspaceComputedTorque,
 )
-from bhgrasp.model.hand import BarrettHand
+from bhgrasp.model.barrett_hand import BarrettHand
 from bhgrasp.motion.trajectories import SmoothStep, exponential_approach
 from bhgrasp.scenarios.joint_tracking import (
     MASS_ERROR,

@@ -10,7 +10,7 @@ from collections.abc import Callable
 import numpy as np
 
 from bhgrasp import metrics
-from bhgrasp.model.hand import BarrettHand
+from bhgrasp.model.barrett_hand import BarrettHand
 from bhgrasp.model.planar import thesis_two_link_finger
 from bhgrasp.motion.trajectories import Sinusoid, SmoothStep
 from bhgrasp.scenarios.joint_tracking import (

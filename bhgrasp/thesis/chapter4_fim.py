@@ -19,7 +19,7 @@ from bhgrasp.controllers.impedance import (
     PositionImpedance,
 )
 from bhgrasp.controllers.impedance_controller import ImpedanceController
-from bhgrasp.model.hand import BarrettHand
+from bhgrasp.model.barrett_hand import BarrettHand
 from bhgrasp.model.objects import Box
 from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.motion.trajectories import Constant, Reference, SmoothStep, exponential_approach

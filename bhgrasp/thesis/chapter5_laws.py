@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from bhgrasp.grasp.metrics import finger_normal_forces
-from bhgrasp.model.hand import BarrettHand
+from bhgrasp.model.barrett_hand import BarrettHand
 from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult
 from bhgrasp.scenarios.grasp_controllers import SQUEEZE
 from bhgrasp.scenarios.grasp_demo import OFFSET, run_grasp_demo

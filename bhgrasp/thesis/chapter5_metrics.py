@@ -9,7 +9,7 @@ import numpy as np
 
 from bhgrasp import metrics
 from bhgrasp.grasp.metrics import finger_normal_forces
-from bhgrasp.model.hand import BarrettHand
+from bhgrasp.model.barrett_hand import BarrettHand
 from bhgrasp.scenarios.demo_result import GraspDemoResult
 from bhgrasp.scenarios.grasp_demo import OFFSET
 

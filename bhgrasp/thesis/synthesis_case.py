@@ -134,7 +134,8 @@ def _notes(allowed: int, succeeded: int, failed: list[str]) -> list[str]:
         "joint damping.  Module `bhgrasp.thesis.synthesis_case`.",
         "Refusals come from the grasp's manipulable space at the planned contacts (before simulating) and, when the "
         "move starts, from the supervisor's checks at the contacts the fingers sense: a request they miss by more "
-        "than 0.5 mm or 5 mrad (`GraspSupervisor(plan_tolerance=...)`; the can's turn of 0.1 rad about y: run "
+        "than 0.5 mm or 5 mrad (`GraspSupervisor(planning=Planning(tolerance=...))`; the can's turn of 0.1 rad "
+        "about y: run "
         "anyway, it ends off the request by about what the plan misses, `tests/test_motion_planning.py`) and the "
         "second-order path check (`bhgrasp.grasp.path_check`: another hand shape within 0.2 mm of the object along "
         "the path; the ball's turn of 0.15 rad about y, run anyway, brings F1's distal link body "
