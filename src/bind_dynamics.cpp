@@ -1,0 +1,71 @@
+// Bindings of the dynamics family: the hand's Slotine-Li and contact torques, a finger's workspace terms, the
+// object regressor.
+#include <nanobind/eigen/dense.h>
+#include <nanobind/nanobind.h>
+#include <nanobind/stl/array.h>
+#include <nanobind/stl/pair.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
+#include <nanobind/stl/vector.h>
+
+#include "dynamics.hpp"
+#include "smc_law.hpp"
+#include "workspace.hpp"
+
+#include "bindings.hpp"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+
+namespace bhgrasp {
+
+void bind_dynamics(nb::module_& m) {
+  nb::class_<HandDynamics>(m, "HandDynamics")
+      .def(nb::init<const std::string&>(), "model"_a)
+      .def(
+          "slotine_li_torque",
+          [](HandDynamics& kernel, const Eigen::Vector3d& gravity, const HandDynamics::ConstVector& q,
+             const HandDynamics::ConstVector& v, const HandDynamics::ConstVector& v_r,
+             const HandDynamics::ConstVector& a_r) -> Eigen::VectorXd {
+            return kernel.slotine_li_torque(gravity, q, v, v_r, a_r);  // a copy: the kernel's is overwritten
+          },
+          "gravity"_a, "q"_a, "v"_a, "v_r"_a, "a_r"_a)
+      .def(
+          "contact_torques",
+          [](HandDynamics& kernel, const Eigen::Matrix3d& base_rotation, const Eigen::Vector3d& base_translation,
+             const HandDynamics::ConstVector& q, const std::vector<int>& joints, const HandDynamics::ConstRows& points,
+             const HandDynamics::ConstRows& forces) -> Eigen::VectorXd {
+            return kernel.contact_torques(base_rotation, base_translation, q, joints, points, forces);  // a copy
+          },
+          "base_rotation"_a, "base_translation"_a, "q"_a, "joints"_a, "points"_a, "forces"_a)
+      .def_prop_ro("nv", &HandDynamics::nv);
+
+  nb::class_<WorkspaceTerms>(m, "WorkspaceTerms")  // the fields of bhgrasp.controllers._workspace_terms._Workspace
+      .def_ro("singular", &WorkspaceTerms::singular).def_ro("position", &WorkspaceTerms::position)
+      .def_ro("jacobian", &WorkspaceTerms::jacobian).def_ro("basis", &WorkspaceTerms::basis)
+      .def_ro("task_jacobian", &WorkspaceTerms::task_jacobian).def_ro("mass", &WorkspaceTerms::mass)
+      .def_ro("coriolis", &WorkspaceTerms::coriolis).def_ro("gravity", &WorkspaceTerms::gravity)
+      .def("torque", &fingertip_torque, "velocity"_a, "x_d"_a, "xd_d"_a, "xdd_d"_a, "kp"_a, "kv"_a);
+  nb::class_<FingerDynamics>(m, "FingerDynamics")
+      .def(nb::init<const std::string&, const std::vector<int>&, const std::vector<std::vector<int>>&>(), "model"_a,
+           "frames"_a, "indices"_a)
+      // copies out as writable arrays in NumPy's layout (the kernel's own are overwritten by its next call), in the
+      // order of bhgrasp.controllers._workspace_terms._finger_terms_python
+      .def(
+          "compute",
+          [](FingerDynamics& kernel, int finger, const Eigen::Vector3d& gravity, const FingerDynamics::ConstVector& q,
+             const FingerDynamics::ConstVector& v) {
+            const FingerTerms& terms = kernel.compute(finger, gravity, q, v);
+            return std::make_tuple(terms.positions, terms.jacobian, terms.mass, terms.gravity, terms.velocity,
+                                   terms.bias);
+          },
+          "finger"_a, "gravity"_a, "q"_a, "v"_a)
+      .def("workspace", &FingerDynamics::workspace, nb::rv_policy::copy, "finger"_a, "gravity"_a, "rotation"_a,
+           "translation"_a, "q"_a, "v"_a)
+      .def_prop_ro("nv", &FingerDynamics::nv);
+
+  m.def("object_regressor", &object_regressor, "rotation"_a, "omega"_a, "v_r"_a, "a_r"_a, "gravity"_a,
+        "Y_o (6, 7) of bhgrasp.controllers.adaptive_grasp.object_regressor.");
+}
+
+}  // namespace bhgrasp
