@@ -7,9 +7,13 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.controllers.grasp_force import GraspForceController
+from bhgrasp.controllers.grasp_options import GraspOptions
 from bhgrasp.controllers.grasping import GraspContacts
 from bhgrasp.motion.trajectories import Quintic
 from bhgrasp.scenarios.hold import BOX_MASS, reference_hold
+
+OPTIONS = GraspOptions(mu=0.6, squeeze=3.0)  # the controllers' shared options here
+CLOSING_HARDER = GraspOptions(mu=0.6, squeeze=3.0, approach_torque=0.1)
 
 
 def measured_cone_margins(traj, mu):
@@ -25,14 +29,14 @@ def lifted():
     pose = hold.state.object_poses[0]
     start = np.concatenate((pose.translation, np.zeros(3)))
     reference = Quintic(start, start + np.array([0.0, 0.0, 0.005, 0.0, 0.0, 0.0]), 1.0)
-    controller = GraspForceController(hold.hand, BOX_MASS, reference=reference, mu=0.6, squeeze=3.0)
+    controller = GraspForceController(hold.hand, BOX_MASS, reference=reference, options=OPTIONS)
     traj = hold.simulator.run(controller, 2.0, state=hold.state, progress=False)
     return hold, traj
 
 
 def test_hold_keeps_the_box_still_with_forces_inside_the_cones():
     hold = reference_hold()
-    controller = GraspForceController(hold.hand, BOX_MASS, mu=0.6, squeeze=3.0)
+    controller = GraspForceController(hold.hand, BOX_MASS, options=OPTIONS)
     traj = hold.simulator.run(controller, 1.0, state=hold.state, progress=False)
     drift = np.linalg.norm(traj.object_position[-1, 0] - traj.object_position[0, 0])
     assert drift < 2e-5  # [m]
@@ -60,7 +64,7 @@ def test_fingers_close_onto_the_box_and_grasp_it():
     q = hold.state.q.copy()
     for finger in hold.hand.fingers:
         q[hold.hand.joint_index(f"{finger}_proximal")] -= 0.03
-    controller = GraspForceController(hold.hand, BOX_MASS, mu=0.6, squeeze=3.0, approach_torque=0.1)
+    controller = GraspForceController(hold.hand, BOX_MASS, options=CLOSING_HARDER)
     traj = hold.simulator.run(controller, 1.0, state=hold.simulator.initial_state(q), progress=False)
     grasped = np.argmax(traj.log["contacts"] >= 2)
     assert 0 < traj.t[grasped] < 0.1 and traj.log["contacts"][-1] == 3
@@ -96,7 +100,7 @@ def finger_normal_forces(hand, traj, k):
 def test_unknown_object_mass_is_learnt_and_contact_forces_follow_the_qp(mass, first_slip_free):
     """Nominal 0.2 kg, true 0.5 or 1.0 kg: the mass estimate converges, the box stays, forces match the QP's."""
     hold = reference_hold(box_mass=mass)
-    controller = GraspForceController(hold.hand, BOX_MASS, mu=0.6, squeeze=3.0, mass_adaptation=5.0)
+    controller = GraspForceController(hold.hand, BOX_MASS, options=OPTIONS, mass_adaptation=5.0)
     traj = hold.simulator.run(controller, 3.0, state=hold.state, progress=False)
     assert traj.log["mass_estimate"][-1] == pytest.approx(mass, rel=0.02)
     assert abs(traj.object_position[-1, 0, 2] - traj.object_position[0, 0, 2]) < 1e-4
@@ -111,7 +115,7 @@ def test_an_infeasible_wrench_gets_the_nearest_admissible_forces_and_is_logged()
     """Two contacts on one line exert no torque about it: the controller still gets forces, inside the cones, that
     meet the rest of the wrench, says so in its log, and counts the infeasible cycles."""
     hand = bh.BarrettHand()
-    controller = GraspForceController(hand, BOX_MASS, mu=0.5, squeeze=3.0)
+    controller = GraspForceController(hand, BOX_MASS, options=GraspOptions(mu=0.5, squeeze=3.0))
     contacts = GraspContacts(
         points=np.array([[0.03, 0.0, 0.0], [-0.03, 0.0, 0.0]]),
         normals=np.array([[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0]]),
@@ -143,7 +147,7 @@ def test_controller_keeps_running_through_infeasible_cycles():
     """Every grasp cycle is infeasible; each QP call ends within a few iterations (the pre-fix solver took up to
     12 551 per cycle, 26 s for this run) and the nearest admissible forces still hold the box within a centimetre."""
     hold = reference_hold()
-    controller = TwoFingerGrasp(hold.hand, BOX_MASS, mu=0.6, squeeze=3.0)
+    controller = TwoFingerGrasp(hold.hand, BOX_MASS, options=OPTIONS)
     traj = hold.simulator.run(controller, 0.5, state=hold.state, progress=False)
     grasping = traj.log["contacts"][1:] >= 2
     assert np.all(traj.log["feasible"][1:][grasping] == 0.0)

@@ -115,13 +115,14 @@ def _can_turn(plan_tolerance):
     from dataclasses import replace
 
     from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
+    from bhgrasp.controllers.grasp_options import GraspOptions
     from bhgrasp.controllers.supervisor import GraspSupervisor
     from bhgrasp.controllers.supervisor_options import Planning
     from bhgrasp.scenarios.demo_result import evaluate_demo
     from bhgrasp.scenarios.object_grasp import OBJECTS, object_grasp
 
     setup = object_grasp(OBJECTS["can"][1])
-    grasp = SMCAdaptiveGrasp(setup.hand, replace(setup.item, density=None), mu=0.6, squeeze=5.0,
+    grasp = SMCAdaptiveGrasp(setup.hand, replace(setup.item, density=None), options=GraspOptions(mu=0.6, squeeze=5.0),
                              object_adaptation=(0.0, 0.0))  # fmt: skip
     offset = np.array(CAN_TURN)
     planning = Planning(tolerance=plan_tolerance)

@@ -8,6 +8,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp, object_parameters, object_regressor
+from bhgrasp.controllers.grasp_options import GraspOptions
 from bhgrasp.controllers.motor_commands import MotorCommands
 from bhgrasp.controllers.object_space import ObjectSpaceController
 from bhgrasp.controllers.supervisor import GraspSupervisor
@@ -124,7 +125,7 @@ def test_grasp_controllers_reject_bad_arguments():
     with pytest.raises(bh.InputError, match="nominal_object"):
         SMCAdaptiveGrasp(hand, 0.5)
     with pytest.raises(bh.InputError, match="distribution"):
-        SMCAdaptiveGrasp(hand, box, distribution="lsq")
+        SMCAdaptiveGrasp(hand, box, options=GraspOptions(distribution="lsq"))
     with pytest.raises(bh.InputError, match="q_contact"):
         GraspSupervisor(hand, np.full(8, 5.0), SMCAdaptiveGrasp(hand, box))
     with pytest.raises(bh.InputError, match="controller"):

@@ -220,11 +220,14 @@ def test_grasp_rerun_with_the_same_controller_repeats_to_round_off() -> None:
     between moved its torque by 1e-16 relative at a single step); the runs then agree to ~1e-13.
     """
     from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
+    from bhgrasp.controllers.grasp_options import GraspOptions
     from bhgrasp.controllers.supervisor import GraspSupervisor
     from bhgrasp.scenarios.box_grasp import box_grasp
 
     setup = box_grasp(mass=0.6)
-    grasp = SMCAdaptiveGrasp(setup.hand, bh.Box(size=setup.box.size, mass=0.3), mu=0.6, squeeze=5.0)
+    grasp = SMCAdaptiveGrasp(
+        setup.hand, bh.Box(size=setup.box.size, mass=0.3), options=GraspOptions(mu=0.6, squeeze=5.0)
+    )
     supervisor = GraspSupervisor(setup.hand, setup.q_contact, grasp, offset=(0, 0, 0.01, 0.1, 0, 0))
     first = setup.simulator.run(supervisor, 1.0, state=setup.state, progress=False)
     second = setup.simulator.run(supervisor, 1.0, state=setup.state, progress=False)

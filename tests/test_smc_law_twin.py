@@ -24,6 +24,7 @@ import pytest
 import bhgrasp
 from bhgrasp import _native
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
+from bhgrasp.controllers.grasp_options import GraspOptions
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.errors import CompiledEngineUnavailable, InputError
@@ -33,6 +34,9 @@ from bhgrasp.scenarios.box_grasp import box_grasp
 from bhgrasp.scenarios.demo_result import MU_ASSUMED
 from bhgrasp.scenarios.grasp_controllers import SQUEEZE
 from bhgrasp.scenarios.grasp_demo import OFFSET
+
+DEMO = GraspOptions(mu=MU_ASSUMED, squeeze=SQUEEZE)  # the demo's shared options
+PINV = GraspOptions(distribution="pinv")
 
 pytest.importorskip("bhgrasp._core")
 
@@ -44,7 +48,7 @@ SCALE_OF = {"wrench_residual": "wrench"}  # |G f - w| is round-off of the QP's s
 def smc(setup, engine, **options):
     """The demo's SMC-adaptive law (told 0.3 kg) on ``engine``."""
     box = Box(size=setup.box.size, mass=0.3)
-    return SMCAdaptiveGrasp(setup.hand, box, mu=MU_ASSUMED, squeeze=SQUEEZE, engine=engine, **options)
+    return SMCAdaptiveGrasp(setup.hand, box, options=DEMO, engine=engine, **options)
 
 
 @pytest.fixture(scope="module")
@@ -148,7 +152,7 @@ def test_the_options_the_compiled_law_does_not_cover_run_the_python_code(barrett
     box = Box(size=(0.06, 0.05, 0.05), mass=0.3)
     assert SMCAdaptiveGrasp(barrett, box).engine == "compiled"
     assert SMCAdaptiveGrasp(barrett, box, hand_adaptation=0.1).engine == "python"
-    assert SMCAdaptiveGrasp(barrett, box, distribution="pinv").engine == "python"
+    assert SMCAdaptiveGrasp(barrett, box, options=PINV).engine == "python"
 
     class Scaled(SMCAdaptiveGrasp):
         def distribute(self, contacts, wrench):
@@ -156,7 +160,7 @@ def test_the_options_the_compiled_law_does_not_cover_run_the_python_code(barrett
 
     assert Scaled(barrett, box).engine == "python"
     with pytest.raises(InputError, match=r"engine='compiled' does not cover hand_adaptation=0.1, distribution='pinv'"):
-        SMCAdaptiveGrasp(barrett, box, hand_adaptation=0.1, distribution="pinv", engine="compiled")
+        SMCAdaptiveGrasp(barrett, box, hand_adaptation=0.1, options=PINV, engine="compiled")
     with pytest.raises(InputError, match="a subclass overriding distribute"):
         Scaled(barrett, box, engine="compiled")
     with pytest.raises(InputError, match="`engine` must be one of"):

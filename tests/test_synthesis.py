@@ -10,6 +10,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
+from bhgrasp.controllers.grasp_options import GraspOptions
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.grasp.manipulability import manipulable_space
 from bhgrasp.grasp.metrics import slip_events
@@ -42,7 +43,7 @@ def test_candidates_keep_the_link_bodies_off_the_object_along_a_lift():
                                   Cylinder(radius=0.033, length=0.10, mass=0.35, pose=CENTRE)])  # fmt: skip
 def test_synthesised_grasp_lifts_without_slip_or_turn(item):
     setup = object_grasp(item)
-    grasp = SMCAdaptiveGrasp(setup.hand, replace(setup.item, density=None), mu=0.6, squeeze=5.0,
+    grasp = SMCAdaptiveGrasp(setup.hand, replace(setup.item, density=None), options=GraspOptions(mu=0.6, squeeze=5.0),
                              object_adaptation=(0.0, 0.0))  # fmt: skip
     supervisor = GraspSupervisor(setup.hand, setup.candidate.q_contact, grasp, offset=LIFT,
                                  fingers=setup.candidate.fingers)  # fmt: skip

@@ -9,6 +9,7 @@ from bhgrasp.controllers.adaptive_impedance import AdaptiveForceImpedance
 from bhgrasp.controllers.base import Controller, JointTracking, inertia_gain
 from bhgrasp.controllers.design import SlidingGains, sliding_gains
 from bhgrasp.controllers.grasp_force import GraspForceController
+from bhgrasp.controllers.grasp_options import GraspOptions
 from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.hosm import QuasiContinuousA, SuperTwisting, TwistingB, hosm
 from bhgrasp.controllers.impedance import (
@@ -36,6 +37,7 @@ __all__ = [
     "Controller",
     "ForceImpedance",
     "GraspForceController",
+    "GraspOptions",
     "GraspSupervisor",
     "ImpedanceController",
     "ImpedanceFilter",

@@ -11,7 +11,7 @@ a Coriolis form for which M_o_dot - 2 C_o = skew(I_w omega) is skew-symmetric, a
 needs.  The estimate follows sigma_o_dot = -Gamma_o Y_o^T s_o (the thesis prints (5.52) without the sign and with
 Gamma^-1; with s_o = X_dot - v_r the minus sign is the one that makes V_dot <= 0).  The desired contact forces are
 F_dc = QP(G, F_do) (inside the friction cones, closest to the squeeze) or the thesis' (5.53) G^+ F_do + (I - G^+ G)
-f_squeeze (``distribution="pinv"``).
+f_squeeze (``GraspOptions(distribution="pinv")``).
 
 Finger level: with P = J_h^+ G^T (J_h^-1 G^T of (5.55) for square J_h), the reference joint velocity (5.57) is
 q_dot_r = P v_r + J_h^+ (c e_fc + h eta), e_fc = F_dc - F_c the contact force error (measured, contact frames;
@@ -27,7 +27,7 @@ Gamma_f = gamma_f diag(scale^2) relative to each parameter's natural size (chapt
 Two engines: ``"compiled"`` runs a grasp cycle in one call of ``bhgrasp._core.SMCAdaptiveLaw`` (``src/smc_law.cpp``,
 glued in :mod:`bhgrasp.controllers._smc_law`), ``"python"`` runs the code below (the readable twin;
 ``tests/test_smc_law_twin.py`` holds the two equal to round-off).  The compiled law covers ``hand_adaptation=None``
-and ``distribution="qp"`` (either ``force_error``); other options run the Python code.
+and ``options.distribution="qp"`` (either ``force_error``); other options run the Python code.
 """
 
 from __future__ import annotations
@@ -40,6 +40,7 @@ from bhgrasp._native import engine_name, required_core
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.controllers._smc_law import CompiledSMCLaw, compiled_state, restore_compiled, uncovered_options
 from bhgrasp.controllers.base import gain_vector
+from bhgrasp.controllers.grasp_options import DEFAULT_GRASP, GraspOptions
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_regressors import object_parameters, object_regressor, object_regressor_python
@@ -60,9 +61,9 @@ class SMCAdaptiveGrasp(ObjectGraspController):
     contact frame, in finger order of the hand; zeros for fingers not touching), ``desired_force`` (F_dc, same
     layout) [N].
 
-    :attr:`engine` says which engine runs (module docstring).  The compiled one reads the gains, ``mu``,
-    ``squeeze``, ``min_normal_force``, ``gravity`` and ``force_error`` when it is built and at every :meth:`reset`
-    (the Python one at every call); ``reference`` is read at every call by both.
+    :attr:`engine` says which engine runs (module docstring).  The compiled one reads the gains and ``force_error``
+    when it is built and at every :meth:`reset` (the Python one at every call); the shared :attr:`options` are fixed
+    for the controller's life; ``reference`` is read at every call by both.
     """
 
     def __init__(
@@ -78,12 +79,7 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         k_f: Any = 0.05,
         hand_adaptation: float | None = None,
         force_error: str = "normal",
-        mu: float = 0.5,
-        squeeze: float = 3.0,
-        min_normal_force: float = 0.5,
-        approach_torque: float = 0.05,
-        gravity: Any = (0.0, 0.0, -9.81),
-        distribution: str = "qp",
+        options: GraspOptions = DEFAULT_GRASP,
         engine: str | None = None,
         identification: ObjectIdentification | None = None,
     ) -> None:
@@ -104,10 +100,10 @@ class SMCAdaptiveGrasp(ObjectGraspController):
                 docstring), or ``None`` (hand model fixed).
             force_error: ``"normal"`` (feed back the normal force errors) or ``"full"`` (all three components, as
                 printed in (5.57)).
-            mu, squeeze, min_normal_force, approach_torque, gravity, distribution: As in
+            options: The shared options (:class:`~bhgrasp.controllers.grasp_options.GraspOptions`), as in
                 :class:`~bhgrasp.controllers.grasping.ObjectGraspController`.
             engine: ``None`` (default): the default engine (:func:`~bhgrasp._native.default_engine`) where the
-                compiled law covers the options (``hand_adaptation=None``, ``distribution="qp"``, no subclass
+                compiled law covers the options (``hand_adaptation=None``, ``options.distribution="qp"``, no subclass
                 overriding a step of the law), else the Python one; ``"compiled"`` (raises if the core does not
                 load or the law does not cover the options) or ``"python"``.
             identification: Composite adaptation of sigma_o
@@ -118,7 +114,7 @@ class SMCAdaptiveGrasp(ObjectGraspController):
             InputError: A bad argument, or ``engine="compiled"`` with options it does not cover.
             CompiledEngineUnavailable: ``engine="compiled"`` but ``bhgrasp._core`` does not load.
         """
-        super().__init__(nominal, reference, mu, squeeze, min_normal_force, approach_torque, gravity, distribution)
+        super().__init__(nominal, reference, options)
         if not isinstance(nominal_object, RigidObject):
             raise InputError(f"`nominal_object` must be a bhgrasp RigidObject (e.g. Box), got {nominal_object!r}")
         if force_error not in ("normal", "full"):

@@ -5,11 +5,10 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from bhgrasp._validation import as_positive, as_vector
+from bhgrasp.controllers.grasp_options import DEFAULT_GRASP, GraspOptions
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
@@ -30,22 +29,17 @@ class GraspForceController(ObjectGraspController):
         nominal: Hand,
         object_mass: float,
         reference: Reference | None = None,
-        mu: float = 0.5,
-        squeeze: float = 3.0,
-        min_normal_force: float = 0.5,
         kp: tuple[float, float] = (400.0, 0.5),
         kd: tuple[float, float] = (8.0, 0.01),
-        approach_torque: float = 0.05,
-        gravity: Any = (0.0, 0.0, -9.81),
         mass_adaptation: float | None = None,
-        distribution: str = "qp",
+        options: GraspOptions = DEFAULT_GRASP,
     ) -> None:
         """Set up the controller (see :class:`ObjectGraspController` for the shared arguments).
 
         Args:
             nominal: The controller's hand model.
             object_mass: Mass [kg] the controller assumes for the object (it may be wrong).
-            reference, mu, squeeze, min_normal_force, approach_torque, gravity, distribution: As in the base.
+            reference, options: As in the base.
             kp, kd: Object PD gains (translation [N/m], [N s/m]; rotation [N m/rad], [N m s/rad]).
             mass_adaptation: ``None``, or the rate gamma [kg s / m^2 ...] of a Slotine-Li estimate of the object's
                 mass: with lambda = kp/kd, s = (v_d - v) + lambda (x_d - x), a_r = a_d + lambda (v_d - v), the
@@ -53,7 +47,7 @@ class GraspForceController(ObjectGraspController):
                 the thesis' adaptive grasp law (5.46)-(5.60), whose V = m s^2 / 2 + (m_hat - m)^2 / (2 gamma)
                 is non-increasing for a rigid grasp).
         """
-        super().__init__(nominal, reference, mu, squeeze, min_normal_force, approach_torque, gravity, distribution)
+        super().__init__(nominal, reference, options)
         self.object_mass = as_positive(object_mass, "object_mass")
         self.kp = as_vector(kp, "kp", 2)
         self.kd = as_vector(kd, "kd", 2)

@@ -19,13 +19,13 @@ from __future__ import annotations
 
 from abc import abstractmethod
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_positive, as_real, as_vector
+from bhgrasp._validation import as_vector
 from bhgrasp.controllers.base import Controller
+from bhgrasp.controllers.grasp_options import DEFAULT_GRASP, GraspOptions
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.forces import ContactForceQP, cone_violations, pseudo_inverse_forces
@@ -54,18 +54,8 @@ class ObjectGraspController(Controller):
     assumed cone), ``contacts`` (number of touching fingers).
     """
 
-    DISTRIBUTIONS = ("qp", "pinv")
-
     def __init__(
-        self,
-        nominal: Hand,
-        reference: Reference | None = None,
-        mu: float = 0.5,
-        squeeze: float = 3.0,
-        min_normal_force: float = 0.5,
-        approach_torque: float = 0.05,
-        gravity: Any = (0.0, 0.0, -9.81),
-        distribution: str = "qp",
+        self, nominal: Hand, reference: Reference | None = None, options: GraspOptions = DEFAULT_GRASP
     ) -> None:
         """Set up the shared parts.
 
@@ -73,34 +63,62 @@ class ObjectGraspController(Controller):
             nominal: The controller's hand model.
             reference: Desired object pose as a Reference of size 6 (COM position [m], rotation vector [rad] of
                 world <- body, both world); ``None`` holds the pose found when the grasp is first established.
-            mu: Friction coefficient assumed by the QP (use a margin below the true one).
-            squeeze: Desired normal force per contact [N] (the internal force the distribution stays closest to).
-            min_normal_force: Lower bound of every normal force in the QP [N].
-            approach_torque: Closing torque [N m] on each finger's proximal-most non-spread joint before contact.
-            gravity: World gravity [m/s^2].
-            distribution: ``"qp"`` (friction-cone QP) or ``"pinv"`` (thesis (5.45), the baseline).
+            options: The force distribution, closing torque and gravity
+                (:class:`~bhgrasp.controllers.grasp_options.GraspOptions`), kept for the controller's life.
         """
         super().__init__()
         if not isinstance(nominal, Hand):
             raise InputError(f"`nominal` must be a bhgrasp Hand, got {nominal!r}")
         if reference is not None and (not isinstance(reference, Reference) or reference.size != 6):
             raise InputError(f"`reference` must be a Reference of size 6 (position, rotation vector), got {reference}")
-        if distribution not in self.DISTRIBUTIONS:
-            raise InputError(f"`distribution` must be one of {self.DISTRIBUTIONS}, got {distribution!r}")
+        if not isinstance(options, GraspOptions):
+            raise InputError(f"`options` must be a GraspOptions, got {options!r}")
         self.nominal = nominal
         self.reference = reference
-        self.mu = as_positive(mu, "mu")
-        self.squeeze = as_positive(squeeze, "squeeze")
-        self.min_normal_force = as_real(min_normal_force, "min_normal_force")
-        self.approach_torque = as_real(approach_torque, "approach_torque")
-        self.gravity = as_vector(gravity, "gravity", 3)
-        self.distribution = distribution
+        self._options = options
+        self._gravity = np.array(options.gravity)
+        self._gravity.flags.writeable = False
         self.sensing = ContactSensing(nominal)
         self._qps: dict[int, ContactForceQP] = {}
         self._infeasible_cycles = 0
         self._hold: pin.SE3 | None = None
         self._time: float | None = None
         self._closing = self._closing_torque()
+
+    @property
+    def options(self) -> GraspOptions:
+        """The shared options (read-only: other options make another controller)."""
+        return self._options
+
+    @property
+    def mu(self) -> float:
+        """Friction coefficient the distribution assumes."""
+        return self._options.mu
+
+    @property
+    def squeeze(self) -> float:
+        """Desired normal force per contact [N]."""
+        return self._options.squeeze
+
+    @property
+    def min_normal_force(self) -> float:
+        """Lower bound of every normal force in the QP [N]."""
+        return self._options.min_normal_force
+
+    @property
+    def approach_torque(self) -> float:
+        """Closing torque [N m] before contact."""
+        return self._options.approach_torque
+
+    @property
+    def gravity(self) -> np.ndarray:
+        """World gravity [m/s^2], read-only."""
+        return self._gravity
+
+    @property
+    def distribution(self) -> str:
+        """``"qp"`` or ``"pinv"``."""
+        return self._options.distribution
 
     def _closing_torque(self) -> np.ndarray:
         torque = np.zeros(self.nominal.nv)

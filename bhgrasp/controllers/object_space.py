@@ -26,6 +26,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive
 from bhgrasp.controllers.base import gain_vector
+from bhgrasp.controllers.grasp_options import DEFAULT_GRASP, GraspOptions
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
@@ -92,12 +93,7 @@ class ObjectSpaceController(ObjectGraspController):
         kp: Any = None,
         kv: Any = None,
         lam: float = 10.0,
-        mu: float = 0.5,
-        squeeze: float = 3.0,
-        min_normal_force: float = 0.5,
-        approach_torque: float = 0.05,
-        gravity: Any = (0.0, 0.0, -9.81),
-        distribution: str = "qp",
+        options: GraspOptions = DEFAULT_GRASP,
     ) -> None:
         """Set up the law.
 
@@ -110,9 +106,9 @@ class ObjectSpaceController(ObjectGraspController):
                 (default 400, 40: critically damped at 20 rad/s).  "natural"/"stiffness": wrench gains [N/m, N m/rad],
                 [N s/m, N m s/rad] (default (60, 0.05), (20, 0.002); the thesis' K_p = 60, K_v = 20 for translation).
             lam: lambda [1/s] of the stiffness law (the thesis' 0.01 barely differs from the natural law).
-            mu, squeeze, min_normal_force, approach_torque, gravity, distribution: As in the base.
+            options: The shared options, as in the base.
         """
-        super().__init__(nominal, reference, mu, squeeze, min_normal_force, approach_torque, gravity, distribution)
+        super().__init__(nominal, reference, options)
         if law not in LAWS:
             raise InputError(f"`law` must be one of {LAWS}, got {law!r}")
         if not isinstance(nominal_object, RigidObject):

@@ -6,6 +6,7 @@ from typing import Any
 
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.grasp_force import GraspForceController
+from bhgrasp.controllers.grasp_options import GraspOptions
 from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_space import ObjectSpaceController
@@ -38,7 +39,7 @@ def grasp_controller(
     "composite" adds the measured wrench's prediction error
     (:class:`~bhgrasp.controllers.object_identification.ObjectIdentification`, Gamma_o = :data:`COMPOSITE_RATES`).
     """
-    shared = {"mu": mu, "squeeze": SQUEEZE, "distribution": distribution}
+    shared = {"options": GraspOptions(mu=mu, squeeze=SQUEEZE, distribution=distribution)}
     if adaptation not in ADAPTATIONS:
         raise InputError(f"`adaptation` must be one of {ADAPTATIONS}, got {adaptation!r}")
     if adaptation == "composite" and name != "smc-adaptive":

@@ -19,6 +19,7 @@ import pinocchio as pin
 
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.grasp_lyapunov import finger_lyapunov, force_integrals, object_lyapunov
+from bhgrasp.controllers.grasp_options import GraspOptions
 from bhgrasp.controllers.object_identification import ObjectIdentification
 from bhgrasp.controllers.object_regressors import object_parameters
 from bhgrasp.controllers.supervisor import GraspSupervisor
@@ -158,9 +159,8 @@ def _simulate(law: str, noisy: bool, duration: float, seed: int, hand_scale: flo
     grasp = SMCAdaptiveGrasp(
         model,
         nominal,
-        mu=MU_ASSUMED,
-        squeeze=SQUEEZE,
         object_adaptation=RATES,
+        options=GraspOptions(mu=MU_ASSUMED, squeeze=SQUEEZE),
         identification=identification,
         **controller,
     )

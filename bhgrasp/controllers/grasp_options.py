@@ -1,0 +1,50 @@
+"""The options every object-space grasp controller shares: the force distribution, the closing torque, gravity.
+
+Frozen and checked when made; a controller is built with one (:class:`GraspOptions`, default :data:`DEFAULT_GRASP`)
+and keeps it: other options make another controller (``dataclasses.replace(DEFAULT_GRASP, mu=0.6)``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from bhgrasp._validation import as_positive, as_real, as_vector
+from bhgrasp.errors import InputError
+
+DISTRIBUTIONS = ("qp", "pinv")
+
+
+@dataclass(frozen=True)
+class GraspOptions:
+    """How an object-space grasp controller distributes the object wrench over the contacts, and closes before them.
+
+    Attributes:
+        mu: Friction coefficient the distribution assumes (use a margin below the true one).
+        squeeze: Desired normal force per contact [N] (the internal force the distribution stays closest to).
+        min_normal_force: Lower bound of every normal force in the QP [N].
+        approach_torque: Closing torque [N m] on each finger's proximal-most non-spread joint before contact.
+        gravity: World gravity [m/s^2].
+        distribution: ``"qp"`` (friction-cone QP) or ``"pinv"`` (thesis (5.45), the baseline).
+    """
+
+    mu: float = 0.5
+    squeeze: float = 3.0
+    min_normal_force: float = 0.5
+    approach_torque: float = 0.05
+    gravity: Any = (0.0, 0.0, -9.81)
+    distribution: str = "qp"
+
+    def __post_init__(self) -> None:
+        if self.distribution not in DISTRIBUTIONS:
+            raise InputError(f"`distribution` must be one of {DISTRIBUTIONS}, got {self.distribution!r}")
+        object.__setattr__(self, "mu", as_positive(self.mu, "mu"))
+        object.__setattr__(self, "squeeze", as_positive(self.squeeze, "squeeze"))
+        object.__setattr__(self, "min_normal_force", as_real(self.min_normal_force, "min_normal_force"))
+        object.__setattr__(self, "approach_torque", as_real(self.approach_torque, "approach_torque"))
+        object.__setattr__(self, "gravity", tuple(float(g) for g in as_vector(self.gravity, "gravity", 3)))
+
+
+DEFAULT_GRASP = GraspOptions()
+
+__all__ = ["DEFAULT_GRASP", "DISTRIBUTIONS", "GraspOptions"]
