@@ -38,7 +38,7 @@ FLOORS = (
     ("bhgrasp", "bhgrasp.plots", "bhgrasp.viz"),
     ("bhgrasp.scenarios",),
     ("bhgrasp.bench", "bhgrasp.thesis"),
-    ("bhgrasp._arguments", "bhgrasp.sweep_config"),
+    ("bhgrasp.sweep_config",),
     ("bhgrasp.cli",),
     ("bhgrasp.__main__",),
 )

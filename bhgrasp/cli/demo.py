@@ -6,7 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
-from bhgrasp import _arguments as checked
+from bhgrasp.cli import arguments as checked
 from bhgrasp.scenarios.grasp_controllers import ADAPTATIONS, CONTROLLERS
 from bhgrasp.scenarios.grasp_demo import HANDS, grasp_scene, run_grasp_demo, save_demo
 

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from bhgrasp import _arguments as checked
+from bhgrasp.cli import arguments as checked
 from bhgrasp.errors import InputError
 
 CHAPTERS = ("ch3", "ch4", "ch5")  # bhgrasp.thesis.runner.CHAPTERS, checked equal by the tests

@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from bhgrasp import _arguments as checked
+from bhgrasp.cli import arguments as checked
 
 SETS = ("development", "held-out")  # bhgrasp.bench.objects.SETS, checked equal by the tests
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from bhgrasp import _arguments as checked
+from bhgrasp.cli import arguments as checked
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -6,7 +6,7 @@ import argparse
 import functools
 import sys
 
-from bhgrasp import _arguments as checked
+from bhgrasp.cli import arguments as checked
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
