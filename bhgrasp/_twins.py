@@ -85,7 +85,7 @@ KERNELS = (
     ),
     Twin(
         "contact_frames",
-        "bhgrasp.grasp.frames._frames",
+        "bhgrasp.grasp.frames.unit_normal_frames",
         "tests/test_sensing_kernels.py::test_contact_frames_match_the_numpy_twin",
     ),
     Twin(

@@ -125,7 +125,7 @@ def run_sweep(
             try:
                 check(dict(case))
             except InputError as error:
-                raise InputError(f"case {index} ({_describe(case)}): {error}") from error
+                raise InputError(f"case {index} ({describe_case(case)}): {error}") from error
     seeds = case_seeds(len(cases), seed)
     path = None if log is None else Path(log)
     rows = _read_log(path, cases, seeds) if path is not None else {}
@@ -182,7 +182,8 @@ def _plain(value: Any) -> Any:
     return value.item() if isinstance(value, np.generic) else value
 
 
-def _describe(case: Mapping[str, Any]) -> str:
+def describe_case(case: Mapping[str, Any]) -> str:
+    """A case's parameters as ``name=value, ...`` for an error message."""
     return ", ".join(f"{name}={value!r}" for name, value in case.items())
 
 
@@ -211,8 +212,9 @@ def _read_log(path: Path, cases: list[dict[str, Any]], seeds: list[int]) -> dict
         if logged != expected:
             changed = [name for name in expected if logged[name] != expected[name]]
             raise InputError(
-                f"{path} belongs to another sweep: its case {case} has {_describe({k: logged[k] for k in changed})}, "
-                f"this sweep's has {_describe({k: expected[k] for k in changed})}; use a new log (or delete it)"
+                f"{path} belongs to another sweep: its case {case} has "
+                f"{describe_case({k: logged[k] for k in changed})}, this sweep's has "
+                f"{describe_case({k: expected[k] for k in changed})}; use a new log (or delete it)"
             )
         rows[case] = row
     return rows
@@ -225,4 +227,11 @@ def _append(path: Path, row: dict[str, Any]) -> None:
         stream.flush()
 
 
-__all__ = ["BatchedRollout", "case_seeds", "grid", "random_design", "run_sweep"]
+__all__ = [
+    "BatchedRollout",
+    "case_seeds",
+    "describe_case",
+    "grid",
+    "random_design",
+    "run_sweep",
+]

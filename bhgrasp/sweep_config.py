@@ -18,7 +18,7 @@ from typing import Any
 from bhgrasp import sweep
 from bhgrasp.errors import InputError
 from bhgrasp.scenarios.rollouts import check_grasp_case
-from bhgrasp.sweep import _describe
+from bhgrasp.sweep import describe_case
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -91,7 +91,7 @@ def load_config(path: Path) -> SweepConfig:
         try:
             check_grasp_case(case)
         except InputError as error:
-            raise InputError(f"{path} case {index} ({_describe(case)}): {error}") from error
+            raise InputError(f"{path} case {index} ({describe_case(case)}): {error}") from error
     output = Path(settings.get("output", "sweep.csv"))
     log = Path(settings.get("log", output.with_suffix(".jsonl")))
     workers = settings.get("workers", 0) or None

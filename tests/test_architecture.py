@@ -204,3 +204,18 @@ def strongly_connected(graph: dict[str, set[str]]) -> list[list[str]]:
                         break
                 components.append(sorted(component))
     return components
+
+
+def test_no_module_imports_a_private_name_of_another() -> None:
+    """A name another module needs has a public home (a private module, ``_core`` and ``_native``'s names aside)."""
+    borrowed = []
+    for name, path in MODULES.items():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not (isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith("bhgrasp")):
+                continue
+            for alias in node.names:
+                target = f"{node.module}.{alias.name}"
+                private = alias.name.startswith("_") and not alias.name.startswith("__")
+                if private and target not in MODULES and target != COMPILED_CORE:
+                    borrowed.append(f"{name}: {target}")
+    assert borrowed == []

@@ -13,11 +13,11 @@ from bhgrasp.scenarios.hold import reference_hold
 RUN = """
 import numpy as np
 from bhgrasp.grasp import ContactForceQP
-from bhgrasp.grasp.kinematics import _kernel
+from bhgrasp.grasp.kinematics import grasp_kinematics_kernel
 from bhgrasp.scenarios.hold import reference_hold
 hold = reference_hold()
 trajectory = hold.simulator.run(hold.controller, 0.05, state=hold.state, progress=False)
-print(hold.simulator.engine_name, ContactForceQP(3, 0.5).engine, _kernel(hold.simulator.scene.hand))
+print(hold.simulator.engine_name, ContactForceQP(3, 0.5).engine, grasp_kinematics_kernel(hold.simulator.scene.hand))
 print(trajectory.q[-1].tobytes().hex())
 """
 

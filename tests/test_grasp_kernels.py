@@ -146,7 +146,9 @@ MAPS = ("joint_map", "joint_map_rate", "grasp_map", "hand_jacobian", "hand_jacob
 
 def assert_twins_agree(hand, q, obj, points, frames, joints):
     """The compiled kernel and its Python twin agree on all five maps (tolerance: module docstring)."""
-    assert kinematics_module._kernel(hand) is not None, "bhgrasp._core does not load: nothing compiled to compare"
+    assert kinematics_module.grasp_kinematics_kernel(hand) is not None, (
+        "bhgrasp._core does not load: nothing compiled to compare"
+    )
     compiled = contact_kinematics(hand, q, obj, points, frames, joints)
     python = contact_kinematics_python(hand, q, obj, points, frames, joints)
     singular = np.linalg.svd(python.hand_jacobian, compute_uv=False)
@@ -200,11 +202,11 @@ def test_compiled_kernel_reads_the_base_placement_of_each_call():
     rng = np.random.default_rng(7)
     grasp = world_grasp(hand, list(hand.fingertip_frames.values()), rng)
     assert_twins_agree(hand, *grasp)
-    kernel = kinematics_module._kernel(hand)
+    kernel = kinematics_module.grasp_kinematics_kernel(hand)
     before = contact_kinematics(hand, *grasp)
     hand.base_placement = pin.SE3(pin.exp3(np.array([0.3, -0.5, 0.8])), np.array([0.1, -0.2, 0.05]))
     assert_twins_agree(hand, *grasp)
-    assert kinematics_module._kernel(hand) is kernel
+    assert kinematics_module.grasp_kinematics_kernel(hand) is kernel
     assert not np.allclose(contact_kinematics(hand, *grasp).joint_map, before.joint_map)
 
 
@@ -218,7 +220,7 @@ def test_without_the_compiled_core_the_kinematics_say_so_unless_python_is_the_de
     with pytest.raises(bh.CompiledEngineUnavailable, match="BHGRASP_ENGINE=python for everything"):
         contact_kinematics(hand, *grasp)
     monkeypatch.setattr(_native, "DEFAULT_ENGINE", "python")
-    assert kinematics_module._kernel(hand) is None
+    assert kinematics_module.grasp_kinematics_kernel(hand) is None
     python_default, python = contact_kinematics(hand, *grasp), contact_kinematics_python(hand, *grasp)
     for name in MAPS:
         np.testing.assert_array_equal(getattr(python_default, name), getattr(python, name))
@@ -228,7 +230,7 @@ def test_compiled_kernel_rejects_arrays_of_the_wrong_size():
     """The binding's own checks (the Python callers validate first): a wrong call raises, it does not read astray."""
     hand = bh.BarrettHand()
     q, obj, points, frames, joints = world_grasp(hand, list(hand.fingertip_frames.values()), np.random.default_rng(0))
-    kernel = kinematics_module._kernel(hand)
+    kernel = kinematics_module.grasp_kinematics_kernel(hand)
     args = (np.eye(3), np.zeros(3), q, obj.com, obj.twist, points, frames.reshape(-1, 3), joints)
     kernel.compute(*args)
     for index, wrong in ((2, q[:-1]), (5, points[:0]), (6, frames.reshape(-1, 3)[:-3]), (7, joints[:-1]),

@@ -219,7 +219,9 @@ def test_printed_fim_settles_where_the_closed_form_says_and_the_feedforward_at_f
         force = finger_press.normal_force(setup, traj)
         assert np.ptp(force[-500:]) < 1e-3  # at rest
         final = float(np.mean(force[-200:]))
-        inner, frictionless, measured = chapter4_closed_form._closed_form(setup, traj, force, law, 80.0, feedforward)
+        inner, frictionless, measured = chapter4_closed_form.closed_form_force(
+            setup, traj, force, law, 80.0, feedforward
+        )
         assert inner == pytest.approx(chapter4.inner_loop_stiffness(setup, traj.q[-1], 80.0))
         assert 80.0 < inner < 120.0  # Kp x ~1.25 kg
         assert final == pytest.approx(measured, rel=1e-4)
@@ -237,7 +239,7 @@ def test_printed_fim_on_f3_misses_f_d_as_the_closed_form_with_friction_predicts(
     controller = ImpedanceController(setup.hand, {"F3": law}, *finger_press.F3_GAINS, feedforward=False)
     traj = finger_press.run(setup, controller, 3.0)
     force = finger_press.normal_force(setup, traj)
-    inner, frictionless, measured = chapter4_closed_form._closed_form(
+    inner, frictionless, measured = chapter4_closed_form.closed_form_force(
         setup, traj, force, law, finger_press.F3_GAINS[0], False
     )
     final = float(np.mean(force[-150:]))
@@ -283,8 +285,8 @@ def test_tuned_impedance_beats_its_start_on_a_held_out_force_and_is_reproducible
     again = bh.tuning.cma_es(objective, start, 0.5, seed=4, max_generations=3, population=6, executor="serial")
     np.testing.assert_array_equal(first.history_parameters, again.history_parameters)
     np.testing.assert_array_equal(first.history_fitness, again.history_fitness)
-    untuned, _ = press_fitness._evaluate((5.0, 5.0), 8.0)
-    tuned, _ = press_fitness._evaluate(tuple(10.0**first.best), 8.0)
+    untuned, _ = press_fitness.evaluate_press((5.0, 5.0), 8.0)
+    tuned, _ = press_fitness.evaluate_press(tuple(10.0**first.best), 8.0)
     assert tuned.settling < untuned.settling and tuned.overshoot <= untuned.overshoot
 
 
@@ -295,7 +297,7 @@ def test_fitness_runs_continue_the_shared_approach_to_the_bit(params, force):
     t, measured = press_fitness._discrete_fim(*params, force, press_fitness.TUNING_SPRING, 1.0)
     start, _, _ = press_fitness._approach(press_fitness.TUNING_SPRING, force, 1.0)
     assert 0.1 < start.t < 0.9  # the runs share ~a third of their samples
-    setup = press_fitness._cached_f3_setup(press_fitness.TUNING_SPRING)
+    setup = press_fitness.cached_f3_setup(press_fitness.TUNING_SPRING)
     traj = finger_press.run(setup, press_fitness._discrete_fim_controller(setup, *params, force), 1.0)
     np.testing.assert_array_equal(t, traj.t)
     np.testing.assert_array_equal(measured, finger_press.normal_force(setup, traj))

@@ -18,7 +18,7 @@ import bhgrasp as bh
 from bhgrasp._native import core_loads
 from bhgrasp.controllers.adaptive_grasp import object_parameters, object_regressor, object_regressor_python
 from bhgrasp.errors import InputError
-from bhgrasp.grasp.frames import _frames, _unit_normals, contact_frames
+from bhgrasp.grasp.frames import _unit_normals, contact_frames, unit_normal_frames
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.scenarios.hold import reference_hold
 
@@ -148,7 +148,7 @@ def test_contact_frames_match_the_numpy_twin() -> None:
     normals[:50] = np.c_[np.full(50, 0.9), rng.normal(scale=1e-3, size=(50, 2))]  # at the switch
     normals[50:56] = np.vstack((np.eye(3), -np.eye(3)))
     compiled = contact_frames(normals)
-    np.testing.assert_allclose(compiled, _frames(_unit_normals(normals)), rtol=0, atol=RELATIVE)
+    np.testing.assert_allclose(compiled, unit_normal_frames(_unit_normals(normals)), rtol=0, atol=RELATIVE)
     np.testing.assert_allclose(compiled.transpose(0, 2, 1) @ compiled, np.broadcast_to(np.eye(3), (500, 3, 3)),
                                rtol=0, atol=RELATIVE)  # fmt: skip
     np.testing.assert_allclose(np.linalg.det(compiled), 1.0, rtol=0, atol=RELATIVE)

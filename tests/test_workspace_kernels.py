@@ -25,8 +25,8 @@ from bhgrasp.controllers._workspace_terms import (
     _finger_terms_python,
     _fingertip_torque,
     _kernel,
-    _workspace,
     _workspace_dynamics,
+    workspace_terms,
 )
 from bhgrasp.controllers.impedance import ForceImpedance
 from bhgrasp.controllers.impedance_controller import ImpedanceController
@@ -109,7 +109,7 @@ def test_the_workspace_terms_are_the_python_twin_to_round_off(hand: bh.Hand) -> 
     for _ in range(100):
         q, v, finger = well_conditioned(hand, rng)
         index, number = hand.finger_indices(finger), hand.fingers.index(finger)
-        compiled = _workspace(hand, q, v, finger, index, number)
+        compiled = workspace_terms(hand, q, v, finger, index, number)
         python = _workspace_dynamics(hand, q, v, finger, index, number)
         assert not compiled.singular and not python.singular
         for name in names:
@@ -125,7 +125,7 @@ def test_the_fingertip_torque_is_the_python_twin_to_round_off(hand: bh.Hand) -> 
     for _ in range(100):
         q, v, finger = well_conditioned(hand, rng)
         index, number = hand.finger_indices(finger), hand.fingers.index(finger)
-        compiled = _workspace(hand, q, v, finger, index, number)
+        compiled = workspace_terms(hand, q, v, finger, index, number)
         python = _workspace_dynamics(hand, q, v, finger, index, number)
         root = rng.normal(size=(2, 3, 3))
         kp, kv = (r @ r.T + np.eye(3) for r in root)
@@ -138,7 +138,7 @@ def test_the_fingertip_torque_is_the_python_twin_to_round_off(hand: bh.Hand) -> 
 def test_the_kernel_checks_the_torque_sizes() -> None:
     hand = bh.BarrettHand()
     q, v = hand.configuration(F3_proximal=0.6, F3_distal=0.4), np.zeros(hand.nv)
-    terms = _workspace(hand, q, v, "F3", hand.finger_indices("F3"), 2)
+    terms = workspace_terms(hand, q, v, "F3", hand.finger_indices("F3"), 2)
     reference, gains = (np.zeros(3),) * 3, (np.eye(3),) * 2
     for wrong in (np.zeros(3), np.zeros(1)):  # joint velocities of another size than the finger's 2
         with pytest.raises(ValueError, match="fingertip_torque: terms of a regular configuration, velocity of size"):
@@ -177,7 +177,7 @@ def test_the_controller_gives_the_same_torques_without_the_kernel(monkeypatch: p
 
 def test_the_impedance_controller_gives_the_same_torques_without_the_kernel(monkeypatch: pytest.MonkeyPatch) -> None:
     """In lockstep: the Python twin, fed the states of the compiled controller's run, gives its torques and logs."""
-    setup = press_fitness._cached_f3_setup(press_fitness.TUNING_SPRING)
+    setup = press_fitness.cached_f3_setup(press_fitness.TUNING_SPRING)
 
     def controller() -> ImpedanceController:
         law = ForceImpedance(Constant(setup.tip0), setup.normal, 6.0, setup.surface_point(), setup.k_e, mass=0.01,
@@ -230,7 +230,7 @@ def test_base_placement_and_gravity_changes_reach_the_kernel() -> None:
     assert not np.array_equal(after[0], before[0]) and not np.array_equal(after[3], before[3])
     index = hand.finger_indices(finger)
     compiled, python = (
-        _workspace(hand, q, v, finger, index, number),
+        workspace_terms(hand, q, v, finger, index, number),
         _workspace_dynamics(hand, q, v, finger, index, number),
     )
     for name in ("position", "jacobian", "basis", "gravity"):

@@ -24,9 +24,8 @@ from bhgrasp._native import required_core
 from bhgrasp._validation import as_array, as_vector
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.forces import solver_arguments
-from bhgrasp.grasp.frames import TANGENT_SWITCH, ZERO_NORMAL, _grasp_map, contact_frames
-from bhgrasp.grasp.kinematics import _hand_index
-from bhgrasp.grasp.kinematics import _kernel as _kinematics_kernel
+from bhgrasp.grasp.frames import TANGENT_SWITCH, ZERO_NORMAL, contact_frames, grasp_map_from_frames
+from bhgrasp.grasp.kinematics import grasp_kinematics_kernel, hand_index
 
 if TYPE_CHECKING:
     from bhgrasp.model.hand import BaseFrame
@@ -72,9 +71,9 @@ class CompiledSMCLaw:
         """Build ``core.SMCAdaptiveLaw`` on the hand's kernels and configure it from ``law``."""
         hand = law.nominal
         self._regressor = core.object_regressor
-        self.kernel = core.SMCAdaptiveLaw(_kinematics_kernel(hand), hand.compiled_dynamics(), len(hand.fingers))
+        self.kernel = core.SMCAdaptiveLaw(grasp_kinematics_kernel(hand), hand.compiled_dynamics(), len(hand.fingers))
         self._finger_of = {link: hand.fingers.index(f) for link, f in law.sensing._finger_of.items()}
-        self._joint_of = _hand_index(hand).joints
+        self._joint_of = hand_index(hand).joints
         self._rows: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
         self._base: BaseFrame | None = None  # the hand base the kernel was last given
         self._held: tuple[Any, np.ndarray, np.ndarray] | None = None  # law._hold and its arrays
@@ -217,7 +216,7 @@ class CompiledSMCLaw:
         elif status == 2:  # GraspContacts.grasp_map's check, then ContactForceQP.solve's
             com = as_vector(state.object_poses[0].translation, "reference", 3)
             points = np.array([c.point for c in contacts])
-            as_array(_grasp_map(points, contact_frames(normals), com), "grasp_map", (6, 3 * len(contacts)))
+            as_array(grasp_map_from_frames(points, contact_frames(normals), com), "grasp_map", (6, 3 * len(contacts)))
         else:
             as_vector(out[self._wrench], "wrench", 6)
         raise InputError(f"{type(law).__name__}: the compiled law found non-finite values (status {status})")

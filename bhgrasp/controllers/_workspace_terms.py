@@ -42,7 +42,7 @@ class _Workspace:
         return _fingertip_torque(self, *args)
 
 
-def _workspace(hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, index: np.ndarray, number: int) -> Any:
+def workspace_terms(hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, index: np.ndarray, number: int) -> Any:
     """The workspace terms of ``finger`` at validated (q [rad], v [rad/s]), world frame: a :class:`_Workspace`.
 
     ``index`` are the finger's joint indices and ``number`` its place in ``hand.fingers``.  From the hand's
@@ -73,7 +73,7 @@ def _singular(finger: str, angles: np.ndarray, rank: int) -> InputError:
 def _workspace_dynamics(
     hand: Hand, q: np.ndarray, v: np.ndarray, finger: str, index: np.ndarray, number: int
 ) -> _Workspace:
-    """:func:`_workspace` in NumPy: the twin of the compiled ``FingerDynamics.workspace``.
+    """:func:`workspace_terms` in NumPy: the twin of the compiled ``FingerDynamics.workspace``.
 
     B spans the column space of J_f (left singular vectors), each column's largest entry made positive (a sign that
     changes nothing but makes B unique).

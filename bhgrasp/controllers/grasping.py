@@ -29,7 +29,7 @@ from bhgrasp.controllers.grasp_options import DEFAULT_GRASP, GraspOptions
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.forces import ContactForceQP, cone_violations, pseudo_inverse_forces
-from bhgrasp.grasp.frames import _grasp_map, contact_frames, hand_jacobian
+from bhgrasp.grasp.frames import contact_frames, grasp_map_from_frames, hand_jacobian
 from bhgrasp.grasp.sensing import ContactSensing, FingerContact
 from bhgrasp.model.hand import Hand
 from bhgrasp.motion.trajectories import Reference
@@ -251,7 +251,7 @@ class GraspContacts:
         """G (6, 3n) about :attr:`reference`."""
         if self.reference is None:
             raise InputError("GraspContacts.reference (the object's COM) is not set")
-        return _grasp_map(self.points, self.frames, as_vector(self.reference, "reference", 3))
+        return grasp_map_from_frames(self.points, self.frames, as_vector(self.reference, "reference", 3))
 
     def jacobian(self, hand: Hand, q: np.ndarray) -> np.ndarray:
         """J_h (3n, nv) in contact coordinates."""

@@ -26,7 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_vector
-from bhgrasp.controllers._workspace_terms import _workspace
+from bhgrasp.controllers._workspace_terms import workspace_terms
 from bhgrasp.controllers.base import Controller, gain_matrix
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
@@ -61,7 +61,7 @@ def workspace_dynamics(hand: Hand, q: Any, v: Any, finger: str) -> WorkspaceDyna
     """
     q, v = as_vector(q, "q", hand.nq), as_vector(v, "v", hand.nv)
     index = hand.finger_indices(finger)
-    terms = _workspace(hand, q, v, finger, index, hand.fingers.index(finger))
+    terms = workspace_terms(hand, q, v, finger, index, hand.fingers.index(finger))
     return WorkspaceDynamics(
         *(np.array(value) for value in (terms.basis, terms.task_jacobian, terms.mass, terms.coriolis, terms.gravity))
     )
@@ -129,9 +129,11 @@ class WorkspaceComputedTorque(Controller):
         return self._control(t, state, q, v)
 
     def _workspaces(self, q: np.ndarray, v: np.ndarray) -> dict[str, Any]:
-        """Every controlled finger's :func:`_workspace` at validated (q, v): the fingertip, Jacobian and dynamics."""
+        """Every controlled finger's workspace terms at validated (q, v): fingertip, Jacobian and dynamics."""
         hand = self.nominal
-        return {finger: _workspace(hand, q, v, finger, index, number) for finger, _, index, number in self._fingers}
+        return {
+            finger: workspace_terms(hand, q, v, finger, index, number) for finger, _, index, number in self._fingers
+        }
 
     def _control(
         self, t: float, state: State, q: np.ndarray, v: np.ndarray, workspace: Mapping[str, Any] | None = None

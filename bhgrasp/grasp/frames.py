@@ -56,14 +56,16 @@ def contact_frames(normals: Any) -> np.ndarray:
     normals = _rows(normals, "normals")
     core = default_core()
     if core is None:
-        return _frames(_unit_normals(normals))
-    frames, zero = core.contact_frames(normals, ZERO_NORMAL, TANGENT_SWITCH)  # src/sensing.cpp, _frames' twin
+        return unit_normal_frames(_unit_normals(normals))
+    frames, zero = core.contact_frames(
+        normals, ZERO_NORMAL, TANGENT_SWITCH
+    )  # src/sensing.cpp, unit_normal_frames' twin
     if zero >= 0:
         _unit_normals(normals)  # raises InputError naming the zero normals
     return frames.reshape(-1, 3, 3)
 
 
-def _frames(unit: np.ndarray) -> np.ndarray:
+def unit_normal_frames(unit: np.ndarray) -> np.ndarray:
     """:func:`contact_frames` of validated unit normals (n, 3): t1, t2 = n x t1 written out component-wise."""
     switch = np.abs(unit[:, 0]) > TANGENT_SWITCH
     axis = np.zeros_like(unit)
@@ -91,10 +93,10 @@ def grasp_map(points: Any, normals: Any, reference: Any) -> np.ndarray:
         reference: Point the torque is taken about (e.g. the object's centre of mass), world [m], shape (3,).
     """
     points, normals = _contacts(points, normals)
-    return _grasp_map(points, contact_frames(normals), as_vector(reference, "reference", 3))
+    return grasp_map_from_frames(points, contact_frames(normals), as_vector(reference, "reference", 3))
 
 
-def _grasp_map(points: np.ndarray, frames: np.ndarray, reference: np.ndarray) -> np.ndarray:
+def grasp_map_from_frames(points: np.ndarray, frames: np.ndarray, reference: np.ndarray) -> np.ndarray:
     """:func:`grasp_map` from validated points (n, 3) and their contact frames (n, 3, 3)."""
     levers = _skew_rows(points - reference)  # (n, 3, 3)
     blocks = np.concatenate([frames, levers @ frames], axis=1)  # (n, 6, 3)
@@ -145,14 +147,15 @@ def grasp_constraint_residual(grasp_matrix: Any, jacobian: Any, object_twist: An
         object_twist: ``(v_r [m/s], omega [rad/s])`` of the object at the reference point, world-aligned, (6,).
         v: Joint velocities, shape (nv,).
     """
-    grasp_matrix = _grasp_matrix(grasp_matrix)
+    grasp_matrix = checked_grasp_matrix(grasp_matrix)
     jacobian = as_array(jacobian, "jacobian", (grasp_matrix.shape[1], None))
     twist = as_vector(object_twist, "object_twist", 6)
     v = as_vector(v, "v", jacobian.shape[1])
     return jacobian @ v - grasp_matrix.T @ twist
 
 
-def _grasp_matrix(value: Any) -> np.ndarray:
+def checked_grasp_matrix(value: Any) -> np.ndarray:
+    """``value`` as a grasp matrix G (6, 3n), n >= 1 (InputError otherwise)."""
     matrix = as_array(value, "grasp_matrix", (6, None))
     if matrix.shape[1] == 0 or matrix.shape[1] % 3:
         raise InputError(f"`grasp_matrix` must have shape (6, 3n) with n >= 1, got shape {matrix.shape}")
@@ -199,4 +202,12 @@ def _skew_rows(vectors: np.ndarray) -> np.ndarray:
     return result
 
 
-__all__ = ["contact_frames", "grasp_constraint_residual", "grasp_map", "hand_jacobian"]
+__all__ = [
+    "checked_grasp_matrix",
+    "contact_frames",
+    "grasp_constraint_residual",
+    "grasp_map",
+    "grasp_map_from_frames",
+    "hand_jacobian",
+    "unit_normal_frames",
+]

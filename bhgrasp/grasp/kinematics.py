@@ -41,7 +41,7 @@ import pinocchio as pin
 from bhgrasp._native import kernel
 from bhgrasp._validation import as_array, as_vector, require_name
 from bhgrasp.errors import InputError
-from bhgrasp.grasp.frames import _frames, contact_frames
+from bhgrasp.grasp.frames import contact_frames, unit_normal_frames
 from bhgrasp.model.couplings import refuse_couplings
 from bhgrasp.model.hand import Hand
 
@@ -113,7 +113,9 @@ def grasp_kinematics(
     unit_body = contact_frames(normals_body)[:, :, 2]  # validated, normalised
     rotation = np.asarray(obj.rotation, dtype=float)
     points = obj.com + points_body @ rotation.T
-    return contact_kinematics(hand, q, obj, points, _frames(unit_body @ rotation.T), parent_joints(hand, links))
+    return contact_kinematics(
+        hand, q, obj, points, unit_normal_frames(unit_body @ rotation.T), parent_joints(hand, links)
+    )
 
 
 def contact_kinematics(
@@ -134,7 +136,7 @@ def contact_kinematics(
         frames: (n, 3, 3) contact frames [t1, t2, n] (columns, world), as :func:`~bhgrasp.grasp.frames.contact_frames`.
         joints: n Pinocchio joint ids, the joint whose body carries each contact (:func:`parent_joints`).
     """
-    kernel = _kernel(hand)
+    kernel = grasp_kinematics_kernel(hand)
     if kernel is None:
         return contact_kinematics_python(hand, q, obj, points, frames, joints)
     placement = hand.base_placement
@@ -151,7 +153,7 @@ def contact_kinematics_python(
     model, data = hand.model, hand.data
     count, nv = points.shape[0], model.nv
     com, twist = np.asarray(obj.com, dtype=float), np.asarray(obj.twist, dtype=float)
-    masks = _hand_index(hand).masks[joints][:, None, :]  # (n, 1, nv): the columns that move each contact's body
+    masks = hand_index(hand).masks[joints][:, None, :]  # (n, 1, nv): the columns that move each contact's body
     placement = hand.base_placement
     moved = not placement.isIdentity(0.0)  # world = placement * (the model's frame)
     offsets = points - com  # r_i = p_i - c [m]
@@ -194,7 +196,7 @@ def contact_kinematics_python(
 
 def parent_joints(hand: Hand, links: Any) -> list[int]:
     """The Pinocchio joint ids of the bodies that carry the frames ``links`` (unknown names are rejected)."""
-    index = _hand_index(hand)
+    index = hand_index(hand)
     try:
         return [index.joints[link] for link in links]
     except KeyError:
@@ -204,18 +206,18 @@ def parent_joints(hand: Hand, links: Any) -> list[int]:
 
 
 @dataclass(frozen=True)
-class _HandIndex:
+class HandIndex:
     """What the kinematics read from a hand's model once: support masks (njoints, nv) and frame -> joint id."""
 
     masks: np.ndarray
     joints: dict[str, int]
 
 
-_INDEX: weakref.WeakKeyDictionary[Hand, _HandIndex] = weakref.WeakKeyDictionary()
+_INDEX: weakref.WeakKeyDictionary[Hand, HandIndex] = weakref.WeakKeyDictionary()
 
 
-def _hand_index(hand: Hand) -> _HandIndex:
-    """The hand's :class:`_HandIndex`, built on first use (models are not modified after loading)."""
+def hand_index(hand: Hand) -> HandIndex:
+    """The hand's :class:`HandIndex`, built on first use (models are not modified after loading)."""
     index = _INDEX.get(hand)
     if index is None:
         refuse_couplings(hand.couplings, "the grasp kinematics (grasp map, P = J_h^+ G^T and its rate)")
@@ -225,11 +227,11 @@ def _hand_index(hand: Hand) -> _HandIndex:
             for ancestor in list(model.supports[joint])[1:]:  # [0] is the universe
                 start = model.joints[ancestor].idx_v
                 masks[joint, start : start + model.joints[ancestor].nv] = 1.0
-        index = _INDEX[hand] = _HandIndex(masks, {frame.name: frame.parentJoint for frame in model.frames})
+        index = _INDEX[hand] = HandIndex(masks, {frame.name: frame.parentJoint for frame in model.frames})
     return index
 
 
-def _kernel(hand: Hand) -> Any:
+def grasp_kinematics_kernel(hand: Hand) -> Any:
     """The hand's compiled ``_core.GraspKinematics``, built on first use; ``None`` when the default engine is Python."""
     refuse_couplings(hand.couplings, "the grasp kinematics (grasp map, P = J_h^+ G^T and its rate)")
     return kernel(hand, "GraspKinematics", lambda core: core.GraspKinematics(hand.model.saveToString()))
@@ -253,9 +255,12 @@ def _pinv(matrix: np.ndarray) -> np.ndarray:
 
 __all__ = [
     "GraspKinematics",
+    "HandIndex",
     "ObjectState",
     "contact_kinematics",
     "contact_kinematics_python",
     "grasp_kinematics",
+    "grasp_kinematics_kernel",
+    "hand_index",
     "parent_joints",
 ]

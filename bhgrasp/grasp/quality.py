@@ -21,7 +21,7 @@ import numpy as np
 from bhgrasp._validation import as_positive, as_real
 from bhgrasp.errors import BhgraspError
 from bhgrasp.grasp.cones import friction_cone_edges
-from bhgrasp.grasp.frames import _grasp_matrix, grasp_map
+from bhgrasp.grasp.frames import checked_grasp_matrix, grasp_map
 
 LP_TOLERANCE = 1e-10  # HiGHS primal/dual feasibility tolerance of the force-closure LP
 CLOSURE_TOLERANCE = 1e-9  # default margin above which a grasp counts as force closure
@@ -32,7 +32,7 @@ def default_torque_scale(grasp_matrix: Any) -> float:
 
     For ``G_i = [[R_i], [skew(d_i) R_i]]``, ``|d_i| = ||G_i[3:]||_F / sqrt(2)`` (``R_i`` is orthogonal).
     """
-    grasp_matrix = _grasp_matrix(grasp_matrix)
+    grasp_matrix = checked_grasp_matrix(grasp_matrix)
     lever = np.linalg.norm(grasp_matrix[3:].reshape(3, -1, 3), axis=(0, 2)).max() / math.sqrt(2.0)
     return float(lever) if lever > 0.0 else 1.0
 
@@ -50,7 +50,7 @@ def primitive_wrenches(grasp_matrix: Any, mu: float, facets: int = 8, torque_sca
         torque_scale: Length [m] that divides the torques; by default :func:`default_torque_scale` (the largest
             reference-to-contact distance), which makes the result independent of the unit of length.
     """
-    grasp_matrix = _grasp_matrix(grasp_matrix)
+    grasp_matrix = checked_grasp_matrix(grasp_matrix)
     edges = friction_cone_edges(mu, facets)
     scale = default_torque_scale(grasp_matrix) if torque_scale is None else as_positive(torque_scale, "torque_scale")
     count = grasp_matrix.shape[1] // 3

@@ -1,6 +1,6 @@
 """The fitness chapter 4's CMA-ES tuning minimises: F3 under FIM with the Tustin filter, scored by (4.49).
 
-:func:`impedance_fitness` (mean |f_d - f| from first contact [N]) and the held-out evaluation ``_evaluate`` are
+:func:`impedance_fitness` (mean |f_d - f| from first contact [N]) and the held-out evaluation ``evaluate_press`` are
 top-level functions of this module, so that worker processes can import and run them.  Every run at one
 (K_s, f_d, duration) shares its approach up to first contact, whatever M_I and K_I: ``_approach`` simulates it once
 per process and ``_discrete_fim`` continues from it, to the bit the run from the start.
@@ -60,7 +60,7 @@ def _discrete_fim(
     The run continues the shared approach (:func:`_approach`) from its last sample before the controller first senses
     contact: it is the run from the start, to the bit (tests/test_impedance.py), with the approach simulated once.
     """
-    setup = _cached_f3_setup(spring)
+    setup = cached_f3_setup(spring)
     controller = _discrete_fim_controller(setup, mass, stiffness, force)
     approach = _approach(spring, force, duration)
     if approach is None:
@@ -105,7 +105,7 @@ def _approach(spring: float, force: float, duration: float) -> tuple[Any, np.nda
     once or records contacts (without force) before.  A run continued from S (the controller reset there: filter at
     rest, first step dt = 0, as the filter saw only zeros; the other joints held at q0) is the run from the start.
     """
-    setup = _cached_f3_setup(spring)
+    setup = cached_f3_setup(spring)
     sim = setup.simulator
     controller = _discrete_fim_controller(setup, 0.01, 100.0, force)  # any M_I, K_I: the filter only sees zeros
     sensing = ContactSensing(setup.hand)
@@ -128,13 +128,15 @@ def _approach(spring: float, force: float, duration: float) -> tuple[Any, np.nda
 
 
 @functools.lru_cache(maxsize=4)
-def _cached_f3_setup(spring: float) -> Setup:
+def cached_f3_setup(spring: float) -> Setup:
+    """:func:`~bhgrasp.scenarios.finger_press.f3_setup` of ``spring`` [N/m], built once per process (a few kept)."""
     return f3_setup(spring)
 
 
-def _evaluate(
+def evaluate_press(
     params: tuple[float, float], desired: float, spring: float = TUNING_SPRING, duration: float = TUNING_DURATION
 ) -> tuple[ForceMetrics, float]:
+    """Impedance ``params`` pressing ``desired`` [N] (held out): force metrics, mean |f_d - f| from contact [N]."""
     t, force = _discrete_fim(params[0], params[1], desired, spring, duration)
     start = int(np.argmax(force > 0))
     return force_metrics(t, force, desired), float(np.mean(np.abs(desired - force[start:])))
@@ -148,5 +150,7 @@ __all__ = [
     "TUNING_SPRING",
     "TUNING_TOL_FUN",
     "TUNING_TOL_X",
+    "cached_f3_setup",
+    "evaluate_press",
     "impedance_fitness",
 ]

@@ -3,7 +3,7 @@
 :func:`as_printed` turns an impedance law into thesis (4.20)-(4.26) as printed (no feed-forward J^T f_d n, the
 filter's acceleration passed on); :func:`steady_force` is the balance at rest of impedance, environment and the
 inner loop's stiffness (:func:`inner_loop_stiffness`), shifted by a static friction force's deflection
-(:func:`friction_offset`); ``_why_printed`` and :data:`PRINTED_NOTE` are the report's account of it.
+(:func:`friction_offset`); ``why_printed`` and :data:`PRINTED_NOTE` are the report's account of it.
 """
 
 from __future__ import annotations
@@ -85,7 +85,7 @@ def friction_offset(setup: Setup, q: Any, reaction: np.ndarray, force: float, kp
     return float(setup.normal @ deflection / kp)
 
 
-def _closed_form(
+def closed_form_force(
     setup: Setup, traj: Trajectory, force: np.ndarray, law: ForceImpedance, kp: float, feedforward: bool
 ) -> tuple[float, float, float]:
     """k_p, and the closed-form steady force of a finished run of ``law``: frictionless, with the measured friction."""
@@ -112,7 +112,7 @@ PRINTED_NOTE = (
 )
 
 
-def _why_printed(
+def why_printed(
     kp: float, gains: float, impedance: float, k_e: float, desired: float, predicted: float, final: float
 ) -> str:
     """The report's explanation of the printed law's steady force error, with one run's numbers."""
@@ -139,7 +139,9 @@ __all__ = [
     "PRINTED_GAMMA",
     "PRINTED_NOTE",
     "as_printed",
+    "closed_form_force",
     "friction_offset",
     "inner_loop_stiffness",
     "steady_force",
+    "why_printed",
 ]

@@ -45,9 +45,9 @@ from bhgrasp.thesis.chapter4_closed_form import (
     CLOSED_FORM_HEADER,
     PRINTED_GAMMA,
     PRINTED_NOTE,
-    _closed_form,
-    _why_printed,
     as_printed,
+    closed_form_force,
+    why_printed,
 )
 from bhgrasp.thesis.chapter4_metrics import FORCE_HEADER, force_row
 
@@ -73,11 +73,11 @@ def planar_impedance(scale: float = 1.0) -> Case:
             extra[:2] = [f"{k_hat:.1f} ({setup.k_e:.1f})", f"{x_hat:.5f} ({setup.surface:.5f})"]
         if law is not None:
             assert isinstance(controller, ImpedanceController)
-            inner, *predicted = _closed_form(setup, traj, force, law, PLANAR_GAINS[0], controller.feedforward)
+            inner, *predicted = closed_form_force(setup, traj, force, law, PLANAR_GAINS[0], controller.feedforward)
             extra[2:] = [f"{value:.3f}" for value in predicted]
             if name.startswith("FIM as printed"):
                 final = force_metrics(traj.t, force, desired).final
-                why = _why_printed(inner, PLANAR_GAINS[0], law.stiffness, setup.k_e, law.force, predicted[0], final)
+                why = why_printed(inner, PLANAR_GAINS[0], law.stiffness, setup.k_e, law.force, predicted[0], final)
                 why += "  On a frictionless face the run settles at the first column (tests/test_impedance.py)."
         case.table.append(force_row(name, force_metrics(traj.t, force, desired), extra))
         case.traces[name] = (traj.t, force, desired)
@@ -169,10 +169,10 @@ def f3_force(scale: float = 1.0) -> Case:
             if isinstance(law, AdaptiveForceImpedance):
                 k_hat, x_hat = traj.log["F3/stiffness_estimate"][-1], traj.log["F3/surface_estimate"][-1]
                 extra = [f"{k_hat / setup.k_e:.4f}", f"{1e3 * (x_hat - setup.surface):+.3f}"]
-            inner, *predicted = _closed_form(setup, traj, force, law, F3_GAINS[0], forward)
+            inner, *predicted = closed_form_force(setup, traj, force, law, F3_GAINS[0], forward)
             if name == "FIM as printed" and spring == 1e4:
                 final = force_metrics(traj.t, force, 10.0).final
-                why = _why_printed(inner, F3_GAINS[0], law.stiffness, setup.k_e, law.force, predicted[0], final)
+                why = why_printed(inner, F3_GAINS[0], law.stiffness, setup.k_e, law.force, predicted[0], final)
             extra += [f"{value:.3f}" for value in predicted]
             case.table.append(force_row(f"{name}, K_s = {spring:g}", force_metrics(traj.t, force, 10.0), extra))
             case.traces[f"{name} K_s {spring:g}"] = (traj.t, force, 10.0)

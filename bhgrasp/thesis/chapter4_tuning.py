@@ -26,8 +26,8 @@ from bhgrasp.scenarios.press_fitness import (
     TUNING_SPRING,
     TUNING_TOL_FUN,
     TUNING_TOL_X,
-    _cached_f3_setup,
-    _evaluate,
+    cached_f3_setup,
+    evaluate_press,
     impedance_fitness,
 )
 from bhgrasp.thesis.case import Case
@@ -124,7 +124,7 @@ def _held_out_calls(starts: list, best: dict, thesis: dict) -> list[tuple[Callab
     for start in starts:
         untuned, tuned = tuple(best[start][1]), tuple(10.0 ** best[start][3].best)
         for desired in (4.0, 6.0, 8.0):
-            calls += [(_evaluate, (untuned, desired)), (_evaluate, (tuned, desired))]
+            calls += [(evaluate_press, (untuned, desired)), (evaluate_press, (tuned, desired))]
     return calls
 
 
@@ -185,7 +185,7 @@ def tuning(scale: float = 1.0, executor: Any = None) -> Case:
     )
     held_out_table(case, report)
     found_all, fitness_all = runs_table(case, report)
-    mass_range = fingertip_mass_range(_cached_f3_setup(TUNING_SPRING).hand, "F3")
+    mass_range = fingertip_mass_range(cached_f3_setup(TUNING_SPRING).hand, "F3")
     case.notes += tuning_notes(report, found_all, fitness_all, mass_range)
     return case
 
