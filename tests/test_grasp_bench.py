@@ -323,3 +323,27 @@ def test_the_readme_states_the_committed_benchmark_success_rates() -> None:
             assert f"| {group} | {labels[actuation]} | {rates} | {total} | {distinct} |" in readme
             rows += 1
     assert rows == 3  # the real hand on both sets, the idealised hand on the development set
+
+
+def test_the_placement_search_builds_each_configuration_as_the_checked_call_does() -> None:
+    """The search's fast configuration (10^5 calls a trial) equals ``hand.configuration`` to the bit, and raises as
+    it does outside the limits; a placement is computed once per process for each set of arguments."""
+    from bhgrasp.bench import placement
+
+    item = OBJECT_SET[0]
+    reach = placement._reach(item, 0.45, 0.8)
+    hand = reach.hand
+    for angle in (0.8, 1.234567, 2.4):
+        checked = hand.configuration(
+            F1_spread=0.45,
+            F2_spread=0.45,
+            **{f"{f}_proximal": angle for f in hand.fingers},
+            **{f"{f}_distal": angle / 3 for f in hand.fingers},
+        )
+        np.testing.assert_array_equal(reach.configuration(angle), checked)
+    with pytest.raises(InputError, match="outside its limits"):
+        reach.configuration(3.0)
+    assert placement._reach(item, 0.45, 0.8) is reach
+    centre = np.array([0.0, 0.0, placement.hand_depth(0.45, 0.8) + item.half_extents[2]])  # knuckles on its top
+    touch = reach.touch("F3", centre)
+    assert 0.8 < touch < reach.closed and touch == reach._touch("F3", centre)

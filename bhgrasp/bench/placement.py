@@ -19,6 +19,7 @@ the stand with :data:`STAND_MARGIN` to spare; the benchmark applies it to power 
 
 from __future__ import annotations
 
+import functools
 import itertools
 
 import coal
@@ -41,6 +42,13 @@ class _Reach:
 
     def __init__(self, item: BenchObject, spread: float, opening: float, closed: float = 2.4) -> None:
         self.hand = bh.BarrettHand()
+        hand = self.hand
+        self._spread = [hand.joint_index(f"{f}_spread") for f in ("F1", "F2")]
+        self._proximal = [hand.joint_index(f"{f}_proximal") for f in hand.fingers]
+        self._distal = [hand.joint_index(f"{f}_distal") for f in hand.fingers]
+        self._lower, self._upper = hand.lower, hand.upper
+        self._request = coal.DistanceRequest()
+        self._touches: dict[tuple, float] = {}
         self.geometry = self.hand.collision_model()
         self.data = pin.GeometryData(self.geometry)
         self.model_data = self.hand.model.createData()
@@ -60,12 +68,7 @@ class _Reach:
 
         ``shape``: another shape placed at ``centre`` (axes as the object's) instead of the object.
         """
-        q = self.hand.configuration(
-            F1_spread=self.spread,
-            F2_spread=self.spread,
-            **{f"{f}_proximal": angle for f in self.hand.fingers},
-            **{f"{f}_distal": angle / 3 for f in self.hand.fingers},
-        )
+        q = self.configuration(angle)
         pin.updateGeometryPlacements(self.hand.model, self.model_data, self.geometry, self.data, q)
         placement = coal.Transform3s(_FLIP, centre)
         shape = self.shape if shape is None else shape
@@ -78,14 +81,41 @@ class _Reach:
                 coal_transform(frame),
                 shape,
                 placement,
-                coal.DistanceRequest(),
+                self._request,
                 result,
             )
             nearest = min(nearest, gap)
         return nearest
 
+    def configuration(self, angle: float) -> np.ndarray:
+        """Every finger at proximal ``angle`` [rad], the distal at a third, both spreads at ``spread``.
+
+        As ``hand.configuration(...)`` builds it, without its per-joint checks (the search calls it ~10^5 times a
+        trial); outside the joint limits it raises as that does.
+        """
+        q = self.hand.neutral()
+        q[self._spread] = self.spread
+        q[self._proximal] = angle
+        q[self._distal] = angle / 3
+        if not ((q >= self._lower).all() and (q <= self._upper).all()):  # the checked call names the joint, raises
+            fingers = self.hand.fingers
+            return self.hand.configuration(
+                F1_spread=self.spread,
+                F2_spread=self.spread,
+                **{f"{f}_proximal": angle for f in fingers},
+                **{f"{f}_distal": angle / 3 for f in fingers},
+            )
+        return q
+
     def touch(self, finger: str, centre: np.ndarray) -> float:
-        """The first proximal angle [rad] at which ``finger`` touches (``closed`` if it never does)."""
+        """The first proximal angle [rad] at which ``finger`` touches (``closed`` if it never does), once per place."""
+        key = (finger, *map(float, centre))
+        found = self._touches.get(key)
+        if found is None:
+            found = self._touches[key] = self._touch(finger, centre)
+        return found
+
+    def _touch(self, finger: str, centre: np.ndarray) -> float:
         low, high = self.opening, self.closed
         if self.distance(finger, low, centre) <= 0.0:
             return low
@@ -104,12 +134,19 @@ def _deepest_corner(shape: coal.CollisionGeometry, placement: pin.SE3) -> float:
     return max(placement.act(np.array(corner))[2] for corner in itertools.product(*zip(box.min_, box.max_)))
 
 
+@functools.lru_cache(maxsize=64)
+def _reach(item: BenchObject, spread: float, opening: float) -> _Reach:
+    """The :class:`_Reach` of ``item`` at ``spread`` and ``opening``, built once per process (its touches kept)."""
+    return _Reach(item, spread, opening)
+
+
+@functools.lru_cache(maxsize=64)
 def hand_depth(spread: float, opening: float) -> float:
     """How far [m] below the hand base (hand frame z) its lowest non-finger shape reaches.
 
     That is the knuckle housings (0.091 m), 11 mm beyond the palm surface; the benchmark's clearances start there.
     """
-    reach = _Reach(BenchObject("sphere", (0.01,), 0.1), spread, opening)
+    reach = _reach(BenchObject("sphere", (0.01,), 0.1), spread, opening)
     q = reach.hand.configuration(F1_spread=spread, F2_spread=spread)
     pin.updateGeometryPlacements(reach.hand.model, reach.model_data, reach.geometry, reach.data, q)
     shapes = reach.geometry.geometryObjects
@@ -120,13 +157,14 @@ def hand_depth(spread: float, opening: float) -> float:
     )
 
 
+@functools.lru_cache(maxsize=256)
 def grasp_offset(item: BenchObject, spread: float, clearance: float, opening: float) -> float:
     """The object's offset [m] along the hand's y axis (towards F3) at which F3 and F1 touch it at the same angle.
 
     ``clearance``: the knuckles (:func:`hand_depth`) to the object's top [m]; ``opening``: the pre-shape's
-    proximal angle [rad].
+    proximal angle [rad].  Computed once per process for each set of arguments.
     """
-    reach = _Reach(item, spread, opening)
+    reach = _reach(item, spread, opening)
     depth = hand_depth(spread, opening) + clearance + item.half_extents[2]  # the object's centre, hand frame z
 
     def imbalance(offset: float) -> float:  # > 0: F1 arrives later than F3
@@ -156,7 +194,7 @@ def stand_clearance(item: BenchObject, spread: float, clearance: float, opening:
     in :data:`_SWEEP` steps, to its first touch of the object (bisected).  A finger that never touches the object
     counts as ``-inf``: the hand does not grasp it from there.
     """
-    reach = _Reach(item, spread, opening)
+    reach = _reach(item, spread, opening)
     offset = grasp_offset(item, spread, clearance, opening)
     centre = np.array([0.0, offset, hand_depth(spread, opening) + clearance + item.half_extents[2]])
     stand = coal.Box(*(2 * item.half_extents[:2]), STAND_HEIGHT)
