@@ -22,8 +22,9 @@ def test_free_closing_keeps_distal_at_a_third_of_proximal() -> None:
     hand = bh.BarrettHand()
     q0 = hand.configuration(F1_spread=0.3, F2_spread=0.3, F1_distal=0.1, F2_distal=0.05, F3_distal=0.2)
     sim = Simulator(Scene(hand), dt=1e-3, actuation=BarrettActuation(hand))
-    trajectory = sim.run(lambda t, s: np.array([0.02, 0.03, 0.03, 0.03]), 0.5, state=sim.initial_state(q0),
-                         progress=False)  # fmt: skip
+    trajectory = sim.run(
+        lambda t, s: np.array([0.02, 0.03, 0.03, 0.03]), 0.5, state=sim.initial_state(q0), progress=False
+    )
     q = trajectory.q
     for proximal, distal in PAIRS:
         offset = q0[distal] - q0[proximal] / 3  # distal = proximal / 3 + its offset, 125:375 gears
@@ -42,8 +43,10 @@ def _blocked_f3(duration: float, motor: callable) -> tuple:
     hand = bh.BarrettHand()
     obstacle = SpringMounted(
         Box(size=(0.04, 0.02, 0.02), mass=0.5, pose=pin.SE3(np.eye(3), np.array([0.0, 0.095, 0.115]))),
-        direction=(0, 0, 1), stiffness=1e5, damping=50.0,
-    )  # fmt: skip
+        direction=(0, 0, 1),
+        stiffness=1e5,
+        damping=50.0,
+    )
     actuation = BarrettActuation(hand)
     sim = Simulator(Scene(hand, [obstacle]), dt=1e-3, actuation=actuation, contact=SpringDamper(5e4, 50.0))
     return sim.run(motor, duration, progress=False), actuation

@@ -54,9 +54,17 @@ def test_the_contact_wrench_sums_the_hand_contacts_and_sees_the_support():
     points = np.array([[0.02, 0.0, 0.1], [-0.02, 0.0, 0.1], [0.0, 0.0, 0.075]])
     forces = np.array([[-1.0, 0.0, 0.5], [1.0, 0.0, 1.5], [0.0, 0.0, 2.0]])
     bodies = (("F1_distal_link", "object0"), ("F2_distal_link", "object0"), ("environment0", "object0"))
-    state = State(0.0, np.zeros(8), np.zeros(8), object_poses=(pose,), object_twists=np.zeros((1, 6)),
-                  contact_points=points, contact_forces=forces, contact_normals=np.zeros((3, 3)),
-                  contact_bodies=bodies)  # fmt: skip
+    state = State(
+        0.0,
+        np.zeros(8),
+        np.zeros(8),
+        object_poses=(pose,),
+        object_twists=np.zeros((1, 6)),
+        contact_points=points,
+        contact_forces=forces,
+        contact_normals=np.zeros((3, 3)),
+        contact_bodies=bodies,
+    )
     frames = frozenset(frame.name for frame in bh.BarrettHand().model.frames)
     wrench, free = contact_wrench(state, frames, "object0")
     # (0.02, 0, 0) x (-1, 0, 0.5) + (-0.02, 0, 0) x (1, 0, 1.5) = (0, -0.01 + 0.03, 0); the support's force left out
@@ -103,8 +111,10 @@ def ideal_truth() -> np.ndarray:
 @pytest.fixture(scope="module")
 def shaken():
     """The grasp shakes the 0.6 kg box (told 0.3 kg): thesis law exact, composite law with the combined noise."""
-    return {"thesis": identification_run("thesis", False, 6.0), "composite": identification_run("composite", True, 6.0,
-                                                                                                 seed=1)}  # fmt: skip
+    return {
+        "thesis": identification_run("thesis", False, 6.0),
+        "composite": identification_run("composite", True, 6.0, seed=1),
+    }
 
 
 def test_the_composite_law_learns_mass_and_inertia_in_the_grasp_under_noise(shaken):
@@ -133,8 +143,12 @@ def test_the_composite_law_is_not_fooled_by_joint_friction():
 
 
 def test_identification_waits_for_the_object_to_leave_its_support():
-    setup_law = SMCAdaptiveGrasp(bh.BarrettHand(), Box(size=(0.06, 0.05, 0.05), mass=0.3),
-                                 identification=ObjectIdentification(), object_adaptation=(5.0, 1e-3))  # fmt: skip
+    setup_law = SMCAdaptiveGrasp(
+        bh.BarrettHand(),
+        Box(size=(0.06, 0.05, 0.05), mass=0.3),
+        identification=ObjectIdentification(),
+        object_adaptation=(5.0, 1e-3),
+    )
     assert setup_law.parameter_information()[0, 0] == pytest.approx(1 / 5.0)
     run = identification_run("composite", False, 2.0)
     # the box sits on its pedestal until the lift at the squeeze's end, then the prediction term runs

@@ -49,8 +49,16 @@ def test_encoders_and_link_angles_follow_the_gear_ratios() -> None:
     unless enableBreakawayEncoders(false), whose P-only formula is right only before breakaway."""
     hand = bh.BarrettHand()
     driver = BarrettDriver(hand)
-    q = hand.configuration(F1_spread=1.2, F2_spread=1.2, F1_proximal=0.8, F1_distal=0.8 / 3,
-                           F2_proximal=0.5, F2_distal=0.6, F3_proximal=2.0, F3_distal=2.0 / 3)  # fmt: skip
+    q = hand.configuration(
+        F1_spread=1.2,
+        F2_spread=1.2,
+        F1_proximal=0.8,
+        F1_distal=0.8 / 3,
+        F2_proximal=0.5,
+        F2_distal=0.6,
+        F3_proximal=2.0,
+        F3_distal=2.0 / 3,
+    )
     driver.reset(State(t=0.0, q=q, v=np.zeros(8)))
     with pytest.raises(InputError, match=r"no reading yet: call update\(\)"):
         driver.primary_encoder_positions()
@@ -104,8 +112,16 @@ def test_initialize_homes_the_fingers_then_the_spread_and_zeroes_the_encoders() 
     the spread, and zeroes there: afterwards the counts are the gear train's from the open stops (to the joint
     stops' give), and a trapezoidal move lands where libbarrett's units say."""
     hand = bh.BarrettHand()
-    q0 = hand.configuration(F1_spread=0.6, F2_spread=0.6, F1_proximal=0.8, F1_distal=0.8 / 3,
-                            F2_proximal=1.2, F2_distal=0.4, F3_proximal=0.5, F3_distal=0.5 / 3)  # fmt: skip
+    q0 = hand.configuration(
+        F1_spread=0.6,
+        F2_spread=0.6,
+        F1_proximal=0.8,
+        F1_distal=0.8 / 3,
+        F2_proximal=1.2,
+        F2_distal=0.4,
+        F3_proximal=0.5,
+        F3_distal=0.5 / 3,
+    )
     simulator = _sim(hand)
     driver = BarrettDriver(hand, homed=False)
     driver.reset(simulator.initial_state(q0))
@@ -218,8 +234,10 @@ def test_close_on_an_object_stalls_on_contact_and_reports_done() -> None:
     curls to its stop, and the puck stops after TSTOP = 50 ms without motion (HOLD = 0: IDLE)."""
     box = SpringMounted(
         Box(size=(0.04, 0.02, 0.02), mass=0.5, pose=pin.SE3(np.eye(3), np.array([0.0, 0.095, 0.115]))),
-        direction=(0, 0, 1), stiffness=1e5, damping=50.0,
-    )  # fmt: skip
+        direction=(0, 0, 1),
+        stiffness=1e5,
+        damping=50.0,
+    )
     driver = BarrettDriver(hand)
     driver.script([(0.0, "close", "F3")])
     trajectory = _sim(hand, [box]).run(driver, 2.0, progress=False)
@@ -247,8 +265,9 @@ def test_pid_hold_gives_way_by_the_disturbance_over_its_stiffness() -> None:
         disturbance = np.zeros(8)
         disturbance[F2P] = 0.3  # [N m] closing, below the 0.5 N m breakaway
         push = disturbance.copy()
-        trajectory = sim.run(driver, 0.8, state=start, progress=False,
-                             disturbance=lambda t, push=push: push if t >= 0.4 else np.zeros(8))  # fmt: skip
+        trajectory = sim.run(
+            driver, 0.8, state=start, progress=False, disturbance=lambda t, push=push: push if t >= 0.4 else np.zeros(8)
+        )
         kp, _ = _gains(500, 2500)
         eta = sim.actuation.drive.efficiency
         k = np.flatnonzero(trajectory.t < 0.4)[-1]  # steady before the disturbance (it holds against gravity)

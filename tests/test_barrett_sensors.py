@@ -62,9 +62,15 @@ def contacts(hand, q, rows) -> State:
         points.append(placement.act(np.asarray(point, dtype=float)))
         normals.append(placement.rotation @ normal)
         forces.append(placement.rotation @ force)
-    return State(0.0, q, np.zeros(hand.nv), contact_points=np.array(points).reshape(-1, 3),
-                 contact_normals=np.array(normals).reshape(-1, 3), contact_forces=np.array(forces).reshape(-1, 3),
-                 contact_bodies=tuple(bodies))  # fmt: skip
+    return State(
+        0.0,
+        q,
+        np.zeros(hand.nv),
+        contact_points=np.array(points).reshape(-1, 3),
+        contact_normals=np.array(normals).reshape(-1, 3),
+        contact_forces=np.array(forces).reshape(-1, 3),
+        contact_bodies=tuple(bodies),
+    )
 
 
 def pad_point(pad_name: str, u: float, w: float, h: float) -> tuple[str, np.ndarray]:
@@ -287,8 +293,9 @@ def test_the_centroid_of_the_cell_forces_is_at_the_contact(hand, sensors, pad) -
     box = (np.array([22e-3, -4e-3]), np.array([46e-3, 4e-3])) if pad.name != "palm" else (-0.02, 0.02)
     index = ("F1", "F2", "F3", "palm").index(pad.name)
     for uw in rng.uniform(*box, size=(20, 2)):
-        reading = sensors.loads(contacts(hand, q, [(*pad_point(pad.name, *uw, 0.0005), pad_normal(pad.name),
-                                                   2.0 * pad_normal(pad.name))]))  # fmt: skip
+        reading = sensors.loads(
+            contacts(hand, q, [(*pad_point(pad.name, *uw, 0.0005), pad_normal(pad.name), 2.0 * pad_normal(pad.name))])
+        )
         forces = cell_forces(reading, pad)
         centroid = forces @ pad.centres / forces.sum()
         assert (np.abs(centroid - uw) <= 0.5 * pitch).all(), (uw, centroid)
@@ -303,8 +310,11 @@ def test_pads_lie_on_the_links_faces(hand) -> None:
     q = hand.configuration(F1_proximal=0.8, F2_proximal=0.8, F3_proximal=0.8)
     for finger in FINGERS:
         pad = finger_pad(finger)
-        box = next(g for g in geometry.geometryObjects
-                   if model.frames[g.parentFrame].name == pad.frame and isinstance(g.geometry, coal.Box))  # fmt: skip
+        box = next(
+            g
+            for g in geometry.geometryObjects
+            if model.frames[g.parentFrame].name == pad.frame and isinstance(g.geometry, coal.Box)
+        )
         centre, half = box.placement.translation, box.geometry.halfSide
         assert (pad.cells[:, 0] >= centre[0] - half[0]).all() and (pad.cells[:5, 1] <= centre[0] + half[0]).all()
         assert (np.abs(pad.cells[:, 2:]) <= half[2]).all()  # within the link's width

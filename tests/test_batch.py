@@ -147,8 +147,9 @@ def test_a_batch_of_barrett_hands_switches_like_separate_runs(threads: int, satu
     on the way back: every environment's modes, configuration and velocity equal its separate run's, bit for bit."""
     setup = box_grasp(mass=0.3, actuation="barrett")
     actuation = BarrettActuation(setup.hand, damping=0.01, friction=0.002, saturate=saturate)
-    simulator = Simulator(setup.simulator.scene, dt=setup.simulator.dt, contact=setup.simulator.law,
-                          actuation=actuation)  # fmt: skip
+    simulator = Simulator(
+        setup.simulator.scene, dt=setup.simulator.dt, contact=setup.simulator.law, actuation=actuation
+    )
     start = simulator.initial_state(setup.q_start)
     scales = np.array([1.0, 0.8, 1.3])  # 1.3: above the puck limit, clipped when saturating
     close, opening = np.array([0.02, 0.11, 0.11, 0.11]), np.array([0.0, -0.11, -0.11, -0.11])

@@ -28,8 +28,15 @@ from bhgrasp.cli import main
 from bhgrasp.data import Trajectory
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-FLAGS = ["--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--disable-quic"]  # fmt: skip
+FLAGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--disable-quic",
+]
 LINKS = ["palm_0", "F1_proximal_link_0", "F2_distal_link_0", "F3_distal_link_0", "object0"]
 TIMEOUT = 60_000  # [ms] only an upper bound for a loaded machine: nothing below waits a fixed time
 

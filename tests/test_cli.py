@@ -118,8 +118,14 @@ def test_experiments_ch4_writes_the_report_and_figures(tmp_path: Path, capsys: p
     run_chapter("ch4", tmp_path, 0.2)
     assert "ch4: 6 cases" in capsys.readouterr().out
     report = (tmp_path / "chapter4.md").read_text()
-    for heading in ("One-link finger", "uncontrolled vs position-based", "Planar finger", "adaptive FIM",
-                    "all three fingers", "CMA-ES"):  # fmt: skip
+    for heading in (
+        "One-link finger",
+        "uncontrolled vs position-based",
+        "Planar finger",
+        "adaptive FIM",
+        "all three fingers",
+        "CMA-ES",
+    ):
         assert heading in report
     figures = sorted(tmp_path.glob("*.png"))
     assert len(figures) == 6 and all(f"]({f.name})" in report for f in figures)
@@ -299,8 +305,19 @@ def test_grasp_bench_reproduces_a_committed_trial_and_flags_a_difference(
     from bhgrasp.thesis.results import REFERENCE
 
     committed = REFERENCE / "grasp_benchmark.json"
-    argv = ["grasp-bench", "--object", "box:0.06x0.05x0.05:0.3", "--grasp", "precision", "--workers", "1",
-            "--json", str(tmp_path / "run.json"), "--compare", str(committed)]  # fmt: skip
+    argv = [
+        "grasp-bench",
+        "--object",
+        "box:0.06x0.05x0.05:0.3",
+        "--grasp",
+        "precision",
+        "--workers",
+        "1",
+        "--json",
+        str(tmp_path / "run.json"),
+        "--compare",
+        str(committed),
+    ]
     assert main(argv) == 0
     out = capsys.readouterr().out
     assert "barrett: 1/1 succeed (1 strict)" in out and "compared 1 trials with" in out and "0 difference(s)" in out

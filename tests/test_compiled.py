@@ -35,11 +35,17 @@ FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))
 def twin(simulator: Simulator, engine: str) -> Simulator:
     """The same scene, law, actuation and options with another engine."""
     return Simulator(
-        simulator.scene, dt=simulator.dt, contact=simulator.law, actuation=simulator.actuation,
-        integrator=simulator.integrator, joint_limit_stiffness=simulator.limit_stiffness,
-        joint_limit_damping=simulator.limit_damping, max_penetration=simulator.max_penetration,
-        max_speed=simulator.max_speed, engine=engine,
-    )  # fmt: skip
+        simulator.scene,
+        dt=simulator.dt,
+        contact=simulator.law,
+        actuation=simulator.actuation,
+        integrator=simulator.integrator,
+        joint_limit_stiffness=simulator.limit_stiffness,
+        joint_limit_damping=simulator.limit_damping,
+        max_penetration=simulator.max_penetration,
+        max_speed=simulator.max_speed,
+        engine=engine,
+    )
 
 
 def lockstep(simulator: Simulator, controller, steps: int, state=None) -> dict[str, float]:
@@ -96,8 +102,12 @@ def test_reference_hold() -> None:
 @pytest.mark.parametrize("integrator", INTEGRATORS)
 def test_free_flight_with_spin(integrator: str) -> None:
     """A box tumbling about its intermediate axis (the implicit-midpoint gyroscopic torque; RK4's dexp stages)."""
-    box = Box(size=(0.08, 0.05, 0.03), mass=0.4, pose=pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.2, 0.5), np.zeros(3)),
-              velocity=[0.5, -0.2, 0.44, 0.4, 15.0, 0.6])  # fmt: skip
+    box = Box(
+        size=(0.08, 0.05, 0.03),
+        mass=0.4,
+        pose=pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.2, 0.5), np.zeros(3)),
+        velocity=[0.5, -0.2, 0.44, 0.4, 15.0, 0.6],
+    )
     simulator = Simulator(Scene(far_hand(), [box]), integrator=integrator)
     assert_agree(lockstep(simulator, zero(8), 1000), 0)
 
@@ -105,11 +115,22 @@ def test_free_flight_with_spin(integrator: str) -> None:
 @pytest.mark.parametrize("integrator", INTEGRATORS)
 def test_off_centre_box_collision(integrator: str) -> None:
     """Two boxes meeting off centre: box-box patches, then they spin apart."""
-    first = Box(size=(0.05, 0.04, 0.03), mass=0.3, friction=0.8, pose=pin.SE3(np.eye(3), np.zeros(3)),
-                velocity=[0.5, 0.0, 0.0, 0.0, 0.0, 0.0], name="first")  # fmt: skip
-    second = Box(size=(0.05, 0.04, 0.03), mass=0.5, friction=0.8,
-                 pose=pin.SE3(pin.rpy.rpyToMatrix(0.2, 0.1, 0.3), np.array([0.1, 0.02, 0.01])),
-                 velocity=[-0.5, 0.0, 0.0, 0.0, 0.0, 0.0], name="second")  # fmt: skip
+    first = Box(
+        size=(0.05, 0.04, 0.03),
+        mass=0.3,
+        friction=0.8,
+        pose=pin.SE3(np.eye(3), np.zeros(3)),
+        velocity=[0.5, 0.0, 0.0, 0.0, 0.0, 0.0],
+        name="first",
+    )
+    second = Box(
+        size=(0.05, 0.04, 0.03),
+        mass=0.5,
+        friction=0.8,
+        pose=pin.SE3(pin.rpy.rpyToMatrix(0.2, 0.1, 0.3), np.array([0.1, 0.02, 0.01])),
+        velocity=[-0.5, 0.0, 0.0, 0.0, 0.0, 0.0],
+        name="second",
+    )
     simulator = Simulator(Scene(far_hand(), [first, second]), integrator=integrator)
     assert_agree(lockstep(simulator, zero(8), 300), 2)
 
@@ -124,8 +145,7 @@ def test_box_sliding_down_an_incline(integrator: str) -> None:
     incline = Plane(normal=normal, offset=float(normal[0]), friction=mu, name="incline")
     law = SpringDamper(stiffness=1e4, damping=20.0, friction=mu)
     dt = 1e-3 if integrator == "implicit" else 2e-4  # the explicit step needs a smaller step for k = 1e4
-    simulator = Simulator(Scene(far_hand((0.0, 0.0, -G)), [box], [incline]), dt=dt, contact=law,
-                          integrator=integrator)  # fmt: skip
+    simulator = Simulator(Scene(far_hand((0.0, 0.0, -G)), [box], [incline]), dt=dt, contact=law, integrator=integrator)
     assert_agree(lockstep(simulator, zero(8), 1200), 4)
 
 
@@ -137,8 +157,9 @@ def test_barrett_closing_on_a_box_breaks_away_and_reopens() -> None:
     are on."""
     setup = box_grasp(mass=0.3, actuation="barrett")
     actuation = BarrettActuation(setup.hand, damping=0.01, friction=0.002)
-    simulator = Simulator(setup.simulator.scene, dt=setup.simulator.dt, contact=setup.simulator.law,
-                          actuation=actuation, engine="python")  # fmt: skip
+    simulator = Simulator(
+        setup.simulator.scene, dt=setup.simulator.dt, contact=setup.simulator.law, actuation=actuation, engine="python"
+    )
     state = simulator.initial_state(setup.q_start)
     close = lambda t, s: np.array([0.02, 0.11, 0.11, 0.11])  # noqa: E731
     opening = lambda t, s: np.array([0.0, -0.11, -0.11, -0.11])  # noqa: E731

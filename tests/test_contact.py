@@ -74,9 +74,16 @@ def test_signed_distances_agree_with_coal(shape: str) -> None:
     expected = []
     for point in points:
         result.clear()
-        expected.append(coal.distance(probe, coal.Transform3s(np.eye(3), point),
-                                      scene.geometry.geometryObjects[geom].geometry, transform,
-                                      coal.DistanceRequest(), result))  # fmt: skip
+        expected.append(
+            coal.distance(
+                probe,
+                coal.Transform3s(np.eye(3), point),
+                scene.geometry.geometryObjects[geom].geometry,
+                transform,
+                coal.DistanceRequest(),
+                result,
+            )
+        )
     np.testing.assert_allclose(engine._signed_distance(geom, points), expected, atol=1e-9)
 
 

@@ -24,9 +24,15 @@ from bhgrasp.motion.trajectories import Constant, Quintic, Sinusoid, exponential
 from bhgrasp.scenarios.joint_tracking import f3_case
 
 Q_MID = dict(
-    F1_spread=0.5, F1_proximal=0.6, F1_distal=0.3, F2_spread=0.5, F2_proximal=0.6, F2_distal=0.3,
-    F3_proximal=0.6, F3_distal=0.3,
-)  # fmt: skip
+    F1_spread=0.5,
+    F1_proximal=0.6,
+    F1_distal=0.3,
+    F2_spread=0.5,
+    F2_proximal=0.6,
+    F2_distal=0.3,
+    F3_proximal=0.6,
+    F3_distal=0.3,
+)
 
 
 def joint_factories():
@@ -98,8 +104,9 @@ def test_computed_torque_gives_the_linear_error_dynamics(barrett, q_mid):
     reference = Sinusoid(q_mid, np.full(8, 0.15), 0.7)
     sim = bh.Simulator(bh.Scene(barrett), dt=1e-3)
     e0 = np.linspace(-0.08, 0.08, 8)
-    traj = sim.run(ComputedTorque(barrett.perturbed(1.0), reference), 1.5, state=sim.initial_state(q_mid + e0),
-                   progress=False)  # fmt: skip
+    traj = sim.run(
+        ComputedTorque(barrett.perturbed(1.0), reference), 1.5, state=sim.initial_state(q_mid + e0), progress=False
+    )
     _, v_d0, _ = reference(0.0)
     expected = closed_form_error(400.0, 160.0, e0, -v_d0, traj.t)
     error = traj.q - traj.log["q_d"]
@@ -113,8 +120,9 @@ def test_computed_torque_error_converges_with_the_step_size(barrett, q_mid):
     for dt in (2e-3, 1e-3, 5e-4):
         sim = bh.Simulator(bh.Scene(barrett), dt=dt)
         e0 = np.full(8, 0.05)
-        traj = sim.run(ComputedTorque(barrett, Constant(q_mid)), 0.5, state=sim.initial_state(q_mid + e0),
-                       progress=False)  # fmt: skip
+        traj = sim.run(
+            ComputedTorque(barrett, Constant(q_mid)), 0.5, state=sim.initial_state(q_mid + e0), progress=False
+        )
         expected = closed_form_error(400.0, 160.0, e0, np.zeros(8), traj.t)
         gaps.append(np.max(np.abs(traj.q - q_mid - expected)))
     assert gaps[0] / gaps[1] == pytest.approx(2.0, rel=0.25) and gaps[1] / gaps[2] == pytest.approx(2.0, rel=0.25)
@@ -145,8 +153,9 @@ def test_workspace_dynamics_reproduce_joint_space_dynamics(barrett, q_mid):
     for finger in barrett.fingers:
         index = barrett.finger_indices(finger)
         dyn = workspace_dynamics(barrett, q_mid, v, finger)
-        x_dd = dyn.basis.T @ (barrett.fingertip_jacobian(q_mid, finger) @ a
-                              + barrett.fingertip_bias_acceleration(q_mid, v, finger))  # fmt: skip
+        x_dd = dyn.basis.T @ (
+            barrett.fingertip_jacobian(q_mid, finger) @ a + barrett.fingertip_bias_acceleration(q_mid, v, finger)
+        )
         a_finger = np.zeros(8)
         a_finger[index] = a[index]
         tau = dyn.jacobian.T @ (dyn.mass @ x_dd + dyn.coriolis + dyn.gravity)
@@ -208,8 +217,9 @@ def adaptive_run(barrett, q_mid, dt, noise=None, leakage=0.0):
 def test_adaptive_lyapunov_function_is_non_increasing(barrett, q_mid):
     """A.1 with adaptation: V = s^T M s / 2 + theta~^T Gamma theta~ / 2 has V_dot = -s^T K_s s <= 0 (noise-free)."""
     controller, traj = adaptive_run(barrett, q_mid, dt=1e-4)
-    values = np.array([lyapunov(barrett, controller, q, s, th)
-                       for q, s, th in zip(traj.q, traj.log["s"], traj.log["theta"])])  # fmt: skip
+    values = np.array(
+        [lyapunov(barrett, controller, q, s, th) for q, s, th in zip(traj.q, traj.log["s"], traj.log["theta"])]
+    )
     assert values[0] > 0 and np.all(np.diff(values) <= 1e-9 * values[0])
     # and it decreases by the dissipated integral of s^T K_s s (2 % for the discretisation)
     dissipation = np.einsum("ij,j,ij->i", traj.log["s"], controller.k_s, traj.log["s"])

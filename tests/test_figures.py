@@ -242,8 +242,15 @@ def tuning_figure() -> Figure:
     traces = {}
     for start in ((-0.3, -0.3), (0.7, 0.7), (-1.0, 1.0)):
         for seed in (1, 2):
-            result = cma_es(fitness, np.array(start), 0.5, seed=seed, max_generations=30, executor="serial",
-                            bounds=([-2.0, -1.0], [1.0, 2.0]))  # fmt: skip
+            result = cma_es(
+                fitness,
+                np.array(start),
+                0.5,
+                seed=seed,
+                max_generations=30,
+                executor="serial",
+                bounds=([-2.0, -1.0], [1.0, 2.0]),
+            )
             traces[f"from {list(start)}, seed {seed}"] = (np.arange(result.generations), result.generation_best, None)
     return plots.force_case_figure(SimpleNamespace(key="tuning", title="CMA-ES tuning (short runs)", traces=traces))
 

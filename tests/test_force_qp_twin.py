@@ -51,8 +51,9 @@ INFEASIBLE_STATUSES = {"PROXQP_PRIMAL_INFEASIBLE", "PROXQP_MAX_ITER_REACHED"}
 def sphere_contacts(angles, radius=0.04, tilt=0.0):
     """Contacts at ``angles`` [rad] on a sphere's circle of latitude -tilt, normals towards the centre."""
     angles = np.asarray(angles, dtype=float)
-    points = radius * np.column_stack((np.cos(angles) * np.cos(tilt), np.sin(angles) * np.cos(tilt),
-                                       np.full(len(angles), -np.sin(tilt))))  # fmt: skip
+    points = radius * np.column_stack(
+        (np.cos(angles) * np.cos(tilt), np.sin(angles) * np.cos(tilt), np.full(len(angles), -np.sin(tilt)))
+    )
     return grasp_map(points, -points / radius, np.zeros(3))
 
 
@@ -62,8 +63,16 @@ def spread(n):
 
 def loop_wrench(s):
     """A vertical force that swings between pushing down and lifting, with side forces and torques [N, N m]."""
-    return np.array([0.5 * np.sin(6 * s), 0.3 * np.sin(4 * s), 3.0 * np.sin(6 * np.pi * s), 0.01 * np.cos(5 * s),
-                     0.004 * np.sin(3 * s), 0.002])  # fmt: skip
+    return np.array(
+        [
+            0.5 * np.sin(6 * s),
+            0.3 * np.sin(4 * s),
+            3.0 * np.sin(6 * np.pi * s),
+            0.01 * np.cos(5 * s),
+            0.004 * np.sin(3 * s),
+            0.002,
+        ]
+    )
 
 
 def two_contact_wrench(gmap):
@@ -92,8 +101,9 @@ def antipodal_wrench(s):
 
 def drifting_grasp(s):
     """Three contacts that slide slowly around and across the equator (the grasp map changes every cycle)."""
-    return sphere_contacts(spread(3) + 0.1 * np.sin(2 * np.pi * s * np.array([1.0, 2.0, 3.0])),
-                           tilt=-0.6 + 0.9 * np.sin(np.pi * s) ** 2)  # fmt: skip
+    return sphere_contacts(
+        spread(3) + 0.1 * np.sin(2 * np.pi * s * np.array([1.0, 2.0, 3.0])), tilt=-0.6 + 0.9 * np.sin(np.pi * s) ** 2
+    )
 
 
 def loops():
@@ -155,18 +165,26 @@ def lockstep(cycles=1200, requests=150):
     pairs = []
     for gmap, wrench, mu, f_min, desired in random_requests(requests):
         n = gmap.shape[1] // 3
-        pairs.append(tuple(ContactForceQP(n, mu, min_normal_force=f_min, engine=engine).solve(gmap, wrench, desired)
-                           for engine in ("compiled", "python")))  # fmt: skip
+        pairs.append(
+            tuple(
+                ContactForceQP(n, mu, min_normal_force=f_min, engine=engine).solve(gmap, wrench, desired)
+                for engine in ("compiled", "python")
+            )
+        )
     summary["random requests"] = compare(pairs)
     return summary
 
 
 def compare(pairs):
     metrics = max(
-        max(float(np.max(np.abs(a.wrench_error - b.wrench_error))), abs(a.wrench_residual - b.wrench_residual),
-            abs(a.cone_violation - b.cone_violation), abs(a.normal_margin - b.normal_margin))
+        max(
+            float(np.max(np.abs(a.wrench_error - b.wrench_error))),
+            abs(a.wrench_residual - b.wrench_residual),
+            abs(a.cone_violation - b.cone_violation),
+            abs(a.normal_margin - b.normal_margin),
+        )
         for a, b in pairs
-    )  # fmt: skip
+    )
     return {
         "forces": max(float(np.max(np.abs(a.forces - b.forces))) for a, b in pairs),
         "force_bits": sum(not np.array_equal(a.forces, b.forces) for a, b in pairs),
@@ -222,8 +240,13 @@ else:
 @pytest.mark.slow  # 15 s
 def test_the_engines_agree_bit_for_bit_against_the_plain_proxsuite():
     """Same arithmetic (proxsuite without vector extensions on both sides): identical in every cycle."""
-    run = subprocess.run([sys.executable, "-c", PLAIN_PROXSUITE, str(Path(__file__).parent)], capture_output=True,
-                         text=True, check=True, timeout=600)  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, "-c", PLAIN_PROXSUITE, str(Path(__file__).parent)],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=600,
+    )
     summary = json.loads(run.stdout.strip().splitlines()[-1])
     if summary is None:
         pytest.skip("proxsuite's plain module proxsuite_pywrap cannot be selected")
@@ -245,8 +268,15 @@ def test_torque_scale_has_the_bits_of_default_torque_scale():
 
 
 def test_the_constants_are_the_same():
-    for name in ("NEAREST_WEIGHT", "PRIMAL_INFEASIBILITY", "DOUBTFUL_ERROR", "DUALITY_GAP_REL", "FEASIBLE_RESIDUAL",
-                 "ADMISSIBLE_TOLERANCE", "CHECK_ITER"):  # fmt: skip
+    for name in (
+        "NEAREST_WEIGHT",
+        "PRIMAL_INFEASIBILITY",
+        "DOUBTFUL_ERROR",
+        "DUALITY_GAP_REL",
+        "FEASIBLE_RESIDUAL",
+        "ADMISSIBLE_TOLERANCE",
+        "CHECK_ITER",
+    ):
         assert getattr(core.ContactForceQP, name) == getattr(grasp_forces, name), name
 
 

@@ -50,17 +50,22 @@ def test_objects_parse_from_kind_dims_mass_and_refuse_what_the_hand_cannot_hold(
     assert (can.kind, can.dims, can.mass) == ("cylinder", (0.033, 0.10), 0.35)
     np.testing.assert_allclose(can.half_extents, [0.033, 0.033, 0.05])
     assert can.body(0.8).pose.translation[2] == pytest.approx(0.05)  # resting on the table top z = 0
-    for text, message in (("cube:1:2", "kind must be one of"), ("box:0.1x0.1:0.2", "a box takes 3 dimension"),
-                          ("sphere:0.2:0.1", "at most 0.15 m"), ("sphere:0.03:-1", "KIND:DIMS:MASS"),
-                          ("sphere:0.03:0", "positive and finite")):  # fmt: skip
+    for text, message in (
+        ("cube:1:2", "kind must be one of"),
+        ("box:0.1x0.1:0.2", "a box takes 3 dimension"),
+        ("sphere:0.2:0.1", "at most 0.15 m"),
+        ("sphere:0.03:-1", "KIND:DIMS:MASS"),
+        ("sphere:0.03:0", "positive and finite"),
+    ):
         with pytest.raises(InputError, match=message):
             BenchObject.parse(text)
 
 
 def test_the_shake_pushes_10_m_newtons_along_each_direction_for_its_window() -> None:
     force = shake_force(0.3)
-    impulses = [sum(force(HELD_AT + k * SHAKE_TIME + s)[0] for s in np.arange(0.0, SHAKE_TIME, 1e-3)) * 1e-3
-                for k in range(6)]  # fmt: skip
+    impulses = [
+        sum(force(HELD_AT + k * SHAKE_TIME + s)[0] for s in np.arange(0.0, SHAKE_TIME, 1e-3)) * 1e-3 for k in range(6)
+    ]
     expected = 10 * 0.3 * SHAKE_TIME * np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
     np.testing.assert_allclose(impulses, expected, atol=1e-9)
     assert not force(HELD_AT - 1e-6).any() and not force(HELD_AT + 6 * SHAKE_TIME).any()
@@ -143,19 +148,45 @@ def test_the_fingers_reach_a_ball_together_where_the_static_geometry_says() -> N
 
 
 def test_the_report_compares_outcomes_and_metrics_and_renders_the_rates(tmp_path) -> None:
-    trial = {"object": "box", "spec": "box:0.06x0.05x0.05:0.3", "grasp": "power", "actuation": "barrett",
-             "success": True, "strict_success": True, "placed": True, "failure": "", "lifted": 0.1,
-             "max_displacement": 1e-4, "max_rotation": 1e-3, "slip_samples": 0, "peak_contact_force": 15.0,
-             "peak_stand_force": 0.0, "peak_joint_torque": 1.3, "torque_to_rating": 0.5, "inside_envelope": True,
-             "most_loaded_joint": "F3_proximal", "gripped": True, "held_force_F1": 3.0, "held_force_F2": 3.0,
-             "held_force_F3": 6.0, "spread": 0.0}  # fmt: skip
-    failed = {**trial, "grasp": "precision", "success": False, "strict_success": False, "placed": False,
-              "failure": "moved 5 mm / 15 deg under the +x push"}  # fmt: skip
+    trial = {
+        "object": "box",
+        "spec": "box:0.06x0.05x0.05:0.3",
+        "grasp": "power",
+        "actuation": "barrett",
+        "success": True,
+        "strict_success": True,
+        "placed": True,
+        "failure": "",
+        "lifted": 0.1,
+        "max_displacement": 1e-4,
+        "max_rotation": 1e-3,
+        "slip_samples": 0,
+        "peak_contact_force": 15.0,
+        "peak_stand_force": 0.0,
+        "peak_joint_torque": 1.3,
+        "torque_to_rating": 0.5,
+        "inside_envelope": True,
+        "most_loaded_joint": "F3_proximal",
+        "gripped": True,
+        "held_force_F1": 3.0,
+        "held_force_F2": 3.0,
+        "held_force_F3": 6.0,
+        "spread": 0.0,
+    }
+    failed = {
+        **trial,
+        "grasp": "precision",
+        "success": False,
+        "strict_success": False,
+        "placed": False,
+        "failure": "moved 5 mm / 15 deg under the +x push",
+    }
     trials = [trial, failed]
     assert bench_report.compare(trials, trials) == []
     moved = [{**trial, "peak_contact_force": 15.0001}, failed]
-    assert bench_report.compare(moved, trials) == [f"{('box:0.06x0.05x0.05:0.3', 'power', 'barrett', 0.0)} "
-                                                   "peak_contact_force: 15.0001, reference 15.0"]  # fmt: skip
+    assert bench_report.compare(moved, trials) == [
+        f"{('box:0.06x0.05x0.05:0.3', 'power', 'barrett', 0.0)} peak_contact_force: 15.0001, reference 15.0"
+    ]
     assert len(bench_report.compare([{**trial, "inside_envelope": False}], trials)) == 1
     assert "not in the reference" in bench_report.compare([{**trial, "spread": 0.45}], trials)[0]
     assert len(bench_report.compare([{**trial, "success": False}], trials)) == 1
@@ -269,8 +300,15 @@ def test_a_grip_needs_every_finger_pressing_its_share_of_the_weight_and_no_dista
     """least_grip: m g / (3 mu); a lifted trial whose weakest finger presses less, or whose distal joint rests on
     its stop (a cage), fails and says which finger."""
     assert least_grip(0.3) == pytest.approx(0.3 * G / (3 * FRICTION))
-    record = {"lifted": 0.1, "success": False, "inside_envelope": True, "on_stop": "", "held_force_F1": 2.0,
-              "held_force_F2": 0.4, "held_force_F3": 3.0}  # fmt: skip
+    record = {
+        "lifted": 0.1,
+        "success": False,
+        "inside_envelope": True,
+        "on_stop": "",
+        "held_force_F1": 2.0,
+        "held_force_F2": 0.4,
+        "held_force_F3": 3.0,
+    }
     args = (np.zeros(1), np.zeros(1), np.zeros(1), 18.0)
     assert failure_reason(record, *args, mass=0.3) == (
         "not gripped: F2 presses the object with 0.40 N once lifted (each finger needs 1.23 N to carry its weight by "

@@ -94,8 +94,9 @@ def test_three_fingertip_contacts_leave_the_barrett_five_object_motions(held):
     q_dot = np.linalg.lstsq(dyn.hand_jacobian, dyn.grasp_map.T @ forbidden, rcond=None)[0]
     assert np.linalg.norm(dyn.hand_jacobian @ q_dot - dyn.grasp_map.T @ forbidden) > 1e-3
     two = [i for i, link in enumerate(links) if link.startswith(("F1", "F2"))]
-    g2 = bh.grasp_map(points[two] @ pose.rotation.T + pose.translation, normals[two] @ pose.rotation.T,
-                      pose.translation)  # fmt: skip
+    g2 = bh.grasp_map(
+        points[two] @ pose.rotation.T + pose.translation, normals[two] @ pose.rotation.T, pose.translation
+    )
     j2 = dyn.hand_jacobian[[3 * i + k for i in two for k in range(3)]]
     assert grasp_mobility(g2, j2).shape == (6, 6)  # two 3-DOF fingers: every object twist
 

@@ -31,8 +31,9 @@ GRAVITY_WRENCH = np.array([0.0, 0.0, 0.2 * 9.81, 0.0, 0.0, 0.0])  # what the con
 def sphere_contacts(n: int = 3, radius: float = 0.04, tilt: float = 0.0):
     """n contacts on a sphere's equator (optionally tilted below it), normals towards the centre."""
     angles = 2 * np.pi * np.arange(n) / n + 0.3
-    points = radius * np.column_stack((np.cos(angles) * np.cos(tilt), np.sin(angles) * np.cos(tilt),
-                                       np.full(n, -np.sin(tilt))))  # fmt: skip
+    points = radius * np.column_stack(
+        (np.cos(angles) * np.cos(tilt), np.sin(angles) * np.cos(tilt), np.full(n, -np.sin(tilt)))
+    )
     return points, -points / radius
 
 
@@ -85,8 +86,9 @@ def least_scaled_error(gmap, w, mu, f_min, facets=8):
     n = gmap.shape[1] // 3
     scale = np.concatenate((np.ones(3), np.full(3, 1.0 / default_torque_scale(gmap))))
     a = scale[:, None] * gmap
-    f = quadprog_solve(a.T @ a + 1e-10 * np.eye(3 * n), a.T @ (scale * w), np.zeros((0, 3 * n)), np.zeros(0),
-                       3 * n, mu, f_min, facets)  # fmt: skip
+    f = quadprog_solve(
+        a.T @ a + 1e-10 * np.eye(3 * n), a.T @ (scale * w), np.zeros((0, 3 * n)), np.zeros(0), 3 * n, mu, f_min, facets
+    )
     return float(np.linalg.norm(a @ f - scale * w))
 
 
@@ -170,8 +172,9 @@ def test_infeasible_wrench_is_reported_with_the_least_residual():
         blocks[i * len(pyramid) : (i + 1) * len(pyramid), 3 * i : 3 * i + 3] = -pyramid
         normals_rows[i, 3 * i + 2] = 1.0
     hessian = gmap.T @ gmap + 1e-9 * np.eye(3 * n)
-    best = quadprog.solve_qp(hessian, gmap.T @ GRAVITY_WRENCH, np.vstack((blocks, normals_rows)).T,
-                             np.zeros(len(blocks) + n), meq=0)[0]  # fmt: skip
+    best = quadprog.solve_qp(
+        hessian, gmap.T @ GRAVITY_WRENCH, np.vstack((blocks, normals_rows)).T, np.zeros(len(blocks) + n), meq=0
+    )[0]
     least = np.linalg.norm(gmap @ best - GRAVITY_WRENCH)
     assert least > 0.1 and result.wrench_residual == pytest.approx(least, rel=1e-3)
     assert result.wrench_residual == pytest.approx(GRAVITY_WRENCH[2], rel=1e-3)  # none of the weight is carried
@@ -322,8 +325,16 @@ def test_a_false_infeasibility_certificate_is_overruled():
     the nearest problem's tiny error makes the QP run again without the test, and the optimum is found."""
     gmap = equator_grasp()
     t = 0.161
-    wrench = np.array([0.3 * np.sin(t), 0.2 * np.cos(t), 9.81 * 0.2 + 0.1 * np.sin(2 * t),
-                       0.002 * np.sin(t), 0.001 * np.cos(t), 0.0005 * np.sin(3 * t)])  # fmt: skip
+    wrench = np.array(
+        [
+            0.3 * np.sin(t),
+            0.2 * np.cos(t),
+            9.81 * 0.2 + 0.1 * np.sin(2 * t),
+            0.002 * np.sin(t),
+            0.001 * np.cos(t),
+            0.0005 * np.sin(3 * t),
+        ]
+    )
     qp = ContactForceQP(3, 0.5, min_normal_force=1.0)
     result = qp.solve(gmap, wrench)
     assert result.feasible and result.status == "PROXQP_SOLVED" and result.iterations <= qp.iteration_bound

@@ -50,10 +50,12 @@ def random_twist(rng):
 def central_difference(hand, q, obj, points, normals, links, step=STEP):
     """(P(t + h) - P(t - h)) / 2h, the object advanced at its twist and the joints at q_dot = P x_dot."""
     q_dot = grasp_kinematics(hand, q, obj, points, normals, links).joint_map @ obj.twist
-    ahead = grasp_kinematics(hand, pin.integrate(hand.model, q, step * q_dot), obj.advanced(step), points, normals,
-                             links)  # fmt: skip
-    behind = grasp_kinematics(hand, pin.integrate(hand.model, q, -step * q_dot), obj.advanced(-step), points, normals,
-                              links)  # fmt: skip
+    ahead = grasp_kinematics(
+        hand, pin.integrate(hand.model, q, step * q_dot), obj.advanced(step), points, normals, links
+    )
+    behind = grasp_kinematics(
+        hand, pin.integrate(hand.model, q, -step * q_dot), obj.advanced(-step), points, normals, links
+    )
     return (ahead.joint_map - behind.joint_map) / (2.0 * step)
 
 
@@ -77,8 +79,9 @@ def test_joint_map_rate_is_the_derivative_of_the_joint_map_on_the_hold(held, fin
     """Three contacts: J (9, 8) full column rank; two: J (6, 8) full row rank (the null-space term of d(J^+))."""
     hand, q, box, pose, points, normals, links = held
     keep = [i for i, link in enumerate(links) if link.startswith(fingers)]
-    obj = ObjectState(box.mass, box.inertia, pose.translation.copy(), pose.rotation.copy(),
-                      random_twist(np.random.default_rng(seed)))  # fmt: skip
+    obj = ObjectState(
+        box.mass, box.inertia, pose.translation.copy(), pose.rotation.copy(), random_twist(np.random.default_rng(seed))
+    )
     args = (hand, q, obj, points[keep], normals[keep], [links[i] for i in keep])
     assert_rate_matches(grasp_kinematics(*args), central_difference(*args))
 
@@ -112,24 +115,33 @@ def test_grasp_kinematics_agree_with_independent_truths_at_random_configurations
     args = (hand, q, obj, (points - com) @ rotation, normals @ rotation, links)
     kinematics = grasp_kinematics(*args)
     assert_rate_matches(kinematics, central_difference(*args))
-    np.testing.assert_allclose(kinematics.hand_jacobian, bh.hand_jacobian(hand, q, points, links, normals),
-                               rtol=0.0, atol=1e-14)  # fmt: skip
+    np.testing.assert_allclose(
+        kinematics.hand_jacobian, bh.hand_jacobian(hand, q, points, links, normals), rtol=0.0, atol=1e-14
+    )
     np.testing.assert_allclose(kinematics.grasp_map, bh.grasp_map(points, normals, com), rtol=0.0, atol=1e-14)
     pinv = np.linalg.pinv(kinematics.hand_jacobian)
     np.testing.assert_allclose(kinematics.hand_jacobian_pinv, pinv, rtol=0.0, atol=1e-10 * np.max(np.abs(pinv)))
-    np.testing.assert_allclose(kinematics.joint_map, pinv @ kinematics.grasp_map.T, rtol=0.0,
-                               atol=1e-10 * np.max(np.abs(kinematics.joint_map)))  # fmt: skip
+    np.testing.assert_allclose(
+        kinematics.joint_map, pinv @ kinematics.grasp_map.T, rtol=0.0, atol=1e-10 * np.max(np.abs(kinematics.joint_map))
+    )
 
 
 def test_central_difference_error_shrinks_with_the_step_as_expected(held):
     """Down to the round-off floor the error of the central difference falls as h^2: the analytic P_dot is the
     limit, not merely close to one step's difference."""
     hand, q, box, pose, points, normals, links = held
-    obj = ObjectState(box.mass, box.inertia, pose.translation.copy(), pose.rotation.copy(), np.array(
-        [0.02, -0.01, 0.03, 2.0, -1.0, 1.5]))  # fmt: skip
+    obj = ObjectState(
+        box.mass,
+        box.inertia,
+        pose.translation.copy(),
+        pose.rotation.copy(),
+        np.array([0.02, -0.01, 0.03, 2.0, -1.0, 1.5]),
+    )
     kinematics = grasp_kinematics(hand, q, obj, points, normals, links)
-    errors = [np.max(np.abs(kinematics.joint_map_rate - central_difference(hand, q, obj, points, normals, links, h)))
-              for h in (1e-2, 5e-3)]  # fmt: skip
+    errors = [
+        np.max(np.abs(kinematics.joint_map_rate - central_difference(hand, q, obj, points, normals, links, h)))
+        for h in (1e-2, 5e-3)
+    ]
     assert errors[1] < 0.3 * errors[0]  # h^2: a quarter
     assert errors[1] > 1e3 * np.max(np.abs(kinematics.joint_map)) * EPS / 5e-3  # truncation, not round-off
 
@@ -166,7 +178,8 @@ def world_grasp(hand, links, rng, count=3):
     q = hand.random_configuration(rng)
     links = links[:count]
     points = np.array([hand.frame_placement(q, link).translation for link in links]) + 0.01 * rng.normal(
-        size=(count, 3))  # fmt: skip
+        size=(count, 3)
+    )
     com = points.mean(axis=0) + 0.01 * rng.normal(size=3)
     obj = ObjectState(0.3, np.diag([1e-4, 2e-4, 3e-4]), com, pin.exp3(rng.normal(size=3)), random_twist(rng))
     return q, obj, points, contact_frames(rng.normal(size=(count, 3))), kinematics_module.parent_joints(hand, links)
@@ -177,8 +190,9 @@ def world_grasp(hand, links, rng, count=3):
 def test_compiled_kernel_agrees_with_its_python_twin_on_the_hold(held, fingers, seed):
     hand, q, box, pose, points, normals, links = held
     keep = [i for i, link in enumerate(links) if link.startswith(fingers)]
-    obj = ObjectState(box.mass, box.inertia, pose.translation.copy(), pose.rotation.copy(),
-                      random_twist(np.random.default_rng(seed)))  # fmt: skip
+    obj = ObjectState(
+        box.mass, box.inertia, pose.translation.copy(), pose.rotation.copy(), random_twist(np.random.default_rng(seed))
+    )
     points_world = pose.translation + points[keep] @ pose.rotation.T
     frames = contact_frames(normals[keep] @ pose.rotation.T)
     joints = kinematics_module.parent_joints(hand, [links[i] for i in keep])
@@ -233,7 +247,12 @@ def test_compiled_kernel_rejects_arrays_of_the_wrong_size():
     kernel = kinematics_module.grasp_kinematics_kernel(hand)
     args = (np.eye(3), np.zeros(3), q, obj.com, obj.twist, points, frames.reshape(-1, 3), joints)
     kernel.compute(*args)
-    for index, wrong in ((2, q[:-1]), (5, points[:0]), (6, frames.reshape(-1, 3)[:-3]), (7, joints[:-1]),
-                         (7, [*joints[:-1], hand.model.njoints])):  # fmt: skip
+    for index, wrong in (
+        (2, q[:-1]),
+        (5, points[:0]),
+        (6, frames.reshape(-1, 3)[:-3]),
+        (7, joints[:-1]),
+        (7, [*joints[:-1], hand.model.njoints]),
+    ):
         with pytest.raises(ValueError, match="GraspKinematics.compute|joint the model lacks"):
             kernel.compute(*args[:index], wrong, *args[index + 1 :])

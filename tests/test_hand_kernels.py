@@ -39,8 +39,9 @@ def test_slotine_li_torque_is_the_python_twin_to_the_bit(hand: bh.Hand) -> None:
         compiled = hand.slotine_li_torque(q, v, v_r, a_r)
         np.testing.assert_array_equal(compiled, hand_dynamics._slotine_li_torque_python(hand, q, v, v_r, a_r))
         truth = pin.rnea(hand.model, hand.model.createData(), q, v, a_r)
-        np.testing.assert_allclose(hand.slotine_li_torque(q, v, v, a_r), truth, rtol=0,
-                                   atol=1e-12 * max(1.0, np.abs(truth).max()))  # fmt: skip
+        np.testing.assert_allclose(
+            hand.slotine_li_torque(q, v, v, a_r), truth, rtol=0, atol=1e-12 * max(1.0, np.abs(truth).max())
+        )
 
 
 def test_a_changed_gravity_reaches_the_kernel() -> None:

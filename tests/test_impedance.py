@@ -25,8 +25,10 @@ from bhgrasp.scenarios import finger_press, press_fitness
 from bhgrasp.thesis import chapter4, chapter4_closed_form, chapter4_tuning
 
 
-@pytest.mark.parametrize(("mass", "damping", "stiffness", "period"), [(0.5, 3.0, 40.0, 1e-3), (8.9, 167.0, 560.0, 2e-3),
-                                                                      (0.005, 0.3, 4.76, 1e-3)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("mass", "damping", "stiffness", "period"),
+    [(0.5, 3.0, 40.0, 1e-3), (8.9, 167.0, 560.0, 2e-3), (0.005, 0.3, 4.76, 1e-3)],
+)
 def test_tustin_filter_matches_scipy_bilinear(mass, damping, stiffness, period):
     tustin = TustinImpedanceFilter(mass, damping, stiffness, period, size=1)
     num, den, _ = cont2discrete(([1.0], [mass, damping, stiffness]), period, method="bilinear")
@@ -54,8 +56,13 @@ def test_tustin_filter_uses_changed_parameters_from_the_next_sample():
         if n == 20:
             tustin.stiffness, tustin.damping = 80.0, 5.0
         numerator, denominator = tustin.coefficients()
-        expected = (numerator[0] * force + numerator[1] * history[2] + numerator[2] * history[3]
-                    - denominator[1] * history[0] - denominator[2] * history[1])  # fmt: skip
+        expected = (
+            numerator[0] * force
+            + numerator[1] * history[2]
+            + numerator[2] * history[3]
+            - denominator[1] * history[0]
+            - denominator[2] * history[1]
+        )
         assert tustin.step([force], 1e-3)[0][0] == expected
         history = [expected, history[0], force, history[2]]
 
@@ -68,8 +75,11 @@ def test_continuous_filter_follows_the_second_order_step_response():
     filt = ImpedanceFilter(m, b, k, size=1)
     times = np.arange(1, 20001) * dt
     produced = np.array([filt.step([force], dt)[0][0] for _ in times])
-    exact = force / k * (1 - np.exp(-zeta * wn * times) * (np.cos(wd * times) + zeta / np.sqrt(1 - zeta**2)
-                                                            * np.sin(wd * times)))  # fmt: skip
+    exact = (
+        force
+        / k
+        * (1 - np.exp(-zeta * wn * times) * (np.cos(wd * times) + zeta / np.sqrt(1 - zeta**2) * np.sin(wd * times)))
+    )
     assert np.max(np.abs(produced - exact)) < 2e-3 * force / k  # implicit Euler, first order in dt
     for _ in range(10):
         final = filt.step([force], 1.0)[0][0]  # implicit Euler is stable for any step, and converges to F / K
@@ -96,8 +106,15 @@ def test_reaction_torques_equal_rnea_with_external_forces(barrett):
     links = ("F1_distal_link", "F3_distal_link", "F3_proximal_link")
     points = np.array([barrett.frame_placement(q, link).translation + 0.01 * rng.normal(size=3) for link in links])
     forces = rng.normal(size=(3, 3))  # on the object
-    state = bh.State(0.0, q, np.zeros(8), contact_points=points, contact_normals=np.tile([0, 0, 1.0], (3, 1)),
-                     contact_forces=forces, contact_bodies=tuple((link, "object") for link in links))  # fmt: skip
+    state = bh.State(
+        0.0,
+        q,
+        np.zeros(8),
+        contact_points=points,
+        contact_normals=np.tile([0, 0, 1.0], (3, 1)),
+        contact_forces=forces,
+        contact_bodies=tuple((link, "object") for link in links),
+    )
     sensed = ContactSensing(barrett).reaction_torques(state)
     wrenches = {}
     for link, point, force in zip(links, points, forces):
@@ -125,8 +142,16 @@ def test_gradient_estimator_lyapunov_function_never_grows():
     """
     normal = np.array([0.0, 0.0, 1.0])
     k_e, x_e = 2000.0, 0.03
-    law = AdaptiveForceImpedance(Constant(np.zeros(3)), normal, 5.0, np.array([0, 0, 0.02]), 1000.0,
-                                 gamma=(200.0, 0.5), estimator="gradient", quasi_static_speed=10.0)  # fmt: skip
+    law = AdaptiveForceImpedance(
+        Constant(np.zeros(3)),
+        normal,
+        5.0,
+        np.array([0, 0, 0.02]),
+        1000.0,
+        gamma=(200.0, 0.5),
+        estimator="gradient",
+        quasi_static_speed=10.0,
+    )
     true = np.array([k_e, k_e * (x_e - law._centre)])
     values, errors = [], []
     for k, t in enumerate(np.arange(0, 6.0, 1e-3)):
@@ -154,8 +179,16 @@ def test_least_squares_estimator_identifies_the_environment_from_two_force_level
 
 def test_fim_tracks_the_force_with_known_environment_on_the_planar_finger():
     setup = finger_press.planar_setup(1000.0)
-    law = ForceImpedance(Constant(setup.tip0), setup.normal, 10.0, setup.surface_point(), setup.k_e,
-                         mass=8.9, damping=167.0, stiffness=560.0)  # fmt: skip
+    law = ForceImpedance(
+        Constant(setup.tip0),
+        setup.normal,
+        10.0,
+        setup.surface_point(),
+        setup.k_e,
+        mass=8.9,
+        damping=167.0,
+        stiffness=560.0,
+    )
     traj = finger_press.run(setup, ImpedanceController(setup.hand, {"tip": law}, *finger_press.PLANAR_GAINS), 3.0)
     force = finger_press.normal_force(setup, traj)
     assert abs(np.mean(force[-200:]) - 10.0) < 0.02 * 10.0
@@ -175,8 +208,14 @@ def test_adaptive_fim_on_f3_finds_the_environment_and_tracks_the_force(f3_setups
     traj = finger_press.run(setup, ImpedanceController(setup.hand, {"F3": known}, *finger_press.F3_GAINS), 2.0)
     assert abs(np.mean(finger_press.normal_force(setup, traj)[-100:]) - 10.0) < 0.2  # < 2 %
     profile = SmoothStep([5.0], [10.0], 0.3, delay=2.0)
-    adaptive = AdaptiveForceImpedance(still, setup.normal, profile, setup.surface_point() - 0.01 * setup.normal,
-                                      0.5 * setup.k_e, **finger_press.F3_IMPEDANCE)  # fmt: skip
+    adaptive = AdaptiveForceImpedance(
+        still,
+        setup.normal,
+        profile,
+        setup.surface_point() - 0.01 * setup.normal,
+        0.5 * setup.k_e,
+        **finger_press.F3_IMPEDANCE,
+    )
     traj = finger_press.run(setup, ImpedanceController(setup.hand, {"F3": adaptive}, *finger_press.F3_GAINS), 4.5)
     force = finger_press.normal_force(setup, traj)
     assert abs(np.mean(force[-100:]) - 10.0) < 0.2
@@ -210,8 +249,16 @@ def test_printed_fim_settles_where_the_closed_form_says_and_the_feedforward_at_f
     setup = finger_press.planar_setup(1000.0, friction=friction)
     finals = {}
     for feedforward in (False, True):
-        law = ForceImpedance(Constant(setup.tip0), setup.normal, 10.0, setup.surface_point(), setup.k_e,
-                             mass=8.9, damping=167.0, stiffness=560.0)  # fmt: skip
+        law = ForceImpedance(
+            Constant(setup.tip0),
+            setup.normal,
+            10.0,
+            setup.surface_point(),
+            setup.k_e,
+            mass=8.9,
+            damping=167.0,
+            stiffness=560.0,
+        )
         if not feedforward:
             chapter4.as_printed(law)
         controller = ImpedanceController(setup.hand, {"tip": law}, *finger_press.PLANAR_GAINS, feedforward=feedforward)
@@ -234,8 +281,11 @@ def test_printed_fim_settles_where_the_closed_form_says_and_the_feedforward_at_f
 
 def test_printed_fim_on_f3_misses_f_d_as_the_closed_form_with_friction_predicts(f3_setups):
     setup = f3_setups[1e4]
-    law = chapter4.as_printed(ForceImpedance(Constant(setup.tip0), setup.normal, 10.0, setup.surface_point(),
-                                             setup.k_e, **finger_press.F3_IMPEDANCE))  # fmt: skip
+    law = chapter4.as_printed(
+        ForceImpedance(
+            Constant(setup.tip0), setup.normal, 10.0, setup.surface_point(), setup.k_e, **finger_press.F3_IMPEDANCE
+        )
+    )
     controller = ImpedanceController(setup.hand, {"F3": law}, *finger_press.F3_GAINS, feedforward=False)
     traj = finger_press.run(setup, controller, 3.0)
     force = finger_press.normal_force(setup, traj)
@@ -290,8 +340,10 @@ def test_tuned_impedance_beats_its_start_on_a_held_out_force_and_is_reproducible
     assert tuned.settling < untuned.settling and tuned.overshoot <= untuned.overshoot
 
 
-@pytest.mark.parametrize(("params", "force"), [((0.01, 100.0), 6.0), ((0.005, 4.7561), 4.0), ((0.0011, 3.1387), 6.0),
-                                               ((1e-4, 1.0), 8.0), ((0.1, 500.0), 6.0)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("params", "force"),
+    [((0.01, 100.0), 6.0), ((0.005, 4.7561), 4.0), ((0.0011, 3.1387), 6.0), ((1e-4, 1.0), 8.0), ((0.1, 500.0), 6.0)],
+)
 def test_fitness_runs_continue_the_shared_approach_to_the_bit(params, force):
     """_discrete_fim continues the approach that every (M_I, K_I) shares; the run from the start is the same."""
     t, measured = press_fitness._discrete_fim(*params, force, press_fitness.TUNING_SPRING, 1.0)

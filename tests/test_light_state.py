@@ -29,8 +29,9 @@ ENGINES = ("compiled", "python")
 
 
 def engine_twin(simulator: Simulator, engine: str) -> Simulator:
-    return Simulator(simulator.scene, dt=simulator.dt, contact=simulator.law, actuation=simulator.actuation,
-                     engine=engine)  # fmt: skip
+    return Simulator(
+        simulator.scene, dt=simulator.dt, contact=simulator.law, actuation=simulator.actuation, engine=engine
+    )
 
 
 def spring_scene(engine: str) -> tuple[Simulator, object, np.ndarray]:
@@ -39,8 +40,13 @@ def spring_scene(engine: str) -> tuple[Simulator, object, np.ndarray]:
     tip = hand.fingertip_positions(hand.configuration(F3_proximal=1.0))[hand.fingers.index("F3")]
     body = Box(size=(0.04, 0.04, 0.01), mass=0.1, pose=pin.SE3(np.eye(3), tip + np.array([0.0, 0.0, 0.006])))
     plate = SpringMounted(body=body, direction=np.array([0.0, 0.0, 1.0]), stiffness=200.0, damping=2.0)
-    box = Box(size=(0.03, 0.02, 0.02), mass=0.05, pose=pin.SE3(pin.rpy.rpyToMatrix(0.1, 0.2, 0.3), np.r_[3.0, 0, 0]),
-              velocity=[0.1, 0.0, 0.0, 1.0, 4.0, -2.0], name="tumbling")  # fmt: skip
+    box = Box(
+        size=(0.03, 0.02, 0.02),
+        mass=0.05,
+        pose=pin.SE3(pin.rpy.rpyToMatrix(0.1, 0.2, 0.3), np.r_[3.0, 0, 0]),
+        velocity=[0.1, 0.0, 0.0, 1.0, 4.0, -2.0],
+        name="tumbling",
+    )
     simulator = Simulator(Scene(hand, [plate, box]), actuation=FullyActuated(hand, damping=0.02), engine=engine)
     torque = np.zeros(8)
     torque[hand.joint_index("F3_proximal")] = 0.3
@@ -118,8 +124,12 @@ def test_copies_pickles_and_replaced_states_continue_the_run_bit_for_bit(engine:
         return start
 
     reference = run(state)
-    for other in (copy.copy(state), copy.deepcopy(state), pickle.loads(pickle.dumps(state)),
-                  dataclasses.replace(state, t=state.t)):  # fmt: skip
+    for other in (
+        copy.copy(state),
+        copy.deepcopy(state),
+        pickle.loads(pickle.dumps(state)),
+        dataclasses.replace(state, t=state.t),
+    ):
         continued = run(other)
         np.testing.assert_array_equal(continued.scene_q, reference.scene_q)
         np.testing.assert_array_equal(continued.scene_v, reference.scene_v)
@@ -163,8 +173,12 @@ def test_a_trajectory_records_what_each_state_holds(engine: str) -> None:
                 np.testing.assert_array_equal(trajectory.object_position[k, i], pose.translation)
                 rotation = pin.Quaternion(*np.roll(trajectory.object_quaternion[k, i], 1)).toRotationMatrix()
                 np.testing.assert_allclose(rotation, pose.rotation, rtol=0, atol=4e-16)
-                np.testing.assert_allclose(trajectory.object_twist[k, i], state.object_twists[i], rtol=0,
-                                           atol=1e-15 * max(1.0, np.abs(state.object_twists[i]).max()))  # fmt: skip
+                np.testing.assert_allclose(
+                    trajectory.object_twist[k, i],
+                    state.object_twists[i],
+                    rtol=0,
+                    atol=1e-15 * max(1.0, np.abs(state.object_twists[i]).max()),
+                )
             if k == 0:
                 continue  # a run's first sample records no step, so no contact forces
             contacts = trajectory.contacts_at(k)

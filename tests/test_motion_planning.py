@@ -122,15 +122,21 @@ def _can_turn(plan_tolerance):
     from bhgrasp.scenarios.object_grasp import OBJECTS, object_grasp
 
     setup = object_grasp(OBJECTS["can"][1])
-    grasp = SMCAdaptiveGrasp(setup.hand, replace(setup.item, density=None), options=GraspOptions(mu=0.6, squeeze=5.0),
-                             object_adaptation=(0.0, 0.0))  # fmt: skip
+    grasp = SMCAdaptiveGrasp(
+        setup.hand,
+        replace(setup.item, density=None),
+        options=GraspOptions(mu=0.6, squeeze=5.0),
+        object_adaptation=(0.0, 0.0),
+    )
     offset = np.array(CAN_TURN)
     planning = Planning(tolerance=plan_tolerance)
-    supervisor = GraspSupervisor(setup.hand, setup.candidate.q_contact, grasp, offset=offset,
-                                 fingers=setup.candidate.fingers, planning=planning)  # fmt: skip
+    supervisor = GraspSupervisor(
+        setup.hand, setup.candidate.q_contact, grasp, offset=offset, fingers=setup.candidate.fingers, planning=planning
+    )
     traj = setup.simulator.run(supervisor, 3.0, state=setup.state, progress=False)
-    return offset, evaluate_demo(traj, setup.hand, "smc-adaptive", setup.item.mass, setup.item.mass, supervisor, 0.0,
-                                 setup.simulator.scene)  # fmt: skip
+    return offset, evaluate_demo(
+        traj, setup.hand, "smc-adaptive", setup.item.mass, setup.item.mass, supervisor, 0.0, setup.simulator.scene
+    )
 
 
 def test_a_request_the_sensed_contacts_make_only_in_part_is_refused_and_run_anyway_misses_by_that_part() -> None:

@@ -46,8 +46,9 @@ def test_a_mounted_hand_is_the_hand_placed_at_the_mounts_pose(tilted) -> None:
     q_hand = tilted.random_configuration(np.random.default_rng(0))
     q = np.concatenate((COORDINATES, q_hand))
     for frame in ("palm_surface", "F1_tip", "F2_distal_link", "F3_tip"):
-        np.testing.assert_allclose(hand.frame_placement(q, frame).homogeneous,
-                                   placed.frame_placement(q_hand, frame).homogeneous, atol=1e-14)  # fmt: skip
+        np.testing.assert_allclose(
+            hand.frame_placement(q, frame).homogeneous, placed.frame_placement(q_hand, frame).homogeneous, atol=1e-14
+        )
     # the fingers' dynamics with the mount at rest are the placed hand's (same gravity in the world)
     v_hand, a_hand = np.random.default_rng(1).normal(size=(2, 8))
     mounted_torques = pin.rnea(hand.model, hand.data, q, np.r_[np.zeros(6), v_hand], np.r_[np.zeros(6), a_hand])
@@ -99,8 +100,9 @@ def test_mount_reference_follows_a_world_pose_motion(tilted) -> None:
     for t in (0.1, 0.35, 0.7, 0.95, 1.5):
         c, rates, accelerations = reference(t)
         pose = motion(t)[0]
-        np.testing.assert_allclose((ORIGIN * mount_pose(c)).homogeneous,
-                                   pin.SE3(pin.exp3(pose[3:]), pose[:3]).homogeneous, atol=1e-13)  # fmt: skip
+        np.testing.assert_allclose(
+            (ORIGIN * mount_pose(c)).homogeneous, pin.SE3(pin.exp3(pose[3:]), pose[:3]).homogeneous, atol=1e-13
+        )
         (c_plus, rates_plus, _), (c_minus, rates_minus, _) = reference(t + 1e-6), reference(t - 1e-6)
         np.testing.assert_allclose((c_plus - c_minus) / 2e-6, rates, atol=1e-7)
         np.testing.assert_allclose((rates_plus - rates_minus) / 2e-6, accelerations, atol=1e-6)
@@ -115,8 +117,9 @@ def tray_lift():
     tray = Box(size=(0.12, 0.12, 0.01), mass=0.2, friction=0.8, pose=pin.SE3(np.eye(3), np.array([0, 0, 0.09605])))
     simulator = Simulator(Scene(hand, [tray]), dt=1e-3)
     lift = MountReference(PoseMotion(pin.SE3.Identity(), [0, 0, 0.1, 0, 0, 0], 0.5, delay=0.3), hand.base_placement)
-    trajectory = simulator.run(MountServo(hand, lift), 1.0, state=simulator.initial_state(hand.neutral()),
-                               progress=False)  # fmt: skip
+    trajectory = simulator.run(
+        MountServo(hand, lift), 1.0, state=simulator.initial_state(hand.neutral()), progress=False
+    )
     return hand, lift, trajectory
 
 
@@ -143,9 +146,15 @@ def test_the_servo_feels_the_load_through_the_contact_torques(tray_lift) -> None
     sensing = ContactSensing(hand)
     for k in (250, 450, 900):
         contacts = trajectory.contacts_at(k)
-        state = bh.State(trajectory.t[k], trajectory.q[k], trajectory.v[k], contact_points=contacts["point"],
-                         contact_normals=contacts["normal"], contact_forces=contacts["force"],
-                         contact_bodies=tuple(map(tuple, contacts["bodies"])))  # fmt: skip
+        state = bh.State(
+            trajectory.t[k],
+            trajectory.q[k],
+            trajectory.v[k],
+            contact_points=contacts["point"],
+            contact_normals=contacts["normal"],
+            contact_forces=contacts["force"],
+            contact_bodies=tuple(map(tuple, contacts["bodies"])),
+        )
         reaction = sensing.reaction_torques(state)  # the mount's x, y, z slide along the world axes here
         np.testing.assert_allclose(reaction[:3], -contacts["force"].sum(axis=0), rtol=1e-12, atol=1e-15)
     assert np.abs(trajectory.log["mount_error"][:, :3]).max() < 5e-4  # the servo holds the path within 0.5 mm
@@ -177,8 +186,9 @@ def test_the_barrett_drive_runs_a_mounted_hand_with_direct_mount_inputs() -> Non
         unmounted = BarrettTransmission(bh.BarrettHand())
         np.testing.assert_array_equal(gears[6:, :4], unmounted.gears(modes))
     actuation = BarrettActuation(hand, saturate=True)
-    np.testing.assert_array_equal(actuation.joint_torques(np.r_[1.0, 0, 0, 0, 100.0, 0, 0, 0, 0, 0])[[6, 0]],
-                                  [17.5 * MAX_MOTOR_TORQUE, 100.0])  # pucks saturate, the mount does not  # fmt: skip
+    np.testing.assert_array_equal(
+        actuation.joint_torques(np.r_[1.0, 0, 0, 0, 100.0, 0, 0, 0, 0, 0])[[6, 0]], [17.5 * MAX_MOTOR_TORQUE, 100.0]
+    )  # pucks saturate, the mount does not
     simulator = Simulator(Scene(hand), actuation=actuation)
     with pytest.raises(InputError, match="BatchSimulator runs the Barrett hand's four motors alone, got 10 inputs"):
         BatchSimulator(simulator, [simulator.initial_state()])

@@ -11,8 +11,13 @@ from nbclient import NotebookClient
 
 NOTEBOOKS = sorted((Path(__file__).resolve().parents[1] / "notebooks").glob("*.ipynb"))
 BUDGET = 120.0  # [s] per notebook on 2 cores (the limit)
-FIGURES = {"02_joint_control": 1, "03_force_control": 1, "05_grasp_and_manipulate": 3, "06_bring_your_own_hand": 3,
-           "07_barrett_hand": 1}  # fmt: skip
+FIGURES = {
+    "02_joint_control": 1,
+    "03_force_control": 1,
+    "05_grasp_and_manipulate": 3,
+    "06_bring_your_own_hand": 3,
+    "07_barrett_hand": 1,
+}
 
 
 def test_every_tutorial_is_present() -> None:

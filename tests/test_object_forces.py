@@ -42,8 +42,9 @@ def test_a_run_stops_at_the_first_state_until_accepts() -> None:
     hand = bh.BarrettHand()
     box = Box(size=(0.05, 0.05, 0.05), mass=0.3, pose=pin.SE3(np.eye(3), np.r_[0.3, 0.0, 1.0]))
     simulator = Simulator(Scene(hand, [box]), dt=1e-3)
-    trajectory = simulator.run(lambda t, s: np.zeros(8), 1.0, progress=False,
-                               until=lambda s: s.object_poses[0].translation[2] < 0.95)  # fmt: skip
+    trajectory = simulator.run(
+        lambda t, s: np.zeros(8), 1.0, progress=False, until=lambda s: s.object_poses[0].translation[2] < 0.95
+    )
     z = trajectory.object_position[:, 0, 2]
     assert z[-1] < 0.95 <= z[-2]
     assert trajectory.t[-1] == pytest.approx(np.sqrt(2 * 0.05 / 9.81), abs=2e-3)  # 0.101 s, not the 1 s asked

@@ -38,9 +38,9 @@ def test_object_regressor_is_newton_euler_and_its_coriolis_form_is_passive():
     )
 
     # C(omega) as a matrix in omega_r: M_dot - 2 C skew-symmetric, M_dot = d/dt (R I R^T) by central differences.
-    coriolis = np.column_stack([
-        object_regressor(rotation, twist, np.r_[0, 0, 0, e], np.zeros(6), np.zeros(3))[3:] @ sigma for e in np.eye(3)
-    ])  # fmt: skip
+    coriolis = np.column_stack(
+        [object_regressor(rotation, twist, np.r_[0, 0, 0, e], np.zeros(6), np.zeros(3))[3:] @ sigma for e in np.eye(3)]
+    )
     h = 1e-6
     ahead, behind = pin.exp3(h * omega) @ rotation, pin.exp3(-h * omega) @ rotation
     inertia_dot = (ahead @ inertia @ ahead.T - behind @ inertia @ behind.T) / (2 * h)
@@ -86,8 +86,9 @@ def test_smc_adaptive_learns_an_unknown_mass_and_tracks_the_contact_forces(mass)
     # the logged force error is the measured one: desired minus the simulator's contact forces (to 0.2 mN: the
     # controller sums a finger's touching contact points, the trajectory every point of the finger's links)
     measured = finger_normal_forces(bh.BarrettHand(), traj)[settled]
-    np.testing.assert_allclose(traj.log["desired_force"][settled][..., 2] - measured,
-                               traj.log["force_error"][settled][..., 2], atol=2e-4)  # fmt: skip
+    np.testing.assert_allclose(
+        traj.log["desired_force"][settled][..., 2] - measured, traj.log["force_error"][settled][..., 2], atol=2e-4
+    )
 
 
 def test_pseudo_inverse_baseline_leaves_the_cone_where_the_qp_does_not():

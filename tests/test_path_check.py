@@ -86,8 +86,14 @@ def test_a_spread_on_its_stop_leaves_its_limit_on_a_turn_about_y() -> None:
 def test_the_motion_table_flags_the_turns_whose_link_bodies_meet_the_box(started) -> None:
     grasp, setup, state = started
     touching = [c for c in ContactSensing(setup.hand).fingers(state).values() if c.link is not None]
-    space = manipulable_space(setup.hand, state.q, [c.point for c in touching], [c.normal for c in touching],
-                              [c.link for c in touching], state.object_poses[0].translation)  # fmt: skip
+    space = manipulable_space(
+        setup.hand,
+        state.q,
+        [c.point for c in touching],
+        [c.normal for c in touching],
+        [c.link for c in touching],
+        state.object_poses[0].translation,
+    )
     checked = []
     for motion, (_, offset) in MOTIONS.items():
         try:  # the first-order checks of run_grasp_demo
@@ -119,5 +125,6 @@ def test_contacts_must_lie_on_a_link_with_geometry() -> None:
     setup = box_grasp()
     points, _ = planned_contacts(setup)
     with pytest.raises(bh.InputError, match="link 'palm_nothing' is not a hand frame carrying collision geometry"):
-        path_contacts(setup.hand, setup.q_contact, points, ["palm_nothing"] * 3, setup.box.geometry(),
-                      setup.box.pose, np.zeros(6))  # fmt: skip
+        path_contacts(
+            setup.hand, setup.q_contact, points, ["palm_nothing"] * 3, setup.box.geometry(), setup.box.pose, np.zeros(6)
+        )

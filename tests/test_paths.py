@@ -44,8 +44,9 @@ def test_the_path_lies_on_its_circle_and_closes_at_rest() -> None:
     end, velocity, acceleration = circle(circle.end_time + 1.0)
     np.testing.assert_allclose(end[:3], lifted, atol=1e-15)  # once around: back at the lifted point
     assert not velocity.any() and not acceleration.any()
-    np.testing.assert_allclose(circle(circle.delay + circle.lift_time + 1.0)[0][:3], lifted + 2 * radius * TILTED[0],
-                               atol=1e-15)  # halfway (the blend's midpoint): across the centre  # fmt: skip
+    np.testing.assert_allclose(
+        circle(circle.delay + circle.lift_time + 1.0)[0][:3], lifted + 2 * radius * TILTED[0], atol=1e-15
+    )  # halfway (the blend's midpoint): across the centre
     assert circle(0.29)[0][:3] == pytest.approx(START.translation, abs=1e-15)  # before the delay: at the start
 
 
@@ -91,8 +92,12 @@ def test_a_horizontal_circle_is_refused_before_simulating(box_setup) -> None:
         run_path(box_setup, circle(plane="x-y"))
 
 
-MOVES = [((0.0, 0.0, 0.01, 0.0, 0.0, 0.0), 0.6), ((0.0, 0.003, 0.0, 0.15, 0.0, 0.0), 0.8),
-         ((0.0, -0.003, 0.0, 0.0, 0.15, 0.0), 0.8), ((0.0, 0.0, 0.0, -0.15, -0.15, 0.0), 1.0)]  # fmt: skip
+MOVES = [
+    ((0.0, 0.0, 0.01, 0.0, 0.0, 0.0), 0.6),
+    ((0.0, 0.003, 0.0, 0.15, 0.0, 0.0), 0.8),
+    ((0.0, -0.003, 0.0, 0.0, 0.15, 0.0), 0.8),
+    ((0.0, 0.0, 0.0, -0.15, -0.15, 0.0), 1.0),
+]
 
 
 def _rotation(sample: np.ndarray) -> np.ndarray:

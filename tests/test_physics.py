@@ -59,8 +59,12 @@ def test_spinning_sphere_keeps_its_velocity(integrator: str) -> None:
 
 def _tumbling_box(dt: float, integrator: str, duration: float):
     """A box spinning near its intermediate axis (unstable: it tumbles), moving at 0.7 m/s."""
-    box = Box(size=(0.08, 0.05, 0.03), mass=0.4, pose=pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.2, 0.5), np.zeros(3)),
-              velocity=[0.5, -0.2, 0.44, 0.4, 15.0, 0.6])  # fmt: skip
+    box = Box(
+        size=(0.08, 0.05, 0.03),
+        mass=0.4,
+        pose=pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.2, 0.5), np.zeros(3)),
+        velocity=[0.5, -0.2, 0.44, 0.4, 15.0, 0.6],
+    )
     inertia = box.spatial_inertia().inertia
     states = _fly(box, integrator, dt, duration)
     rotations = [s.object_poses[0].rotation for s in states]
@@ -109,11 +113,22 @@ def test_tumbling_box_rk4_is_fourth_order() -> None:
 @pytest.mark.parametrize("integrator", INTEGRATORS)
 def test_off_centre_box_collision_conserves_linear_momentum(integrator: str) -> None:
     """The issue's case (before: 8e-3 of sum m |v| with the default integrators, 3e-4 with RK4)."""
-    first = Box(size=(0.05, 0.04, 0.03), mass=0.3, friction=0.8, pose=pin.SE3(np.eye(3), np.zeros(3)),
-                velocity=[0.5, 0.0, 0.0, 0.0, 0.0, 0.0], name="first")  # fmt: skip
-    second = Box(size=(0.05, 0.04, 0.03), mass=0.5, friction=0.8,
-                 pose=pin.SE3(pin.rpy.rpyToMatrix(0.2, 0.1, 0.3), np.array([0.1, 0.02, 0.01])),
-                 velocity=[-0.5, 0.0, 0.0, 0.0, 0.0, 0.0], name="second")  # fmt: skip
+    first = Box(
+        size=(0.05, 0.04, 0.03),
+        mass=0.3,
+        friction=0.8,
+        pose=pin.SE3(np.eye(3), np.zeros(3)),
+        velocity=[0.5, 0.0, 0.0, 0.0, 0.0, 0.0],
+        name="first",
+    )
+    second = Box(
+        size=(0.05, 0.04, 0.03),
+        mass=0.5,
+        friction=0.8,
+        pose=pin.SE3(pin.rpy.rpyToMatrix(0.2, 0.1, 0.3), np.array([0.1, 0.02, 0.01])),
+        velocity=[-0.5, 0.0, 0.0, 0.0, 0.0, 0.0],
+        name="second",
+    )
     sim = Simulator(Scene(far_hand(), [first, second]), dt=1e-3, integrator=integrator)
     trajectory = sim.run(lambda t, s: np.zeros(8), 0.3, progress=False)
     assert trajectory.contact_count().max() >= 2

@@ -43,8 +43,9 @@ def test_tracking_figure_keeps_the_reference_and_every_torque_visible(asmc):
     for row in range(2):
         position, _, torque = figure.axes[3 * row : 3 * row + 3]
         reference = [line for line in position.lines if line.get_color() == "k"]
-        assert len(reference) == 1 and reference[0].get_zorder() > max(line.get_zorder() for line in position.lines
-                                                                        if line is not reference[0])  # fmt: skip
+        assert len(reference) == 1 and reference[0].get_zorder() > max(
+            line.get_zorder() for line in position.lines if line is not reference[0]
+        )
         raw, mean = torque.lines[2], torque.lines[3]  # the chattering run's pair
         assert raw.get_alpha() <= 0.3 and mean.get_zorder() > raw.get_zorder()
         assert np.ptp(mean.get_ydata()) < np.ptp(raw.get_ydata())  # the mean is inside the band

@@ -100,19 +100,26 @@ def test_tolerances_default_tight_overrides_by_pattern_with_reasons() -> None:
 
 def test_table_values_reads_a_report_table() -> None:
     header = ["start", "found [M_I, K_I]", "F_d [N]", "error [N] untuned -> tuned", "overshoot %", "note"]
-    table = [["[0.5, 0.5]", "[0.0048, 6.2626]", "4", "0.080 -> 0.035", "-", "text"],
-             ["[0.5, 0.5]", "[0.0048, 6.2626]", "6", "0.113 -> 0.048", "1.0e+00", "inf"]]  # fmt: skip
+    table = [
+        ["[0.5, 0.5]", "[0.0048, 6.2626]", "4", "0.080 -> 0.035", "-", "text"],
+        ["[0.5, 0.5]", "[0.0048, 6.2626]", "6", "0.113 -> 0.048", "1.0e+00", "inf"],
+    ]
     case = SimpleNamespace(key="tuning", header=header, table=table)
     values, resolution = results.table_values(case)
     assert values == {
-        "tuning/0.5_0.5/F_d_N=4/found_M_I_K_I#1": 0.0048, "tuning/0.5_0.5/F_d_N=4/found_M_I_K_I#2": 6.2626,
-        "tuning/0.5_0.5/F_d_N=4/F_d_N": 4.0, "tuning/0.5_0.5/F_d_N=4/error_N_untuned_to_tuned#1": 0.080,
+        "tuning/0.5_0.5/F_d_N=4/found_M_I_K_I#1": 0.0048,
+        "tuning/0.5_0.5/F_d_N=4/found_M_I_K_I#2": 6.2626,
+        "tuning/0.5_0.5/F_d_N=4/F_d_N": 4.0,
+        "tuning/0.5_0.5/F_d_N=4/error_N_untuned_to_tuned#1": 0.080,
         "tuning/0.5_0.5/F_d_N=4/error_N_untuned_to_tuned#2": 0.035,
-        "tuning/0.5_0.5/F_d_N=6/found_M_I_K_I#1": 0.0048, "tuning/0.5_0.5/F_d_N=6/found_M_I_K_I#2": 6.2626,
-        "tuning/0.5_0.5/F_d_N=6/F_d_N": 6.0, "tuning/0.5_0.5/F_d_N=6/error_N_untuned_to_tuned#1": 0.113,
-        "tuning/0.5_0.5/F_d_N=6/error_N_untuned_to_tuned#2": 0.048, "tuning/0.5_0.5/F_d_N=6/overshoot_pct": 1.0,
+        "tuning/0.5_0.5/F_d_N=6/found_M_I_K_I#1": 0.0048,
+        "tuning/0.5_0.5/F_d_N=6/found_M_I_K_I#2": 6.2626,
+        "tuning/0.5_0.5/F_d_N=6/F_d_N": 6.0,
+        "tuning/0.5_0.5/F_d_N=6/error_N_untuned_to_tuned#1": 0.113,
+        "tuning/0.5_0.5/F_d_N=6/error_N_untuned_to_tuned#2": 0.048,
+        "tuning/0.5_0.5/F_d_N=6/overshoot_pct": 1.0,
         "tuning/0.5_0.5/F_d_N=6/note": math.inf,
-    }  # fmt: skip
+    }
     assert resolution["tuning/0.5_0.5/F_d_N=4/found_M_I_K_I#1"] == pytest.approx(1e-4)
     assert resolution["tuning/0.5_0.5/F_d_N=6/overshoot_pct"] == pytest.approx(0.1)
     assert resolution["tuning/0.5_0.5/F_d_N=4/F_d_N"] == 1.0 and "tuning/0.5_0.5/F_d_N=6/note" not in resolution
@@ -120,14 +127,25 @@ def test_table_values_reads_a_report_table() -> None:
 
 
 def test_written_json_round_trips_and_the_cli_compares_folders(tmp_path: Path, capsys) -> None:
-    case = SimpleNamespace(key="smc", values={"mass_kg": np.float64(1.0008), "slip_events": np.int64(0),
-                                              "settling_s": np.inf, "none_kg": float("nan")})  # fmt: skip
+    case = SimpleNamespace(
+        key="smc",
+        values={
+            "mass_kg": np.float64(1.0008),
+            "slip_events": np.int64(0),
+            "settling_s": np.inf,
+            "none_kg": float("nan"),
+        },
+    )
     new, reference = tmp_path / "new", tmp_path / "reference"
     path = results.write_results(new, 5, [case], scale=1.0)
     results.write_results(reference, 5, [case], scale=1.0)
     text = path.read_text()
-    assert json.loads(text)["values"] == {"smc/mass_kg": 1.0008, "smc/none_kg": "nan", "smc/settling_s": "inf",
-                                          "smc/slip_events": 0}  # fmt: skip
+    assert json.loads(text)["values"] == {
+        "smc/mass_kg": 1.0008,
+        "smc/none_kg": "nan",
+        "smc/settling_s": "inf",
+        "smc/slip_events": 0,
+    }
     assert main(["experiments", "compare", str(new), "--reference", str(reference)]) == 0
     assert "0 of 4 values outside tolerance, 0 missing, 0 extra" in capsys.readouterr().out
     case.values["mass_kg"] = 1.2

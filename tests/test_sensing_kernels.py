@@ -43,8 +43,15 @@ def random_state(rng: np.random.Generator, hand: bh.Hand, m: int) -> bh.State:
     bodies = tuple((links[rng.integers(len(links))], "box") for _ in range(m))
     if m >= 2:
         bodies = (bodies[0], bodies[0], *bodies[2:])
-    return bh.State(0.0, hand.neutral(), np.zeros(hand.nv), contact_points=rng.normal(scale=0.05, size=(m, 3)),
-                    contact_normals=normals, contact_forces=forces, contact_bodies=bodies)  # fmt: skip
+    return bh.State(
+        0.0,
+        hand.neutral(),
+        np.zeros(hand.nv),
+        contact_points=rng.normal(scale=0.05, size=(m, 3)),
+        contact_normals=normals,
+        contact_forces=forces,
+        contact_bodies=bodies,
+    )
 
 
 def assert_same_fingers(sensing: ContactSensing, state: bh.State) -> None:
@@ -105,9 +112,15 @@ def test_reaction_torques_refuse_a_non_finite_point() -> None:
 
 def test_a_finger_that_only_pulls_has_no_strongest_link() -> None:
     hand = bh.BarrettHand()
-    state = bh.State(0.0, hand.neutral(), np.zeros(hand.nv), contact_points=np.array([[0.01, 0.0, 0.1]]),
-                     contact_normals=np.array([[0.0, 0.0, 1.0]]), contact_forces=np.array([[0.5, 0.0, -2.0]]),
-                     contact_bodies=(("F1_distal_link", "box"),))  # fmt: skip
+    state = bh.State(
+        0.0,
+        hand.neutral(),
+        np.zeros(hand.nv),
+        contact_points=np.array([[0.01, 0.0, 0.1]]),
+        contact_normals=np.array([[0.0, 0.0, 1.0]]),
+        contact_forces=np.array([[0.5, 0.0, -2.0]]),
+        contact_bodies=(("F1_distal_link", "box"),),
+    )
     contact = ContactSensing(hand).fingers(state)["F1"]
     assert contact.count == 1 and contact.link is None and not contact.touching
     np.testing.assert_array_equal(contact.normal, [0.0, 0.0, 1.0])
@@ -117,8 +130,10 @@ def test_a_finger_that_only_pulls_has_no_strongest_link() -> None:
 
 def regressor_truth(rotation, twist, v_r, a_r, gravity, sigma) -> np.ndarray:
     """M_o a_r + C_o v_r + N_o with I_w = R I R^T and C = (skew(w) I_w - I_w skew(w) - skew(I_w w)) / 2."""
-    mass, inertia = sigma[0], np.array([[sigma[1], sigma[2], sigma[3]], [sigma[2], sigma[4], sigma[5]],
-                                        [sigma[3], sigma[5], sigma[6]]])  # fmt: skip
+    mass, inertia = (
+        sigma[0],
+        np.array([[sigma[1], sigma[2], sigma[3]], [sigma[2], sigma[4], sigma[5]], [sigma[3], sigma[5], sigma[6]]]),
+    )
     world = rotation @ inertia @ rotation.T
     omega = twist[3:]
     coriolis = 0.5 * (pin.skew(omega) @ world - world @ pin.skew(omega) - pin.skew(world @ omega))
@@ -137,8 +152,9 @@ def test_object_regressor_matches_its_twin_and_its_definition() -> None:
         np.testing.assert_allclose(compiled, python, rtol=0, atol=RELATIVE * scale)
         inertia = np.diag(rng.uniform(1e-4, 1e-3, size=3))
         sigma = object_parameters(rng.uniform(0.1, 1.0), rotation.T @ inertia @ rotation)
-        np.testing.assert_allclose(compiled @ sigma, regressor_truth(rotation, twist, v_r, a_r, gravity, sigma),
-                                   rtol=0, atol=RELATIVE * scale)  # fmt: skip
+        np.testing.assert_allclose(
+            compiled @ sigma, regressor_truth(rotation, twist, v_r, a_r, gravity, sigma), rtol=0, atol=RELATIVE * scale
+        )
 
 
 def test_contact_frames_match_the_numpy_twin() -> None:
@@ -149,8 +165,9 @@ def test_contact_frames_match_the_numpy_twin() -> None:
     normals[50:56] = np.vstack((np.eye(3), -np.eye(3)))
     compiled = contact_frames(normals)
     np.testing.assert_allclose(compiled, unit_normal_frames(_unit_normals(normals)), rtol=0, atol=RELATIVE)
-    np.testing.assert_allclose(compiled.transpose(0, 2, 1) @ compiled, np.broadcast_to(np.eye(3), (500, 3, 3)),
-                               rtol=0, atol=RELATIVE)  # fmt: skip
+    np.testing.assert_allclose(
+        compiled.transpose(0, 2, 1) @ compiled, np.broadcast_to(np.eye(3), (500, 3, 3)), rtol=0, atol=RELATIVE
+    )
     np.testing.assert_allclose(np.linalg.det(compiled), 1.0, rtol=0, atol=RELATIVE)
 
 

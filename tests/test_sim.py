@@ -139,11 +139,18 @@ def _collision_momentum(integrator: str, friction: float, dt: float) -> tuple[np
     hand = far_hand(gravity=(0.0, 0.0, 0.0))
     first = Sphere(radius=0.02, mass=0.3, friction=friction, pose=at(0.0), velocity=np.array([0.5, 0, 0, 0, 0, 0]))
     second = Sphere(
-        radius=0.03, mass=0.1, friction=friction, pose=pin.SE3(np.eye(3), np.array([0.1, 0.02, 0.0])),
+        radius=0.03,
+        mass=0.1,
+        friction=friction,
+        pose=pin.SE3(np.eye(3), np.array([0.1, 0.02, 0.0])),
         velocity=np.array([-0.2, 0.0, 0.1, 0.0, 0.0, 0.0]),
-    )  # fmt: skip
-    sim = Simulator(Scene(hand, [first, second]), dt=dt, integrator=integrator,
-                    contact=SpringDamper(stiffness=1e4, damping=5.0, friction=friction))  # fmt: skip
+    )
+    sim = Simulator(
+        Scene(hand, [first, second]),
+        dt=dt,
+        integrator=integrator,
+        contact=SpringDamper(stiffness=1e4, damping=5.0, friction=friction),
+    )
     trajectory = sim.run(hold_hand(hand), 0.3, progress=False)
     assert trajectory.contact_count().max() >= 1  # they did collide
     return np.einsum("o,toi->ti", np.array([0.3, 0.1]), trajectory.object_twist[:, :, :3]), trajectory
@@ -228,8 +235,13 @@ def test_same_seed_same_trajectory_bit_for_bit() -> None:
 
     def run(seed: int) -> Trajectory:
         sim = Simulator(scene, dt=1e-3)
-        return sim.run(lambda t, s: hand.gravity_torques(s.q) - 0.01 * s.v, 0.3, sensor_noise=(1e-3, 1e-2), seed=seed,
-                       progress=False)  # fmt: skip
+        return sim.run(
+            lambda t, s: hand.gravity_torques(s.q) - 0.01 * s.v,
+            0.3,
+            sensor_noise=(1e-3, 1e-2),
+            seed=seed,
+            progress=False,
+        )
 
     first, second, other = run(3), run(3), run(4)
     for name in ("q", "v", "u", "object_position", "contact_force"):

@@ -107,8 +107,10 @@ def test_the_engines_agree_on_the_demo_with_a_hold_and_a_reset(run):
 
 def test_the_engines_agree_under_the_supervisor_on_the_moving_reference(run):
     setup, states = run
-    compiled, python = (GraspSupervisor(setup.hand, setup.q_contact, smc(setup, engine), offset=OFFSET)
-                        for engine in ("compiled", "python"))  # fmt: skip
+    compiled, python = (
+        GraspSupervisor(setup.hand, setup.q_contact, smc(setup, engine), offset=OFFSET)
+        for engine in ("compiled", "python")
+    )
     worst = lockstep(compiled, python, states)
     print("moving:", {key: f"{error:.1e}" for key, error in worst.items()})
     assert isinstance(compiled.grasp.reference, PoseMotion) and compiled.log["phase"] == 2.0
@@ -125,9 +127,13 @@ def test_the_engines_agree_with_the_full_force_error_and_other_gains(run):
 def without(state, prefixes):
     """The state without the contacts of the fingers whose links start with ``prefixes``."""
     keep = [k for k, (link, _) in enumerate(state.contact_bodies) if not link.startswith(prefixes)]
-    return replace(state, contact_points=state.contact_points[keep], contact_normals=state.contact_normals[keep],
-                   contact_forces=state.contact_forces[keep],
-                   contact_bodies=tuple(state.contact_bodies[k] for k in keep))  # fmt: skip
+    return replace(
+        state,
+        contact_points=state.contact_points[keep],
+        contact_normals=state.contact_normals[keep],
+        contact_forces=state.contact_forces[keep],
+        contact_bodies=tuple(state.contact_bodies[k] for k in keep),
+    )
 
 
 def test_the_engines_agree_when_fingers_let_go_and_touch_again(run):
@@ -205,8 +211,13 @@ def opposed(state):
     points = np.vstack((state.contact_points, state.contact_points[k]))
     keep = [r for r in range(len(normals)) if r not in rows or r == k]
     bodies = (*state.contact_bodies, state.contact_bodies[k])
-    return replace(state, contact_points=points[keep], contact_normals=normals[keep], contact_forces=forces[keep],
-                   contact_bodies=tuple(bodies[r] for r in keep))  # fmt: skip
+    return replace(
+        state,
+        contact_points=points[keep],
+        contact_normals=normals[keep],
+        contact_forces=forces[keep],
+        contact_bodies=tuple(bodies[r] for r in keep),
+    )
 
 
 @pytest.mark.parametrize(
@@ -249,8 +260,10 @@ def test_time_going_backwards_raises_on_both_engines(run):
 def test_the_engines_agree_with_composite_identification(run):
     """The composite law (measured wrench's prediction error) runs after either engine's cycle, on the same bits."""
     setup, states = run
-    compiled, python = (smc(setup, engine, identification=ObjectIdentification(), object_adaptation=(5.0, 1e-3))
-                        for engine in ("compiled", "python"))  # fmt: skip
+    compiled, python = (
+        smc(setup, engine, identification=ObjectIdentification(), object_adaptation=(5.0, 1e-3))
+        for engine in ("compiled", "python")
+    )
     assert (compiled.engine, python.engine) == ("compiled", "python")
     worst = lockstep(compiled, python, states)
     print("composite:", {key: f"{error:.1e}" for key, error in worst.items()})

@@ -151,16 +151,17 @@ def test_a_changed_fixed_parameter_never_reuses_logged_rows(tmp_path: Path) -> N
     sweep.run_sweep(projectile, [{**case, "angle": 0.3} for case in design], seed=2, log=log, executor="serial")
     with pytest.raises(bh.InputError, match=r"its case 0 has angle=0.3, this sweep's has angle=0.5; use a new log"):
         sweep.run_sweep(projectile, [{**case, "angle": 0.5} for case in design], seed=2, log=log, executor="serial")
-    again = sweep.run_sweep(projectile, [{**case, "angle": 0.3} for case in design], seed=2, log=log,
-                            executor="serial")  # fmt: skip
+    again = sweep.run_sweep(projectile, [{**case, "angle": 0.3} for case in design], seed=2, log=log, executor="serial")
     assert len(again) == 2 and len(log.read_text().splitlines()) == 2  # the same sweep resumes from its log
 
 
 def test_failed_cases_exit_non_zero_with_a_summary(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     """A case that cannot be checked beforehand (too short for the fingers to close) fails at run time."""
     config = tmp_path / "sweep.toml"
-    config.write_text(f'[sweep]\noutput = "{tmp_path / "out.csv"}"\nworkers = 1\nprogress = false\n'
-                      "[grid]\nmass = [0.3, 0.5]\n[fixed]\nduration = 0.05\n")  # fmt: skip
+    config.write_text(
+        f'[sweep]\noutput = "{tmp_path / "out.csv"}"\nworkers = 1\nprogress = false\n'
+        "[grid]\nmass = [0.3, 0.5]\n[fixed]\nduration = 0.05\n"
+    )
     assert main(["sweep", str(config)]) == 1
     captured = capsys.readouterr()
     assert "2 cases, 2 failed" in captured.out

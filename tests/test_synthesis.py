@@ -31,25 +31,34 @@ def test_candidates_keep_the_link_bodies_off_the_object_along_a_lift():
     shapes, shape = HandClearance(hand), box.geometry()
     assert candidates
     for c in candidates:
-        space = manipulable_space(hand, c.q_contact, c.points, c.normals,
-                                  [hand.fingertip_frames[f] for f in c.fingers], box.pose.translation)  # fmt: skip
+        space = manipulable_space(
+            hand, c.q_contact, c.points, c.normals, [hand.fingertip_frames[f] for f in c.fingers], box.pose.translation
+        )
         lifted = pin.SE3(box.pose.rotation, box.pose.translation + LIFT[:3])
         assert shapes.nearest_other(c.q_contact + space.joint_map @ LIFT, c.fingers, shape, lifted) >= 1.5e-3
         opened = np.flatnonzero(c.q_pregrasp != c.q_contact)  # the proximal joints alone
         assert [hand.joint_names[i] for i in opened] == ["F1_proximal", "F2_proximal", "F3_proximal"]
 
 
-@pytest.mark.parametrize("item", [Box(size=(0.06, 0.05, 0.05), mass=0.6, pose=CENTRE),
-                                  Cylinder(radius=0.033, length=0.10, mass=0.35, pose=CENTRE)])  # fmt: skip
+@pytest.mark.parametrize(
+    "item",
+    [Box(size=(0.06, 0.05, 0.05), mass=0.6, pose=CENTRE), Cylinder(radius=0.033, length=0.10, mass=0.35, pose=CENTRE)],
+)
 def test_synthesised_grasp_lifts_without_slip_or_turn(item):
     setup = object_grasp(item)
-    grasp = SMCAdaptiveGrasp(setup.hand, replace(setup.item, density=None), options=GraspOptions(mu=0.6, squeeze=5.0),
-                             object_adaptation=(0.0, 0.0))  # fmt: skip
-    supervisor = GraspSupervisor(setup.hand, setup.candidate.q_contact, grasp, offset=LIFT,
-                                 fingers=setup.candidate.fingers)  # fmt: skip
+    grasp = SMCAdaptiveGrasp(
+        setup.hand,
+        replace(setup.item, density=None),
+        options=GraspOptions(mu=0.6, squeeze=5.0),
+        object_adaptation=(0.0, 0.0),
+    )
+    supervisor = GraspSupervisor(
+        setup.hand, setup.candidate.q_contact, grasp, offset=LIFT, fingers=setup.candidate.fingers
+    )
     traj = setup.simulator.run(supervisor, 3.0, state=setup.state, progress=False)
-    result = evaluate_demo(traj, setup.hand, "smc-adaptive", item.mass, item.mass, supervisor, 0.0,
-                           setup.simulator.scene)  # fmt: skip
+    result = evaluate_demo(
+        traj, setup.hand, "smc-adaptive", item.mass, item.mass, supervisor, 0.0, setup.simulator.scene
+    )
     assert result.true_position_error < 1e-4 and result.true_rotation_error < 1e-3  # [m], [rad]
     late = traj.t >= result.grasp_time + 0.02  # after the touch-down transient (the can's pads skid for ~7 ms)
     assert slip_events(setup.hand, traj, float(traj.t[late][0])) == 0
@@ -60,8 +69,11 @@ def test_the_box_synthesis_finds_the_thesis_pinch():
     hand, box = bh.BarrettHand(), Box(size=(0.06, 0.05, 0.05), mass=0.6, pose=CENTRE)
     best = synthesize(hand, box)
     thesis = box_grasp(mass=0.6)
-    np.testing.assert_allclose(best.points, [[-0.025, -0.025, CONTACT_HEIGHT], [0.025, -0.025, CONTACT_HEIGHT],
-                                             [0.0, 0.025, CONTACT_HEIGHT]], atol=1e-4)  # fmt: skip
+    np.testing.assert_allclose(
+        best.points,
+        [[-0.025, -0.025, CONTACT_HEIGHT], [0.025, -0.025, CONTACT_HEIGHT], [0.0, 0.025, CONTACT_HEIGHT]],
+        atol=1e-4,
+    )
     np.testing.assert_allclose(best.q_contact, thesis.q_contact, atol=2e-3)
     assert best.quality.force_closure and best.holds_weight
 

@@ -131,8 +131,12 @@ def test_pose_path_moves_back_to_back_and_composes_rotations_about_world_axes() 
     """Waypoints are the cumulative offsets (R_k = exp(dtheta_k) R_k-1), reached at rest at each join; between
     joins the twist is d/dt of the pose (finite differences); a zero offset holds the pose."""
     start = pin.SE3(pin.exp3(np.array([0.1, 0.2, -0.3])), np.array([0.0, 0.1, 0.3]))
-    moves = [([0.0, 0.0, -0.05, 0.0, 0.0, 0.0], 1.0), ([0.0] * 6, 0.5), ([0.02, 0.0, 0.1, 0.0, 0.3, 0.0], 0.8),
-             ([0.0, 0.0, 0.0, 0.2, 0.0, 0.0], 0.6)]  # fmt: skip
+    moves = [
+        ([0.0, 0.0, -0.05, 0.0, 0.0, 0.0], 1.0),
+        ([0.0] * 6, 0.5),
+        ([0.02, 0.0, 0.1, 0.0, 0.3, 0.0], 0.8),
+        ([0.0, 0.0, 0.0, 0.2, 0.0, 0.0], 0.6),
+    ]
     path = PosePath(start, moves, delay=0.2)
     pose, t = pin.SE3(start), 0.2
     for offset, duration in moves:

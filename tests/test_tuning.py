@@ -166,8 +166,18 @@ def test_rosenbrock_reaches_its_minimum_at_one_one() -> None:
 
 
 def test_bounded_shifted_rosenbrock_stops_on_cma_criteria_at_its_minimum() -> None:
-    result = cma_es(shifted_rosenbrock, [0.0, 0.0], 0.5, seed=3, max_generations=5000, bounds=([-2.0, -1.0],
-                    [1.0, 2.0]), executor="serial", tol_fun=1e-12, tol_x=1e-8, max_evaluations=20_000)  # fmt: skip
+    result = cma_es(
+        shifted_rosenbrock,
+        [0.0, 0.0],
+        0.5,
+        seed=3,
+        max_generations=5000,
+        bounds=([-2.0, -1.0], [1.0, 2.0]),
+        executor="serial",
+        tol_fun=1e-12,
+        tol_x=1e-8,
+        max_evaluations=20_000,
+    )
     assert np.max(np.abs(result.best - ROSENBROCK_SHIFT)) < 1e-4
     assert result.best_fitness < 1e-10 and result.evaluations < 20_000
     assert_stop_is_real(result, 2, 6, 1e-12, 1e-8)
@@ -178,8 +188,18 @@ def test_a_minimum_on_a_bound_is_found_and_the_stop_criterion_holds(seed: int) -
     """Sphere centred at (1.5, -0.7) in the box [-1, 1]^2: the constrained minimum (1, -0.7) is on the bound x = 1."""
     centre = np.array([1.5, -0.7])
     objective = functools.partial(shifted_sphere, centre=centre)
-    result = cma_es(objective, [0.0, 0.0], 0.5, seed=seed, max_generations=5000, bounds=(-1.0, 1.0),
-                    executor="serial", tol_fun=1e-11, tol_x=1e-7, max_evaluations=20_000)  # fmt: skip
+    result = cma_es(
+        objective,
+        [0.0, 0.0],
+        0.5,
+        seed=seed,
+        max_generations=5000,
+        bounds=(-1.0, 1.0),
+        executor="serial",
+        tol_fun=1e-11,
+        tol_x=1e-7,
+        max_evaluations=20_000,
+    )
     assert np.all(result.history_parameters <= 1.0) and np.all(result.history_parameters >= -1.0)
     assert np.max(np.abs(result.best - [1.0, -0.7])) < 1e-4
     assert result.best_fitness == pytest.approx(0.25, abs=1e-8)  # (1.5 - 1)^2
@@ -187,8 +207,17 @@ def test_a_minimum_on_a_bound_is_found_and_the_stop_criterion_holds(seed: int) -
 
 
 def test_the_evaluation_cap_stops_a_run_that_has_not_converged() -> None:
-    result = cma_es(shifted_rosenbrock, [0.0, 0.0], 0.5, seed=3, max_generations=5000, executor="serial",
-                    tol_fun=1e-12, tol_x=1e-8, max_evaluations=60)  # fmt: skip
+    result = cma_es(
+        shifted_rosenbrock,
+        [0.0, 0.0],
+        0.5,
+        seed=3,
+        max_generations=5000,
+        executor="serial",
+        tol_fun=1e-12,
+        tol_x=1e-8,
+        max_evaluations=60,
+    )
     assert result.criteria == {"maxfevals": 60}
     assert 60 < result.evaluations <= 60 + 6  # cma stops after the first generation past the cap
     assert result.stop == "{'maxfevals': 60}"
@@ -198,8 +227,17 @@ def test_the_evaluation_cap_stops_a_run_that_has_not_converged() -> None:
 
 def test_bounded_runs_to_convergence_are_deterministic_per_seed() -> None:
     def run(seed: int) -> TuningResult:
-        return cma_es(shifted_rosenbrock, [0.0, 0.0], 0.5, seed=seed, max_generations=5000, bounds=([-2.0, -1.0],
-                      [1.0, 2.0]), executor="serial", tol_fun=1e-10, tol_x=1e-6)  # fmt: skip
+        return cma_es(
+            shifted_rosenbrock,
+            [0.0, 0.0],
+            0.5,
+            seed=seed,
+            max_generations=5000,
+            bounds=([-2.0, -1.0], [1.0, 2.0]),
+            executor="serial",
+            tol_fun=1e-10,
+            tol_x=1e-6,
+        )
 
     first, again, other = run(5), run(5), run(6)
     assert_same_result(first, again)
@@ -434,8 +472,14 @@ def test_a_batched_objective_gives_the_run_of_its_candidates_one_by_one() -> Non
     a process pool: a batch gives the bits of separate runs, so CMA-ES takes the same path to the bit."""
     from bhgrasp.tuning import BatchedObjective
 
-    settings = {"x0": [0.3, 0.8], "sigma0": 0.2, "seed": 3, "max_generations": 3, "population": 5,
-                "bounds": ([-1.0, 0.05], [1.0, 2.0])}  # fmt: skip
+    settings = {
+        "x0": [0.3, 0.8],
+        "sigma0": 0.2,
+        "seed": 3,
+        "max_generations": 3,
+        "population": 5,
+        "bounds": ([-1.0, 0.05], [1.0, 2.0]),
+    }
     batched = cma_es(BatchedObjective(hold_cost_batch, size=3), executor="serial", **settings)
     alone = cma_es(BatchedObjective(hold_cost_batch, size=1), executor="serial", **settings)
     pooled = cma_es(BatchedObjective(hold_cost_batch, size=3), executor=None, **settings)
@@ -455,8 +499,15 @@ def failing_batch(candidates: list[np.ndarray]) -> list[float]:
 def test_a_batched_call_that_fails_fails_its_candidates_only() -> None:
     from bhgrasp.tuning import BatchedObjective
 
-    result = cma_es(BatchedObjective(failing_batch, size=2), x0=[0.5, 0.5], sigma0=1.5, seed=0, max_generations=4,
-                    population=6, executor="serial")  # fmt: skip
+    result = cma_es(
+        BatchedObjective(failing_batch, size=2),
+        x0=[0.5, 0.5],
+        sigma0=1.5,
+        seed=0,
+        max_generations=4,
+        population=6,
+        executor="serial",
+    )
     assert any("not a finite number" in failure for failure in result.failures)
     assert any("RuntimeError: a candidate beyond 2" in failure for failure in result.failures)
     assert np.isfinite(result.best_fitness)

@@ -32,15 +32,26 @@ def a_state() -> bh.State:
     """A state with an object pose, twist and two contact forces (the reads below perturb it)."""
     rotation = pin.rpy.rpyToMatrix(0.1, -0.2, 0.3)
     return bh.State(
-        t=0.5, q=np.linspace(0.0, 0.7, 8), v=np.zeros(8), object_poses=(pin.SE3(rotation, np.array([0.1, 0.2, 0.3])),),
-        object_twists=np.array([[0.01, 0.0, -0.02, 0.1, 0.2, 0.0]]), contact_points=np.zeros((2, 3)),
-        contact_normals=np.tile([0.0, 0.0, 1.0], (2, 1)), contact_forces=np.array([[0.0, 0.0, 3.0], [1.0, 0.0, 2.0]]),
-    )  # fmt: skip
+        t=0.5,
+        q=np.linspace(0.0, 0.7, 8),
+        v=np.zeros(8),
+        object_poses=(pin.SE3(rotation, np.array([0.1, 0.2, 0.3])),),
+        object_twists=np.array([[0.01, 0.0, -0.02, 0.1, 0.2, 0.0]]),
+        contact_points=np.zeros((2, 3)),
+        contact_normals=np.tile([0.0, 0.0, 1.0], (2, 1)),
+        contact_forces=np.array([[0.0, 0.0, 3.0], [1.0, 0.0, 2.0]]),
+    )
 
 
 def test_noise_has_the_model_sigmas_and_zero_mean() -> None:
-    model = SensorModel(object_position=1e-3, object_rotation=2e-3, object_velocity=3e-3,
-                        object_angular_velocity=4e-2, contact_force=0.5, joint_position=1e-4)  # fmt: skip
+    model = SensorModel(
+        object_position=1e-3,
+        object_rotation=2e-3,
+        object_velocity=3e-3,
+        object_angular_velocity=4e-2,
+        contact_force=0.5,
+        joint_position=1e-4,
+    )
     sensors, truth = Sensors(model, seed=11), a_state()
     reads = [sensors.read(truth) for _ in range(4000)]
     position = np.array([r.object_poses[0].translation for r in reads]) - truth.object_poses[0].translation
@@ -48,8 +59,14 @@ def test_noise_has_the_model_sigmas_and_zero_mean() -> None:
     twist = np.array([r.object_twists[0] for r in reads]) - truth.object_twists[0]
     force = np.array([r.contact_forces for r in reads]) - truth.contact_forces
     joints = np.array([r.q for r in reads]) - truth.q
-    for sample, sigma in ((position, 1e-3), (turn, 2e-3), (twist[:, :3], 3e-3), (twist[:, 3:], 4e-2),
-                          (force.reshape(-1, 3), 0.5), (joints, 1e-4)):  # fmt: skip
+    for sample, sigma in (
+        (position, 1e-3),
+        (turn, 2e-3),
+        (twist[:, :3], 3e-3),
+        (twist[:, 3:], 4e-2),
+        (force.reshape(-1, 3), 0.5),
+        (joints, 1e-4),
+    ):
         # 4000 draws: the sample sigma's standard error is 1.1 %, the mean's 1.6 % of sigma
         np.testing.assert_allclose(sample.std(axis=0), sigma, rtol=0.05)
         assert np.all(np.abs(sample.mean(axis=0)) < 0.07 * sigma)
@@ -66,8 +83,9 @@ def test_the_joint_noise_shorthand_is_the_same_model_bit_for_bit() -> None:
     simulator, hand = box_on_table()
 
     def run(**sensing) -> bh.Trajectory:
-        return simulator.run(lambda t, s: hand.gravity_torques(s.q) - 0.01 * s.v, 0.1, seed=5, progress=False,
-                             **sensing)  # fmt: skip
+        return simulator.run(
+            lambda t, s: hand.gravity_torques(s.q) - 0.01 * s.v, 0.1, seed=5, progress=False, **sensing
+        )
 
     short, model = run(sensor_noise=(1e-3, 1e-2)), run(sensors=SensorModel(joint_position=1e-3, joint_velocity=1e-2))
     for name in ("q", "v", "u", "object_position"):

@@ -159,7 +159,24 @@ def test_the_provenance_cites_only_public_sources_it_lists() -> None:
     readme, urdf = (folder / "README.md").read_text(), (folder / "barrett_hand.urdf").read_text()
     assert "shared/" not in readme
     listed = set(re.findall(r"^\| ([A-Z][A-Za-z0-9-]+) \|", readme.split("## Sources", 1)[1], flags=re.MULTILINE))
-    known = {"WIKI-MASS", "WIKI-KIN", "WIKI-SAFE", "MAN-262", "MAN-BH8", "LIBB", "HERB", "JHU", "SWX", "ROB",
-             "ROB-old", "RISE", "BRP", "GRASPIT", "ORAVE", "AIKIDO", "BLAYER"}  # fmt: skip
+    known = {
+        "WIKI-MASS",
+        "WIKI-KIN",
+        "WIKI-SAFE",
+        "MAN-262",
+        "MAN-BH8",
+        "LIBB",
+        "HERB",
+        "JHU",
+        "SWX",
+        "ROB",
+        "ROB-old",
+        "RISE",
+        "BRP",
+        "GRASPIT",
+        "ORAVE",
+        "AIKIDO",
+        "BLAYER",
+    }
     used = {key for key in known if re.search(rf"(?<![A-Za-z-]){re.escape(key)}(?![A-Za-z-])", readme + urdf)}
     assert used and used <= listed, f"source keys used but not listed: {sorted(used - listed)}"

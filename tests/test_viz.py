@@ -174,10 +174,14 @@ def test_a_frame_sends_only_what_changed(held, monkeypatch):
     sent: list[tuple[str, str]] = []
     cls = type(viewer.viewer)  # on the class: Visualizer has __slots__
     real_transform, real_property = cls.set_transform, cls.set_property
-    monkeypatch.setattr(cls, "set_transform", lambda self, *a: (sent.append(("transform", self.path.lower())),
-                                                                  real_transform(self, *a))[1])  # fmt: skip
-    monkeypatch.setattr(cls, "set_property", lambda self, *a: (sent.append(("property", self.path.lower())),
-                                                                 real_property(self, *a))[1])  # fmt: skip
+    monkeypatch.setattr(
+        cls,
+        "set_transform",
+        lambda self, *a: (sent.append(("transform", self.path.lower())), real_transform(self, *a))[1],
+    )
+    monkeypatch.setattr(
+        cls, "set_property", lambda self, *a: (sent.append(("property", self.path.lower())), real_property(self, *a))[1]
+    )
     contacts = len(state.contact_points)
     assert 0 < contacts < viewer.max_contacts
     viewer.display(state)
@@ -188,8 +192,15 @@ def test_a_frame_sends_only_what_changed(held, monkeypatch):
     assert nodes <= len(sent) <= nodes + 3 * contacts  # was nodes + 6 * max_contacts (24 slots: 144 messages)
     sent.clear()
     no_contacts = np.zeros((0, 3))
-    viewer.display(SimpleNamespace(q=state.q, object_poses=state.object_poses, contact_points=no_contacts,
-                                   contact_normals=no_contacts, contact_forces=no_contacts))  # fmt: skip
+    viewer.display(
+        SimpleNamespace(
+            q=state.q,
+            object_poses=state.object_poses,
+            contact_points=no_contacts,
+            contact_normals=no_contacts,
+            contact_forces=no_contacts,
+        )
+    )
     hidden = {path for kind, path in sent if kind == "property"}
     assert hidden and all("/contacts/" in path for path in hidden) and len(hidden) <= 3 * contacts
 

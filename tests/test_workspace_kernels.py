@@ -180,8 +180,16 @@ def test_the_impedance_controller_gives_the_same_torques_without_the_kernel(monk
     setup = press_fitness.cached_f3_setup(press_fitness.TUNING_SPRING)
 
     def controller() -> ImpedanceController:
-        law = ForceImpedance(Constant(setup.tip0), setup.normal, 6.0, setup.surface_point(), setup.k_e, mass=0.01,
-                             stiffness=100.0, period=finger_press.DT)  # fmt: skip
+        law = ForceImpedance(
+            Constant(setup.tip0),
+            setup.normal,
+            6.0,
+            setup.surface_point(),
+            setup.k_e,
+            mass=0.01,
+            stiffness=100.0,
+            period=finger_press.DT,
+        )
         return ImpedanceController(setup.hand, {"F3": law}, *finger_press.F3_GAINS)
 
     compiled, steps = controller(), []
