@@ -296,6 +296,9 @@ def test_one_hand_class_offers_every_algorithm_of_its_modules_as_a_method() -> N
             assert (offered.fget if isinstance(offered, property) else offered) is function, name
     assert "twin" not in pickle.loads(pickle.dumps(bh.BarrettHand())).__dict__  # rebuilt on first use
     assert hand_module.Hand is bh.Hand
+    loaded = bh.BarrettHand.from_urdf(bh.barrett_urdf_path())  # a plain Hand, as from Hand.from_urdf
+    assert type(loaded) is bh.Hand
+    assert set(loaded.fingertip_frames.values()) == set(bh.BarrettHand().fingertip_frames.values())
 
 
 def test_the_base_frame_is_new_after_each_change_and_read_only(barrett: bh.Hand) -> None:

@@ -83,7 +83,8 @@ def hand_from_urdf(
             raise ModelError(f"URDF {str(path)!r} has no leaf links to use as fingertips; pass `fingertips`")
     if not isinstance(fingertips, Mapping):
         fingertips = {frame: frame for frame in fingertips}
-    return cls(model, fingertips, urdf_path=Path(path), **kwargs)
+    hand_class = cls.__mro__[-2]  # Hand itself: a subclass (BarrettHand) has a constructor of its own
+    return hand_class(model, fingertips, urdf_path=Path(path), **kwargs)
 
 
 def collision_model(hand: Hand) -> pin.GeometryModel:
