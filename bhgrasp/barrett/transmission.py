@@ -122,6 +122,7 @@ class BarrettTransmission(Transmission):
         self.distal = [names.index(f"{f}_distal") for f in FINGERS]
         self.direct = [i for i, name in enumerate(names) if name not in required]  # e.g. a wrist mount's joints
         self._lower = hand.lower
+        self._matrices: dict[tuple[int, ...], np.ndarray] = {}  # matrix() per mode combination
 
     @property
     def n_inputs(self) -> int:
@@ -129,8 +130,18 @@ class BarrettTransmission(Transmission):
         return 4 + len(self.direct)
 
     def matrix(self, modes: Any = None) -> np.ndarray:
-        """Spread column (1, 1) on F1/F2 spread; per finger (1, 1/3) on (proximal, distal), or (0, 1) if broken."""
+        """Spread column (1, 1) on F1/F2 spread; per finger (1, 1/3) on (proximal, distal), or (0, 1) if broken.
+
+        A fresh array; each of the 27 mode combinations is built once per drive (the contact loop asks every step).
+        """
         modes = switch_modes(modes)
+        key = tuple(modes.tolist())
+        built = self._matrices.get(key)
+        if built is None:
+            built = self._matrices[key] = self._matrix(modes)
+        return built.copy()
+
+    def _matrix(self, modes: np.ndarray) -> np.ndarray:
         columns = np.zeros((self.hand.nv, self.n_inputs))
         columns[self.direct, range(4, self.n_inputs)] = 1.0
         columns[list(self.spread), 0] = 1.0
@@ -233,6 +244,9 @@ _ARMED = np.zeros(3, dtype=int)
 
 def switch_modes(modes: Any) -> np.ndarray:
     """TorqueSwitch modes (3,) as ints from a state's flags (3, or 6 with the worm locks); ``None``/empty: armed."""
+    if type(modes) is np.ndarray and modes.dtype == _ARMED.dtype and modes.shape == (3,):  # the drive's own: fast
+        if all(ARMED <= mode <= REOPENING for mode in modes.tolist()):
+            return modes
     if modes is None or len(modes) == 0:
         return _ARMED
     array = np.asarray(modes)

@@ -46,7 +46,7 @@ from bhgrasp.bench.protocol import (
 from bhgrasp.bench.report import bench_rollout, compare, markdown, run_bench, success_rates, write_json
 from bhgrasp.bench.trial import (
     BenchController,
-    gone,
+    fallen,
     idealised_damping,
     run_trial,
     setup,
@@ -92,7 +92,7 @@ __all__ = [
     "contact_summary",
     "evaluate",
     "failure_reason",
-    "gone",
+    "fallen",
     "grasp_clearance",
     "grasp_offset",
     "hand_depth",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
@@ -229,7 +230,7 @@ def simulate_trial(trial: Trial, dt: float = DT, record_every: int = 40, duratio
         progress=False,
         record_every=record_every,
         object_forces=shake_force(trial.item.mass),
-        until=gone,
+        until=fallen(simulator.scene),
     )
     return trajectory, hand
 
@@ -240,15 +241,23 @@ def run_trial(trial: Trial, dt: float = DT, record_every: int = 40) -> dict:
     return evaluate(trial, trajectory, hand)
 
 
-def gone(state: bh.State) -> bool:
-    """Whether the object fell: below the stand's top (the trial stops there)."""
-    return bool(state.object_poses[0].translation[2] < -0.05)
+def fallen(scene: Scene) -> Callable[[bh.State], bool]:
+    """Whether the object fell: its centre 5 cm below the stand's top (the trial stops there).
+
+    Read from the scene's coordinates (the object's position is their first three; no pose is built each step).
+    """
+    height = scene.object_q_slice(0).start + 2
+
+    def below(state: bh.State) -> bool:
+        return bool(state.scene_q[height] < -0.05)
+
+    return below
 
 
 __all__ = [
     "BenchController",
     "contact_law",
-    "gone",
+    "fallen",
     "idealised_damping",
     "run_trial",
     "setup",
