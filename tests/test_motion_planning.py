@@ -10,7 +10,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.grasp.clearance import check_clearance, path_clearance
-from bhgrasp.scenarios.box_grasp import BOX_SIZE, OFF_STOP_SPACING, PEDESTAL, box_grasp
+from bhgrasp.scenarios.box_grasp import BOX_SIZE, KNUCKLE_SPACING, OFF_STOP_SPACING, PEDESTAL, box_grasp
 from bhgrasp.scenarios.demo_result import SUCCESS
 from bhgrasp.scenarios.grasp_demo import run_grasp_demo
 from bhgrasp.thesis.motions import run_motion, short_reason
@@ -151,3 +151,10 @@ def test_a_request_the_sensed_contacts_make_only_in_part_is_refused_and_run_anyw
     assert result.true_position_error == pytest.approx(shortfall, rel=0.15)
     with pytest.raises(bh.InputError, match="Planning.tolerance"):
         _can_turn((0.0, 5e-3))
+
+
+def test_a_motion_run_too_short_to_reach_its_motion_says_so() -> None:
+    """Chapter 5 at a small --scale: a run that ends before the motion starts names both times (it raised a
+    TypeError on the missing plan before)."""
+    with pytest.raises(bh.InputError, match=r"a 0.9 s run ends before the motion starts at 0\.93 s: nothing"):
+        run_motion(KNUCKLE_SPACING, (0.0, 0.0, 0.01, 0.0, 0.0, 0.0), 0.9)

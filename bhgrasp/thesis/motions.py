@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from bhgrasp.errors import UnreachableError
+from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.scenarios.box_grasp import KNUCKLE_SPACING, OFF_STOP_SPACING
 from bhgrasp.scenarios.demo_result import SUCCESS
 from bhgrasp.scenarios.grasp_demo import run_grasp_demo
@@ -60,6 +60,11 @@ def run_motion(spacing: float, offset: Any, duration: float = DURATION) -> dict[
         result = run_grasp_demo(MASS, ESTIMATE, offset=offset, duration=duration, finger_spacing=spacing)
     except UnreachableError as error:
         return {"refused": True, "reason": short_reason(str(error))}
+    if result.planned_offset is None:  # the run ended before the motion began: nothing was planned or moved
+        raise InputError(
+            f"a {duration:g} s run ends before the motion starts at {result.motion_start:.2f} s: nothing to compare "
+            f"(chapter 5 at --scale below {result.motion_start / DURATION:.2f} leaves its motions no time)"
+        )
     traj = result.trajectory
     moving = traj.t >= result.motion_start
     tracking = traj.log["object_error"][moving]
