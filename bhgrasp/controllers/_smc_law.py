@@ -28,7 +28,7 @@ from bhgrasp.grasp.frames import TANGENT_SWITCH, ZERO_NORMAL, contact_frames, gr
 from bhgrasp.grasp.kinematics import grasp_kinematics_kernel, hand_index
 
 if TYPE_CHECKING:
-    from bhgrasp.model.hand import BaseFrame
+    from bhgrasp.model.hand_description import BaseFrame
 
 _ROW_CACHE = 256  # contact-body tuples whose finger and joint rows are kept (a run meets a handful)
 

@@ -6,7 +6,8 @@ the drive's transmission, the wrist mount, orientation maths and inverse kinemat
 
 from bhgrasp.model.barrett_hand import BarrettHand
 from bhgrasp.model.couplings import Coupling, TwinMap
-from bhgrasp.model.hand import BaseFrame, Hand
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.hand_description import BaseFrame
 from bhgrasp.model.hand_ik import IKResult, ik
 from bhgrasp.model.ik import FingerIKResult, Workspace, finger_ik, workspace
 from bhgrasp.model.mount import MOUNT_JOINTS, mount_coordinates, mount_pose, mounted

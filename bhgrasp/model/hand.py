@@ -18,7 +18,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -35,18 +35,9 @@ from bhgrasp.model.couplings import (
     model_couplings,
     twin_map,
 )
+from bhgrasp.model.hand_description import BaseFrame, JointLayout
 
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)  # [m/s^2] in world coordinates
-
-
-class BaseFrame(NamedTuple):
-    """The hand base in the world as the algorithms read it; a new one whenever the placement or gravity change."""
-
-    placement: pin.SE3  # transform_base_to_world
-    rotation: np.ndarray  # (3, 3) base -> world, read-only
-    translation: np.ndarray  # (3,) [m] base origin in the world, read-only
-    at_origin: bool  # the placement is the identity (world = base frame)
-    gravity: np.ndarray  # (3,) [m/s^2] gravity in base coordinates, read-only
 
 
 class Hand:
@@ -98,7 +89,7 @@ class Hand:
             require_name(frame, frame_names, "frame")
             self._tip_ids[str(finger)] = model.getFrameId(frame)
         self.base_joints = tuple(require_name(joint, model.names[1:], "joint") for joint in base_joints)
-        self.layout = hand_joints.JointLayout.of(model, self._tip_ids, self.base_joints, self.couplings)
+        self.layout = JointLayout.of(model, self._tip_ids, self.base_joints, self.couplings)
         self._placement = base_placement if base_placement is not None else pin.SE3.Identity()
         self._gravity_world = as_vector(gravity, "gravity", 3).copy()
         self.base_placement = self._placement  # checks both and builds the base frame

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -20,9 +20,7 @@ import pinocchio as pin
 from bhgrasp._native import kernel
 from bhgrasp._validation import as_array, as_vector
 from bhgrasp.errors import InputError
-
-if TYPE_CHECKING:
-    from bhgrasp.model.hand import Hand
+from bhgrasp.model.hand_description import HandDescription as Hand
 
 
 def compiled_dynamics(hand: Hand) -> Any:

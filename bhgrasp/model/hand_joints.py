@@ -2,51 +2,19 @@
 
 Free functions over a :class:`~bhgrasp.model.hand.Hand`, which offers each as a method or property of the same name
 (``hand.configuration(F1_proximal=0.8)`` is ``configuration(hand, F1_proximal=0.8)``).  :class:`JointLayout` is
-built once per hand from its model.
+built once per hand from its model (:mod:`~bhgrasp.model.hand_description`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_generator, as_vector, require_name
 from bhgrasp.errors import InputError
-from bhgrasp.model.couplings import Coupling
-
-if TYPE_CHECKING:
-    from bhgrasp.model.hand import Hand
-
-
-@dataclass(frozen=True)
-class JointLayout:
-    """Which coordinate of ``q``/``v`` is which joint, and which joints move which fingertip."""
-
-    joint_names: tuple[str, ...]  # the joints with a coordinate, in Pinocchio's order (mimic joints have none)
-    indices: Mapping[str, int]  # joint name -> its index in q and v
-    finger_joints: Mapping[str, tuple[str, ...]]  # finger -> its joints from the base out (no base joint)
-
-    @classmethod
-    def of(
-        cls, model: pin.Model, tip_ids: Mapping[str, int], base_joints: Sequence[str], couplings: Sequence[Coupling]
-    ) -> JointLayout:
-        """The layout of ``model`` with fingertip frames ``tip_ids`` (finger -> frame id).
-
-        A mimic joint counts as the joint it mimics (listed once in a finger's joints, where first met).
-        """
-        mimics = {coupling.joint: coupling.mimics for coupling in couplings}
-        names = tuple(name for name in model.names[1:] if name not in mimics)
-        indices = {name: model.joints[model.getJointId(name)].idx_v for name in names}
-        base, fingers = set(base_joints), {}
-        for finger, frame in tip_ids.items():
-            supports = model.supports[model.frames[frame].parentJoint][1:]
-            joints = (mimics.get(model.names[j], model.names[j]) for j in supports if model.names[j] not in base)
-            fingers[finger] = tuple(dict.fromkeys(joints))  # in order, each once
-        return cls(names, indices, fingers)
+from bhgrasp.model.hand_description import HandDescription as Hand
 
 
 def joint_index(hand: Hand, joint: str) -> int:

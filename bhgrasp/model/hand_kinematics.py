@@ -8,15 +8,13 @@ Pinocchio's forward kinematics and frame Jacobians, world-aligned, with the hand
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_array, as_vector
-
-if TYPE_CHECKING:
-    from bhgrasp.model.hand import Hand
+from bhgrasp.model.hand_description import HandDescription as Hand
 
 
 def frame_placement(hand: Hand, q: Any, frame: str) -> pin.SE3:

@@ -13,16 +13,14 @@ from __future__ import annotations
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from bhgrasp.errors import InputError, ModelError
+from bhgrasp.model.hand_description import HandDescription as Hand
 from bhgrasp.model.resources import leaf_links, read_urdf
-
-if TYPE_CHECKING:
-    from bhgrasp.model.hand import Hand
 
 
 def build_model(path: str | Path, mimic: bool = False) -> tuple[pin.Model, Any]:
