@@ -28,9 +28,8 @@ def fingertip_positions(hand: Hand, q: Any) -> np.ndarray:
     """Fingertip frame origins in the world [m], shape (n_fingers, 3), in :attr:`fingers` order."""
     pin.framesForwardKinematics(hand.model, hand.data, hand.check_q(q))
     points = np.array([hand.data.oMf[i].translation for i in hand.fingertip_ids])
-    if hand.base.at_origin:
-        return points
-    return points @ hand.base.rotation.T + hand.base.translation
+    base = hand.base
+    return points if base.at_origin else points @ base.rotation.T + base.translation
 
 
 def frame_jacobian(hand: Hand, q: Any, frame: str) -> np.ndarray:
@@ -66,16 +65,17 @@ def point_jacobians(hand: Hand, q: Any, frames: Sequence[str], points: Any) -> n
     points = as_array(points, "points", (len(frames), 3))
     model, data = hand.model, hand.data
     pin.computeJointJacobians(model, data, hand.check_q(q))  # also places the joints (data.oMi)
-    if not hand.base.at_origin:
-        points = (points - hand.base.translation) @ hand.base.rotation  # base-frame points
+    base = hand.base
+    if not base.at_origin:
+        points = (points - base.translation) @ base.rotation  # base-frame points
     result = np.empty((len(frames), 3, model.nv))
     for i, frame in enumerate(frames):
         joint = model.frames[hand.frame_id(frame)].parentJoint
         on_joint = pin.SE3(np.eye(3), data.oMi[joint].actInv(points[i]))  # the point, fixed on its body
         jacobian = pin.getFrameJacobian(model, data, joint, on_joint, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
         result[i] = np.reshape(jacobian, (6, model.nv))[:3]  # (a one-joint model's comes back as a vector)
-    if not hand.base.at_origin:
-        result = np.einsum("ij,njk->nik", hand.base.rotation, result)
+    if not base.at_origin:
+        result = np.einsum("ij,njk->nik", base.rotation, result)
     return result
 
 
@@ -90,14 +90,16 @@ def fingertip_bias_acceleration(hand: Hand, q: Any, v: Any, finger: str) -> np.n
     acceleration = pin.getFrameClassicalAcceleration(
         hand.model, hand.data, frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
     ).linear
-    return acceleration.copy() if hand.base.at_origin else hand.base.rotation @ acceleration
+    base = hand.base
+    return acceleration.copy() if base.at_origin else base.rotation @ acceleration
 
 
 def _jacobian(hand: Hand, q: np.ndarray, frame_id: int, rows: int) -> np.ndarray:
     jacobian = pin.computeFrameJacobian(
         hand.model, hand.data, q, frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
     ).reshape(6, hand.model.nv)  # a one-joint model's comes back as a vector
-    if hand.base.at_origin:
+    base = hand.base
+    if base.at_origin:
         return jacobian[:rows].copy()
-    rotation = hand.base.rotation
+    rotation = base.rotation
     return np.vstack([rotation @ jacobian[i : i + 3] for i in range(0, rows, 3)])
