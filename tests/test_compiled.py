@@ -14,10 +14,11 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from scenes import G, far_hand, incline, off_centre_boxes
 
 import bhgrasp as bh
 from bhgrasp.errors import InputError
-from bhgrasp.model.objects import Box, Plane
+from bhgrasp.model.objects import Box
 from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.scenarios.allegro_grasp import allegro_box_grasp
 from bhgrasp.scenarios.box_grasp import box_grasp
@@ -27,9 +28,7 @@ from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 
-G = 9.81
 TOLERANCE = 1e-12
-FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))
 
 
 def twin(simulator: Simulator, engine: str) -> Simulator:
@@ -88,10 +87,6 @@ def zero(n: int):
     return lambda t, state: np.zeros(n)
 
 
-def far_hand(gravity=(0.0, 0.0, 0.0)) -> bh.Hand:
-    return bh.BarrettHand(base_placement=FAR, gravity=gravity)
-
-
 # ---------------------------------------------------------------------- scenes
 def test_reference_hold() -> None:
     """Three fingertip pads squeezing a box under gravity (the benchmark scene), 2000 steps."""
@@ -115,37 +110,16 @@ def test_free_flight_with_spin(integrator: str) -> None:
 @pytest.mark.parametrize("integrator", INTEGRATORS)
 def test_off_centre_box_collision(integrator: str) -> None:
     """Two boxes meeting off centre: box-box patches, then they spin apart."""
-    first = Box(
-        size=(0.05, 0.04, 0.03),
-        mass=0.3,
-        friction=0.8,
-        pose=pin.SE3(np.eye(3), np.zeros(3)),
-        velocity=[0.5, 0.0, 0.0, 0.0, 0.0, 0.0],
-        name="first",
-    )
-    second = Box(
-        size=(0.05, 0.04, 0.03),
-        mass=0.5,
-        friction=0.8,
-        pose=pin.SE3(pin.rpy.rpyToMatrix(0.2, 0.1, 0.3), np.array([0.1, 0.02, 0.01])),
-        velocity=[-0.5, 0.0, 0.0, 0.0, 0.0, 0.0],
-        name="second",
-    )
-    simulator = Simulator(Scene(far_hand(), [first, second]), integrator=integrator)
+    simulator = Simulator(Scene(far_hand(), off_centre_boxes()), integrator=integrator)
     assert_agree(lockstep(simulator, zero(8), 300), 2)
 
 
 @pytest.mark.parametrize("integrator", ["implicit", "semi-implicit"])
 def test_box_sliding_down_an_incline(integrator: str) -> None:
     """Four corners sliding at up to 2.8 m/s (multi-point patch depths, kinetic friction, slip memory)."""
-    theta, mu = np.radians(30.0), 0.3
-    normal = np.array([np.sin(theta), 0.0, np.cos(theta)])
-    rest = np.array([1.0, 0.0, 0.0]) + normal * (0.025 - 0.2 * G * np.cos(theta) / 1e4)
-    box = Box(size=(0.06, 0.05, 0.05), mass=0.2, friction=mu, pose=pin.SE3(pin.rpy.rpyToMatrix(0, theta, 0), rest))
-    incline = Plane(normal=normal, offset=float(normal[0]), friction=mu, name="incline")
-    law = SpringDamper(stiffness=1e4, damping=20.0, friction=mu)
+    box, plane, law = incline()
     dt = 1e-3 if integrator == "implicit" else 2e-4  # the explicit step needs a smaller step for k = 1e4
-    simulator = Simulator(Scene(far_hand((0.0, 0.0, -G)), [box], [incline]), dt=dt, contact=law, integrator=integrator)
+    simulator = Simulator(Scene(far_hand((0.0, 0.0, -G)), [box], [plane]), dt=dt, contact=law, integrator=integrator)
     assert_agree(lockstep(simulator, zero(8), 1200), 4)
 
 

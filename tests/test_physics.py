@@ -15,23 +15,17 @@ import dataclasses
 import numpy as np
 import pinocchio as pin
 import pytest
+from scenes import G, far_hand, incline, off_centre_boxes
 
 import bhgrasp as bh
 from bhgrasp.data import ContactMemory
-from bhgrasp.model.objects import Box, Plane, Sphere
+from bhgrasp.model.objects import Box, Sphere
 from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import INTEGRATORS, Simulator
 from bhgrasp.sim.actuation import BarrettActuation
-from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 
-G = 9.81
 Z = np.array([0.0, 0.0, 1.0])
-FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))
-
-
-def far_hand(gravity=(0.0, 0.0, 0.0)) -> bh.Hand:
-    return bh.BarrettHand(base_placement=FAR, gravity=gravity)
 
 
 def _fly(body, integrator: str, dt: float, duration: float):
@@ -113,23 +107,7 @@ def test_tumbling_box_rk4_is_fourth_order() -> None:
 @pytest.mark.parametrize("integrator", INTEGRATORS)
 def test_off_centre_box_collision_conserves_linear_momentum(integrator: str) -> None:
     """The issue's case (before: 8e-3 of sum m |v| with the default integrators, 3e-4 with RK4)."""
-    first = Box(
-        size=(0.05, 0.04, 0.03),
-        mass=0.3,
-        friction=0.8,
-        pose=pin.SE3(np.eye(3), np.zeros(3)),
-        velocity=[0.5, 0.0, 0.0, 0.0, 0.0, 0.0],
-        name="first",
-    )
-    second = Box(
-        size=(0.05, 0.04, 0.03),
-        mass=0.5,
-        friction=0.8,
-        pose=pin.SE3(pin.rpy.rpyToMatrix(0.2, 0.1, 0.3), np.array([0.1, 0.02, 0.01])),
-        velocity=[-0.5, 0.0, 0.0, 0.0, 0.0, 0.0],
-        name="second",
-    )
-    sim = Simulator(Scene(far_hand(), [first, second]), dt=1e-3, integrator=integrator)
+    sim = Simulator(Scene(far_hand(), off_centre_boxes()), dt=1e-3, integrator=integrator)
     trajectory = sim.run(lambda t, s: np.zeros(8), 0.3, progress=False)
     assert trajectory.contact_count().max() >= 2
     assert np.abs(trajectory.object_twist[-1, :, 3:]).max() > 1.0  # off centre: they spin
@@ -140,12 +118,8 @@ def test_off_centre_box_collision_conserves_linear_momentum(integrator: str) -> 
 # ---------------------------------------------------------------------- fast sliding
 def _fast_slide(dt: float, duration: float = 1.2, mu: float = 0.3, theta: float = np.radians(30.0)):
     """A 0.2 kg box released on a 30 deg incline with mu = 0.3: it accelerates past 2.8 m/s in 1.2 s."""
-    normal = np.array([np.sin(theta), 0.0, np.cos(theta)])
-    rest = np.array([1.0, 0.0, 0.0]) + normal * (0.025 - 0.2 * G * np.cos(theta) / 1e4)
-    box = Box(size=(0.06, 0.05, 0.05), mass=0.2, friction=mu, pose=pin.SE3(pin.rpy.rpyToMatrix(0, theta, 0), rest))
-    incline = Plane(normal=normal, offset=float(normal[0]), friction=mu, name="incline")
-    law = SpringDamper(stiffness=1e4, damping=20.0, friction=mu)
-    sim = Simulator(Scene(far_hand((0.0, 0.0, -G)), [box], [incline]), dt=dt, contact=law)
+    box, plane, law = incline(mu, theta)
+    sim = Simulator(Scene(far_hand((0.0, 0.0, -G)), [box], [plane]), dt=dt, contact=law)
     return sim.run(lambda t, s: np.zeros(8), duration, progress=False)
 
 

@@ -8,6 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+import scenes
+from scenes import G
 
 import bhgrasp as bh
 from bhgrasp.data import Trajectory
@@ -19,12 +21,10 @@ from bhgrasp.sim import Simulator
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 
-G = 9.81
-FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))
-
 
 def far_hand(gravity=(0.0, 0.0, -G)) -> bh.Hand:
-    return bh.BarrettHand(base_placement=FAR, gravity=gravity)
+    """The hand of :func:`scenes.far_hand`, under gravity by default here."""
+    return scenes.far_hand(gravity)
 
 
 def hold_hand(hand: bh.Hand):
