@@ -177,9 +177,9 @@ def test_least_squares_estimator_identifies_the_environment_from_two_force_level
     assert law.surface == pytest.approx(x_e, abs=1e-8)
 
 
-def test_fim_tracks_the_force_with_known_environment_on_the_planar_finger():
-    setup = finger_press.planar_setup(1000.0)
-    law = ForceImpedance(
+def planar_fim(setup) -> ForceImpedance:
+    """FIM on the planar finger pressing 10 N, known environment, the impedance M 8.9, B 167, K 560."""
+    return ForceImpedance(
         Constant(setup.tip0),
         setup.normal,
         10.0,
@@ -189,6 +189,11 @@ def test_fim_tracks_the_force_with_known_environment_on_the_planar_finger():
         damping=167.0,
         stiffness=560.0,
     )
+
+
+def test_fim_tracks_the_force_with_known_environment_on_the_planar_finger():
+    setup = finger_press.planar_setup(1000.0)
+    law = planar_fim(setup)
     traj = finger_press.run(setup, ImpedanceController(setup.hand, {"tip": law}, *finger_press.PLANAR_GAINS), 3.0)
     force = finger_press.normal_force(setup, traj)
     assert abs(np.mean(force[-200:]) - 10.0) < 0.02 * 10.0
@@ -249,16 +254,7 @@ def test_printed_fim_settles_where_the_closed_form_says_and_the_feedforward_at_f
     setup = finger_press.planar_setup(1000.0, friction=friction)
     finals = {}
     for feedforward in (False, True):
-        law = ForceImpedance(
-            Constant(setup.tip0),
-            setup.normal,
-            10.0,
-            setup.surface_point(),
-            setup.k_e,
-            mass=8.9,
-            damping=167.0,
-            stiffness=560.0,
-        )
+        law = planar_fim(setup)
         if not feedforward:
             chapter4.as_printed(law)
         controller = ImpedanceController(setup.hand, {"tip": law}, *finger_press.PLANAR_GAINS, feedforward=feedforward)
