@@ -14,6 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 import bhgrasp as bh
+from bhgrasp.bench.placement import grasp_clearance
 from bhgrasp.bench.protocol import (
     DIRECTIONS,
     FORCE_LIMIT,
@@ -22,6 +23,7 @@ from bhgrasp.bench.protocol import (
     LIFT,
     LIFT_AT,
     LOOSE,
+    PRESHAPE,
     SHAKE_TIME,
     STAND,
     STRICT,
@@ -30,6 +32,10 @@ from bhgrasp.bench.protocol import (
 from bhgrasp.model.hand import STANDARD_GRAVITY
 
 GRAVITY = -STANDARD_GRAVITY[2]  # [m/s^2] the simulated hand's (bhgrasp.model.hand)
+NO_HEIGHT = (
+    "no grasp height: from the knuckles on its top to 6 cm above, a finger first touches its top face, or the stand "
+    "first (bench.placement.grasp_clearance); run with the knuckles on its top"
+)
 STOP_MARGIN = 0.01  # [rad] a distal joint this close to its upper limit rests on its stop
 PLACED = 0.002  # [m] placed: back within this of its resting height, the stand carrying at least half its weight
 
@@ -61,6 +67,7 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
         "lifted": lifted,
         "max_displacement": float(offsets.max()),
         "max_rotation": float(turns.max()),
+        "height_found": grasp_clearance(trial.item, trial.preshape_spread, trial.grasp, PRESHAPE) is not None,
     }
     record.update(contact_summary(trajectory, hand, held, shaken))
     record.update(joint_load(trajectory, hand))
@@ -173,10 +180,17 @@ def failure_reason(
 ) -> str:
     """Why a trial failed ('' if it succeeded).
 
-    Not lifted, a finger not gripping (``mass`` [kg] sets the least grip) or on its stop, outside the envelope, the
-    phase or push direction that moved the object too far (``times`` [s]: the samples of ``offsets`` and ``turns``
-    from before the lift), the object leaving the scene (the run's ``end`` [s] before the shake's), or not placed.
+    No grasp height (:data:`NO_HEIGHT`, then the rest), not lifted, a finger not gripping (``mass`` [kg] sets the
+    least grip) or on its stop, outside the envelope, the phase or push direction that moved the object too far
+    (``times`` [s]: the samples of ``offsets`` and ``turns`` from before the lift), the object leaving the scene (the
+    run's ``end`` [s] before the shake's), or not placed.
     """
+    reason = _failure(record, offsets, turns, times, end, mass)
+    return f"{NO_HEIGHT}; {reason}" if reason and not record.get("height_found", True) else reason
+
+
+def _failure(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.ndarray, end: float, mass: float) -> str:
+    """:func:`failure_reason` once the grasp height is known to exist, or not."""
     if record["lifted"] <= 0.5 * LIFT:
         reason = f"not lifted: the object rose {1e3 * record['lifted']:.0f} mm of the wrist's {1e3 * LIFT:.0f}"
         if record["peak_stand_force"] > 0.0:
@@ -212,6 +226,7 @@ def failure_reason(
 
 
 __all__ = [
+    "NO_HEIGHT",
     "contact_summary",
     "evaluate",
     "failure_reason",

@@ -1,20 +1,26 @@
-"""Where the grasp benchmark puts the hand over an object: so that its fingers reach the object together.
+"""Where the grasp benchmark puts the hand over an object: rules of the object's shape and the hand's geometry.
 
-A closing BH8-280 is not symmetric about its palm centre: F3's knuckle is fixed on one side, F1's and F2's turn on
-the spread on the other.  Centred over a 35 mm ball at the 60 deg spread, F3 touches it at a proximal angle of
-1.23 rad and F1/F2 at 1.41 rad, so F3 pushes the ball away before the others arrive and it rolls off.  With every
-finger closing at the same rate (the close command), the fingers arrive together when their touch angles agree:
-:func:`grasp_offset` finds the object's offset along the F3 axis (hand y) where F3's touch angle equals F1's, by
-bisection, each touch angle itself a bisection on coal's distance between the finger's collision shapes and the
-object.
+**Along the F3 axis (hand y)**, :func:`grasp_offset`:
 
-The object stands on a stand of its own footprint (:func:`~bhgrasp.bench.trial.setup`), whose sides
-continue the object's.  With the knuckles on the 5 cm box's top the closing fingers pass beside the box and meet the
-stand first (coal: 17-30 mm deep at the angle they would reach the box; simulated, the distal links press the stand
-with 122-227 N while the knuckles hold the box with 20 N, and the lifted box lies loose in the fingers).
-:func:`grasp_clearance` raises the hand from a grasp's nominal height only where a finger, closing, would meet the
-stand before the object (:func:`stand_clearance` below 0), and then until every finger touches the object before
-the stand with :data:`STAND_MARGIN` to spare; the benchmark applies it to power grasps only.
+- a sphere or an upright cylinder, at a spread where F1's and F2's closing planes meet inside the hand
+  (:func:`closing_planes_meet`; the three-finger spread of 60 deg puts them 14.4 mm towards F3): its axis there.
+  Each finger then presses towards the axis within its own closing plane, which holds the finger's spread axis, so
+  the back-drivable spread carries no torque.  At the former 0.45 rad spread the planes met 52 mm off the axis; the
+  squeeze opened the spread 0.1 rad, and a 1.5 N push closed it again and let the 45 mm ball out.  F3, the nearer,
+  touches first and pushes the object the few millimetres to F1 and F2;
+- otherwise (a box, F1 and F2 facing F3 on parallel planes), where F3's touch angle equals F1's, so that the fingers,
+  closing at one rate, arrive together: bisection, each touch angle itself a bisection on coal's distance between
+  the finger's collision shapes and the object.
+
+**The height**, :func:`grasp_clearance`: the lowest, on a 2 mm grid from the knuckles on the object's top, at which
+every finger, closing from the pre-shape, first touches the object's side (:func:`grasp_ready`: not a face looking
+up, :func:`faces_up`; in a precision grasp with its fingertip) and touches it before the stand
+(:func:`stand_clearance`).  The object stands on a stand of its own footprint (:func:`~bhgrasp.bench.trial.setup`),
+whose sides continue the object's: with the knuckles on the 5 cm box's top the closing fingers pass beside the box and
+meet the stand first (coal: 17-30 mm deep at the angle they would reach the box; simulated, the distal links pressed
+the stand with 122-227 N while the knuckles held the box with 20 N); with the knuckles on the can's top, F3's inner
+link lands on its rim and presses it onto its stand.  A low object can leave no height (the 3 cm flat box: its top
+until 18 mm, then its stand).
 """
 
 from __future__ import annotations
@@ -107,6 +113,28 @@ class _Reach:
             )
         return q
 
+    def first_touch(self, finger: str, centre: np.ndarray) -> tuple[str, np.ndarray] | None:
+        """The link of ``finger`` that touches the object first, and where on the object (its frame [m]).
+
+        ``None`` if the finger closes without touching it.
+        """
+        angle = self.touch(finger, centre)
+        if angle >= self.closed:
+            return None
+        q = self.configuration(angle)
+        pin.updateGeometryPlacements(self.hand.model, self.model_data, self.geometry, self.data, q)
+        placement = coal.Transform3s(_FLIP, centre)
+        nearest = (np.inf, "", np.zeros(3))
+        for i in self.shapes[finger]:
+            result = coal.DistanceResult()
+            shape = self.geometry.geometryObjects[i]
+            gap = coal.distance(
+                shape.geometry, coal_transform(self.data.oMg[i]), self.shape, placement, self._request, result
+            )
+            if gap < nearest[0]:
+                nearest = (gap, shape.name, _FLIP.T @ (np.asarray(result.getNearestPoint2()) - centre))
+        return nearest[1], nearest[2]
+
     def touch(self, finger: str, centre: np.ndarray) -> float:
         """The first proximal angle [rad] at which ``finger`` touches (``closed`` if it never does), once per place."""
         key = (finger, *map(float, centre))
@@ -157,13 +185,42 @@ def hand_depth(spread: float, opening: float) -> float:
     )
 
 
+@functools.lru_cache(maxsize=64)
+def closing_planes_meet(spread: float) -> float | None:
+    """Where [m, hand y] F1's and F2's closing planes cross the hand's y axis, F3's plane, at ``spread`` [rad].
+
+    A finger closes in the vertical plane normal to its proximal joint's axis; a force in that plane has no moment
+    about the finger's spread axis, which lies in it.  ``None`` where the planes are parallel (spread 0) or cross
+    outside the hand, behind the spread axes or beyond F3's knuckle (spread below 0.45 rad on the BH8-280).
+    """
+    hand = bh.BarrettHand()
+    data = hand.model.createData()
+    pin.forwardKinematics(hand.model, data, hand.configuration(F1_spread=spread, F2_spread=spread))
+    proximal = data.oMi[hand.model.getJointId("F1_proximal")]
+    (x, y), (ax, ay) = proximal.translation[:2], proximal.rotation[:2, 2]  # the joint's origin and axis, hand frame
+    spread_axis = data.oMi[hand.model.getJointId("F1_spread")].translation[1]
+    knuckle = data.oMi[hand.model.getJointId("F3_proximal")].translation[1]
+    if abs(ay) < 1e-9:
+        return None
+    meet = float(y + x * ax / ay)  # the point (0, meet) of the plane (p - origin) . axis = 0
+    return meet if spread_axis <= meet < knuckle else None
+
+
 @functools.lru_cache(maxsize=256)
 def grasp_offset(item: BenchObject, spread: float, clearance: float, opening: float) -> float:
-    """The object's offset [m] along the hand's y axis (towards F3) at which F3 and F1 touch it at the same angle.
+    """The object's offset [m] along the hand's y axis (towards F3): where the closing planes meet, or the fingers.
 
-    ``clearance``: the knuckles (:func:`hand_depth`) to the object's top [m]; ``opening``: the pre-shape's
-    proximal angle [rad].  Computed once per process for each set of arguments.
+    Where F1's and F2's closing planes meet, or else where F3 and F1 touch it at the same angle.
+    A sphere or an upright cylinder, pressed by each finger towards its axis, loads the back-drivable spread with no
+    torque when that axis lies in F1's and F2's closing planes (:func:`closing_planes_meet`): there, where they
+    meet.  A box's faces, F1 and F2 facing F3 at spread 0 (parallel planes), leave the offset free: there the
+    fingers should arrive together, where F3's touch angle equals F1's.  ``clearance``: the knuckles
+    (:func:`hand_depth`) to the object's top [m]; ``opening``: the pre-shape's proximal angle [rad].  Computed once
+    per process for each set of arguments.
     """
+    meet = closing_planes_meet(spread) if item.kind != "box" else None
+    if meet is not None:
+        return meet
     reach = _reach(item, spread, opening)
     depth = hand_depth(spread, opening) + clearance + item.half_extents[2]  # the object's centre, hand frame z
 
@@ -215,21 +272,96 @@ def stand_clearance(item: BenchObject, spread: float, clearance: float, opening:
     return nearest
 
 
-def grasp_clearance(item: BenchObject, spread: float, nominal: float, opening: float, highest: float = 0.06) -> float:
-    """The knuckles' height [m] above the object's top: ``nominal``, raised only if the fingers would meet the stand.
+def faces_up(item: BenchObject, point: np.ndarray, tolerance: float = 1e-4) -> bool:
+    """Whether the object's surface at ``point`` (its frame [m]) faces up.
 
-    ``nominal`` if there every finger, closing, touches the object before the stand (:func:`stand_clearance` at
-    least 0, however small the gap); otherwise the lowest height on a 2 mm grid above ``nominal`` up to ``highest``
-    at which :func:`stand_clearance` is at least :data:`STAND_MARGIN`, and ``nominal`` if there is none (the fingers
-    meet the stand at every height, or miss the object: the 3 cm flat box at spread 0, whose side the closing
-    fingertips cross below its bottom up to 44 mm and not at all above).
+    The top face or rim of a box or cylinder, a sphere above its equator: a closing finger that lands there presses
+    the object onto its stand.
     """
-    if stand_clearance(item, spread, nominal, opening) >= 0.0:
-        return nominal
-    for clearance in np.arange(nominal + 0.002, highest + 1e-9, 0.002):
-        if stand_clearance(item, spread, float(clearance), opening) >= STAND_MARGIN:
-            return float(clearance)
-    return nominal
+    if item.kind == "sphere":
+        return bool(point[2] > tolerance)
+    return bool(point[2] >= item.half_extents[2] - tolerance)
 
 
-__all__ = ["STAND_HEIGHT", "STAND_MARGIN", "grasp_clearance", "grasp_offset", "hand_depth", "stand_clearance"]
+def grasp_centre(item: BenchObject, spread: float, clearance: float, opening: float) -> np.ndarray:
+    """The object's centre [m] in the hand frame (z down the palm's normal) where :func:`grasp_offset` puts it."""
+    depth = hand_depth(spread, opening) + clearance + item.half_extents[2]
+    return np.array([0.0, grasp_offset(item, spread, clearance, opening), depth])
+
+
+def touch_angles(item: BenchObject, spread: float, clearance: float, opening: float) -> dict[str, float]:
+    """Each finger's proximal angle [rad] at its first touch, the hand placed as :func:`grasp_centre` says.
+
+    The finger's closed limit (2.4 rad) for a finger that closes without touching the object.
+    """
+    reach = _reach(item, spread, opening)
+    centre = grasp_centre(item, spread, clearance, opening)
+    return {finger: reach.touch(finger, centre) for finger in reach.hand.fingers}
+
+
+def first_touches(item: BenchObject, spread: float, clearance: float, opening: float) -> dict | None:
+    """Each finger's first touch of the object, ``finger -> (link, point)`` (the object's frame [m]).
+
+    The hand as :func:`grasp_offset` places it for ``clearance`` [m]; ``None`` if a finger closes without touching
+    the object.
+    """
+    reach = _reach(item, spread, opening)
+    centre = grasp_centre(item, spread, clearance, opening)
+    touches = {finger: reach.first_touch(finger, centre) for finger in reach.hand.fingers}
+    return None if any(t is None for t in touches.values()) else touches
+
+
+def grasp_ready(item: BenchObject, spread: float, clearance: float, opening: float, grasp: str) -> bool:
+    """Whether every finger, closing, first touches the object's side, not a face looking up (:func:`faces_up`).
+
+    In a ``precision`` grasp each must touch it first with its distal link (the fingertip).
+    """
+    touches = first_touches(item, spread, clearance, opening)
+    if touches is None:
+        return False
+    return all(
+        not faces_up(item, point) and (grasp != "precision" or "distal" in link) for link, point in touches.values()
+    )
+
+
+@functools.lru_cache(maxsize=256)
+def grasp_clearance(
+    item: BenchObject, spread: float, grasp: str, opening: float, highest: float = 0.06
+) -> float | None:
+    """The knuckles' height [m] above the object's top for a ``grasp`` ('power' or 'precision'), by one rule.
+
+    The lowest height on a 2 mm grid from the knuckles on the object's top (0) up to ``highest`` at which, closing
+    from ``opening`` [rad]:
+
+    - every finger first touches the object's side, not its top face or a sphere above the equator (a finger that
+      lands there presses the object onto its stand), and in a precision grasp with its fingertip
+      (:func:`grasp_ready`);
+    - every finger touches the object before the stand (:func:`stand_clearance` at least 0 on the object's top,
+      :data:`STAND_MARGIN` once raised).
+
+    ``None`` if no height qualifies; computed once per process for each set of arguments.
+    """
+    for clearance in np.arange(0.0, highest + 1e-9, 0.002):
+        clearance = float(clearance)
+        margin = 0.0 if clearance == 0.0 else STAND_MARGIN
+        if not grasp_ready(item, spread, clearance, opening, grasp):
+            continue
+        if stand_clearance(item, spread, clearance, opening) >= margin:
+            return clearance
+    return None
+
+
+__all__ = [
+    "STAND_HEIGHT",
+    "STAND_MARGIN",
+    "closing_planes_meet",
+    "faces_up",
+    "first_touches",
+    "grasp_centre",
+    "grasp_clearance",
+    "grasp_offset",
+    "grasp_ready",
+    "hand_depth",
+    "stand_clearance",
+    "touch_angles",
+]

@@ -5,16 +5,23 @@ palm down above an object (:mod:`~bhgrasp.bench.objects`) standing on a stand of
 DexGraspBench's shake protocol:
 
 1. **approach** (0-1 s): the wrist descends 5 cm to the grasp height, the fingers pre-shaped (proximal 0.8 rad),
-   the spread held in position mode, the hand shifted along its F3 axis so that the fingers reach the object
-   together (:mod:`~bhgrasp.bench.placement`);
+   the spread held in position mode;
 2. **close** (from 1 s): the hand's own ``close()`` (libbarrett's CMD_CLOSE: each finger runs to a stall, then its
    puck idles and its worm holds it), force-limited (the finger pucks' MT lowered to :data:`GRIP_MT`, in both
    grasps: at full MT the power grasps of the development set's box, can and bottle loaded F3's proximal joint,
-   held by its worm against F1 and F2 across the object, at 1.5-2.2 times its rating); ``power`` - the knuckles
-   touching the object's top, ``precision`` - 2 cm above it; either grasp whose closing fingers would meet the
-   object's stand before the object is raised until they keep clear of it
-   (:func:`~bhgrasp.bench.placement.grasp_clearance`); spheres, and cylinders in the precision grasp, take a
-   0.45 rad spread (:data:`ROUND_SPREAD`), boxes and the cylinders' power grasp 0 (F1, F2 facing F3);
+   held by its worm against F1 and F2 across the object, at 1.5-2.2 times its rating).  Where the hand stands, by
+   rules of the object's shape, the same for both grasps (:mod:`~bhgrasp.bench.placement`):
+
+   - the spread (:func:`spread_of`): 0 for a box (F1 and F2 facing F3, each closing in a plane normal to the faces
+     it presses; the box sits where the fingers reach it together), :data:`THREE_FINGER_SPREAD` for a sphere or a
+     cylinder, its axis where F1's and F2's closing planes meet: each finger presses towards the axis in its own
+     plane, so the back-drivable spread carries no torque, and the three fingers stand 120 deg apart;
+   - the height: ``power`` - the lowest, from the knuckles on the object's top, at which every finger, closing,
+     first touches the object's side (not its top face or rim, not a sphere above its equator: a finger landing
+     there presses the object onto its stand) and touches the object before its stand; ``precision`` - the same,
+     with every first touch on a fingertip (distal link).  Where no height up to 6 cm qualifies, the trial runs
+     with the knuckles on the object's top and its failure says so;
+
 3. **lift** (3-4 s): 10 cm up, then 0.5 s at rest; the object's pose in the palm frame at 3 s, the closed grasp
    before the lift, is the reference pose (a sag in the lift counts);
 4. **shake** (4.5-16.5 s): an external force of 10 m newtons on the object's centre of mass along +x, -x, +y, -y,
@@ -44,10 +51,11 @@ its stand after the release (within 2 mm of its resting height, the stand carryi
 ours, 1 cm and 5 deg. Every trial simulates a fixed 18 s, or stops when its object falls below the stand. Contacts:
 :data:`STIFFNESS` and :data:`DT` (their comment gives the reasons).
 
-Constants chosen on the development set's trials (:data:`~bhgrasp.bench.objects.DEVELOPMENT_SET`):
-:data:`ROUND_SPREAD`, :data:`GRIP_MT`, :data:`KNUCKLE_CLEARANCE`, :data:`PRESHAPE`; success rates out of sample are
+Constants chosen on the development set's trials (:data:`~bhgrasp.bench.objects.DEVELOPMENT_SET`): :data:`GRIP_MT`
+and :data:`PRESHAPE`.  The spread and the height are rules (above), which replaced two constants chosen there (a
+0.45 rad spread for round objects, the knuckles 0 or 2 cm above the object's top); success rates out of sample are
 the held-out set's (:data:`~bhgrasp.bench.objects.HELD_OUT_SET`, fixed before any of them was changed; its trials
-under the former protocol were run once, as a baseline, and nothing was chosen on them).
+under the former protocol were run as a baseline, and once under the rules; nothing was chosen on them).
 """
 
 from __future__ import annotations
@@ -63,16 +71,13 @@ ACTUATIONS = ("barrett", "full")
 FRICTION = 0.8
 APPROACH, CLOSE_AT, LIFT_AT, HELD_AT, SHAKE_TIME = 0.05, 1.0, 3.0, 4.5, 2.0  # [m], [s], [s], [s], [s]
 PRESHAPE = 0.8  # [rad] proximal angle of the open hand (the distal follows at a third)
-# [rad] the spread of round objects' fingertip grasps, chosen on the development set's trials under the real drive
-# before its calibration (under the calibrated drive and the present protocol docs/results/grasp_spread.md has the can
-# holding at 0.3-0.6 rad, the 35 mm ball, the bottle and the 45 mm ball at none: caged or turned).  Measured with the
-# drive then: at spread 0 F1 and F2 pinch a cylinder 27 deg either side of its back, its wedge opens the back-drivable
-# spread (0 -> 0.07 rad on the can as the grip closes), and under a +-x push the can turns 17 deg about the pinch axis;
-# the can and the bottle hold at 0.3-0.6 rad, the 45 mm ball at 0.3-0.6, the 35 mm ball only at 0.4-0.5 (at 0.3 it is
-# not lifted, from 0.52 it turns out between F1 and F2 under the +x push; at 60 deg, the spherical grasp, it slips out
-# between them, and at 90 deg three of the four sphere trials failed).  Spheres take it in the power grasp too (both
-# balls hold there); the cylinders' power grasp keeps spread 0, the hand's cylindrical wrap
-ROUND_SPREAD = 0.45
+# [rad] the spread of round objects (spheres, upright cylinders), both grasps: the three fingers 120 deg apart, each
+# closing in a vertical plane through the object's axis (bench.placement.grasp_offset puts the axis where F1's and F2's
+# planes meet, 14.4 mm towards F3).  A finger pressing towards the axis then loads its back-drivable spread with no
+# torque, and three equal fingertip forces balance; at other spreads they cannot both hold.  Derived, not tuned: the
+# former ROUND_SPREAD = 0.45, chosen on the development set's trials, put the planes' meeting point 52 mm off the
+# object's axis, and the squeeze opened the spread by 0.1 rad, which a push then closed, letting the ball out
+THREE_FINGER_SPREAD = math.pi / 3
 LIFT = 0.10  # [m]
 RELEASE = 0.5  # [s] of open() after the place
 DROP = 0.005  # [m] the place stops this far above the lift's start: a stiff wrist setting the held object onto the
@@ -91,7 +96,6 @@ LOOSE, STRICT = (0.05, math.radians(15.0)), (0.01, math.radians(5.0))  # [m], [r
 # 15-25 N; a trial in which any contact (on the object or the stand) passes twice that, or a finger joint carries more
 # than its rating (the URDF's effort limit: the pucks' MT through ideal gears), needed what the hand cannot give
 FORCE_LIMIT = 2 * 25.0  # [N]
-KNUCKLE_CLEARANCE = {"power": 0.0, "precision": 0.02}  # [m] the knuckles above the object's top
 STAND = "pedestal"  # the stand's body name
 
 
@@ -122,12 +126,14 @@ class Trial:
 
 
 def spread_of(item: BenchObject, grasp: str = "power") -> float:
-    """The pre-shape spread [rad]: :data:`ROUND_SPREAD` for spheres and for cylinders' ``precision`` grasp, else 0.
+    """The pre-shape spread [rad], the same for both grasps: 0 for a box, else :data:`THREE_FINGER_SPREAD`.
 
-    At 0, F1 and F2 face F3.
+    A sphere or a cylinder takes the three-finger spread.  At 0, F1 and F2 face F3 across the box, each closing in a
+    plane normal to the faces it presses: no spread torque.
+    ``grasp`` is accepted for symmetry with the other grasp rules and does not change the spread.
     """
-    round_grasp = item.kind == "sphere" or (item.kind == "cylinder" and grasp == "precision")
-    return ROUND_SPREAD if round_grasp else 0.0
+    del grasp
+    return 0.0 if item.kind == "box" else THREE_FINGER_SPREAD
 
 
 __all__ = [
@@ -141,17 +147,16 @@ __all__ = [
     "GRASPS",
     "GRIP_MT",
     "HELD_AT",
-    "KNUCKLE_CLEARANCE",
     "LIFT",
     "LIFT_AT",
     "LOOSE",
     "PRESHAPE",
     "RELEASE",
-    "ROUND_SPREAD",
     "SHAKE_TIME",
     "STAND",
     "STIFFNESS",
     "STRICT",
+    "THREE_FINGER_SPREAD",
     "Trial",
     "spread_of",
 ]

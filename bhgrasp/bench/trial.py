@@ -12,6 +12,7 @@ import bhgrasp as bh
 from bhgrasp.barrett.commands import BarrettDriver
 from bhgrasp.barrett.pucks import FINGER_PUCK
 from bhgrasp.barrett.transmission import PROXIMAL_RATIO, WORM_EFFICIENCY, BarrettTransmission
+from bhgrasp.bench.closing import finger_starts
 from bhgrasp.bench.metrics import GRAVITY, evaluate
 from bhgrasp.bench.placement import STAND_HEIGHT, grasp_clearance, grasp_offset, hand_depth
 from bhgrasp.bench.protocol import (
@@ -22,7 +23,6 @@ from bhgrasp.bench.protocol import (
     FRICTION,
     GRIP_MT,
     HELD_AT,
-    KNUCKLE_CLEARANCE,
     LIFT,
     LIFT_AT,
     PRESHAPE,
@@ -74,8 +74,9 @@ def setup(trial: Trial, dt: float = DT):
     """The simulator, its start state, the mounted hand and the wrist path of a trial."""
     item = trial.item
     top = 2 * item.half_extents[2]
-    clearance, spread = KNUCKLE_CLEARANCE[trial.grasp], trial.preshape_spread
-    clearance = grasp_clearance(item, spread, clearance, PRESHAPE)  # the fingers off the stand, in both grasps
+    spread = trial.preshape_spread
+    clearance = grasp_clearance(item, spread, trial.grasp, PRESHAPE)  # one rule for both grasps (bench.placement)
+    clearance = 0.0 if clearance is None else clearance  # no height qualifies: the knuckles on its top (metrics says)
     grasp_height = top + clearance + hand_depth(spread, PRESHAPE)  # the hand base
     rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
     offset = np.array([0.0, grasp_offset(item, spread, clearance, PRESHAPE), 0.0])
@@ -152,12 +153,20 @@ class BenchController:
         self.set_down = 0.5 * trial.item.mass * GRAVITY  # [N] the stand's push that ends the descent
         self.log: dict = {}
         mt = GRIP_MT  # the force-limited close, in both grasps
+        self.starts = finger_starts(trial)  # [s] after CLOSE_AT: all 0 but on the closing planes (bench.closing)
         if trial.actuation == "barrett":
             self.driver = BarrettDriver(hand, finger=FINGER_PUCK.with_(MT=mt))
-            self.driver.script([(0.0, "set_position_mode", "SPREAD"), (CLOSE_AT, "close", "GRASP")])
+            self.driver.script([(0.0, "set_position_mode", "SPREAD"), *self._closes()])
             self.log = self.driver.log
         else:
             self.close_torque = WORM_EFFICIENCY * PROXIMAL_RATIO * mt / FINGER_PUCK.IPNM  # the real close's stall
+
+    def _closes(self) -> list[tuple]:
+        """The driver's close commands: ``close("GRASP")`` at CLOSE_AT, or each finger at its start."""
+        if not any(self.starts.values()):
+            return [(CLOSE_AT, "close", "GRASP")]
+        starts = sorted(set(self.starts.values()))
+        return [(CLOSE_AT + s, "close", [f for f, t in self.starts.items() if t == s]) for s in starts]
 
     def _set_down(self, state: bh.State) -> bool:
         """Whether the stand pushes up, on the object or on a finger, with at least half the object's weight.
@@ -191,8 +200,8 @@ class BenchController:
             return u
         tau = np.zeros(self.hand.nv)
         tau[:6] = mount
-        sign = 0.0 if t < CLOSE_AT else (1.0 if t < self.place_at else -1.0)
         for finger in self.hand.fingers:
+            sign = 0.0 if t < CLOSE_AT + self.starts[finger] else (1.0 if t < self.place_at else -1.0)
             tau[self.hand.joint_index(f"{finger}_proximal")] = sign * self.close_torque
             tau[self.hand.joint_index(f"{finger}_distal")] = sign * self.close_torque / 3.0
         error = self.spread_hold - state.q[self.spread[0]]  # a stiff PD [N m/rad, N m s/rad] holds the spread
