@@ -8,7 +8,7 @@ report (``bhgrasp grasp-bench``).
 """
 
 from bhgrasp.bench.metrics import contact_summary, evaluate, failure_reason, held_forces, least_grip, relative_poses
-from bhgrasp.bench.objects import DEVELOPMENT_SET, HELD_OUT_SET, KINDS, OBJECT_SET, SETS, BenchObject
+from bhgrasp.bench.objects import DEVELOPMENT_SET, HELD_OUT_SET, HELD_OUT_SET_2, KINDS, OBJECT_SET, SETS, BenchObject
 from bhgrasp.bench.placement import (
     STAND_HEIGHT,
     STAND_MARGIN,
@@ -67,6 +67,7 @@ __all__ = [
     "GRIP_MT",
     "HELD_AT",
     "HELD_OUT_SET",
+    "HELD_OUT_SET_2",
     "KINDS",
     "LIFT",
     "LIFT_AT",

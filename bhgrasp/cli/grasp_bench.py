@@ -8,7 +8,7 @@ import sys
 
 from bhgrasp.cli import arguments as checked
 
-SETS = ("development", "held-out")  # bhgrasp.bench.objects.SETS, checked equal by the tests
+SETS = ("development", "held-out", "held-out-2")  # bhgrasp.bench.objects.SETS, checked equal by the tests
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -30,8 +30,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="append",
         choices=SETS,
         default=None,
-        help="a built-in object set: development (the protocol's constants were chosen on it) or held-out (fixed "
-        "before tuning); repeatable; with --object, added to those",
+        help="a built-in object set: development (the protocol's constants were chosen on it), held-out (fixed "
+        "before tuning) or held-out-2 (fixed before any of its trials ran); repeatable; with --object, added to those",
     )
     add(
         "--grasp",
