@@ -1,22 +1,19 @@
 """The grasp benchmark: a wrist-mounted BH8-280 approaches, closes on, lifts, shakes and places household objects.
 
 :mod:`~bhgrasp.bench.protocol` fixes the protocol (phases, thresholds, contact law,
-:class:`~bhgrasp.bench.protocol.Trial`); :mod:`~bhgrasp.bench.objects` the object sets (development, held-out);
-:mod:`~bhgrasp.bench.placement` where the hand goes; :mod:`~bhgrasp.bench.trial` runs one trial;
+:class:`~bhgrasp.bench.protocol.Trial`); :mod:`~bhgrasp.bench.objects` the object sets (development, two held-out);
+:mod:`~bhgrasp.bench.placement` where the hand goes over the object and :mod:`~bhgrasp.bench.height` how high, both
+from :mod:`~bhgrasp.bench.reach`'s touch angles; :mod:`~bhgrasp.bench.closing` when each finger starts to close;
+:mod:`~bhgrasp.bench.trial` runs one trial;
 :mod:`~bhgrasp.bench.metrics` scores it; :mod:`~bhgrasp.bench.report` runs many and writes the JSON and markdown
 report (``bhgrasp grasp-bench``).
 """
 
+from bhgrasp.bench.closing import finger_starts
+from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN, grasp_clearance, stand_clearance
 from bhgrasp.bench.metrics import contact_summary, evaluate, failure_reason, held_forces, least_grip, relative_poses
 from bhgrasp.bench.objects import DEVELOPMENT_SET, HELD_OUT_SET, HELD_OUT_SET_2, KINDS, OBJECT_SET, SETS, BenchObject
-from bhgrasp.bench.placement import (
-    STAND_HEIGHT,
-    STAND_MARGIN,
-    grasp_clearance,
-    grasp_offset,
-    hand_depth,
-    stand_clearance,
-)
+from bhgrasp.bench.placement import closing_planes_meet, grasp_offset
 from bhgrasp.bench.protocol import (
     ACTUATIONS,
     APPROACH,
@@ -42,6 +39,7 @@ from bhgrasp.bench.protocol import (
     Trial,
     spread_of,
 )
+from bhgrasp.bench.reach import hand_depth
 from bhgrasp.bench.report import bench_rollout, compare, markdown, run_bench, success_rates, write_json
 from bhgrasp.bench.trial import (
     BenchController,
@@ -87,11 +85,13 @@ __all__ = [
     "BenchObject",
     "Trial",
     "bench_rollout",
+    "closing_planes_meet",
     "compare",
     "contact_summary",
     "evaluate",
     "failure_reason",
     "fallen",
+    "finger_starts",
     "grasp_clearance",
     "grasp_offset",
     "hand_depth",

@@ -5,11 +5,12 @@ Where the placement puts a round object's axis where F1's and F2's closing plane
 development set's ball, large ball and can 0.42-0.50 s before F1 and F2 and pushed each 15-19 mm towards them, off
 the planes, where the grasp closed with F3 pressing up to twice what F1 and F2 did.  Started later by the time F1
 needs to close the difference of their touch angles, all three arrive together: the objects moved 0.4-2.6 mm and the
-three fingers pressed within 10 % of each other.  Elsewhere (boxes, spreads whose planes do not meet) the placement
+three fingers pressed within 20 % of each other.  Elsewhere (boxes, spreads whose planes do not meet) the placement
 has them arrive together already, and all start at once, with libbarrett's ``close()`` of the whole grasp.
 
-The time a finger takes to close to an angle comes from an unloaded close of the benchmark's own drive (its pucks at
+The time a finger takes to close to an angle comes from an unloaded close of the real drive (its pucks at
 :data:`~bhgrasp.bench.protocol.GRIP_MT`, the pre-shape, the step, the hand palm down), simulated once per process.
+The idealised hand (``actuation="full"``) closes with constant torques of its own and starts all fingers at once.
 """
 
 from __future__ import annotations
@@ -23,8 +24,10 @@ import pinocchio as pin
 import bhgrasp as bh
 from bhgrasp.barrett.commands import BarrettDriver
 from bhgrasp.barrett.pucks import FINGER_PUCK
-from bhgrasp.bench.placement import closing_planes_meet, grasp_clearance, touch_angles
+from bhgrasp.bench.height import grasp_clearance
+from bhgrasp.bench.placement import closing_planes_meet, touch_angles
 from bhgrasp.bench.protocol import DT, GRIP_MT, PRESHAPE, Trial
+from bhgrasp.errors import ModelError
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
 from bhgrasp.sim.scene import Scene
@@ -36,8 +39,8 @@ CLOSE_SPAN = 3.0  # [s] of the unloaded close: at GRIP_MT it closes at ~0.65 rad
 def close_profile() -> tuple[np.ndarray, np.ndarray]:
     """(times [s], F1's proximal angle [rad]) of an unloaded close from the pre-shape, as the benchmark closes.
 
-    The BH8-280 palm down (the trial's orientation, gravity along the fingers' closing), its finger pucks at
-    GRIP_MT, libbarrett's ``close()`` at t = 0; the angle rises monotonically until the finger stalls.
+    The BH8-280 palm down (the trial's orientation), its finger pucks at GRIP_MT, libbarrett's ``close()`` at
+    t = 0; up to where the angle stops rising (the finger stalls on its stop), read-only.
     """
     hand = bh.BarrettHand(base_placement=pin.SE3(pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0), np.zeros(3)))
     simulator = Simulator(Scene(hand), dt=DT, actuation=BarrettActuation(hand, saturate=True))
@@ -47,10 +50,17 @@ def close_profile() -> tuple[np.ndarray, np.ndarray]:
     for finger in hand.fingers:
         q[hand.joint_index(f"{finger}_proximal")], q[hand.joint_index(f"{finger}_distal")] = PRESHAPE, PRESHAPE / 3
     trajectory = simulator.run(driver, CLOSE_SPAN, state=simulator.initial_state(q), progress=False, record_every=4)
-    angle = trajectory.q[:, hand.joint_index("F1_proximal")]
-    rising = np.concatenate([[True], np.diff(angle) > 0.0])
-    stop = int(np.argmin(rising)) if not rising.all() else len(angle)  # up to the stall
-    return trajectory.t[:stop], angle[:stop]
+    angle = np.maximum.accumulate(trajectory.q[:, hand.joint_index("F1_proximal")])
+    stop = int(np.argmax(angle)) + 1  # up to where it stalls
+    if angle[stop - 1] - angle[0] < 1.0:
+        raise ModelError(
+            f"the unloaded close reached only {angle[stop - 1]:.2f} rad from {angle[0]:.2f} in {CLOSE_SPAN} s; "
+            "a profile of at least 1 rad was expected"
+        )
+    times, angles = trajectory.t[:stop].copy(), angle[:stop].copy()
+    times.setflags(write=False)
+    angles.setflags(write=False)
+    return times, angles
 
 
 def close_time(angle: float) -> float:
@@ -64,10 +74,10 @@ def finger_starts(trial: Trial) -> dict[str, float]:
 
     On the closing planes (a round object, :func:`~bhgrasp.bench.placement.closing_planes_meet`): the finger that
     needs the longest to reach its touch angle starts at 0, the others later by the difference, F2 with F1 (the
-    spread mirrors them about the object's plane of symmetry).  Otherwise all 0.
+    spread mirrors them about the object's plane of symmetry).  Otherwise, and for the idealised hand, all 0.
     """
     item, spread = trial.item, trial.preshape_spread
-    if item.kind == "box" or closing_planes_meet(spread) is None:
+    if trial.actuation != "barrett" or item.kind == "box" or closing_planes_meet(spread) is None:
         return dict.fromkeys(("F1", "F2", "F3"), 0.0)
     clearance = grasp_clearance(item, spread, trial.grasp, PRESHAPE)
     clearance = 0.0 if clearance is None else clearance

@@ -14,7 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 import bhgrasp as bh
-from bhgrasp.bench.placement import grasp_clearance
+from bhgrasp.bench.height import grasp_clearance
 from bhgrasp.bench.protocol import (
     DIRECTIONS,
     FORCE_LIMIT,
@@ -33,8 +33,9 @@ from bhgrasp.model.hand import STANDARD_GRAVITY
 
 GRAVITY = -STANDARD_GRAVITY[2]  # [m/s^2] the simulated hand's (bhgrasp.model.hand)
 NO_HEIGHT = (
-    "no grasp height: from the knuckles on its top to 6 cm above, a finger first touches its top face, or the stand "
-    "first (bench.placement.grasp_clearance); run with the knuckles on its top"
+    "no grasp height: from the knuckles on its top to 6 cm above, some finger first touches its top face (or, in a "
+    "precision grasp, not with its fingertip), meets the stand first, or misses it (bench.height.grasp_clearance); "
+    "run with the knuckles on its top"
 )
 STOP_MARGIN = 0.01  # [rad] a distal joint this close to its upper limit rests on its stop
 PLACED = 0.002  # [m] placed: back within this of its resting height, the stand carrying at least half its weight

@@ -144,7 +144,7 @@ def distinct(trials: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """The trials without copies, the first of each kept.
 
     A copy: a grasp whose record equals another grasp's of the same object, actuation and spread in every outcome
-    and, to ``compare``'s tolerance, every metric (the stand rule raised both to one height: one simulation, run
+    and, to ``compare``'s tolerance, every metric (the height rule put both at one height: one simulation, run
     twice; the two heights may differ by a rounding of the height search).
     """
     kept: list[dict[str, Any]] = []
@@ -214,8 +214,8 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
             if any(groups(trials))
             else []
         ),
-        "Distinct trials: where a power and a precision grasp of an object end at one height (the stand rule raises "
-        "both), they are one simulation, run and listed twice; the last column counts it once.",
+        "Distinct trials: where a power and a precision grasp of an object stand at one height (the height rule puts "
+        "both there), they are one simulation, run and listed twice; the last column counts it once.",
         "",
         "| object set | actuation | success | strict | trials | distinct trials: success / trials |",
         "|---|---|---:|---:|---:|---:|",

@@ -13,8 +13,9 @@ from bhgrasp.barrett.commands import BarrettDriver
 from bhgrasp.barrett.pucks import FINGER_PUCK
 from bhgrasp.barrett.transmission import PROXIMAL_RATIO, WORM_EFFICIENCY, BarrettTransmission
 from bhgrasp.bench.closing import finger_starts
+from bhgrasp.bench.height import STAND_HEIGHT, grasp_clearance
 from bhgrasp.bench.metrics import GRAVITY, evaluate
-from bhgrasp.bench.placement import STAND_HEIGHT, grasp_clearance, grasp_offset, hand_depth
+from bhgrasp.bench.placement import grasp_offset
 from bhgrasp.bench.protocol import (
     APPROACH,
     CLOSE_AT,
@@ -32,6 +33,7 @@ from bhgrasp.bench.protocol import (
     STIFFNESS,
     Trial,
 )
+from bhgrasp.bench.reach import hand_depth
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.model.mount import mounted
 from bhgrasp.model.objects import FixedBox
@@ -75,7 +77,7 @@ def setup(trial: Trial, dt: float = DT):
     item = trial.item
     top = 2 * item.half_extents[2]
     spread = trial.preshape_spread
-    clearance = grasp_clearance(item, spread, trial.grasp, PRESHAPE)  # one rule for both grasps (bench.placement)
+    clearance = grasp_clearance(item, spread, trial.grasp, PRESHAPE)  # one rule for both grasps (bench.height)
     clearance = 0.0 if clearance is None else clearance  # no height qualifies: the knuckles on its top (metrics says)
     grasp_height = top + clearance + hand_depth(spread, PRESHAPE)  # the hand base
     rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
@@ -161,7 +163,7 @@ class BenchController:
         else:
             self.close_torque = WORM_EFFICIENCY * PROXIMAL_RATIO * mt / FINGER_PUCK.IPNM  # the real close's stall
 
-    def _closes(self) -> list[tuple]:
+    def _closes(self) -> list[tuple[float, str, str | list[str]]]:
         """The driver's close commands: ``close("GRASP")`` at CLOSE_AT, or each finger at its start."""
         if not any(self.starts.values()):
             return [(CLOSE_AT, "close", "GRASP")]

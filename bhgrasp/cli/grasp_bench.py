@@ -56,8 +56,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=checked.spread_angle,
         default=None,
         metavar="RAD",
-        help="run every trial at this pre-shape spread [rad, 0 to pi] instead of its grasp's own (0 for boxes and "
-        "the cylinders' power grasp, 0.45 for the rest); repeatable",
+        help="run every trial at this pre-shape spread [rad, 0 to pi] instead of its grasp's own (0 for boxes, "
+        "pi/3 for spheres and cylinders); repeatable",
     )
     add("--json", type=checked.output_file, default=None, help="write the trials here")
     add("--report", type=checked.output_file, default=None, help="write the markdown report")

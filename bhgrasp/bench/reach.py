@@ -1,0 +1,160 @@
+"""How a closing BH8-280 finger reaches an object placed in the hand frame: coal distances and touch angles.
+
+:class:`Reach` closes every finger from a pre-shape (the distal at a third of the proximal, as before the
+TorqueSwitch breaks away) and finds, by bisection on coal's distance between the finger's collision shapes and the
+object, the proximal angle at which each first touches it, the link that does and where.  The benchmark's placement
+(:mod:`~bhgrasp.bench.placement`) and height (:mod:`~bhgrasp.bench.height`) rules are built on it.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+import bhgrasp as bh
+from bhgrasp.bench.objects import BenchObject
+from bhgrasp.grasp.probes import coal_transform
+
+FLIP = pin.rpy.rpyToMatrix(np.pi, 0.0, 0.0)  # world <- palm-down hand: an upright object's axes in the hand frame
+
+
+class Reach:
+    """The proximal angle at which each finger first touches an object placed in the hand frame."""
+
+    def __init__(self, item: BenchObject, spread: float, opening: float, closed: float = 2.4) -> None:
+        self.hand = bh.BarrettHand()
+        hand = self.hand
+        self._spread = [hand.joint_index(f"{f}_spread") for f in ("F1", "F2")]
+        self._proximal = [hand.joint_index(f"{f}_proximal") for f in hand.fingers]
+        self._distal = [hand.joint_index(f"{f}_distal") for f in hand.fingers]
+        self._lower, self._upper = hand.lower, hand.upper
+        self._request = coal.DistanceRequest()
+        self._touches: dict[tuple, float] = {}
+        self.geometry = self.hand.collision_model()
+        self.data = pin.GeometryData(self.geometry)
+        self.model_data = self.hand.model.createData()
+        self.shape = item.body(0.8).geometry()
+        self.spread, self.opening, self.closed = spread, opening, closed
+        self.shapes = {
+            finger: [
+                i
+                for i, g in enumerate(self.geometry.geometryObjects)
+                if g.name.startswith(finger) and "knuckle" not in g.name
+            ]
+            for finger in self.hand.fingers
+        }
+
+    def distance(self, finger: str, angle: float, centre: np.ndarray, shape: coal.ShapeBase | None = None) -> float:
+        """Distance [m] from the finger's links to the object at ``centre`` with every finger at ``angle``.
+
+        ``shape``: another shape placed at ``centre`` (axes as the object's) instead of the object.
+        """
+        return self.nearest(finger, angle, centre, shape)[0]
+
+    def nearest(
+        self, finger: str, angle: float, centre: np.ndarray, shape: coal.ShapeBase | None = None
+    ) -> tuple[float, str, np.ndarray]:
+        """The finger's link nearest the object at ``angle`` (every finger there).
+
+        (distance [m], the link's shape name, the nearest point on the object [m], hand frame).
+        """
+        q = self.configuration(angle)
+        pin.updateGeometryPlacements(self.hand.model, self.model_data, self.geometry, self.data, q)
+        placement = coal.Transform3s(FLIP, centre)
+        shape = self.shape if shape is None else shape
+        nearest = (np.inf, "", np.zeros(3))
+        for i in self.shapes[finger]:
+            result = coal.DistanceResult()
+            link = self.geometry.geometryObjects[i]
+            frame = coal_transform(self.data.oMg[i])
+            gap = coal.distance(link.geometry, frame, shape, placement, self._request, result)
+            if gap < nearest[0]:
+                nearest = (gap, link.name, np.asarray(result.getNearestPoint2()))
+        return nearest
+
+    def configuration(self, angle: float) -> np.ndarray:
+        """Every finger at proximal ``angle`` [rad], the distal at a third, both spreads at ``spread``.
+
+        As ``hand.configuration(...)`` builds it, without its per-joint checks (the search calls it ~10^5 times a
+        trial); outside the joint limits it raises as that does.
+        """
+        q = self.hand.neutral()
+        q[self._spread] = self.spread
+        q[self._proximal] = angle
+        q[self._distal] = angle / 3
+        if not ((q >= self._lower).all() and (q <= self._upper).all()):  # the checked call names the joint, raises
+            fingers = self.hand.fingers
+            return self.hand.configuration(
+                F1_spread=self.spread,
+                F2_spread=self.spread,
+                **{f"{f}_proximal": angle for f in fingers},
+                **{f"{f}_distal": angle / 3 for f in fingers},
+            )
+        return q
+
+    def first_touch(self, finger: str, centre: np.ndarray) -> tuple[str, np.ndarray] | None:
+        """The link of ``finger`` that touches the object first, and where on the object (its frame [m]).
+
+        ``None`` if the finger closes without touching it.
+        """
+        angle = self.touch(finger, centre)
+        if angle >= self.closed:
+            return None
+        _, link, point = self.nearest(finger, angle, centre)
+        return link, FLIP.T @ (point - centre)
+
+    def touch(self, finger: str, centre: np.ndarray) -> float:
+        """The first proximal angle [rad] at which ``finger`` touches (``closed`` if it never does), once per place."""
+        key = (finger, *map(float, centre))
+        found = self._touches.get(key)
+        if found is None:
+            found = self._touches[key] = self._touch(finger, centre)
+        return found
+
+    def _touch(self, finger: str, centre: np.ndarray) -> float:
+        low, high = self.opening, self.closed
+        if self.distance(finger, low, centre) <= 0.0:
+            return low
+        if self.distance(finger, high, centre) > 0.0:
+            return high
+        for _ in range(30):
+            middle = 0.5 * (low + high)
+            low, high = (middle, high) if self.distance(finger, middle, centre) > 0.0 else (low, middle)
+        return high
+
+
+def _deepest_corner(shape: coal.CollisionGeometry, placement: pin.SE3) -> float:
+    """The largest z [m] of a shape's local bounding-box corners placed by ``placement``."""
+    shape.computeLocalAABB()
+    box = shape.aabb_local
+    return max(placement.act(np.array(corner))[2] for corner in itertools.product(*zip(box.min_, box.max_)))
+
+
+@functools.lru_cache(maxsize=64)
+def reach_of(item: BenchObject, spread: float, opening: float) -> Reach:
+    """The :class:`Reach` of ``item`` at ``spread`` and ``opening``, built once per process (its touches kept)."""
+    return Reach(item, spread, opening)
+
+
+@functools.lru_cache(maxsize=64)
+def hand_depth(spread: float, opening: float) -> float:
+    """How far [m] below the hand base (hand frame z) its lowest non-finger shape reaches.
+
+    That is the knuckle housings (0.091 m), 11 mm beyond the palm surface; the benchmark's clearances start there.
+    """
+    reach = reach_of(BenchObject("sphere", (0.01,), 0.1), spread, opening)
+    q = reach.hand.configuration(F1_spread=spread, F2_spread=spread)
+    pin.updateGeometryPlacements(reach.hand.model, reach.model_data, reach.geometry, reach.data, q)
+    shapes = reach.geometry.geometryObjects
+    return max(
+        _deepest_corner(item.geometry, reach.data.oMg[i])
+        for i, item in enumerate(shapes)
+        if not any(part in item.name for part in ("proximal", "distal"))
+    )
+
+
+__all__ = ["FLIP", "Reach", "hand_depth", "reach_of"]
