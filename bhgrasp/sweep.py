@@ -91,6 +91,7 @@ def run_sweep(
     workers: int | None = None,
     progress: bool = False,
     check: Callable[[dict[str, Any]], None] | None = None,
+    on_row: Callable[[dict[str, Any]], None] | None = None,
 ):
     """Run ``rollout`` on every case of ``design``; returns a pandas DataFrame (one row per case, case order).
 
@@ -107,6 +108,7 @@ def run_sweep(
         check: Called with every case's parameters before anything runs (e.g.
             :func:`~bhgrasp.scenarios.rollouts.check_grasp_case`); an ``InputError`` it raises stops the sweep at once,
             naming the case.
+        on_row: Called with each case's row as it finishes (completion order; not for rows resumed from the log).
 
     Raises:
         InputError: A case uses a reserved column name or fails ``check``; the log belongs to another sweep (other
@@ -145,6 +147,8 @@ def run_sweep(
                 rows[index] = _row(index, cases[index], seeds[index], outcome)
                 if path is not None:
                     _append(path, rows[index])
+                if on_row is not None:
+                    on_row(rows[index])
                 bar.update(1)
     finally:
         bar.close()

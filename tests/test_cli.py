@@ -321,6 +321,7 @@ def test_grasp_bench_reproduces_a_committed_trial_and_flags_a_difference(
     assert main(argv) == 0
     out = capsys.readouterr().out
     assert "barrett: 1/1 succeed (1 strict)" in out and "compared 1 trials with" in out and "0 difference(s)" in out
+    assert "  [1/1] box:0.06x0.05x0.05:0.3 precision barrett, spread 0 deg: strict success, " in out  # as it ends
     altered = json.loads(committed.read_text())
     for trial in altered["trials"]:
         trial["peak_contact_force"] = None if trial["peak_contact_force"] is None else trial["peak_contact_force"] + 1

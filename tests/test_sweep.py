@@ -72,8 +72,12 @@ def test_sweep_resumes_from_its_log(tmp_path: Path):
         calls.append(parameters)
         return projectile(parameters, seed)
 
-    table = sweep.run_sweep(counting, DESIGN, seed=2, log=log, executor="serial")
+    finished = []
+    table = sweep.run_sweep(counting, DESIGN, seed=2, log=log, executor="serial", on_row=finished.append)
     assert len(table) == 6 and len(calls) == 3  # only the missing cases ran
+    # on_row saw each case that ran, as it finished, with the row the table holds (resumed rows are not re-announced)
+    assert [row["case"] for row in finished] == [3, 4, 5]
+    assert all(row == table.iloc[row["case"]].to_dict() for row in finished)
     assert len(log.read_text().splitlines()) == 6
     with pytest.raises(bh.InputError, match="another sweep"):
         sweep.run_sweep(projectile, DESIGN, seed=3, log=log, executor="serial")

@@ -16,7 +16,7 @@ import dataclasses
 import functools
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -57,11 +57,13 @@ def run_bench(
     executor: Any = None,
     spreads: Sequence[float] | None = None,
     sets: Sequence[str] | None = None,
+    on_row: Callable[[dict[str, Any]], None] | None = None,
 ) -> tuple[list[dict[str, Any]], list[float]]:
     """Every trial of ``objects`` x ``grasps`` x ``actuations`` (a process pool of ``workers``).
 
     ``spreads`` [rad]: run every trial at each of these pre-shape spreads instead of its grasp's own
     (:attr:`~bhgrasp.bench.protocol.Trial.spread`).  ``sets``: each object's set name (default ``""``).
+    ``on_row``: called with each trial's sweep row as it finishes (:func:`~bhgrasp.sweep.run_sweep`).
     Returns the trial records and each trial's wall time [s] (kept apart: records repeat bit for bit, times not).
     """
     labels = [""] * len(objects) if sets is None else list(sets)
@@ -83,6 +85,7 @@ def run_bench(
         executor=executor or ("serial" if workers == 1 else None),
         workers=workers,
         progress=progress,
+        on_row=on_row,
     )
     trials, walls = [], []
     for row in table.to_dict("records"):

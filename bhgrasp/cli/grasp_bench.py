@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 
 from bhgrasp.cli import arguments as checked
@@ -82,8 +83,9 @@ def run(args: argparse.Namespace) -> int:
     spreads = f" x spreads {args.spreads}" if args.spreads else ""
     count = len(objects) * len(grasps) * len(actuations) * len(args.spreads or [None])
     print(f"grasp benchmark: {count} trials ({len(objects)} objects x {grasps} x {actuations}{spreads}), 18 s each ...")
+    lines = TrialLines(count)
     trials, walls = report.run_bench(
-        objects, grasps, actuations, workers=args.workers, progress=sys.stderr.isatty(), spreads=args.spreads, sets=sets
+        objects, grasps, actuations, workers=args.workers, spreads=args.spreads, sets=sets, on_row=lines.print
     )
     print("\n".join(report.summary_lines(trials, walls, spreads=bool(args.spreads))))
     if args.json is not None:
@@ -97,6 +99,30 @@ def run(args: argparse.Namespace) -> int:
         print(f"  differs: {problem}", file=sys.stderr)
     print(f"compared {len(trials)} trials with {args.compare}: {len(problems)} difference(s)")
     return 1 if problems else 0
+
+
+class TrialLines:
+    """Prints a line per finished trial, at once (a run of 52 trials takes minutes): its outcome and wall time."""
+
+    def __init__(self, total: int) -> None:
+        self.total, self.done = total, 0
+
+    def print(self, row: dict) -> None:
+        """The line of a finished sweep row (:func:`bhgrasp.bench.report.run_bench`'s ``on_row``)."""
+        self.done += 1
+        print(self.line(row), flush=True)
+
+    def line(self, row: dict) -> str:
+        """``[done/total] object grasp actuation, spread: outcome, wall time``."""
+        if row["status"] != "ok":
+            outcome = f"error: {row['error']}"
+        elif row["success"]:
+            outcome = "strict success" if row["strict_success"] else "success"
+        else:
+            outcome = "failure (reason below)"
+        spread = f", spread {math.degrees(row['spread']):.0f} deg" if row.get("spread") is not None else ""
+        label = f"{row['name']} {row['grasp']} {row['actuation']}{spread}"
+        return f"  [{self.done}/{self.total}] {label}: {outcome}, {row['wall_time']:.1f} s"
 
 
 def command(args: argparse.Namespace) -> str:
