@@ -299,24 +299,12 @@ def test_a_round_object_on_the_planes_loads_the_spread_with_no_torque() -> None:
             q[hand.joint_index(f"{finger}_distal")] = angles[finger] / 3
             contact = centre + flip @ touches[finger][1]
             force = (centre - contact) / np.linalg.norm(centre - contact)
-            jacobian = _point_jacobian(hand, q, f"{finger}_distal_link", contact)
+            jacobian = hand.point_jacobian(q, f"{finger}_distal_link", contact)  # the hand at the origin
             worst = max(worst, abs(float(jacobian[:, hand.joint_index(f"{finger}_spread")] @ force)))
         return worst
 
     assert spread_moment(THREE_FINGER_SPREAD) < 1e-9  # [N m per N]
     assert spread_moment(0.45) > 0.005
-
-
-def _point_jacobian(hand: bh.Hand, q: np.ndarray, frame: str, point: np.ndarray) -> np.ndarray:
-    """(3, nv) the linear Jacobian of the point (hand frame) fixed on ``frame``'s link, world-aligned."""
-    model, data = hand.model, hand.model.createData()
-    pin.framesForwardKinematics(model, data, q)
-    fid = model.getFrameId(frame)
-    placement = pin.SE3(np.eye(3), point)  # the point, as a frame on the link's joint
-    joint = model.frames[fid].parentJoint
-    local = data.oMi[joint].actInv(placement)
-    pin.computeJointJacobians(model, data, q)
-    return pin.getFrameJacobian(model, data, joint, local, pin.LOCAL_WORLD_ALIGNED)[:3]
 
 
 def test_the_grasp_height_rule_keeps_every_first_touch_off_the_objects_top() -> None:

@@ -24,7 +24,7 @@ import pinocchio as pin
 import bhgrasp as bh
 from bhgrasp.barrett.commands import BarrettDriver
 from bhgrasp.barrett.pucks import FINGER_PUCK
-from bhgrasp.bench.height import grasp_clearance
+from bhgrasp.bench.height import trial_clearance
 from bhgrasp.bench.placement import closing_planes_meet, touch_angles
 from bhgrasp.bench.protocol import DT, GRIP_MT, PRESHAPE, Trial
 from bhgrasp.errors import ModelError
@@ -79,8 +79,7 @@ def finger_starts(trial: Trial) -> dict[str, float]:
     item, spread = trial.item, trial.preshape_spread
     if trial.actuation != "barrett" or item.kind == "box" or closing_planes_meet(spread) is None:
         return dict.fromkeys(("F1", "F2", "F3"), 0.0)
-    clearance = grasp_clearance(item, spread, trial.grasp, PRESHAPE)
-    clearance = 0.0 if clearance is None else clearance
+    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE)
     angles = touch_angles(item, spread, clearance, PRESHAPE)
     needs = {finger: close_time(angles[finger]) for finger in ("F1", "F3")}
     last = max(needs.values())

@@ -121,6 +121,16 @@ def grasp_clearance(
     return None
 
 
+def trial_clearance(item: BenchObject, spread: float, grasp: str, opening: float) -> float:
+    """Where a trial puts the knuckles [m above the object's top]: :func:`grasp_clearance`, or 0.
+
+    0 (on its top) where no height qualifies; the trial's failure then says so
+    (:data:`~bhgrasp.bench.metrics.NO_HEIGHT`).
+    """
+    clearance = grasp_clearance(item, spread, grasp, opening)
+    return 0.0 if clearance is None else clearance
+
+
 __all__ = [
     "STAND_HEIGHT",
     "STAND_MARGIN",
@@ -130,4 +140,5 @@ __all__ = [
     "grasp_clearance",
     "grasp_ready",
     "stand_clearance",
+    "trial_clearance",
 ]

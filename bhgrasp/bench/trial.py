@@ -13,7 +13,7 @@ from bhgrasp.barrett.commands import BarrettDriver
 from bhgrasp.barrett.pucks import FINGER_PUCK
 from bhgrasp.barrett.transmission import PROXIMAL_RATIO, WORM_EFFICIENCY, BarrettTransmission
 from bhgrasp.bench.closing import finger_starts
-from bhgrasp.bench.height import STAND_HEIGHT, grasp_clearance
+from bhgrasp.bench.height import STAND_HEIGHT, trial_clearance
 from bhgrasp.bench.metrics import GRAVITY, evaluate
 from bhgrasp.bench.placement import grasp_offset
 from bhgrasp.bench.protocol import (
@@ -77,8 +77,7 @@ def setup(trial: Trial, dt: float = DT):
     item = trial.item
     top = 2 * item.half_extents[2]
     spread = trial.preshape_spread
-    clearance = grasp_clearance(item, spread, trial.grasp, PRESHAPE)  # one rule for both grasps (bench.height)
-    clearance = 0.0 if clearance is None else clearance  # no height qualifies: the knuckles on its top (metrics says)
+    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE)  # one rule for both grasps (bench.height)
     grasp_height = top + clearance + hand_depth(spread, PRESHAPE)  # the hand base
     rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
     offset = np.array([0.0, grasp_offset(item, spread, clearance, PRESHAPE), 0.0])
