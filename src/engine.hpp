@@ -12,13 +12,13 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 #include <coal/collision_data.h>
 #include <pinocchio/geometry.hpp>
 #include <pinocchio/multibody.hpp>
 
+#include "decompositions.hpp"
 #include "options.hpp"
 
 namespace bhgrasp {

@@ -2,6 +2,7 @@
 // _finger_terms_python in bhgrasp/controllers/_workspace_terms.py (the same Pinocchio algorithms, called as the
 // Python API calls them).  The task-space part is workspace.cpp, apart because each half takes ~30 s to compile.
 #include "workspace.hpp"
+#include "frame_jacobian.hpp"
 #include "model_io.hpp"
 
 #include <algorithm>
@@ -67,7 +68,7 @@ const FingerTerms& FingerDynamics::compute(int finger, const Eigen::Vector3d& gr
 
   // Hand.fingertip_jacobian: computeFrameJacobian (world-aligned at the frame), its translational rows
   frame_jacobian_.setZero();
-  pinocchio::computeFrameJacobian(model_, data_, q_, frame, pinocchio::LOCAL_WORLD_ALIGNED, frame_jacobian_);
+  compute_frame_jacobian(model_, data_, q_, frame, pinocchio::LOCAL_WORLD_ALIGNED, frame_jacobian_);
   out.jacobian = frame_jacobian_.topRows<3>();
 
   // Hand.mass_matrix: CRBA's upper triangle, mirrored; the finger's block

@@ -10,9 +10,10 @@
 #include <vector>
 
 #include <Eigen/Core>
-#include <Eigen/SVD>
 
 #include <pinocchio/multibody.hpp>
+
+#include "decompositions.hpp"
 
 namespace bhgrasp {
 

@@ -1,6 +1,7 @@
 // Pinocchio models across the Python/C++ boundary: the text serialisations of pin.Model.saveToString() and
 // pin.GeometryModel.saveToString(), read back here.  Boost's serialisation of every joint type is compiled in
-// model_io.cpp alone (each file that included <pinocchio/serialization.hpp> spent ~30 s and ~1 GB compiling it).
+// model_io.cpp and model_convert.cpp alone (each file that included <pinocchio/serialization.hpp> spent ~30 s and
+// ~1 GB compiling it).
 #pragma once
 
 #include <string>

@@ -2,12 +2,12 @@
 // _workspace_dynamics and fingertip_torque() _fingertip_torque (the same maths, line for line).  The joint-space
 // terms that workspace() starts from are finger_terms.cpp.
 #include "workspace.hpp"
+#include "decompositions.hpp"
 
 #include <algorithm>
 #include <stdexcept>
 
 #include <Eigen/LU>
-#include <Eigen/SVD>
 
 namespace bhgrasp {
 
@@ -32,7 +32,7 @@ const WorkspaceTerms& FingerDynamics::workspace(int finger, const Eigen::Vector3
   }
 
   // _workspace_dynamics: B from the SVD of J_f (signs made unique), J_t = B^T J_f, then (2.35)-(2.37)
-  Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, 3> jacobian(3, n);
+  FingerJacobian jacobian(3, n);
   for (Eigen::Index k = 0; k < n; ++k) jacobian.col(k) = out.jacobian.col(index[k]);
   const Eigen::JacobiSVD<decltype(jacobian)> svd(jacobian, Eigen::ComputeFullU);
   const auto& singular = svd.singularValues();
