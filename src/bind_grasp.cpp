@@ -85,7 +85,8 @@ void bind_grasp(nb::module_& m) {
       .def(nb::init<GraspKinematics&, HandDynamics&, int>(), "kinematics"_a, "dynamics"_a, "fingers"_a,
            nb::keep_alive<1, 2>(), nb::keep_alive<1, 3>())
       .def("configure", &SMCAdaptiveLaw::configure, "rho"_a, "k_o"_a, "object_adaptation"_a, "force_gain"_a,
-           "force_integral"_a, "k_f"_a, "normal_only"_a, "squeeze"_a, "gravity"_a, "initial_estimate"_a, "mu"_a,
+           "force_integral"_a, "k_f"_a, "normal_only"_a, "squeeze"_a, "grip_reflex"_a,
+           "gravity"_a, "initial_estimate"_a, "mu"_a,
            "pyramid"_a, "inscribed"_a, "min_normal_force"_a, "tolerance"_a, "max_iter"_a, "max_iter_in"_a,
            "zero_length"_a, "switch_x"_a)
       .def("reset", &SMCAdaptiveLaw::reset)

@@ -34,13 +34,14 @@ SMCAdaptiveLaw::SMCAdaptiveLaw(GraspKinematics& kinematics, HandDynamics& dynami
 
 void SMCAdaptiveLaw::configure(double rho, const Vector6& k_o, const Vector7& object_adaptation, double force_gain,
                                double force_integral, const ConstVector& k_f, bool normal_only, double squeeze,
-                               const Eigen::Vector3d& gravity, const Vector7& initial_estimate, double mu,
+                               bool grip_reflex, const Eigen::Vector3d& gravity, const Vector7& initial_estimate, double mu,
                                const Rows& pyramid, double inscribed, double min_normal_force, double tolerance,
                                int max_iter, int max_iter_in, double zero_length, double switch_x) {
   if (k_f.size() != nv_ || pyramid.cols() != 3 || pyramid.rows() < 1 || max_iter < 1 || max_iter_in < 1)
     throw std::invalid_argument("SMCAdaptiveLaw.configure: k_f of size nv, a (facets, 3) pyramid, iterations >= 1");
   rho_ = rho, k_o_ = k_o, object_adaptation_ = object_adaptation, force_gain_ = force_gain;
   force_integral_ = force_integral, k_f_ = k_f, normal_only_ = normal_only, squeeze_ = squeeze, gravity_ = gravity;
+  grip_reflex_ = grip_reflex;
   initial_estimate_ = initial_estimate, mu_ = mu, pyramid_ = pyramid, inscribed_ = inscribed;
   min_normal_force_ = min_normal_force, tolerance_ = tolerance, max_iter_ = max_iter, max_iter_in_ = max_iter_in;
   zero_length_ = zero_length, switch_x_ = switch_x;
@@ -142,9 +143,18 @@ int SMCAdaptiveLaw::grasp(const ConstVector& q, const ConstVector& v, const Eige
   // distribute: the QP of this contact count, closest to the squeeze along every normal
   ContactForceQP& solver = qp(static_cast<int>(n));
   if (!solver.holds(maps.grasp_map)) solver.set_grasp_map(maps.grasp_map, torque_scale(maps.grasp_map));
+  // the measured forces in contact frames, R^T f as rows; with a friction margin the grip follows their tangential
+  // load: desired normal max(squeeze, |f_t| / mu), mu the QP's (already less the margin)
   auto desired = desired_.head(3 * n);
   desired.setZero();
-  for (Eigen::Index k = 0; k < n; ++k) desired[3 * k + 2] = squeeze_;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    measured_.row(k).noalias() = sums_.force.row(touching_[static_cast<std::size_t>(k)]) * frames_.middleRows<3>(3 * k);
+    desired[3 * k + 2] = squeeze_;
+    if (grip_reflex_) {
+      const double tangential = std::sqrt(measured_(k, 0) * measured_(k, 0) + measured_(k, 1) * measured_(k, 1));
+      desired[3 * k + 2] = std::max(squeeze_, tangential / mu_);
+    }
+  }
   const ForceResult& result = solver.solve(Vector6(wrench), desired);
   infeasible_cycles_ += !result.feasible;
   out[scalars] = result.feasible ? 1.0 : 0.0;
@@ -163,7 +173,6 @@ int SMCAdaptiveLaw::grasp(const ConstVector& q, const ConstVector& v, const Eige
   std::vector<char>& has = has_integral_;
   for (Eigen::Index k = 0; k < n; ++k) {
     const int f = touching_[static_cast<std::size_t>(k)];
-    measured_.row(k).noalias() = sums_.force.row(f) * frames_.middleRows<3>(3 * k);  // R^T f, as a row
     force_error_.row(k) = forces.row(k) - measured_.row(k);
     if (normal_only_) force_error_.row(k).head<2>().setZero();
     const Eigen::RowVector3d previous = has[static_cast<std::size_t>(f)] ? Eigen::RowVector3d(integral_.row(f))

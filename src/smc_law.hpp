@@ -41,10 +41,11 @@ class SMCAdaptiveLaw {
   SMCAdaptiveLaw(const SMCAdaptiveLaw&) = delete;
   SMCAdaptiveLaw& operator=(const SMCAdaptiveLaw&) = delete;
 
-  // The gains of SMCAdaptiveGrasp (k_f of size nv), the QP's arguments as ContactForceQP takes them, and
+  // The gains of SMCAdaptiveGrasp (k_f of size nv), the QP's arguments as ContactForceQP takes them (mu: the
+  // design mu, GraspOptions.design_mu), whether the grip follows the measured load (a friction margin is set), and
   // bhgrasp.grasp.frames' ZERO_NORMAL and TANGENT_SWITCH; then reset().
   void configure(double rho, const Vector6& k_o, const Vector7& object_adaptation, double force_gain,
-                 double force_integral, const ConstVector& k_f, bool normal_only, double squeeze,
+                 double force_integral, const ConstVector& k_f, bool normal_only, double squeeze, bool grip_reflex,
                  const Eigen::Vector3d& gravity, const Vector7& initial_estimate, double mu, const Rows& pyramid,
                  double inscribed, double min_normal_force, double tolerance, int max_iter, int max_iter_in,
                  double zero_length, double switch_x);
@@ -83,7 +84,7 @@ class SMCAdaptiveLaw {
   double rho_ = 0.0, force_gain_ = 0.0, force_integral_ = 0.0, squeeze_ = 0.0, mu_ = 0.0, inscribed_ = 0.0;
   double min_normal_force_ = 0.0, tolerance_ = 0.0, zero_length_ = 0.0, switch_x_ = 0.0;
   int max_iter_ = 1, max_iter_in_ = 1;
-  bool normal_only_ = true;
+  bool normal_only_ = true, grip_reflex_ = false;
   Vector6 k_o_ = Vector6::Zero();
   Vector7 object_adaptation_ = Vector7::Zero(), initial_estimate_ = Vector7::Zero();
   Eigen::VectorXd k_f_;

@@ -154,3 +154,36 @@ def test_controller_keeps_running_through_infeasible_cycles():
     assert traj.log["infeasible_cycles"][-1] >= 490  # of 500 control cycles (1 ms), the first before contact
     assert np.nanmax(traj.log["qp_iterations"]) <= 100 and np.nanmin(traj.log["cone_margin"]) >= -1e-9
     assert np.linalg.norm(traj.object_position[-1, 0] - traj.object_position[0, 0]) < 0.01  # [m]
+
+
+def test_a_friction_margin_raises_the_grip_with_the_measured_load():
+    """Two opposed contacts, no wrench: the QP returns its desired forces.  Without a margin the normals are the
+    squeeze; with margin m each contact's normal is raised to |f_t| / ((1 - m) mu) of its measured tangential force
+    (closed form), and the squeeze is kept where the measured load needs less; the QP's cones are (1 - m) mu's."""
+    hand = bh.BarrettHand()
+    load = np.array([[0.0, 0.0, 2.0], [0.0, 0.0, 0.3]])  # measured on the box, world: 2 N and 0.3 N upwards
+    contacts = GraspContacts(
+        points=np.array([[0.03, 0.0, 0.0], [-0.03, 0.0, 0.0]]),
+        normals=np.array([[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0]]),
+        links=["F1_distal_link", "F3_distal_link"],
+        fingers=["F1", "F3"],
+        forces=load + np.array([[-4.0, 0.0, 0.0], [4.0, 0.0, 0.0]]),  # and 4 N of squeeze
+        reference=np.zeros(3),
+    )
+    plain = GraspForceController(hand, BOX_MASS, options=GraspOptions(mu=0.6, squeeze=3.0))
+    np.testing.assert_allclose(plain.distribute(contacts, np.zeros(6))[:, 2], [3.0, 3.0], atol=1e-9)
+    margin = GraspForceController(hand, BOX_MASS, options=GraspOptions(mu=0.6, squeeze=3.0, friction_margin=0.3))
+    assert margin.design_mu == pytest.approx(0.42) and margin.options.design_mu == margin.design_mu
+    forces = margin.distribute(contacts, np.zeros(6))
+    # 2 N needs 2 / 0.42 = 4.76 N; 0.3 N needs 0.71 N < the squeeze.  Two opposed contacts balance only equal
+    # normals: the QP's nearest balanced forces split the difference (the closed-form projection on f_n1 = f_n3).
+    needed = max(3.0, 2.0 / 0.42), max(3.0, 0.3 / 0.42)
+    np.testing.assert_allclose(forces[:, 2], np.mean(needed), atol=1e-6)
+    assert margin._qps[2].mu == pytest.approx(0.42)
+
+
+def test_friction_margin_is_checked():
+    for bad in (-0.1, 1.0, 1.5, float("nan")):
+        with pytest.raises(bh.InputError, match="friction_margin"):
+            GraspOptions(friction_margin=bad)
+    assert GraspOptions().design_mu == GraspOptions().mu and GraspOptions(friction_margin=0.0).design_mu == 0.5

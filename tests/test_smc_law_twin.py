@@ -268,3 +268,19 @@ def test_the_engines_agree_with_composite_identification(run):
     worst = lockstep(compiled, python, states)
     print("composite:", {key: f"{error:.1e}" for key, error in worst.items()})
     assert compiled.log["identifying"] == 1.0  # the demo lifted the box off its pedestal
+
+
+def test_the_engines_agree_with_a_friction_margin(run):
+    """GraspOptions.friction_margin: the QP's cones at (1 - m) mu and the grip raised with the measured load, the
+    same on both engines; the raise really happens (after the lift the normals exceed the squeeze's)."""
+    setup, states = run
+    box = Box(size=setup.box.size, mass=0.3)
+    margin = replace(DEMO, friction_margin=0.3)
+    compiled, python = (SMCAdaptiveGrasp(setup.hand, box, options=margin, engine=e) for e in ("compiled", "python"))
+    assert compiled.engine == "compiled"
+    late = states[len(states) // 2 :: 5]
+    lockstep(compiled, python, late)
+    plain = smc(setup, "python")
+    for t, state in late:
+        plain(t, state)
+    assert np.sum(python.log["commanded_normal"]) > np.sum(plain.log["commanded_normal"]) + 1.0

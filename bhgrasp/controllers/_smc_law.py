@@ -98,7 +98,7 @@ class CompiledSMCLaw:
 
     def configure(self, law: Any) -> None:
         """Copy ``law``'s gains, QP settings and initial estimate into the kernel, and reset it."""
-        arguments = solver_arguments(1, law.mu, min_normal_force=law.min_normal_force)[1:]
+        arguments = solver_arguments(1, law.design_mu, min_normal_force=law.min_normal_force)[1:]
         rates = law.object_adaptation if law.identification is None else np.zeros(7)  # then updated in identify()
         self.kernel.configure(
             law.rho,
@@ -109,6 +109,7 @@ class CompiledSMCLaw:
             law.k_f,
             law.force_error == "normal",
             law.squeeze,
+            law.friction_margin is not None,
             law.gravity,
             law._initial_object,
             *arguments,

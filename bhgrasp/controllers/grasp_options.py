@@ -26,6 +26,12 @@ class GraspOptions:
         approach_torque: Closing torque [N m] on each finger's proximal-most non-spread joint before contact.
         gravity: World gravity [m/s^2].
         distribution: ``"qp"`` (friction-cone QP) or ``"pinv"`` (thesis (5.45), the baseline).
+        friction_margin: ``None`` (default): the QP's cones use ``mu``.  A fraction m in [0, 1): the fraction of
+            ``mu`` kept in reserve for a true friction below the assumed one.  The QP's cones use (1 - m) mu, and
+            the grip follows the load the fingers measure: each contact's desired normal force is raised to
+            |f_t| / ((1 - m) mu) of its *measured* tangential force f_t, so that a load the model does not know
+            (a wrong mass estimate, the object leaving its support) is met with more squeeze, not with sliding
+            (the grip-load coupling of human grasping: Johansson and Westling, Exp. Brain Res. 56, 1984).
     """
 
     mu: float = 0.5
@@ -34,6 +40,7 @@ class GraspOptions:
     approach_torque: float = 0.05
     gravity: Any = (0.0, 0.0, -9.81)
     distribution: str = "qp"
+    friction_margin: float | None = None
 
     def __post_init__(self) -> None:
         if self.distribution not in DISTRIBUTIONS:
@@ -43,6 +50,16 @@ class GraspOptions:
         object.__setattr__(self, "min_normal_force", as_real(self.min_normal_force, "min_normal_force"))
         object.__setattr__(self, "approach_torque", as_real(self.approach_torque, "approach_torque"))
         object.__setattr__(self, "gravity", tuple(float(g) for g in as_vector(self.gravity, "gravity", 3)))
+        if self.friction_margin is not None:
+            margin = as_real(self.friction_margin, "friction_margin")
+            if not 0.0 <= margin < 1.0:
+                raise InputError(f"`friction_margin` must be None or in [0, 1) (a fraction of mu), got {margin}")
+            object.__setattr__(self, "friction_margin", margin)
+
+    @property
+    def design_mu(self) -> float:
+        """The friction coefficient the distribution enforces: ``mu`` less the margin, (1 - m) mu."""
+        return self.mu if self.friction_margin is None else (1.0 - self.friction_margin) * self.mu
 
 
 DEFAULT_GRASP = GraspOptions()

@@ -51,7 +51,8 @@ class ObjectGraspController(Controller):
     were infeasible), ``wrench_residual`` (|G f - w| of the applied forces [N, N m]), ``qp_iterations`` (solver
     iterations of the cycle, at most :attr:`~bhgrasp.grasp.forces.ContactForceQP.iteration_bound`; 0 for
     ``"pinv"``), ``cone_margin`` (smallest mu f_n - |f_t| of the commanded forces [N], negative = outside the
-    assumed cone), ``contacts`` (number of touching fingers).
+    assumed cone; mu less the friction margin when one is set, :attr:`design_mu`), ``contacts`` (number of touching
+    fingers).
     """
 
     def __init__(
@@ -96,8 +97,18 @@ class ObjectGraspController(Controller):
         return self._options.mu
 
     @property
+    def friction_margin(self) -> float | None:
+        """Fraction of :attr:`mu` kept in reserve (``None``: none; see :class:`GraspOptions`)."""
+        return self._options.friction_margin
+
+    @property
+    def design_mu(self) -> float:
+        """Friction coefficient the distribution enforces, (1 - margin) mu."""
+        return self._options.design_mu
+
+    @property
     def squeeze(self) -> float:
-        """Desired normal force per contact [N]."""
+        """Desired normal force per contact [N] (raised by the grip reflex when a margin is set)."""
         return self._options.squeeze
 
     @property
@@ -199,9 +210,12 @@ class ObjectGraspController(Controller):
         gmap = contacts.grasp_map
         desired = np.zeros((n, 3))
         desired[:, 2] = self.squeeze
+        if self.friction_margin is not None:  # the grip follows the measured load (GraspOptions.friction_margin)
+            tangential = np.sqrt(np.sum(contacts.measured()[:, :2] ** 2, axis=1))
+            desired[:, 2] = np.maximum(self.squeeze, tangential / self.design_mu)
         if self.distribution == "qp":
             if n not in self._qps:
-                self._qps[n] = ContactForceQP(n, self.mu, min_normal_force=self.min_normal_force)
+                self._qps[n] = ContactForceQP(n, self.design_mu, min_normal_force=self.min_normal_force)
             result = self._qps[n].solve(gmap, wrench, desired)
             forces, feasible, iterations = result.forces, result.feasible, result.iterations
         else:
@@ -212,7 +226,7 @@ class ObjectGraspController(Controller):
         self.log["infeasible_cycles"] = np.array(float(self._infeasible_cycles))
         self.log["wrench_residual"] = np.array(float(np.linalg.norm(gmap @ forces.ravel() - wrench)))
         self.log["qp_iterations"] = np.array(float(iterations))
-        self.log["cone_margin"] = np.array(-np.max(cone_violations(forces, self.mu)))
+        self.log["cone_margin"] = np.array(-np.max(cone_violations(forces, self.design_mu)))
         commanded = np.zeros(len(self.nominal.fingers))
         for finger, force in zip(contacts.fingers, forces):
             commanded[self.nominal.fingers.index(finger)] = force[2]

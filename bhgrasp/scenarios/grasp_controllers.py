@@ -31,15 +31,19 @@ def grasp_controller(
     gains: tuple[Any, Any] | None = None,
     mu: float = MU_ASSUMED,
     adaptation: str = "thesis",
+    friction_margin: float | None = None,
 ) -> ObjectGraspController:
     """The object-space controller called ``name`` (one of :data:`CONTROLLERS`) with the demo's gains.
 
     ``gains`` = (kp, kv) overrides the gains of "ctc", "natural" and "stiffness"; ``mu`` is the friction
     coefficient the force distribution assumes; ``adaptation`` (one of :data:`ADAPTATIONS`, "smc-adaptive" only):
     "composite" adds the measured wrench's prediction error
-    (:class:`~bhgrasp.controllers.object_identification.ObjectIdentification`, Gamma_o = :data:`COMPOSITE_RATES`).
+    (:class:`~bhgrasp.controllers.object_identification.ObjectIdentification`, Gamma_o = :data:`COMPOSITE_RATES`);
+    ``friction_margin`` the fraction of ``mu`` kept in reserve
+    (:class:`~bhgrasp.controllers.grasp_options.GraspOptions`).
     """
-    shared = {"options": GraspOptions(mu=mu, squeeze=SQUEEZE, distribution=distribution)}
+    options = GraspOptions(mu=mu, squeeze=SQUEEZE, distribution=distribution, friction_margin=friction_margin)
+    shared = {"options": options}
     if adaptation not in ADAPTATIONS:
         raise InputError(f"`adaptation` must be one of {ADAPTATIONS}, got {adaptation!r}")
     if adaptation == "composite" and name != "smc-adaptive":

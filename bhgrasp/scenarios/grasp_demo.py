@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.controllers.base import Controller
+from bhgrasp.controllers.grasp_options import GraspOptions
 from bhgrasp.controllers.motor_commands import MotorCommands
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.controllers.supervisor_options import Approach, Planning
@@ -57,6 +58,7 @@ SWEEPABLE = (
     "sensor_noise",
     "hand",
     "finger_spacing",
+    "friction_margin",
     *UNCERTAINTIES,
 )
 """The parameters of :func:`run_grasp_demo` a sweep case may set (the case's seed comes from the sweep)."""
@@ -97,6 +99,8 @@ def check_demo_arguments(**arguments: Any) -> None:
         raise InputError(f"the arguments {barrett_only} apply to the Barrett scene, not {arguments['hand']}")
     if "finger_spacing" in arguments:
         as_positive(arguments["finger_spacing"], "finger_spacing")
+    if arguments.get("friction_margin") is not None:
+        GraspOptions(friction_margin=arguments["friction_margin"])  # its check: a fraction in [0, 1)
     check_uncertainty(**{name: arguments[name] for name in UNCERTAINTIES if name in arguments})
 
 
@@ -117,6 +121,7 @@ def run_grasp_demo(
     hand: str = "barrett",
     finger_spacing: float | None = None,
     adaptation: str = "thesis",
+    friction_margin: float | None = None,
     **uncertainty: Any,
 ) -> GraspDemoResult:
     """Grasp, lift and turn the box; see the module docstring.
@@ -154,6 +159,9 @@ def run_grasp_demo(
             which also fits the wrench the hand measures on the object once it is off its pedestal
             (:mod:`bhgrasp.controllers.object_identification`: not fooled by joint friction, chapter 5's adaptation
             case).
+        friction_margin: The fraction of the assumed ``mu`` kept in reserve (``None``: none): the QP's cones at
+            (1 - m) mu and the grip raised with the measured tangential load
+            (:class:`~bhgrasp.controllers.grasp_options.GraspOptions`).
         uncertainty: What the controller does not know (:data:`UNCERTAINTIES`, Barrett scene only):
             ``pose_noise`` (sigma [m], sigma [rad]) on the object pose, ``twist_noise`` (sigma [m/s], sigma
             [rad/s]) on its twist, ``force_noise`` sigma [N] on the contact forces, ``delay`` [s] of every reading,
@@ -173,6 +181,7 @@ def run_grasp_demo(
         stiffness=stiffness,
         sensor_noise=sensor_noise,
         hand=hand,
+        friction_margin=friction_margin,
         **uncertainty,
         **({} if finger_spacing is None else {"finger_spacing": finger_spacing}),
     )
@@ -184,7 +193,7 @@ def run_grasp_demo(
     setup.manipulable_space().check(offset)  # a motion the grasp cannot make is refused before simulating
     setup.check_clearance(offset)  # so is one that drives the box into its pedestal
     nominal_box, mu = Box(size=setup.box.size, mass=estimate), float(uncertainty.get("mu", MU_ASSUMED))
-    grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains, mu, adaptation)
+    grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains, mu, adaptation, friction_margin)
     supervisor = _supervisor(setup, grasp, offset, approach_gains, hand)
     law: Controller = MotorCommands(supervisor, setup.simulator.actuation.drive) if setup.cancel_damping else supervisor
     if viewer is not None:
