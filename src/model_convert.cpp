@@ -1,7 +1,7 @@
 // The model and geometry conversions of model_io.hpp that write or read more than a Model: the mimic-free copy of a
 // model (its Model written back as text) and the geometry read from text.  Apart from model_from_text
 // (model_io.cpp) so that neither file compiles all of Boost's serialisation at once: 1.78 GB of the compiler's memory
-// together, 1.58 GB and 1.37 GB apart.
+// together, 1.56 GB and 1.32 GB apart.
 #include "model_io.hpp"
 
 #include <cmath>

@@ -140,7 +140,7 @@ int SMCAdaptiveLaw::grasp(const ConstVector& q, const ConstVector& v, const Eige
   if (!maps.grasp_map.allFinite()) return grasp_map_not_finite;
   if (!wrench.allFinite()) return wrench_not_finite;
 
-  // distribute: the QP of this contact count, closest to the squeeze along every normal
+  // distribute: the QP of this contact count, closest to the desired normals (the squeeze, or the grip below)
   ContactForceQP& solver = qp(static_cast<int>(n));
   if (!solver.holds(maps.grasp_map)) solver.set_grasp_map(maps.grasp_map, torque_scale(maps.grasp_map));
   // the measured forces in contact frames, R^T f as rows; with a friction margin the grip follows their tangential
@@ -152,7 +152,8 @@ int SMCAdaptiveLaw::grasp(const ConstVector& q, const ConstVector& v, const Eige
     desired[3 * k + 2] = squeeze_;
     if (grip_reflex_) {
       const double tangential = std::sqrt(measured_(k, 0) * measured_(k, 0) + measured_(k, 1) * measured_(k, 1));
-      desired[3 * k + 2] = std::max(squeeze_, tangential / mu_);
+      const double needed = tangential / mu_;  // np.maximum's: a NaN reading stays NaN, as in the twin
+      desired[3 * k + 2] = (needed > squeeze_ || std::isnan(needed)) ? needed : squeeze_;
     }
   }
   const ForceResult& result = solver.solve(Vector6(wrench), desired);

@@ -183,7 +183,7 @@ def test_a_friction_margin_raises_the_grip_with_the_measured_load():
 
 
 def test_friction_margin_is_checked():
-    for bad in (-0.1, 1.0, 1.5, float("nan")):
+    for bad in (-0.1, 1.0, 1.5, float("nan"), float("inf"), True, False):
         with pytest.raises(bh.InputError, match="friction_margin"):
             GraspOptions(friction_margin=bad)
     assert GraspOptions().design_mu == GraspOptions().mu and GraspOptions(friction_margin=0.0).design_mu == 0.5

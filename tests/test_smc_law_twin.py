@@ -272,7 +272,8 @@ def test_the_engines_agree_with_composite_identification(run):
 
 def test_the_engines_agree_with_a_friction_margin(run):
     """GraspOptions.friction_margin: the QP's cones at (1 - m) mu and the grip raised with the measured load, the
-    same on both engines; the raise really happens (after the lift the normals exceed the squeeze's)."""
+    same on both engines, on a run where the margin changes what they command (larger normals after the lift than
+    the same law without it; the reflex's own closed form is tests/test_grasping.py's)."""
     setup, states = run
     box = Box(size=setup.box.size, mass=0.3)
     margin = replace(DEMO, friction_margin=0.3)

@@ -10,8 +10,8 @@ sigma_o = (m, I_xx, I_xy, I_xz, I_yy, I_yz, I_zz) (body-frame inertia about the 
 a Coriolis form for which M_o_dot - 2 C_o = skew(I_w omega) is skew-symmetric, as the Lyapunov argument (5.63)
 needs.  The estimate follows sigma_o_dot = -Gamma_o Y_o^T s_o (the thesis prints (5.52) without the sign and with
 Gamma^-1; with s_o = X_dot - v_r the minus sign is the one that makes V_dot <= 0).  The desired contact forces are
-F_dc = QP(G, F_do) (inside the friction cones, closest to the squeeze) or the thesis' (5.53) G^+ F_do + (I - G^+ G)
-f_squeeze (``GraspOptions(distribution="pinv")``).
+F_dc = QP(G, F_do) (inside the friction cones, closest to the squeeze, which a friction margin raises with the
+measured load) or the thesis' (5.53) G^+ F_do + (I - G^+ G) f_squeeze (``GraspOptions(distribution="pinv")``).
 
 Finger level: with P = J_h^+ G^T (J_h^-1 G^T of (5.55) for square J_h), the reference joint velocity (5.57) is
 q_dot_r = P v_r + J_h^+ (c e_fc + h eta), e_fc = F_dc - F_c the contact force error (measured, contact frames;

@@ -31,7 +31,8 @@ class GraspOptions:
             the grip follows the load the fingers measure: each contact's desired normal force is raised to
             |f_t| / ((1 - m) mu) of its *measured* tangential force f_t, so that a load the model does not know
             (a wrong mass estimate, the object leaving its support) is met with more squeeze, not with sliding
-            (the grip-load coupling of human grasping: Johansson and Westling, Exp. Brain Res. 56, 1984).
+            (the grip-load coupling of human grasping: Johansson and Westling, Exp. Brain Res. 56, 1984).  0 keeps
+            the cones at mu and the grip reflex on.
     """
 
     mu: float = 0.5
@@ -51,6 +52,8 @@ class GraspOptions:
         object.__setattr__(self, "approach_torque", as_real(self.approach_torque, "approach_torque"))
         object.__setattr__(self, "gravity", tuple(float(g) for g in as_vector(self.gravity, "gravity", 3)))
         if self.friction_margin is not None:
+            if isinstance(self.friction_margin, bool):
+                raise InputError(f"`friction_margin` must be None or a number in [0, 1), got {self.friction_margin!r}")
             margin = as_real(self.friction_margin, "friction_margin")
             if not 0.0 <= margin < 1.0:
                 raise InputError(f"`friction_margin` must be None or in [0, 1) (a fraction of mu), got {margin}")

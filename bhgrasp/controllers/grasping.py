@@ -41,7 +41,8 @@ class ObjectGraspController(Controller):
     With two or more touching fingers, a subclass's :meth:`grasp_torques` turns the object pose error into joint
     torques; before that every finger is closed with ``approach_torque`` on top of gravity compensation.  The
     wrench the contacts must exert is distributed either by the friction-cone QP (``distribution="qp"``, forces
-    inside the cones, closest to ``squeeze`` along every normal) or by the thesis' pseudo-inverse form (5.45)
+    inside the cones, closest to ``squeeze`` along every normal, or with a friction margin to the larger of it and
+    the measured tangential load / :attr:`design_mu`) or by the thesis' pseudo-inverse form (5.45)
     (``"pinv"``: f = G^+ w + (I - G^+ G) f_squeeze, no cone constraint; kept as the baseline).
 
     Logged: ``object_error`` (position [m], rotation vector [rad], world), ``wrench`` (commanded on the object),
@@ -108,7 +109,7 @@ class ObjectGraspController(Controller):
 
     @property
     def squeeze(self) -> float:
-        """Desired normal force per contact [N] (raised by the grip reflex when a margin is set)."""
+        """Desired normal force per contact [N] (with a friction margin, the least: distribute() raises it)."""
         return self._options.squeeze
 
     @property

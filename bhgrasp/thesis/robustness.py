@@ -1,7 +1,8 @@
 """Robustness of the SMC-adaptive grasp to what its controller does not know: a seeded Monte-Carlo table.
 
 Each scenario of :data:`SCENARIOS` adds one uncertainty of :mod:`bhgrasp.scenarios.uncertainty` (sensor noise or
-delay, joint friction, a torque limit, a wrong friction coefficient), or all of them, to the grasp demo
+delay, joint friction, a torque limit, a wrong friction coefficient, with and without a friction margin), or all of
+them, to the grasp demo
 (:func:`~bhgrasp.scenarios.grasp_demo.run_grasp_demo`: grasp, squeeze, lift 10 mm and turn 0.1 rad about x).
 Every scenario runs the same :data:`SAMPLES` boxes, their masses drawn uniformly in :data:`MASS_RANGE` (the
 controller starts at :data:`ESTIMATE`), with the same per-run noise seeds, on the sweep executor
@@ -32,9 +33,8 @@ SUCCESS = (0.5e-3, 5e-3)  # [m], [rad] true final error (with zero slip samples)
 MARGIN = 0.3
 """The friction margin of the ``mu_margin`` scenario (GraspOptions.friction_margin): a true mu 20 % below the assumed
 one needs a margin above 0.2 (at 0.2 the QP's cones are the true cone, nothing left for the force loop's error: 10
-of 12 runs held); 0.3 leaves 12.5 % of the true cone.  Chosen on this table's 12 boxes; on 30 other boxes (seed
-18, run once after the choice, 2026-12-05) a true mu of 0.48 held in 100 % of the runs with it and 33 % without,
-the exact plant in 100 % either way."""
+of 12 runs held); 0.3 leaves 12.5 % of the true cone.  Chosen on this table's 12 boxes, not tuned further.  Cones
+alone are not enough: the QP at mu 0.4 without the grip reflex still let the heavier boxes slide at a true 0.48."""
 ALL = {
     "pose_noise": (2e-4, 2e-3),
     "twist_noise": (2e-3, 2e-2),
@@ -205,7 +205,8 @@ def limits(summaries: dict[str, dict[str, float]]) -> list[str]:
             f"A true mu below the assumed one leaves no friction in reserve when the box leaves its pedestal and "
             f"the fingers meet a load the mass estimate does not yet know: the heavier boxes slide "
             f"({mu['mean_slip_events']:.0f} sliding samples per run, rotation errors up to "
-            f"{mu['max_rotation_mrad']:.0f} mrad), even with the QP's cones below the true one."
+            f"{mu['max_rotation_mrad']:.0f} mrad); cones below the true mu alone do not prevent it "
+            "(bhgrasp.thesis.robustness.MARGIN)."
         )
     margin = summaries.get("mu_margin")
     if margin is not None:
