@@ -1,8 +1,8 @@
 // pinocchio::computeFrameJacobian is an inline template: a file that sees its definition (frames.hpp) compiles it
 // again for every joint type even where an extern template declaration names Pinocchio's precompiled copy, because
 // GCC instantiates inline functions to inline them.  In finger_terms.cpp that one call cost 0.9 GB of the compiler's
-// memory and 13 s (1.96 -> 1.08 GB).  This file declares the template without its definition (no frames.hpp, no precompiled header:
-// CMakeLists.txt), so the call below can only link to libpinocchio_default's explicit instantiation for these exact
+// memory and 13 s (1.96 -> 1.08 GB).  This file declares the template without its definition (no frames.hpp, no
+// precompiled header: CMakeLists.txt), so the call below can only link to libpinocchio_default's explicit instantiation for these exact
 // argument types (VectorXd, Data::Matrix6x): the same code, the same bits, nothing compiled here.  Strictly, a
 // function declared inline in one file (frames.hpp, through the precompiled header) and not here is ill-formed, no
 // diagnostic required; GCC and Clang on ELF link it as intended.  A signature change in another Pinocchio would show

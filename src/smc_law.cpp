@@ -34,9 +34,9 @@ SMCAdaptiveLaw::SMCAdaptiveLaw(GraspKinematics& kinematics, HandDynamics& dynami
 
 void SMCAdaptiveLaw::configure(double rho, const Vector6& k_o, const Vector7& object_adaptation, double force_gain,
                                double force_integral, const ConstVector& k_f, bool normal_only, double squeeze,
-                               bool grip_reflex, const Eigen::Vector3d& gravity, const Vector7& initial_estimate, double mu,
-                               const Rows& pyramid, double inscribed, double min_normal_force, double tolerance,
-                               int max_iter, int max_iter_in, double zero_length, double switch_x) {
+                               bool grip_reflex, const Eigen::Vector3d& gravity, const Vector7& initial_estimate,
+                               double mu, const Rows& pyramid, double inscribed, double min_normal_force,
+                               double tolerance, int max_iter, int max_iter_in, double zero_length, double switch_x) {
   if (k_f.size() != nv_ || pyramid.cols() != 3 || pyramid.rows() < 1 || max_iter < 1 || max_iter_in < 1)
     throw std::invalid_argument("SMCAdaptiveLaw.configure: k_f of size nv, a (facets, 3) pyramid, iterations >= 1");
   rho_ = rho, k_o_ = k_o, object_adaptation_ = object_adaptation, force_gain_ = force_gain;

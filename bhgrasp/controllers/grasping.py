@@ -212,7 +212,7 @@ class ObjectGraspController(Controller):
         desired = np.zeros((n, 3))
         desired[:, 2] = self.squeeze
         if self.friction_margin is not None:  # the grip follows the measured load (GraspOptions.friction_margin)
-            tangential = np.sqrt(np.sum(contacts.measured()[:, :2] ** 2, axis=1))
+            tangential = np.linalg.norm(contacts.measured()[:, :2], axis=1)
             desired[:, 2] = np.maximum(self.squeeze, tangential / self.design_mu)
         if self.distribution == "qp":
             if n not in self._qps:
