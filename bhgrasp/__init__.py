@@ -36,6 +36,7 @@ _EXPORTS = {
     "GraspQuality": "bhgrasp.grasp",
     "Hand": "bhgrasp.model.hand",
     "IKResult": "bhgrasp.model.hand_ik",
+    "Mesh": "bhgrasp.model.mesh_object",
     "Plane": "bhgrasp.model.objects",
     "Scene": "bhgrasp.sim.scene",
     "Simulator": "bhgrasp.sim.simulator",
@@ -54,6 +55,7 @@ _EXPORTS = {
     "grasp_map": "bhgrasp.grasp",
     "grasp_quality": "bhgrasp.grasp",
     "hand_jacobian": "bhgrasp.grasp",
+    "household": "bhgrasp.model.household",
     "ik": "bhgrasp.model.hand_ik",
     "internal_forces": "bhgrasp.grasp",
     "is_force_closure": "bhgrasp.grasp",
@@ -106,6 +108,7 @@ __all__ = [
     "Hand",
     "IKResult",
     "InputError",
+    "Mesh",
     "ModelError",
     "Plane",
     "Scene",
@@ -128,6 +131,7 @@ __all__ = [
     "grasp_map",
     "grasp_quality",
     "hand_jacobian",
+    "household",
     "ik",
     "internal_forces",
     "is_force_closure",
@@ -166,7 +170,9 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported here
     from bhgrasp.model.barrett_hand import BarrettHand
     from bhgrasp.model.hand import Hand
     from bhgrasp.model.hand_ik import IKResult, ik
+    from bhgrasp.model.household import household
     from bhgrasp.model.ik import FingerIKResult, Workspace, finger_ik, workspace
+    from bhgrasp.model.mesh_object import Mesh
     from bhgrasp.model.objects import Box, Capsule, Cylinder, FixedBox, Plane, Sphere, table, wall
     from bhgrasp.model.orientation import rotation_from_zyz, zyz_from_rotation
     from bhgrasp.model.planar import (

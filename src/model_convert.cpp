@@ -4,7 +4,10 @@
 // together, 1.56 GB and 1.32 GB apart.
 #include "model_io.hpp"
 
+#include "convex_shapes.hpp"
+
 #include <cmath>
+#include <stdexcept>
 
 #include <boost/variant/get.hpp>
 #include <pinocchio/multibody/geometry.hpp>
@@ -69,8 +72,15 @@ std::string independent_model_text(const std::string& text) {
 }
 
 pinocchio::GeometryModel geometry_from_text(const std::string& text) {
+  std::string rest;
+  const std::vector<ConvexShape> shapes = read_convex_shapes(text, rest);
   pinocchio::GeometryModel geometry;
-  geometry.loadFromString(text);
+  geometry.loadFromString(rest);
+  for (const ConvexShape& convex : shapes) {
+    if (convex.geometry >= geometry.geometryObjects.size())
+      throw std::invalid_argument("convex shapes: a shape names a geometry the geometry model lacks");
+    geometry.geometryObjects[convex.geometry].geometry = convex.shape;
+  }
   return geometry;
 }
 

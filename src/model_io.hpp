@@ -19,7 +19,8 @@ pinocchio::Model model_from_text(const std::string& text);
 // are unchanged.
 std::string independent_model_text(const std::string& text);
 
-// The geometry written by pin.GeometryModel.saveToString().
+// The geometry written by pin.GeometryModel.saveToString(), or by bhgrasp/sim/geometry_text.py (its convex shapes
+// ahead of it: convex_shapes.hpp).
 pinocchio::GeometryModel geometry_from_text(const std::string& text);
 
 }  // namespace bhgrasp

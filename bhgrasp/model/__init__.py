@@ -9,7 +9,9 @@ from bhgrasp.model.couplings import Coupling, TwinMap
 from bhgrasp.model.hand import Hand
 from bhgrasp.model.hand_description import BaseFrame
 from bhgrasp.model.hand_ik import IKResult, ik
+from bhgrasp.model.household import HOUSEHOLD, household, household_mesh
 from bhgrasp.model.ik import FingerIKResult, Workspace, finger_ik, workspace
+from bhgrasp.model.mesh_object import Mesh
 from bhgrasp.model.mount import MOUNT_JOINTS, mount_coordinates, mount_pose, mounted
 from bhgrasp.model.objects import (
     Box,
@@ -29,6 +31,7 @@ from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.model.transmission import DirectDrive, Transmission
 
 __all__ = [
+    "HOUSEHOLD",
     "MOUNT_JOINTS",
     "BarrettHand",
     "BaseFrame",
@@ -41,6 +44,7 @@ __all__ = [
     "FixedBox",
     "Hand",
     "IKResult",
+    "Mesh",
     "Plane",
     "RigidObject",
     "Sphere",
@@ -52,6 +56,8 @@ __all__ = [
     "example_robot_data_dir",
     "example_robot_data_urdf",
     "finger_ik",
+    "household",
+    "household_mesh",
     "ik",
     "mount_coordinates",
     "mount_pose",

@@ -109,6 +109,10 @@ class RigidObject(ABC):
     def geometry(self) -> coal.ShapeBase:
         """A new coal shape centred on the body frame."""
 
+    def collision_shapes(self) -> list[coal.CollisionGeometry]:
+        """The shapes the simulator collides, in the body frame: :meth:`geometry` (a decomposed mesh has several)."""
+        return [self.geometry()]
+
     @abstractmethod
     def _mass_properties(self) -> tuple[float, np.ndarray, float]:
         """Volume [m^3], principal inertia per unit mass (3,) [m^2] (body axes), bounding radius [m]."""

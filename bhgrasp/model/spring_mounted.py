@@ -69,5 +69,9 @@ class SpringMounted:
         """A new coal shape of the body."""
         return self.body.geometry()
 
+    def collision_shapes(self) -> list[coal.CollisionGeometry]:
+        """The shapes the simulator collides (the body's)."""
+        return self.body.collision_shapes()
+
 
 __all__ = ["SpringMounted"]

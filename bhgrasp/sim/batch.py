@@ -35,6 +35,7 @@ from bhgrasp.sim.compiled import (
     memory_of,
     native_memory,
 )
+from bhgrasp.sim.geometry_text import geometry_text
 from bhgrasp.sim.simulator import MATCH_RADIUS, Simulator
 from bhgrasp.sim.state_check import check_state, divergence_text
 from bhgrasp.sim.step_output import StepOutput
@@ -83,7 +84,7 @@ class BatchSimulator:
         self.threads = int(threads)
         self.t = states[0].t
         native = engine_settings(scene, simulator.layout, simulator.law, simulator.settings, MATCH_RADIUS)
-        self._batch = core.Batch(scene.model.saveToString(), scene.geometry.saveToString(), native, len(states))
+        self._batch = core.Batch(scene.model.saveToString(), geometry_text(scene.geometry), native, len(states))
         for i, (state, memory) in enumerate(zip(states, memories)):
             self._batch.set_state(i, state.scene_q, state.scene_v, native_memory(memory))
         self._barrett = isinstance(simulator.actuation, BarrettActuation)

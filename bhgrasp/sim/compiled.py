@@ -19,6 +19,7 @@ from bhgrasp.data import ContactMemory, ContactSet, empty_contact_set
 from bhgrasp.sim.coal_queries import FALLBACK_TOLERANCE, NARROW_TOLERANCE
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.engine import DriveTerms, StepResult
+from bhgrasp.sim.geometry_text import geometry_text
 from bhgrasp.sim.native_options import filled
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_layout import SceneLayout
@@ -48,7 +49,7 @@ class CompiledEngine:
         self, scene: Scene, layout: SceneLayout, law: SpringDamper, settings: SimulatorSettings, match_radius: float
     ) -> None:
         """Copy the scene (Pinocchio's serialisation), the contact law and the settings into C++."""
-        model, geometry = scene.model.saveToString(), scene.geometry.saveToString()
+        model, geometry = scene.model.saveToString(), geometry_text(scene.geometry)
         native = engine_settings(scene, layout, law, settings, match_radius)
         self._engine = core_module().Engine(model, geometry, native)
         self._limits = (settings.max_speed, settings.max_penetration)

@@ -95,10 +95,15 @@ class Scene:
         """The hand's, the objects' and the environment's collision geometry, their pairs and their requests."""
         self.geometry = self._hand_geometry()
         self.hand_geometries = list(range(self.geometry.ngeoms))
-        self.object_geometries = [
-            self._add_geometry(name, joint, pin.SE3.Identity(), item.geometry())
-            for name, joint, item in zip(self.object_names, self.object_joints, self.objects)
-        ]
+        self.object_geometry_sets: list[list[int]] = []  # each object's geometries (a decomposed mesh has several)
+        self._object_of_geometry: dict[int, int] = {}
+        for index, (name, joint, item) in enumerate(zip(self.object_names, self.object_joints, self.objects)):
+            shapes = item.collision_shapes()
+            names = [name] if len(shapes) == 1 else [f"{name}:{k}" for k in range(len(shapes))]
+            geometries = [self._add_geometry(n, joint, pin.SE3.Identity(), shape) for n, shape in zip(names, shapes)]
+            self.object_geometry_sets.append(geometries)
+            self._object_of_geometry.update(dict.fromkeys(geometries, index))
+        self.object_geometries = [g for geometries in self.object_geometry_sets for g in geometries]
         self.environment_geometries = [
             self._add_geometry(name, 0, item.placement, item.geometry())
             for name, item in zip(self.environment_names, self.environment)
@@ -213,13 +218,16 @@ class Scene:
         for b in self.object_geometries:
             candidates += [(a, b, None) for a in self.hand_geometries]
             candidates += [(a, b, env.friction) for a, env in zip(self.environment_geometries, self.environment)]
-        for i, (a, first) in enumerate(zip(self.object_geometries, self.objects)):
-            candidates += [(a, b, first.friction) for b in self.object_geometries[i + 1 :]]
+        for i, (first, geometries) in enumerate(zip(self.objects, self.object_geometry_sets)):
+            later = [b for others in self.object_geometry_sets[i + 1 :] for b in others]  # not its own pieces
+            candidates += [(a, b, first.friction) for a in geometries for b in later]
         if self.environment_touches_hand:  # after the others: the earlier pairs keep their indices
             moving = [g for g in self.hand_geometries if self.geometry.geometryObjects[g].parentJoint != 0]
             for a, env in zip(self.environment_geometries, self.environment):
                 candidates += [(a, b, env.friction) for b in moving]
-        friction_of: dict[int, float | None] = dict(zip(self.object_geometries, (o.friction for o in self.objects)))
+        friction_of: dict[int, float | None] = {
+            g: self.objects[i].friction for g, i in self._object_of_geometry.items()
+        }
         friction_of.update(dict.fromkeys(self.hand_geometries))  # hand pads: the contact law's coefficient
         pairs = []
         for index, (a, b, friction_a) in enumerate(candidates):
@@ -233,6 +241,8 @@ class Scene:
         geometry_object = self.geometry.geometryObjects[geom]
         if geom in self.hand_geometries:
             return self.model.frames[geometry_object.parentFrame].name
+        if geom in self._object_of_geometry:  # an object's piece carries its object's name
+            return self.object_names[self._object_of_geometry[geom]]
         return geometry_object.name
 
     def __reduce__(self) -> tuple:

@@ -14,6 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp.model.objects import RigidObject
+from bhgrasp.sim.geometry_text import geometry_text
 from bhgrasp.sim.scene import Scene
 
 
@@ -52,7 +53,7 @@ class SceneLayout:
             else:
                 springs.append(i)
         digest = hashlib.sha256(scene.model.saveToString().encode())
-        digest.update(scene.geometry.saveToString().encode())
+        digest.update(geometry_text(scene.geometry).encode())
         return cls(
             spinning_bodies=tuple(spinning),
             spring_q=np.array([scene.object_q_slice(i).start for i in springs], dtype=int),

@@ -18,6 +18,7 @@ from pinocchio.visualize import MeshcatVisualizer
 from bhgrasp._validation import as_positive
 from bhgrasp.data import State, Trajectory
 from bhgrasp.errors import InputError
+from bhgrasp.model.mesh_object import Mesh
 from bhgrasp.sim.scene import Scene
 from bhgrasp.viz import drawing
 
@@ -56,6 +57,7 @@ class SceneViewer:
         geometry = scene.geometry.copy()
         for index, geometry_object in enumerate(geometry.geometryObjects):
             geometry_object.meshColor = np.array(self._colour(index))
+        _draw_meshes_whole(scene, geometry)
         self._geometry = geometry
         self._geometry_data = pin.GeometryData(geometry)
         self._data = scene.model.createData()
@@ -115,8 +117,9 @@ class SceneViewer:
         pin.forwardKinematics(scene.model, self._data, q)
         pin.updateGeometryPlacements(scene.model, self._data, self._geometry, self._geometry_data)
         result = [placement.homogeneous for placement in self._geometry_data.oMg]
-        for index, pose in zip(scene.object_geometries, object_poses):
-            result[index] = (pose * self._geometry.geometryObjects[index].placement).homogeneous
+        for geometries, pose in zip(scene.object_geometry_sets, object_poses):
+            for index in geometries:
+                result[index] = (pose * self._geometry.geometryObjects[index].placement).homogeneous
         return result
 
     def display(self, state: State) -> None:
@@ -290,6 +293,15 @@ def save_replay(scene: Scene, trajectory: Trajectory, path: str | Path) -> Path:
         return viewer.save_html(path)
     finally:
         viewer.close()
+
+
+def _draw_meshes_whole(scene: Scene, geometry: pin.GeometryModel) -> None:
+    """A mesh object is drawn as its own surface on its first geometry, its other convex pieces hidden (alpha 0)."""
+    for item, geometries in zip(scene.objects, scene.object_geometry_sets):
+        if isinstance(item, Mesh):
+            geometry.geometryObjects[geometries[0]].geometry = item.surface()
+            for index in geometries[1:]:
+                geometry.geometryObjects[index].meshColor = np.array([0.0, 0.0, 0.0, 0.0])
 
 
 __all__ = ["CAMERA_OFFSET", "CAMERA_TARGET", "SceneViewer", "save_replay"]
