@@ -6,7 +6,7 @@ package) cuts the mesh until every piece is within ``concavity`` of its hull, an
 CoACD runs on one OpenMP thread here: on several its pieces differ in their last bits from run to run (a mug's 32
 pieces, same sizes, different hashes); on one, the same mesh and settings give the same pieces, bit for bit.  It
 takes seconds (7-11 s for the household mug and bowl), so the pieces are kept in ``cache_dir()`` under the
-SHA-256 of the mesh, the settings and CoACD's version, as ``.npz`` files read without pickle; the pieces of
+SHA-256 of the mesh and the settings, as ``.npz`` files read without pickle; the pieces of
 :mod:`~bhgrasp.model.household`'s objects ship with the package (:data:`SHIPPED`, written by
 :func:`~bhgrasp.model.household.write_shipped_pieces`).
 """
@@ -71,15 +71,14 @@ def convex_pieces(
 
 
 def decomposition_key(vertices: np.ndarray, faces: np.ndarray, scale: float, concavity: float) -> str:
-    """The SHA-256 (hex) of a mesh, its scale, the settings and CoACD's version: the name of its pieces' file."""
+    """The SHA-256 (hex) of a mesh, its scale and the settings: the name of its pieces' file.
+
+    Not CoACD's version: pieces once made stay the body's collision shape (a file records the version that made it),
+    so an upgrade changes no simulation and the shipped pieces are found whatever CoACD is installed.
+    """
     digest = hashlib.sha256(np.ascontiguousarray(vertices, dtype=np.float64).tobytes())
     digest.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
-    digest.update(f"scale {float(scale)!r}".encode())
-    try:
-        version = metadata.version("coacd")
-    except metadata.PackageNotFoundError:
-        version = "absent"
-    digest.update(f"{float(concavity)!r} {SEED} no remeshing coacd {version}".encode())
+    digest.update(f"scale {float(scale)!r} concavity {float(concavity)!r} seed {SEED} no remeshing".encode())
     return digest.hexdigest()
 
 
@@ -93,8 +92,16 @@ def write_pieces(path: Path, pieces: list[np.ndarray]) -> None:
     """Store ``pieces`` in ``path`` (atomic: a parallel run reads a whole file or none)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(f"{path.stem}.{os.getpid()}.tmp.npz")
-    np.savez_compressed(partial, count=len(pieces), **{f"piece{k}": piece for k, piece in enumerate(pieces)})
+    arrays = {f"piece{k}": piece for k, piece in enumerate(pieces)}
+    np.savez_compressed(partial, count=len(pieces), made_by=f"coacd {_coacd_version()}", **arrays)
     os.replace(partial, path)
+
+
+def _coacd_version() -> str:
+    try:
+        return metadata.version("coacd")
+    except metadata.PackageNotFoundError:
+        return "unknown"
 
 
 def _decompose(vertices: np.ndarray, faces: np.ndarray, concavity: float) -> list[np.ndarray]:

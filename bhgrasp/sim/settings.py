@@ -14,6 +14,7 @@ from bhgrasp._validation import as_positive, as_real
 from bhgrasp.errors import InputError
 
 INTEGRATORS = ("implicit", "semi-implicit", "rk4")
+START_CHECKS = ("warn", "error", "off")  # what an initial state that starts wrong does
 
 
 @dataclass(frozen=True)
@@ -32,6 +33,9 @@ class SimulatorSettings:
             narrow phase crashes near 1e155 m).
         engine: ``"compiled"`` (the C++ step of ``bhgrasp._core``) or ``"python"`` (the readable reference);
             ``None`` is stored as the default engine (:func:`~bhgrasp._native.default_engine`).
+        start_check: What an initial state that starts wrong (:mod:`~bhgrasp.sim.start_check`: bodies
+            interpenetrating, objects the step cannot resolve) does: ``"warn"`` (a ``StartWarning``), ``"error"``
+            (an ``InputError``) or ``"off"``.
     """
 
     dt: float = 1e-3
@@ -42,15 +46,18 @@ class SimulatorSettings:
     max_speed: float = 100.0
     max_coordinate: float = 1e4
     engine: str | None = None
+    start_check: str = "warn"
 
     def __post_init__(self) -> None:
         """Check every setting and store it as a float (or one of the allowed names)."""
         if self.integrator not in INTEGRATORS:
             raise InputError(f"`integrator` must be one of {INTEGRATORS}, got {self.integrator!r}")
         object.__setattr__(self, "engine", engine_name(self.engine))
+        if self.start_check not in START_CHECKS:
+            raise InputError(f"`start_check` must be one of {START_CHECKS}, got {self.start_check!r}")
         for name in ("dt", "joint_limit_stiffness", "max_penetration", "max_speed", "max_coordinate"):
             object.__setattr__(self, name, as_positive(getattr(self, name), name))
         object.__setattr__(self, "joint_limit_damping", as_real(self.joint_limit_damping, "joint_limit_damping"))
 
 
-__all__ = ["ENGINES", "INTEGRATORS", "SimulatorSettings"]
+__all__ = ["ENGINES", "INTEGRATORS", "START_CHECKS", "SimulatorSettings"]

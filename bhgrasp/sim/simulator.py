@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from bhgrasp.data import ContactMemory, SimulatedState, State
+from bhgrasp.data import ContactMemory, ContactSet, SimulatedState, State
 from bhgrasp.errors import FrozenSettingError, InputError
 from bhgrasp.sim import run_loop
 from bhgrasp.sim.actuation import Actuation, FullyActuated
@@ -46,6 +46,7 @@ from bhgrasp.sim.python_engine import PythonEngine
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_layout import SceneLayout
 from bhgrasp.sim.settings import SimulatorSettings
+from bhgrasp.sim.start_check import StartProblem, report, start_problems
 from bhgrasp.sim.state_check import check_state, describe_divergence
 from bhgrasp.sim.step_output import StepInfo, StepOutput
 
@@ -68,6 +69,7 @@ class Simulator:
         max_speed: float = 100.0,
         engine: str | None = None,
         max_coordinate: float = 1e4,
+        start_check: str = "warn",
     ) -> None:
         """Set up the simulation.
 
@@ -86,6 +88,8 @@ class Simulator:
                 (default): the default engine, compiled unless ``BHGRASP_ENGINE=python``.
             max_coordinate: Largest |coordinate| [m or rad] of a state: beyond it a state is refused and a step
                 has diverged.
+            start_check: ``"warn"``, ``"error"`` or ``"off"``: what :meth:`initial_state` does with a scene that
+                starts wrong (bodies interpenetrating, an object its step cannot resolve; :meth:`check_start`).
 
         Raises:
             InputError: A setting out of range, or an actuation built for another hand.
@@ -100,6 +104,7 @@ class Simulator:
             max_speed=max_speed,
             max_coordinate=max_coordinate,
             engine=engine,
+            start_check=start_check,
         )
         self._build(scene, contact, actuation, settings)
 
@@ -137,6 +142,7 @@ class Simulator:
             "layout": layout,
             "engine": kind(scene, layout, law, settings, MATCH_RADIUS),
             "_drives": {},
+            "_start": [],  # the problems of the last initial state (named again if a run from it diverges)
             "_lock": threading.Lock(),
             "_modal": _modal(actuation),
         }
@@ -183,7 +189,21 @@ class Simulator:
         with self._lock:
             self.actuation.reset(q[: self.scene.nq_hand])
             contacts = self.engine.detect(q, memory)
-            return self._state(0.0, q, v, contacts, memory)
+            self._start[:] = self._start_problems(q, v, contacts)
+            state = self._state(0.0, q, v, contacts, memory)
+        report(self._start, self.settings.start_check)
+        return state
+
+    def check_start(self, state: State) -> list[StartProblem]:
+        """What is wrong with starting from ``state`` (:mod:`~bhgrasp.sim.start_check`; empty if nothing is)."""
+        self._start_memory(state)
+        with self._lock:
+            contacts = self.engine.detect(state.scene_q, ContactMemory.empty())
+            return self._start_problems(state.scene_q, state.scene_v, contacts)
+
+    def _start_problems(self, q: np.ndarray, v: np.ndarray, contacts: ContactSet) -> list[StartProblem]:
+        settings = self.settings
+        return start_problems(self.scene, q, v, contacts, self.law, settings.dt, settings.max_penetration)
 
     def _state(self, t: float, q: np.ndarray, v: np.ndarray, contacts: Any, memory: Any) -> SimulatedState:
         """The state at ``t``: ``contacts`` and ``memory`` as the engine made them (converted when first read)."""
@@ -250,7 +270,8 @@ class Simulator:
         result = self.engine.step(q, v, tau_hand, self._drive(), memory)
         t = round(state.t / self.settings.dt + 1) * self.settings.dt  # k dt exactly: no accumulated rounding
         if result.divergence.kind:
-            raise describe_divergence(t, result.divergence, self.settings)
+            contacts = self.engine.contact_set(result.contacts) if result.divergence.kind == 4 else None
+            raise describe_divergence(t, result.divergence, self.settings, self.scene, self._start, contacts)
         if self._modal:
             actuation.update(result.q[:nqh], result.v[:nvh], u, result.drive, result.load)
         return self._state(t, result.q, result.v, result.contacts, result.memory), StepInfo(

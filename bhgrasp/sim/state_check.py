@@ -9,15 +9,17 @@ coal's narrow phase crashes on coordinates near 1e155 m).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from bhgrasp.data import ContactMemory, State
+from bhgrasp.data import ContactMemory, ContactSet, State
 from bhgrasp.errors import InputError, SimulationDiverged
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_layout import SceneLayout
 from bhgrasp.sim.settings import SimulatorSettings
+from bhgrasp.sim.start_check import summary
 
 QUATERNION_TOLERANCE = 1e-6  # on | |quaternion| - 1 |: integration keeps it to ~1e-15, a hand-written one to its digits
 
@@ -88,20 +90,56 @@ def _free_index(scene: Scene, quaternion: int) -> int:
     return free[quaternion]
 
 
-_KINDS = {
-    1: ("joint/object position (coordinate {index})", "{value}", "reduce dt or the controller gains"),
-    2: ("joint/object velocity (coordinate {index})", "{value}", "reduce dt or the controller gains"),
-    3: ("speed of velocity coordinate {index}", "{value:.3g}", "reduce dt or gains"),
+_KINDS = {  # {where}: the coordinate and, with the scene, its joint or object ("coordinate 2, joint F1_distal")
+    1: ("joint/object position ({where})", "{value}", "reduce dt or the controller gains"),
+    2: ("joint/object velocity ({where})", "{value}", "reduce dt or the controller gains"),
+    3: ("speed of velocity ({where})", "{value:.3g}", "reduce dt or gains"),
     4: ("contact depth", "{value:.4g} m", "stiffen the contact or reduce dt/forces"),
-    5: ("coordinate {index}", "{value:.4g}", "beyond max_coordinate = {bound:g} [m or rad]"),
+    5: ("{where}", "{value:.4g}", "beyond max_coordinate = {bound:g} [m or rad]"),
 }
 
 
-def describe_divergence(t: float, divergence: Any, settings: SimulatorSettings) -> SimulationDiverged:
-    """The error for an engine's divergence record (``kind``, ``index``, ``value``): it names the value it saw."""
-    quantity, value, hint = _KINDS[int(divergence.kind)]
+def describe_divergence(
+    t: float,
+    divergence: Any,
+    settings: SimulatorSettings,
+    scene: Scene | None = None,
+    start: Sequence = (),
+    contacts: ContactSet | None = None,
+) -> SimulationDiverged:
+    """The error for an engine's divergence record (``kind``, ``index``, ``value``): it names the value it saw.
+
+    With the ``scene``, it names the joint or object the coordinate belongs to (and, given the step's ``contacts``,
+    the bodies of the deepest contact); with the problems the run's start had
+    (:func:`~bhgrasp.sim.start_check.start_problems`), it gives them as the likely cause instead of the generic hint.
+    """
+    kind = int(divergence.kind)
+    quantity, value, hint = _KINDS[kind]
     fields = {"index": int(divergence.index), "value": float(divergence.value), "bound": settings.max_coordinate}
-    return SimulationDiverged(t, quantity.format(**fields), value.format(**fields), hint.format(**fields))
+    fields["where"] = f"coordinate {fields['index']}"
+    if scene is not None and kind in (1, 2, 3, 5) and fields["index"] >= 0:
+        fields["where"] += f", {coordinate_owner(scene, fields['index'], velocity=kind in (2, 3))}"
+    quantity = quantity.format(**fields)
+    if scene is not None and kind == 4 and contacts is not None and len(contacts):
+        pair = scene.pairs[int(contacts.pair[int(np.argmax(contacts.depth))])]
+        quantity += f" ({pair.body_b} in {pair.body_a})"
+    if start:
+        hint = "likely because " + summary(list(start))
+    return SimulationDiverged(t, quantity, value.format(**fields), hint.format(**fields))
+
+
+def coordinate_owner(scene: Scene, index: int, velocity: bool) -> str:
+    """What a coordinate of the scene's ``q`` (or ``v``, ``velocity``) moves: ``"joint NAME"`` or ``"object NAME"``."""
+    for i, name in enumerate(scene.object_names):
+        span = scene.object_v_slice(i) if velocity else scene.object_q_slice(i)
+        if span.start <= index < span.stop:
+            return f"object {name}"
+    model = scene.model
+    for joint in range(1, model.njoints):
+        start, size = (model.idx_vs[joint], model.nvs[joint]) if velocity else (model.idx_qs[joint], model.nqs[joint])
+        if start <= index < start + size:
+            return f"joint {model.names[joint]}"
+    return f"coordinate {index}"
 
 
 def divergence_text(divergence: Any) -> str:
@@ -110,7 +148,8 @@ def divergence_text(divergence: Any) -> str:
         return ""
     quantity, value, _ = _KINDS[int(divergence.kind)]
     fields = {"index": int(divergence.index), "value": float(divergence.value)}
+    fields["where"] = f"coordinate {fields['index']}"
     return f"{quantity.format(**fields)} = {value.format(**fields)}"
 
 
-__all__ = ["QUATERNION_TOLERANCE", "check_state", "describe_divergence", "divergence_text"]
+__all__ = ["QUATERNION_TOLERANCE", "check_state", "coordinate_owner", "describe_divergence", "divergence_text"]

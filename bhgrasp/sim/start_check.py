@@ -1,0 +1,186 @@
+"""A scene that starts wrong says so: interpenetrating bodies and objects the step cannot resolve, before a step.
+
+:func:`start_problems` reads a start configuration as the first step would see it and names
+
+- every collision pair that starts **interpenetrated** deeper than :data:`START_DEPTH_SHARE` of the simulator's
+  ``max_penetration`` (5 mm by default): its bodies, its depth and the force its contact spring releases at once;
+- every free object whose contact the step cannot **resolve**: one that may move further in one step than its
+  smallest half-thickness ``h`` (it can pass through a surface unseen, "tunnelling"), with the ``dt = h / u`` it
+  needs, and one the contact law lets sink deeper than ``h`` (at rest under gravity, or stopping from its speed).
+  Its speed ``u`` is what it may reach at its first contact: its initial speed plus its spin at its bounding radius,
+  plus the speed of a fall through its gap to the nearest environment shape, ``sqrt(2 g gap)``.
+
+The stopping depth of a body of mass ``m`` arriving at ``u`` on the law ``f = k d^e`` (``e = 1`` linear) is the ``d``
+at which the spring's energy ``k d^(e+1) / (e+1)`` equals ``m u^2 / 2``; at rest it sinks ``d = (m g / k)^(1/e)``.
+:class:`~bhgrasp.sim.simulator.Simulator` runs the check when it builds an initial state and warns, raises, or stays
+quiet by its ``start_check`` setting; it also names the problems when a run that started with them diverges.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import coal
+import numpy as np
+
+from bhgrasp.data import ContactSet
+from bhgrasp.errors import InputError
+from bhgrasp.model.objects import RigidObject
+from bhgrasp.sim.contact_law import SpringDamper
+from bhgrasp.sim.scene import Scene
+
+START_DEPTH_SHARE = 0.25  # a start deeper than this share of max_penetration is named
+
+
+class StartWarning(UserWarning):
+    """A simulation starts interpenetrated or with an object its step cannot resolve (see :class:`StartProblem`)."""
+
+
+@dataclass(frozen=True)
+class StartProblem:
+    """One thing wrong with a start configuration.
+
+    Attributes:
+        kind: ``"interpenetrated"`` or ``"unresolved"``.
+        bodies: The bodies concerned (a pair, or one object).
+        value: The depth [m] of an interpenetration, or the ``dt`` [s] an unresolved object needs (0 when the
+            contact law, not ``dt``, is what cannot hold it).
+        message: What is wrong (and, for an object, what to change), in words.
+        limit: The depth [m] an interpenetration may have, or the object's smallest half-thickness [m].
+    """
+
+    kind: str
+    bodies: tuple[str, ...]
+    value: float
+    message: str
+    limit: float
+
+
+def start_problems(
+    scene: Scene, q: np.ndarray, v: np.ndarray, contacts: ContactSet, law: SpringDamper, dt: float, max_depth: float
+) -> list[StartProblem]:
+    """What is wrong with starting ``scene`` at ``(q, v)`` whose contacts are ``contacts`` (module docstring)."""
+    return _interpenetrations(scene, contacts, law, START_DEPTH_SHARE * max_depth) + _unresolved(scene, q, v, law, dt)
+
+
+def report(problems: list[StartProblem], mode: str) -> None:
+    """Warn of ``problems`` (``mode`` ``"warn"``), raise them (``"error"``) or neither (``"off"``, or none)."""
+    if not problems or mode == "off":
+        return
+    text = summary(problems)
+    if mode == "error":
+        raise InputError(text + " (Simulator(start_check='warn') runs it anyway)")
+    warnings.warn(text, StartWarning, stacklevel=3)
+
+
+def summary(problems: list[StartProblem], shown: int = 3) -> str:
+    """The problems in one sentence: the deepest ``shown`` interpenetrations (and how many more), every object."""
+    deep = sorted((p for p in problems if p.kind == "interpenetrated"), key=lambda p: -p.value)
+    parts = []
+    if deep:
+        listed = "; ".join(p.message for p in deep[:shown]) + (
+            f"; and {len(deep) - shown} more" if len(deep) > shown else ""
+        )
+        pairs = f"{len(deep)} body pair{'s' * (len(deep) > 1)}"
+        parts.append(
+            f"{pairs} start interpenetrated deeper than {deep[0].limit * 1e3:.3g} mm "
+            f"({START_DEPTH_SHARE:g} of max_penetration): {listed}; move them apart"
+        )
+    parts += [p.message for p in problems if p.kind != "interpenetrated"]
+    return "the scene starts wrong: " + "; ".join(parts)
+
+
+def _interpenetrations(scene: Scene, contacts: ContactSet, law: SpringDamper, limit: float) -> list[StartProblem]:
+    deepest: dict[tuple[str, str], float] = {}  # per pair of bodies (a body may have several geometries)
+    for index, depth in zip(contacts.pair, contacts.depth):
+        pair = scene.pairs[int(index)]
+        bodies = (pair.body_a, pair.body_b)
+        deepest[bodies] = max(deepest.get(bodies, 0.0), float(depth))
+    problems = []
+    for (body_a, body_b), depth in deepest.items():
+        if depth <= limit:
+            continue
+        force = law.stiffness * depth ** (1.0 if law.normal_law == "linear" else law.exponent)
+        message = f"{body_b} {depth * 1e3:.3g} mm inside {body_a} (its contact pushes {force:.3g} N at once)"
+        problems.append(StartProblem("interpenetrated", (body_a, body_b), depth, message, limit))
+    return problems
+
+
+def _unresolved(scene: Scene, q: np.ndarray, v: np.ndarray, law: SpringDamper, dt: float) -> list[StartProblem]:
+    gravity = float(np.linalg.norm(scene.hand.gravity))
+    exponent = 1.0 if law.normal_law == "linear" else law.exponent
+    problems = []
+    for index, item in enumerate(scene.objects):
+        if not isinstance(item, RigidObject):
+            continue  # a spring-mounted object moves along its spring only
+        name = scene.object_names[index]
+        shape = item.geometry()
+        shape.computeLocalAABB()
+        half = 0.5 * float(np.min(shape.aabb_local.max_ - shape.aabb_local.min_))  # smallest half-thickness [m]
+        twist = scene.object_twist(q, v, index)
+        pose = scene.object_pose(q, index)
+        gap, below = _gap(scene, shape, pose)
+        fall = math.sqrt(2.0 * gravity * gap) if below is not None else 0.0
+        speed = float(np.linalg.norm(twist[:3]) + np.linalg.norm(twist[3:]) * item.bounding_radius) + fall
+        onto = f" (falling {gap * 1e3:.3g} mm onto {below})" if below is not None and fall > 0.0 else ""
+        if speed * dt > half:
+            problems.append(
+                StartProblem(
+                    "unresolved",
+                    (name,),
+                    half / speed,
+                    f"{name} may move {speed * dt * 1e3:.3g} mm in one step at {speed:.3g} m/s{onto}, more than its "
+                    f"smallest half-thickness {half * 1e3:.3g} mm: it can pass through a surface unseen; "
+                    f"dt <= {half / speed:.3g} s resolves it",
+                    half,
+                )
+            )
+        resting = (item.mass * gravity / law.stiffness) ** (1.0 / exponent) if below is not None else 0.0
+        stopping = ((exponent + 1.0) * item.mass * speed**2 / (2.0 * law.stiffness)) ** (1.0 / (exponent + 1.0))
+        sink = max(resting, stopping)
+        if sink > half:
+            problems.append(
+                StartProblem(
+                    "unresolved",
+                    (name,),
+                    0.0,
+                    f"{name} sinks {sink * 1e3:.3g} mm into what it meets (contact stiffness {law.stiffness:.3g}), "
+                    f"more than its smallest half-thickness {half * 1e3:.3g} mm: stiffen the contact or make it larger",
+                    half,
+                )
+            )
+    return problems
+
+
+def _gap(scene: Scene, shape: coal.CollisionGeometry, pose) -> tuple[float, str | None]:
+    """Distance [m] from an object down to the nearest environment shape below it, and that shape's name.
+
+    Below: the shape's nearest point lies on gravity's side of the object's.  ``(inf, None)`` if none does (no
+    environment, no gravity, or only walls beside or above it).
+    """
+    down = np.asarray(scene.hand.gravity, dtype=float)
+    nearest, name = math.inf, None
+    if not np.any(down):
+        return nearest, name
+    transform = coal.Transform3s(pose.rotation, pose.translation)
+    for geom, env_name in zip(scene.environment_geometries, scene.environment_names):
+        geometry_object = scene.geometry.geometryObjects[geom]
+        placement = geometry_object.placement
+        result = coal.DistanceResult()
+        distance = coal.distance(
+            shape,
+            transform,
+            geometry_object.geometry,
+            coal.Transform3s(placement.rotation, placement.translation),
+            coal.DistanceRequest(),
+            result,
+        )
+        below = down @ (np.asarray(result.getNearestPoint2()) - np.asarray(result.getNearestPoint1())) >= 0.0
+        if (below or distance <= 0.0) and distance < nearest:
+            nearest, name = max(distance, 0.0), env_name
+    return nearest, name
+
+
+__all__ = ["START_DEPTH_SHARE", "StartProblem", "StartWarning", "report", "start_problems", "summary"]

@@ -1,0 +1,122 @@
+"""A scene that starts wrong says so before its first step, and a run that diverges from it names why.
+
+Truths: the depth of a hand placed inside a plane (the plane's distance of its links, from coal apart); the step a
+falling 1 um box needs, h / sqrt(2 g gap); the sag of a heavy box on a soft contact, m g / k; scenes that start
+right (the demo, a box resting at its static depth) report nothing.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import coal
+import numpy as np
+import pinocchio as pin
+import pytest
+from scenes import G, far_hand
+
+import bhgrasp as bh
+from bhgrasp.errors import InputError, SimulationDiverged
+from bhgrasp.model.objects import Box, Plane, table
+from bhgrasp.scenarios.box_grasp import box_grasp
+from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.simulator import Simulator
+from bhgrasp.sim.start_check import StartWarning
+from bhgrasp.sim.state_check import coordinate_owner
+
+TILT = 0.3  # [rad] the plane's tilt about y
+
+
+def hand_in_a_tilted_plane(engine: str, start_check: str = "warn") -> Simulator:
+    """The BH8-280 at the origin, fingers up, a plane tilted 0.3 rad whose solid side reaches 170 mm up its normal."""
+    normal = np.array([math.sin(TILT), 0.0, math.cos(TILT)])
+    plane = Plane(normal=normal, offset=0.17, name="incline")
+    scene = Scene(bh.BarrettHand(gravity=(0.0, 0.0, -G)), [], [plane])
+    return Simulator(scene, engine=engine, start_check=start_check)
+
+
+@pytest.mark.parametrize("engine", ["python", "compiled"])
+def test_a_hand_started_inside_a_plane_is_named_and_so_is_its_divergence(engine: str) -> None:
+    simulator = hand_in_a_tilted_plane(engine)
+    with pytest.warns(StartWarning, match=r"8 body pairs start interpenetrated deeper than 5 mm") as caught:
+        state = simulator.initial_state()
+    assert "F1_distal_link 120 mm inside incline" in str(caught[0].message)
+    problems = simulator.check_start(state)
+    assert {p.bodies[1] for p in problems} >= {"F1_distal_link", "F2_distal_link", "F3_distal_link"}
+    deepest = max(problems, key=lambda p: p.value)
+    assert deepest.bodies == ("incline", "F1_distal_link")
+    assert deepest.value == pytest.approx(plane_depth(simulator.scene, "F1_distal_link"), rel=1e-9)
+    cause = r"\(coordinate 2, joint F1_distal\) = 232; likely because .* start interpenetrated"
+    with pytest.raises(SimulationDiverged, match=cause):
+        simulator.run(lambda t, s: np.zeros(8), 0.01, state=state, progress=False)
+
+
+def plane_depth(scene: Scene, link: str) -> float:
+    """The plane's overlap of a link's box and sphere at the neutral pose: d - min n.x over each, in closed form."""
+    plane = scene.environment[0]
+    data = scene.model.createData()
+    geometry_data = pin.GeometryData(scene.geometry)
+    pin.updateGeometryPlacements(scene.model, data, scene.geometry, geometry_data, pin.neutral(scene.model))
+    depths = []
+    for index in scene.hand_geometries:
+        item = scene.geometry.geometryObjects[index]
+        if scene.model.frames[item.parentFrame].name != link:
+            continue
+        placement, shape, n = geometry_data.oMg[index], item.geometry, plane.normal
+        if isinstance(shape, coal.Box):  # the corner furthest along -n
+            lowest = placement.translation @ n - np.abs(placement.rotation.T @ n) @ shape.halfSide
+        else:  # a sphere
+            lowest = placement.translation @ n - shape.radius
+        depths.append(plane.offset - lowest)
+    return max(depths)
+
+
+def test_the_start_check_warns_raises_or_stays_quiet_by_option() -> None:
+    with pytest.raises(InputError, match=r"starts wrong: .* \(Simulator\(start_check='warn'\) runs it anyway\)"):
+        hand_in_a_tilted_plane("compiled", "error").initial_state()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        hand_in_a_tilted_plane("compiled", "off").initial_state()
+    with pytest.raises(InputError, match="`start_check` must be one of"):
+        Simulator(Scene(far_hand()), start_check="loud")
+    assert hand_in_a_tilted_plane("compiled").with_settings(start_check="off").settings.start_check == "off"
+
+
+def test_a_box_too_small_for_dt_is_named_with_the_dt_it_needs() -> None:
+    """A 1 um box 1 mm above the table reaches sqrt(2 g gap) = 0.14 m/s: dt must be h / u = 3.6 us, not 1 ms."""
+    tiny = Box(size=(1e-6,) * 3, density=1000.0, pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, 1e-3])), name="speck")
+    simulator = Simulator(Scene(far_hand((0.0, 0.0, -G)), [tiny], [table()]))
+    with pytest.warns(StartWarning, match=r"speck may move 0\.14 mm in one step .* dt <= 3\.57e-06 s resolves it"):
+        state = simulator.initial_state()
+    (problem,) = simulator.check_start(state)
+    half, gap = 0.5e-6, 1e-3 - 0.5e-6
+    assert problem.value == pytest.approx(half / math.sqrt(2 * G * gap), rel=1e-6)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        simulator.with_settings(dt=0.9 * problem.value).initial_state()  # a step that resolves it: nothing to say
+
+
+def test_a_heavy_box_on_a_soft_contact_is_named_with_its_sag() -> None:
+    """10 kg on k = 1e4 N/m sinks m g / k = 9.81 mm, more than the 5 mm half-thickness of a 10 mm slab."""
+    slab = Box(size=(0.1, 0.1, 0.01), mass=10.0, pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.005])), name="slab")
+    simulator = Simulator(Scene(far_hand((0.0, 0.0, -G)), [slab], [table()]))
+    with pytest.warns(StartWarning, match=r"slab sinks 9\.81 mm into what it meets .* half-thickness 5 mm"):
+        simulator.initial_state()
+
+
+def test_scenes_that_start_right_say_nothing() -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        setup = box_grasp()  # the demo: fingers open, the box on its pedestal
+        assert setup.simulator.check_start(setup.state) == []
+        resting = Box(size=(0.06, 0.05, 0.05), mass=0.2, pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.0248])))
+        simulator = Simulator(Scene(far_hand((0.0, 0.0, -G)), [resting], [table()]))
+        assert simulator.check_start(simulator.initial_state()) == []
+
+
+def test_a_coordinate_is_named_by_its_joint_or_object() -> None:
+    scene = Scene(far_hand(), [Box(size=(0.1,) * 3, mass=1.0, name="crate")])
+    assert coordinate_owner(scene, 0, velocity=True) == "joint F1_spread"
+    assert coordinate_owner(scene, scene.nv_hand + 4, velocity=True) == "object crate"
+    assert coordinate_owner(scene, scene.nq_hand + 6, velocity=False) == "object crate"
