@@ -22,6 +22,7 @@ QUICK = {  # script -> its arguments for a smoke run
     "bench_sweep.py": ["--cases", "2", "--duration", "0.8"],
     "bench_scaling.py": ["--steps", "20"],
     "bench_instructions.py": ["--cases", "free", "--engine", "compiled", "--short", "2", "--long", "12"],
+    "bench_meshes.py": ["--steps", "20", "--repeat", "1"],
 }
 
 

@@ -105,6 +105,16 @@ def test_a_heavy_box_on_a_soft_contact_is_named_with_its_sag() -> None:
         simulator.initial_state()
 
 
+def test_a_can_dropped_onto_a_soft_contact_is_named_before_it_diverges() -> None:
+    """0.35 kg falling 0.3 m reaches u = sqrt(2 g 0.3) = 2.43 m/s and stops u sqrt(m / k) = 14.4 mm deep on k = 1e4
+    N/m: under its 33 mm half-width but past a max_penetration of 10 mm, where the run would be declared diverged."""
+    can = bh.Cylinder(radius=0.033, length=0.1, mass=0.35, pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.35])))
+    simulator = Simulator(Scene(far_hand((0.0, 0.0, -G)), [can], [table()]), max_penetration=0.01)
+    stop = math.sqrt(2 * G * 0.3) * math.sqrt(0.35 / 1e4)
+    with pytest.warns(StartWarning, match=rf"sinks {stop * 1e3:.3g} mm .* more than max_penetration 10 mm"):
+        simulator.initial_state()
+
+
 def test_scenes_that_start_right_say_nothing() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")

@@ -1,7 +1,13 @@
 """The grasp benchmark's objects: household-sized boxes, cylinders and spheres the BH8-280 spans, as ``KIND:DIMS:MASS``.
 
 An object is given as ``box:0.06x0.05x0.05:0.3`` (edges x, y, z [m]), ``cylinder:0.033x0.10:0.35`` (radius x height
-[m], axis vertical) or ``sphere:0.035:0.2`` (radius [m]); the last field is the mass [kg].  Two built-in sets:
+[m], axis vertical) or ``sphere:0.035:0.2`` (radius [m]); the last field is the mass [kg].  As a mesh: ``KIND:DIMS:MASS:
+mesh`` is the same primitive simulated as a triangle mesh (a box's 12 triangles, a 64-sided cylinder, an icosphere of
+642 vertices; :class:`~bhgrasp.model.mesh_object.Mesh`), ``mesh:PATH:MASS`` a mesh file (metres) and
+``household:NAME:MASS`` one of :mod:`bhgrasp.model.household`'s objects.  A mesh is planned as the primitive its
+hull resembles (:func:`planned_as`: a box if its hull fills at least 90 % of its bounding box, a sphere if its
+extents agree within 15 % and it fills less than 65 %, else an upright cylinder of its footprint's larger half-width)
+and simulated as itself (its hull, or convex pieces if the hull exceeds it by more than 5 %).  The built-in sets:
 
 - :data:`DEVELOPMENT_SET` (also ``OBJECT_SET``), on which the protocol's constants were chosen: the issue's three
   examples (a box, a soup-can-sized cylinder, a ball) and three more of household sizes (a flat box, a slim bottle, a
@@ -11,7 +17,9 @@ An object is given as ``box:0.06x0.05x0.05:0.3`` (edges x, y, z [m]), ``cylinder
   wide can, a tall chips can, a tall bottle and a tall narrow box, a flat and a deep box, three balls of 33-42 mm -
   with approximate sizes and masses of such items, not the set's measured values;
 - :data:`HELD_OUT_SET_2`, fixed before any of its trials ran, once the first had been run under several protocols:
-  four boxes (flat, a tall heavy block, a light brick, a 1.1 kg bottle), a marker and a cup, four balls of 21-48 mm.
+  four boxes (flat, a tall heavy block, a light brick, a 1.1 kg bottle), a marker and a cup, four balls of 21-48 mm;
+- :data:`MESH_SET`: the development set's objects simulated as meshes (each must end as its primitive does), and the
+  household mug and bottle that fit the hand's span.
 
 Each is well under the hand's 2 kg per finger load limit (Barrett wiki, safety page).  A top-down grasp spans an
 object's width, not its height: widths up to 0.15 m and heights up to 0.30 m are accepted.
@@ -22,9 +30,11 @@ stand upright, box edges along the world axes.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -34,16 +44,23 @@ from bhgrasp.model.objects import Box, Cylinder, RigidObject, Sphere
 
 KINDS = {"box": 3, "cylinder": 2, "sphere": 1}  # kind -> number of dimensions
 _NUMBER = r"[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?"
+MESHED = "meshed"  # BenchObject.mesh of a primitive simulated as its mesh
+CYLINDER_SECTIONS, SPHERE_SUBDIVISIONS = 64, 3  # the primitives' meshes
 
 
 @dataclass(frozen=True)
 class BenchObject:
-    """One benchmark object: ``kind`` ('box', 'cylinder', 'sphere'), ``dims`` [m] (see module), ``mass`` [kg]."""
+    """One benchmark object: ``kind`` ('box', 'cylinder', 'sphere'), ``dims`` [m] (see module), ``mass`` [kg].
+
+    ``mesh``: ``""`` (the primitive), ``"meshed"`` (the primitive as a triangle mesh), ``"household:NAME"`` or a mesh
+    file's path; for the last two, ``kind`` and ``dims`` are what the protocol plans with (:func:`planned_as`).
+    """
 
     kind: str
     dims: tuple[float, ...]
     mass: float
     name: str = ""
+    mesh: str = ""
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -64,20 +81,32 @@ class BenchObject:
 
     @classmethod
     def parse(cls, text: str) -> BenchObject:
-        """An object from ``KIND:DIMS:MASS`` (module docstring), e.g. ``cylinder:0.033x0.10:0.35``."""
-        match = re.fullmatch(rf"(\w+):({_NUMBER}(?:x{_NUMBER})*):({_NUMBER})", text.strip())
+        """An object from ``KIND:DIMS:MASS[:mesh]``, ``mesh:PATH:MASS`` or ``household:NAME:MASS`` (module doc)."""
+        text = text.strip()
+        source = re.fullmatch(rf"(mesh|household):(.+):({_NUMBER})", text)
+        if source is not None:
+            origin, where, mass = source.groups()
+            mesh = where if origin == "mesh" else f"household:{where}"
+            kind, dims = planned_as(mesh_of(mesh))
+            return cls(kind, dims, float(mass), mesh=mesh)
+        match = re.fullmatch(rf"(\w+):({_NUMBER}(?:x{_NUMBER})*):({_NUMBER})(:mesh)?", text)
         if match is None:
             raise InputError(
                 f"an object is KIND:DIMS:MASS, e.g. box:0.06x0.05x0.05:0.3, cylinder:0.033x0.10:0.35 or "
-                f"sphere:0.035:0.2 (m, kg), got {text!r}"
+                f"sphere:0.035:0.2 (m, kg), with ':mesh' to simulate it as a mesh, or mesh:PATH:MASS or "
+                f"household:NAME:MASS, got {text!r}"
             )
-        kind, dims, mass = match.groups()
-        return cls(kind, tuple(float(d) for d in dims.split("x")), float(mass))
+        kind, dims, mass, meshed = match.groups()
+        return cls(kind, tuple(float(d) for d in dims.split("x")), float(mass), mesh=MESHED if meshed else "")
 
     @property
     def spec(self) -> str:
-        """The ``KIND:DIMS:MASS`` text of this object."""
-        return f"{self.kind}:{'x'.join(f'{d:g}' for d in self.dims)}:{self.mass:g}"
+        """The text of this object (:meth:`parse` reads it back)."""
+        if self.mesh and self.mesh != MESHED:
+            origin = self.mesh if self.mesh.startswith("household:") else f"mesh:{self.mesh}"
+            return f"{origin}:{self.mass:g}"
+        primitive = f"{self.kind}:{'x'.join(f'{d:g}' for d in self.dims)}:{self.mass:g}"
+        return primitive + (":mesh" if self.mesh else "")
 
     @property
     def half_extents(self) -> np.ndarray:
@@ -92,11 +121,73 @@ class BenchObject:
         """The rigid body resting on the table (its lowest point at z = 0), centred on the z axis."""
         pose = pin.SE3(np.eye(3), np.array([0.0, 0.0, self.half_extents[2]]))
         common = {"mass": self.mass, "pose": pose, "friction": friction, "name": self.name}
+        if self.mesh:
+            return _mesh_body(self.mesh_source(), common)
         if self.kind == "box":
             return Box(size=self.dims, **common)
         if self.kind == "cylinder":
             return Cylinder(radius=self.dims[0], length=self.dims[1], **common)
         return Sphere(radius=self.dims[0], **common)
+
+    def mesh_source(self):
+        """The triangle mesh of a mesh object (a ``trimesh.Trimesh``, its own frame), or None for a primitive."""
+        if not self.mesh:
+            return None
+        if self.mesh != MESHED:
+            return mesh_of(self.mesh)
+        import trimesh
+
+        if self.kind == "box":
+            return trimesh.creation.box(extents=self.dims)
+        if self.kind == "cylinder":
+            return trimesh.creation.cylinder(radius=self.dims[0], height=self.dims[1], sections=CYLINDER_SECTIONS)
+        return trimesh.creation.icosphere(subdivisions=SPHERE_SUBDIVISIONS, radius=self.dims[0])
+
+
+def mesh_of(source: str):
+    """The ``trimesh.Trimesh`` of ``household:NAME`` or of a mesh file [m]."""
+    import trimesh
+
+    from bhgrasp.model.household import household_mesh
+
+    if source.startswith("household:"):
+        return household_mesh(source.split(":", 1)[1])
+    path = Path(source)
+    if not path.is_file():
+        raise InputError(f"mesh file {source!r} does not exist")
+    return trimesh.load(path, force="mesh")
+
+
+def planned_as(mesh) -> tuple[str, tuple[float, ...]]:
+    """The primitive the protocol plans a mesh as (module docstring): ``(kind, dims)``, from its hull and extents."""
+    extents = np.asarray(mesh.extents, dtype=float)
+    fill = float(mesh.convex_hull.volume / np.prod(extents))
+    if fill >= 0.9:
+        return "box", tuple(float(e) for e in extents)
+    if fill < 0.65 and extents.max() <= 1.15 * extents.min():
+        return "sphere", (float(extents.max() / 2),)
+    return "cylinder", (float(extents[:2].max() / 2), float(extents[2]))
+
+
+def _mesh_body(source, common: dict) -> RigidObject:
+    """A Mesh resting as the primitive does: its bounding box centred on the z axis, its lowest point at z = 0."""
+    from bhgrasp.model.mesh_object import Mesh
+
+    standing = Mesh(source, mass=common["mass"], collision="hull")
+    if standing.volume < trimesh_hull_volume(standing) / 1.05:  # non-convex: its convex pieces
+        standing = Mesh(source, mass=common["mass"], collision="decomposed")
+    low, high = np.min(standing.vertices, axis=0), np.max(standing.vertices, axis=0)
+    centre = pin.SE3(np.eye(3), np.array([-(low[0] + high[0]) / 2, -(low[1] + high[1]) / 2, -low[2]]))
+    return dataclasses.replace(
+        standing, pose=centre, friction=common["friction"], name=common["name"], mass=common["mass"], density=None
+    )
+
+
+def trimesh_hull_volume(item) -> float:
+    """The volume [m^3] of a Mesh's convex hull."""
+    import trimesh
+
+    return float(trimesh.Trimesh(*item.hull).volume)
 
 
 DEVELOPMENT_SET = (
@@ -136,6 +227,24 @@ HELD_OUT_SET_2 = (
     BenchObject("sphere", (0.0375,), 0.068, "apple"),
     BenchObject("sphere", (0.021,), 0.046, "golf ball"),
 )
-SETS = {"development": DEVELOPMENT_SET, "held-out": HELD_OUT_SET, "held-out-2": HELD_OUT_SET_2}
+# The development set simulated as meshes (each must end as its primitive does), and the household objects that fit
+# the hand's span (the bowl, banana and drill are wider than 0.15 m).
+MESH_SET = (
+    *(dataclasses.replace(item, name=f"{item.name} (mesh)", mesh=MESHED) for item in DEVELOPMENT_SET),
+    dataclasses.replace(BenchObject.parse("household:mug:0.118"), name="mug"),
+    dataclasses.replace(BenchObject.parse("household:bottle:0.3"), name="household bottle"),
+)
+SETS = {"development": DEVELOPMENT_SET, "held-out": HELD_OUT_SET, "held-out-2": HELD_OUT_SET_2, "meshes": MESH_SET}
 
-__all__ = ["DEVELOPMENT_SET", "HELD_OUT_SET", "HELD_OUT_SET_2", "KINDS", "OBJECT_SET", "SETS", "BenchObject"]
+__all__ = [
+    "DEVELOPMENT_SET",
+    "HELD_OUT_SET",
+    "HELD_OUT_SET_2",
+    "KINDS",
+    "MESH_SET",
+    "OBJECT_SET",
+    "SETS",
+    "BenchObject",
+    "mesh_of",
+    "planned_as",
+]

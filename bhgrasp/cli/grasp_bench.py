@@ -9,7 +9,7 @@ import sys
 
 from bhgrasp.cli import arguments as checked
 
-SETS = ("development", "held-out", "held-out-2")  # bhgrasp.bench.objects.SETS, checked equal by the tests
+SETS = ("development", "held-out", "held-out-2", "meshes")  # bhgrasp.bench.objects.SETS, checked equal by the tests
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -23,7 +23,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="KIND:DIMS:MASS",
         help="box:0.06x0.05x0.05:0.3 (edges, m), cylinder:0.033x0.10:0.35 (radius x height), sphere:0.035:0.2 "
-        "(radius); masses in kg; repeatable (default: both built-in sets, see --set)",
+        "(radius); masses in kg; ':mesh' after one simulates it as a mesh; mesh:PATH:MASS a mesh file [m], "
+        "household:mug:0.118 a household object; repeatable (default: the built-in sets, see --set)",
     )
     add(
         "--set",
@@ -32,7 +33,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=SETS,
         default=None,
         help="a built-in object set: development (the protocol's constants were chosen on it), held-out (fixed "
-        "before tuning) or held-out-2 (fixed before any of its trials ran); repeatable; with --object, added to those",
+        "before tuning), held-out-2 (fixed before any of its trials ran) or meshes (the development set as meshes, "
+        "a mug and a bottle); repeatable; with --object, added to those",
     )
     add(
         "--grasp",

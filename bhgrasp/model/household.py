@@ -47,19 +47,20 @@ def household_mesh(name: str):
     return trimesh.Trimesh(vertices=np.round(mesh.vertices, 9), faces=mesh.faces, process=True)
 
 
-def household(name: str, position: Any = (0.0, 0.0, 0.0), collision: str | None = None, **fields: Any) -> Mesh:
+def household(kind: str, position: Any = (0.0, 0.0, 0.0), collision: str | None = None, **fields: Any) -> Mesh:
     """A household object standing with its base centre at ``position`` (world) [m], its YCB mass.
 
     Args:
-        name: One of :data:`HOUSEHOLD`.
+        kind: One of :data:`HOUSEHOLD`.
         position: Where its base's centre stands.
         collision: ``"hull"`` or ``"decomposed"`` (default: decomposed for the non-convex ones).
-        fields: Any other :class:`~bhgrasp.model.mesh_object.Mesh` field (``mass``, ``friction``, ``name``, ...).
+        fields: Any other :class:`~bhgrasp.model.mesh_object.Mesh` field (``mass``, ``friction``, ``name``: default
+            ``kind``, ...).
     """
-    mass, concave = HOUSEHOLD[name] if name in HOUSEHOLD else (None, False)
-    mesh = household_mesh(name)
+    mass, concave = HOUSEHOLD[kind] if kind in HOUSEHOLD else (None, False)
+    mesh = household_mesh(kind)
     collision = collision or ("decomposed" if concave else "hull")
-    fields.setdefault("name", name)
+    fields.setdefault("name", kind)
     if "density" not in fields:
         fields.setdefault("mass", mass)
     standing = Mesh(mesh, collision=collision, **fields)

@@ -53,6 +53,12 @@ class GraspDemoResult:
     planned_offset: np.ndarray | None = None
     requested_offset: np.ndarray | None = None
 
+    @property
+    def object_label(self) -> str:
+        """The grasped object in the summary: its name, or its shape's (``box``) if it was given none."""
+        item = self.scene.objects[0]
+        return item.name or type(item).__name__.lower()
+
     def summary(self) -> str:
         """A few lines for the terminal."""
         duration = float(self.trajectory.t[-1])
@@ -67,7 +73,7 @@ class GraspDemoResult:
             window = f"at the last sample: the run ended before the forces settle at {self.settle_time:.2f} s"
         return "\n".join(
             [
-                f"grasp demo ({self.scene.hand.name}, {self.controller}): box {self.true_mass:.2f} kg, "
+                f"grasp demo ({self.scene.hand.name}, {self.controller}): {self.object_label} {self.true_mass:.2f} kg, "
                 f"controller told {self.initial_estimate:.2f} kg{estimate}",
                 f"  grasp closed at {self.grasp_time:.3f} s; {motion}",
                 f"  object pose error: {1e3 * self.position_error:.3f} mm, "
