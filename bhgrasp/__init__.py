@@ -55,7 +55,7 @@ _EXPORTS = {
     "grasp_map": "bhgrasp.grasp",
     "grasp_quality": "bhgrasp.grasp",
     "hand_jacobian": "bhgrasp.grasp",
-    "household": "bhgrasp.model.household",
+    "household": "bhgrasp.model.household_objects",
     "ik": "bhgrasp.model.hand_ik",
     "internal_forces": "bhgrasp.grasp",
     "is_force_closure": "bhgrasp.grasp",
@@ -170,7 +170,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported here
     from bhgrasp.model.barrett_hand import BarrettHand
     from bhgrasp.model.hand import Hand
     from bhgrasp.model.hand_ik import IKResult, ik
-    from bhgrasp.model.household import household
+    from bhgrasp.model.household_objects import household
     from bhgrasp.model.ik import FingerIKResult, Workspace, finger_ik, workspace
     from bhgrasp.model.mesh_object import Mesh
     from bhgrasp.model.objects import Box, Capsule, Cylinder, FixedBox, Plane, Sphere, table, wall

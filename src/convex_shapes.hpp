@@ -12,6 +12,9 @@
 
 namespace bhgrasp {
 
+// The radius [m] of the sphere geometry_text.py writes in each convex shape's place (checked when it is replaced).
+constexpr double kConvexPlaceholderRadius = 1e-3;
+
 struct ConvexShape {
   std::size_t geometry;                                     // its index in the GeometryModel
   std::shared_ptr<coal::Convex<coal::Triangle>> shape;      // its points and triangles, as written

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include <boost/variant/get.hpp>
+#include <coal/shape/geometric_shapes.h>
 #include <pinocchio/multibody/geometry.hpp>
 #include <pinocchio/multibody/model.hpp>
 #include <pinocchio/serialization.hpp>
@@ -79,7 +80,11 @@ pinocchio::GeometryModel geometry_from_text(const std::string& text) {
   for (const ConvexShape& convex : shapes) {
     if (convex.geometry >= geometry.geometryObjects.size())
       throw std::invalid_argument("convex shapes: a shape names a geometry the geometry model lacks");
-    geometry.geometryObjects[convex.geometry].geometry = convex.shape;
+    auto& target = geometry.geometryObjects[convex.geometry].geometry;
+    const auto* placeholder = dynamic_cast<const coal::Sphere*>(target.get());
+    if (placeholder == nullptr || placeholder->radius != kConvexPlaceholderRadius)
+      throw std::invalid_argument("convex shapes: a shape names a geometry that is not its placeholder");
+    target = convex.shape;
   }
   return geometry;
 }

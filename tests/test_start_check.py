@@ -39,37 +39,49 @@ def hand_in_a_tilted_plane(engine: str, start_check: str = "warn") -> Simulator:
 @pytest.mark.parametrize("engine", ["python", "compiled"])
 def test_a_hand_started_inside_a_plane_is_named_and_so_is_its_divergence(engine: str) -> None:
     simulator = hand_in_a_tilted_plane(engine)
-    with pytest.warns(StartWarning, match=r"8 body pairs start interpenetrated deeper than 5 mm") as caught:
+    depths = plane_depths(simulator.scene)  # closed form, per link
+    deep = sorted((d, link) for link, d in depths.items() if d > 0.005)
+    with pytest.warns(StartWarning, match=rf"{len(deep)} body pairs start interpenetrated deeper than 5 mm") as caught:
         state = simulator.initial_state()
-    assert "F1_distal_link 120 mm inside incline" in str(caught[0].message)
+    assert f"{deep[-1][1]} {deep[-1][0] * 1e3:.3g} mm inside incline" in str(caught[0].message)
     problems = simulator.check_start(state)
-    assert {p.bodies[1] for p in problems} >= {"F1_distal_link", "F2_distal_link", "F3_distal_link"}
-    deepest = max(problems, key=lambda p: p.value)
-    assert deepest.bodies == ("incline", "F1_distal_link")
-    assert deepest.value == pytest.approx(plane_depth(simulator.scene, "F1_distal_link"), rel=1e-9)
-    cause = r"\(coordinate 2, joint F1_distal\) = 232; likely because .* start interpenetrated"
+    assert sorted(p.bodies[1] for p in problems) == sorted(link for _, link in deep)
+    for problem in problems:
+        assert problem.bodies[0] == "incline"
+        assert problem.value == pytest.approx(depths[problem.bodies[1]], rel=1e-9)
+    cause = r"\(coordinate 2, joint F1_distal\) = [0-9.e+]+; likely because .* start interpenetrated"
     with pytest.raises(SimulationDiverged, match=cause):
         simulator.run(lambda t, s: np.zeros(8), 0.01, state=state, progress=False)
 
 
-def plane_depth(scene: Scene, link: str) -> float:
-    """The plane's overlap of a link's box and sphere at the neutral pose: d - min n.x over each, in closed form."""
+def plane_depths(scene: Scene) -> dict[str, float]:
+    """Each moving hand link's deepest overlap with the plane at the neutral pose, d - min n.x over its shapes.
+
+    In closed form: a box's corner furthest along -n, a sphere's point, a cylinder's rim point (axis a, radius r,
+    half-length h: c.n - r sqrt(1 - (a.n)^2) - h |a.n|).
+    """
     plane = scene.environment[0]
+    n = plane.normal
     data = scene.model.createData()
     geometry_data = pin.GeometryData(scene.geometry)
     pin.updateGeometryPlacements(scene.model, data, scene.geometry, geometry_data, pin.neutral(scene.model))
-    depths = []
+    depths: dict[str, float] = {}
     for index in scene.hand_geometries:
         item = scene.geometry.geometryObjects[index]
-        if scene.model.frames[item.parentFrame].name != link:
-            continue
-        placement, shape, n = geometry_data.oMg[index], item.geometry, plane.normal
-        if isinstance(shape, coal.Box):  # the corner furthest along -n
-            lowest = placement.translation @ n - np.abs(placement.rotation.T @ n) @ shape.halfSide
-        else:  # a sphere
-            lowest = placement.translation @ n - shape.radius
-        depths.append(plane.offset - lowest)
-    return max(depths)
+        if item.parentJoint == 0:
+            continue  # the palm: fixed, the environment does not collide with it
+        placement, shape = geometry_data.oMg[index], item.geometry
+        centre = placement.translation @ n
+        if isinstance(shape, coal.Box):
+            lowest = centre - np.abs(placement.rotation.T @ n) @ shape.halfSide
+        elif isinstance(shape, coal.Sphere):
+            lowest = centre - shape.radius
+        else:
+            along = float(placement.rotation[:, 2] @ n)
+            lowest = centre - shape.radius * math.sqrt(max(1.0 - along * along, 0.0)) - shape.halfLength * abs(along)
+        link = scene.model.frames[item.parentFrame].name
+        depths[link] = max(depths.get(link, -math.inf), plane.offset - lowest)
+    return depths
 
 
 def test_the_start_check_warns_raises_or_stays_quiet_by_option() -> None:
@@ -130,3 +142,27 @@ def test_a_coordinate_is_named_by_its_joint_or_object() -> None:
     assert coordinate_owner(scene, 0, velocity=True) == "joint F1_spread"
     assert coordinate_owner(scene, scene.nv_hand + 4, velocity=True) == "object crate"
     assert coordinate_owner(scene, scene.nq_hand + 6, velocity=False) == "object crate"
+
+
+def test_the_fall_is_measured_to_what_lies_below_not_to_a_wall_beside() -> None:
+    """A box 0.45 m over the table with a wall 25 mm to its side falls onto the table: u = sqrt(2 g 0.45)."""
+    box = Box(size=(0.05,) * 3, mass=0.3, pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.475])), name="crate")
+    wall = bh.FixedBox(size=(0.02, 0.4, 1.0), pose=pin.SE3(np.eye(3), np.array([0.06, 0.0, 0.5])), name="wall")
+    law = bh.SpringDamper(stiffness=1e3)  # soft: it stops u sqrt(m / k) = 51 mm deep, past max_penetration
+    simulator = Simulator(Scene(far_hand((0.0, 0.0, -G)), [box], [table(), wall]), contact=law, start_check="off")
+    (problem,) = simulator.check_start(simulator.initial_state())
+    stop = math.sqrt(2 * G * 0.45) * math.sqrt(0.3 / 1e3)
+    assert f"sinks {stop * 1e3:.3g} mm into what it meets (falling 450 mm onto table)" in problem.message
+
+
+def test_a_name_with_braces_does_not_break_the_divergence_message() -> None:
+    from types import SimpleNamespace
+
+    from bhgrasp.sim.settings import SimulatorSettings
+    from bhgrasp.sim.start_check import StartProblem
+    from bhgrasp.sim.state_check import describe_divergence
+
+    problem = StartProblem("unresolved", ("cup {big}",), 0.0, "cup {big} sinks 30 mm", 0.01)
+    record = SimpleNamespace(kind=3, index=0, value=250.0)
+    error = describe_divergence(0.001, record, SimulatorSettings(), None, (problem,))
+    assert "likely because the scene starts wrong: cup {big} sinks 30 mm" in str(error)

@@ -4,7 +4,7 @@ An object is given as ``box:0.06x0.05x0.05:0.3`` (edges x, y, z [m]), ``cylinder
 [m], axis vertical) or ``sphere:0.035:0.2`` (radius [m]); the last field is the mass [kg].  As a mesh: ``KIND:DIMS:MASS:
 mesh`` is the same primitive simulated as a triangle mesh (a box's 12 triangles, a 64-sided cylinder, an icosphere of
 642 vertices; :class:`~bhgrasp.model.mesh_object.Mesh`), ``mesh:PATH:MASS`` a mesh file (metres) and
-``household:NAME:MASS`` one of :mod:`bhgrasp.model.household`'s objects.  A mesh is planned as the primitive its
+``household:NAME:MASS`` one of :mod:`bhgrasp.model.household_objects`'s objects.  A mesh is planned as the primitive its
 hull resembles (:func:`planned_as`: a box if its hull fills at least 90 % of its bounding box, a sphere if its
 extents agree within 15 % and it fills less than 65 %, else an upright cylinder of its footprint's larger half-width)
 and simulated as itself (its hull, or convex pieces if the hull exceeds it by more than 5 %).  The built-in sets:
@@ -148,19 +148,24 @@ def mesh_of(source: str):
     """The ``trimesh.Trimesh`` of ``household:NAME`` or of a mesh file [m]."""
     import trimesh
 
-    from bhgrasp.model.household import household_mesh
+    from bhgrasp.model.household_objects import household_mesh
 
     if source.startswith("household:"):
         return household_mesh(source.split(":", 1)[1])
     path = Path(source)
     if not path.is_file():
         raise InputError(f"mesh file {source!r} does not exist")
-    return trimesh.load(path, force="mesh")
+    try:
+        return trimesh.load(path, force="mesh")
+    except Exception as error:  # trimesh raises many kinds for a malformed file
+        raise InputError(f"mesh file {source!r} could not be read: {error}") from error
 
 
 def planned_as(mesh) -> tuple[str, tuple[float, ...]]:
     """The primitive the protocol plans a mesh as (module docstring): ``(kind, dims)``, from its hull and extents."""
-    extents = np.asarray(mesh.extents, dtype=float)
+    extents = np.asarray(mesh.extents, dtype=float) if len(mesh.vertices) else np.zeros(3)
+    if not np.all(extents > 0.0):
+        raise InputError(f"a mesh to grasp must have a volume, got extents {extents.tolist()} m")
     fill = float(mesh.convex_hull.volume / np.prod(extents))
     if fill >= 0.9:
         return "box", tuple(float(e) for e in extents)

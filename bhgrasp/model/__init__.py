@@ -9,7 +9,7 @@ from bhgrasp.model.couplings import Coupling, TwinMap
 from bhgrasp.model.hand import Hand
 from bhgrasp.model.hand_description import BaseFrame
 from bhgrasp.model.hand_ik import IKResult, ik
-from bhgrasp.model.household import HOUSEHOLD, household, household_mesh
+from bhgrasp.model.household_objects import HOUSEHOLD, household, household_mesh
 from bhgrasp.model.ik import FingerIKResult, Workspace, finger_ik, workspace
 from bhgrasp.model.mesh_object import Mesh
 from bhgrasp.model.mount import MOUNT_JOINTS, mount_coordinates, mount_pose, mounted

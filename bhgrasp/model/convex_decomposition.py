@@ -3,12 +3,13 @@
 A non-convex body (a mug, a bowl, an L-shaped tool) collides as several convex pieces: CoACD (Wei et al., "Approximate
 convex decomposition for 3D meshes with collision-aware concavity and tree search", SIGGRAPH 2022; the ``coacd``
 package) cuts the mesh until every piece is within ``concavity`` of its hull, and each piece collides as its hull.
-CoACD runs on one OpenMP thread here: on several its pieces differ in their last bits from run to run (a mug's 32
-pieces, same sizes, different hashes); on one, the same mesh and settings give the same pieces, bit for bit.  It
-takes seconds (7-11 s for the household mug and bowl), so the pieces are kept in ``cache_dir()`` under the
+CoACD runs on one OpenMP thread here: on several its pieces differ in their last bits from run to run (a mug cut
+twice: the same 32 pieces' sizes, different hashes); on one, the same mesh and settings give the same pieces, bit for
+bit (checked between two fresh installs).  It takes seconds (1-2 s for the banana and the drill, 7-11 s for the
+household mug and bowl), so the pieces are kept in ``cache_dir()`` under the
 SHA-256 of the mesh and the settings, as ``.npz`` files read without pickle; the pieces of
-:mod:`~bhgrasp.model.household`'s objects ship with the package (:data:`SHIPPED`, written by
-:func:`~bhgrasp.model.household.write_shipped_pieces`).
+:mod:`~bhgrasp.model.household_objects`'s objects ship with the package (:data:`SHIPPED`, written by
+:func:`~bhgrasp.model.household_objects.write_shipped_pieces`).
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import os
+import tempfile
+import warnings
 from importlib import metadata
 from pathlib import Path
 
@@ -64,9 +67,15 @@ def convex_pieces(
     name = f"{decomposition_key(*source, concavity)}.npz"
     for path in (SHIPPED / name, cache_dir() / name):
         if path.is_file():
-            return read_pieces(path)
+            try:
+                return read_pieces(path)
+            except (OSError, ValueError, KeyError) as error:  # a damaged file: cut again (and replace it)
+                warnings.warn(f"decomposition {path} is unreadable ({error}); cutting the mesh again", stacklevel=2)
     pieces = _decompose(np.asarray(vertices, dtype=np.float64), np.asarray(faces, dtype=np.int32), concavity)
-    write_pieces(cache_dir() / name, pieces)
+    try:
+        write_pieces(cache_dir() / name, pieces)
+    except OSError as error:  # a read-only home: the pieces are still good, only not kept
+        warnings.warn(f"could not keep the decomposition in {cache_dir()} ({error}); set {CACHE_ENV}", stacklevel=2)
     return pieces
 
 
@@ -83,17 +92,28 @@ def decomposition_key(vertices: np.ndarray, faces: np.ndarray, scale: float, con
 
 
 def read_pieces(path: Path) -> list[np.ndarray]:
-    """The pieces stored in ``path`` (no pickle)."""
+    """The pieces stored in ``path`` (no pickle).
+
+    Raises:
+        ValueError: The file holds no pieces, or a piece that is not (n >= 4, 3) finite points.
+    """
     with np.load(path, allow_pickle=False) as stored:
-        return [np.array(stored[f"piece{k}"], dtype=np.float64) for k in range(int(stored["count"]))]
+        pieces = [np.array(stored[f"piece{k}"], dtype=np.float64) for k in range(int(stored["count"]))]
+    for piece in pieces:
+        if piece.ndim != 2 or piece.shape[1] != 3 or len(piece) < 4 or not np.all(np.isfinite(piece)):
+            raise ValueError(f"a piece of shape {piece.shape} (or not finite)")
+    if not pieces:
+        raise ValueError("no pieces")
+    return pieces
 
 
 def write_pieces(path: Path, pieces: list[np.ndarray]) -> None:
     """Store ``pieces`` in ``path`` (atomic: a parallel run reads a whole file or none)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f"{path.stem}.{os.getpid()}.tmp.npz")
+    handle, partial = tempfile.mkstemp(suffix=".npz", prefix=f"{path.stem}.", dir=path.parent)  # one per writer
     arrays = {f"piece{k}": piece for k, piece in enumerate(pieces)}
-    np.savez_compressed(partial, count=len(pieces), made_by=f"coacd {_coacd_version()}", **arrays)
+    with os.fdopen(handle, "wb") as file:
+        np.savez_compressed(file, count=len(pieces), made_by=f"coacd {_coacd_version()}", **arrays)
     os.replace(partial, path)
 
 
@@ -119,7 +139,17 @@ def _decompose(vertices: np.ndarray, faces: np.ndarray, concavity: float) -> lis
 
 
 def _one_openmp_thread(package: Path) -> None:
-    """Set CoACD's own OpenMP runtime (the libgomp its wheel ships) to one thread for this thread's next regions."""
+    """Set CoACD's own OpenMP runtime (the libgomp its Linux wheel ships) to one thread for this thread's next regions.
+
+    Where there is none to be found (another platform's wheel, a source build), warn that the pieces may differ from
+    run to run.
+    """
     libraries = sorted((package.parent / "coacd.libs").glob("libgomp*.so*"))
     for library in libraries:
         ctypes.CDLL(str(library)).omp_set_num_threads(1)
+    if not libraries:
+        warnings.warn(
+            "CoACD's OpenMP runtime was not found: it may cut on several threads, and then not give the same pieces "
+            "twice (run with OMP_NUM_THREADS=1 for that)",
+            stacklevel=3,
+        )

@@ -66,7 +66,10 @@ class Mesh(RigidObject):
         object.__setattr__(self, "concavity", as_positive(self.concavity, "concavity"))
         if self.collision not in COLLISION:
             raise InputError(f"`collision` must be one of {COLLISION}, got {self.collision!r}")
-        solid = _solid(vertices * self.scale, faces, self.mesh_label)
+        scaled = vertices * self.scale
+        if not np.all(np.isfinite(scaled)):
+            raise InputError(f"the {self.mesh_label} scaled by {self.scale!r} is not finite")
+        solid = _solid(scaled, faces, self.mesh_label)
         volume = float(solid.volume)
         center = np.asarray(solid.center_mass, dtype=float)
         inertia_per_mass = np.asarray(solid.moment_inertia, dtype=float) / volume  # trimesh: density 1, about COM
@@ -81,6 +84,10 @@ class Mesh(RigidObject):
             parts = convex_pieces(self.vertices, self.faces, self.concavity, source)
             pieces = tuple(_hull(part) for part in parts)
         object.__setattr__(self, "pieces", pieces)
+        for piece in {id(p): p for p in (self.hull, *pieces)}.values():
+            _convex(*piece, label=self.mesh_label)  # coal refuses some hulls: say so now, not in a later step
+        if not (np.all(np.isfinite(center)) and np.all(np.isfinite(inertia_per_mass))):
+            raise InputError(f"the {self.mesh_label}'s mass properties are not finite (scale {self.scale!r})")
         object.__setattr__(self, "_unit_inertia", frozen_array(0.5 * (inertia_per_mass + inertia_per_mass.T)))
         object.__setattr__(self, "_volume", volume)
         super().__post_init__()
@@ -110,9 +117,18 @@ class Mesh(RigidObject):
         """What the simulator collides: the hull, or each convex piece's hull (body frame)."""
         return [_convex(*piece) for piece in self.pieces]
 
-    def surface(self) -> coal.Convex:
-        """The mesh's own triangles in the body frame, as coal's ``Convex`` type, for drawing only (not convex)."""
-        return _convex(self.vertices, self.faces)
+    def surface(self) -> coal.BVHModelOBBRSS:
+        """The mesh's own triangles in the body frame as a coal triangle model, for drawing (not what collides)."""
+        model = coal.BVHModelOBBRSS()
+        model.beginModel(len(self.faces), len(self.vertices))
+        model.addSubModel(_points(self.vertices), _triangles(self.faces))
+        model.endModel()
+        return model
+
+    def __setstate__(self, state: dict) -> None:
+        """Unpickled: its arrays read-only again (pickle does not keep the flag)."""
+        for key, value in state.items():
+            object.__setattr__(self, key, _frozen(value))
 
     def _mass_properties(self) -> tuple[float, np.ndarray, float]:
         radius = float(np.sqrt((self.vertices**2).sum(axis=1)).max())
@@ -151,7 +167,7 @@ def _read(source: Any) -> tuple[np.ndarray, np.ndarray]:
             raise InputError(f"mesh file {str(path)!r} could not be read: {error}") from error
         source = loaded
     if isinstance(source, trimesh.Trimesh):
-        return np.asarray(source.vertices, dtype=float), np.asarray(source.faces)
+        return as_array(np.asarray(source.vertices), "mesh vertices", (None, 3)), np.asarray(source.faces)
     if isinstance(source, tuple | list) and len(source) == 2:
         vertices = as_array(source[0], "mesh vertices", (None, 3))
         faces = np.asarray(source[1])
@@ -194,12 +210,36 @@ def _hull(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return frozen_array(hull.vertices), _frozen_faces(hull.faces)
 
 
-def _convex(vertices: np.ndarray, faces: np.ndarray) -> coal.Convex:
+def _convex(vertices: np.ndarray, faces: np.ndarray, label: str = "mesh") -> coal.Convex:
+    try:
+        return coal.Convex(_points(vertices), _triangles(faces))
+    except RuntimeError as error:  # coal keeps at most 255 neighbours a vertex ("Too many neighbors.")
+        raise InputError(
+            f"coal cannot collide the convex hull of the {label} ({len(vertices)} vertices): "
+            f"{str(error).strip().splitlines()[-1]} (a vertex of the hull joins more than 255 triangles, e.g. a cap "
+            "of over 255 sides); give a coarser mesh"
+        ) from error
+
+
+def _points(vertices: np.ndarray) -> coal.StdVec_Vec3s:
     points = coal.StdVec_Vec3s()
-    points.extend(np.array(vertices))
+    points.extend(np.array(vertices, dtype=np.float64))
+    return points
+
+
+def _triangles(faces: np.ndarray) -> coal.StdVec_Triangle:
     triangles = coal.StdVec_Triangle()
     triangles.extend(coal.Triangle(int(a), int(b), int(c)) for a, b, c in faces)
-    return coal.Convex(points, triangles)
+    return triangles
+
+
+def _frozen(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        value.setflags(write=False)
+    elif isinstance(value, tuple):
+        for item in value:
+            _frozen(item)
+    return value
 
 
 def _frozen_faces(faces: np.ndarray) -> np.ndarray:

@@ -12,6 +12,7 @@ import coal
 import pinocchio as pin
 
 HEADER = "bhgrasp-convex-shapes 1"
+PLACEHOLDER_RADIUS = 1e-3  # [m] the sphere in each convex shape's place (src/convex_shapes.hpp checks it)
 
 
 def geometry_text(geometry: pin.GeometryModel) -> str:
@@ -23,7 +24,7 @@ def geometry_text(geometry: pin.GeometryModel) -> str:
     placeholder = geometry.copy()  # its objects are copies: the scene's own shapes stay
     lines = [f"{HEADER} {len(convex)}"]
     for index, shape in convex:
-        placeholder.geometryObjects[index].geometry = coal.Sphere(1e-3)
+        placeholder.geometryObjects[index].geometry = coal.Sphere(PLACEHOLDER_RADIUS)
         points = shape.points()
         triangles = [shape.polygons(t) for t in range(shape.num_polygons)]
         lines.append(f"{index} {len(points)} {len(triangles)}")
@@ -32,4 +33,4 @@ def geometry_text(geometry: pin.GeometryModel) -> str:
     return "\n".join(lines) + "\n" + placeholder.saveToString()
 
 
-__all__ = ["HEADER", "geometry_text"]
+__all__ = ["HEADER", "PLACEHOLDER_RADIUS", "geometry_text"]

@@ -103,6 +103,7 @@ class Scene:
             geometries = [self._add_geometry(n, joint, pin.SE3.Identity(), shape) for n, shape in zip(names, shapes)]
             self.object_geometry_sets.append(geometries)
             self._object_of_geometry.update(dict.fromkeys(geometries, index))
+        # every object geometry, in object order (not indexed by object: a decomposed mesh contributes several)
         self.object_geometries = [g for geometries in self.object_geometry_sets for g in geometries]
         self.environment_geometries = [
             self._add_geometry(name, 0, item.placement, item.geometry())

@@ -134,18 +134,9 @@ class Simulator:
         law = contact if contact is not None else SpringDamper()
         layout = SceneLayout.of(scene)
         kind = CompiledEngine if settings.engine == "compiled" else PythonEngine
-        values = {
-            "scene": scene,
-            "law": law,
-            "actuation": actuation,
-            "settings": settings,
-            "layout": layout,
-            "engine": kind(scene, layout, law, settings, MATCH_RADIUS),
-            "_drives": {},
-            "_start": [],  # the problems of the last initial state (named again if a run from it diverges)
-            "_lock": threading.Lock(),
-            "_modal": _modal(actuation),
-        }
+        engine = kind(scene, layout, law, settings, MATCH_RADIUS)
+        values = {"scene": scene, "law": law, "actuation": actuation, "settings": settings, "layout": layout}
+        values |= {"engine": engine, "_drives": {}, "_lock": threading.Lock(), "_modal": _modal(actuation)}
         for name, value in values.items():
             object.__setattr__(self, name, value)
 
@@ -189,9 +180,10 @@ class Simulator:
         with self._lock:
             self.actuation.reset(q[: self.scene.nq_hand])
             contacts = self.engine.detect(q, memory)
-            self._start[:] = self._start_problems(q, v, contacts)
-            state = self._state(0.0, q, v, contacts, memory)
-        report(self._start, self.settings.start_check)
+            off = self.settings.start_check == "off"
+            problems = () if off else tuple(self._start_problems(q, v, contacts))
+            state = self._state(0.0, q, v, contacts, memory, problems)
+        report(list(problems), self.settings.start_check)
         return state
 
     def check_start(self, state: State) -> list[StartProblem]:
@@ -202,13 +194,15 @@ class Simulator:
             return self._start_problems(state.scene_q, state.scene_v, contacts)
 
     def _start_problems(self, q: np.ndarray, v: np.ndarray, contacts: ContactSet) -> list[StartProblem]:
-        settings = self.settings
-        return start_problems(self.scene, q, v, contacts, self.law, settings.dt, settings.max_penetration)
+        return start_problems(self.scene, q, v, contacts, self.law, self.dt, self.max_penetration)
 
-    def _state(self, t: float, q: np.ndarray, v: np.ndarray, contacts: Any, memory: Any) -> SimulatedState:
-        """The state at ``t``: ``contacts`` and ``memory`` as the engine made them (converted when first read)."""
+    def _state(self, t: float, q: Any, v: Any, contacts: Any, memory: Any, start: tuple = ()) -> SimulatedState:
+        """The state at ``t`` with the engine's ``contacts`` and ``memory`` (converted when first read).
+
+        ``start``: the problems of the initial state its run began from (named if the run diverges).
+        """
         scene = self.scene
-        source = StepOutput(self, contacts, memory)
+        source = StepOutput(self, contacts, memory, start)
         sizes = (scene.nq_hand, scene.nv_hand)
         return SimulatedState.lazy(t, q, v, self.actuation.modes(), source, sizes, self.layout.signature)
 
@@ -269,12 +263,14 @@ class Simulator:
             tau_hand = tau_hand + disturbance
         result = self.engine.step(q, v, tau_hand, self._drive(), memory)
         t = round(state.t / self.settings.dt + 1) * self.settings.dt  # k dt exactly: no accumulated rounding
+        source = getattr(state, "_source", None)
+        start = source.start if isinstance(source, StepOutput) and source.simulator is self else ()
         if result.divergence.kind:
             contacts = self.engine.contact_set(result.contacts) if result.divergence.kind == 4 else None
-            raise describe_divergence(t, result.divergence, self.settings, self.scene, self._start, contacts)
+            raise describe_divergence(t, result.divergence, self.settings, self.scene, start, contacts)
         if self._modal:
             actuation.update(result.q[:nqh], result.v[:nvh], u, result.drive, result.load)
-        return self._state(t, result.q, result.v, result.contacts, result.memory), StepInfo(
+        return self._state(t, result.q, result.v, result.contacts, result.memory, start), StepInfo(
             result.contacts, result.drive, self.engine
         )
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import coal
 import numpy as np
+import pinocchio as pin
 
 from bhgrasp.data import ContactSet
 from bhgrasp.errors import InputError
@@ -64,7 +65,7 @@ def start_problems(
 ) -> list[StartProblem]:
     """What is wrong with starting ``scene`` at ``(q, v)`` whose contacts are ``contacts`` (module docstring)."""
     limit = START_DEPTH_SHARE * max_depth
-    return _interpenetrations(scene, contacts, law, limit) + _unresolved(scene, q, v, law, dt, max_depth)
+    return _interpenetrations(scene, q, contacts, law, limit) + _unresolved(scene, q, v, law, dt, max_depth)
 
 
 def report(problems: list[StartProblem], mode: str) -> None:
@@ -94,12 +95,32 @@ def summary(problems: list[StartProblem], shown: int = 3) -> str:
     return "the scene starts wrong: " + "; ".join(parts)
 
 
-def _interpenetrations(scene: Scene, contacts: ContactSet, law: SpringDamper, limit: float) -> list[StartProblem]:
+def _interpenetrations(
+    scene: Scene, q: np.ndarray, contacts: ContactSet, law: SpringDamper, limit: float
+) -> list[StartProblem]:
+    """Each pair of bodies in contact whose shapes overlap deeper than ``limit`` [m], by coal's signed distance.
+
+    (Not the contacts' own depths: those measure a patch point's overlap to the nearest faces, which for a link
+    sunk whole in a plane is a side face: a box 146 mm deep read 58 mm.)
+    """
+    data = scene.model.createData()
+    geometry_data = pin.GeometryData(scene.geometry)
+    pin.updateGeometryPlacements(scene.model, data, scene.geometry, geometry_data, q)
     deepest: dict[tuple[str, str], float] = {}  # per pair of bodies (a body may have several geometries)
-    for index, depth in zip(contacts.pair, contacts.depth):
-        pair = scene.pairs[int(index)]
+    for index in sorted({int(k) for k in contacts.pair}):
+        pair = scene.pairs[index]
+        shapes = [scene.geometry.geometryObjects[g].geometry for g in (pair.geom_a, pair.geom_b)]
+        a, b = (geometry_data.oMg[g] for g in (pair.geom_a, pair.geom_b))
+        distance = coal.distance(
+            shapes[0],
+            coal.Transform3s(a.rotation, a.translation),
+            shapes[1],
+            coal.Transform3s(b.rotation, b.translation),
+            coal.DistanceRequest(),
+            coal.DistanceResult(),
+        )
         bodies = (pair.body_a, pair.body_b)
-        deepest[bodies] = max(deepest.get(bodies, 0.0), float(depth))
+        deepest[bodies] = max(deepest.get(bodies, 0.0), -float(distance))
     problems = []
     for (body_a, body_b), depth in deepest.items():
         if depth <= limit:
@@ -120,12 +141,10 @@ def _unresolved(
         if not isinstance(item, RigidObject):
             continue  # a spring-mounted object moves along its spring only
         name = scene.object_names[index]
-        shape = item.geometry()
-        shape.computeLocalAABB()
-        half = 0.5 * float(np.min(shape.aabb_local.max_ - shape.aabb_local.min_))  # smallest half-thickness [m]
+        half = _half_thickness(item)
         twist = scene.object_twist(q, v, index)
         pose = scene.object_pose(q, index)
-        gap, below = _gap(scene, shape, pose)
+        gap, below = _gap(scene, item.geometry(), pose)
         fall = math.sqrt(2.0 * gravity * gap) if below is not None else 0.0
         speed = float(np.linalg.norm(twist[:3]) + np.linalg.norm(twist[3:]) * item.bounding_radius) + fall
         onto = f" (falling {gap * 1e3:.3g} mm onto {below})" if below is not None and fall > 0.0 else ""
@@ -170,16 +189,29 @@ def _unresolved(
     return problems
 
 
+def _half_thickness(item: RigidObject) -> float:
+    """The smallest half-thickness [m] of the shapes an object collides with (a decomposed mug's walls, not its hull).
+
+    Half the smallest edge of each shape's bounding box in the body frame.
+    """
+    halves = []
+    for shape in item.collision_shapes():
+        shape.computeLocalAABB()
+        halves.append(0.5 * float(np.min(shape.aabb_local.max_ - shape.aabb_local.min_)))
+    return min(halves)
+
+
 def _gap(scene: Scene, shape: coal.CollisionGeometry, pose) -> tuple[float, str | None]:
     """Distance [m] from an object down to the nearest environment shape below it, and that shape's name.
 
-    Below: the shape's nearest point lies on gravity's side of the object's.  ``(inf, None)`` if none does (no
-    environment, no gravity, or only walls beside or above it).
+    Below: the shape's nearest point lies within 60 deg of straight down from the object's centre.  ``(inf, None)``
+    if none does (no environment, no gravity, or only walls beside or above it).
     """
-    down = np.asarray(scene.hand.gravity, dtype=float)
+    gravity = np.asarray(scene.hand.gravity, dtype=float)
     nearest, name = math.inf, None
-    if not np.any(down):
+    if not np.any(gravity):
         return nearest, name
+    down = gravity / np.linalg.norm(gravity)
     transform = coal.Transform3s(pose.rotation, pose.translation)
     for geom, env_name in zip(scene.environment_geometries, scene.environment_names):
         geometry_object = scene.geometry.geometryObjects[geom]
@@ -193,8 +225,9 @@ def _gap(scene: Scene, shape: coal.CollisionGeometry, pose) -> tuple[float, str 
             coal.DistanceRequest(),
             result,
         )
-        below = down @ (np.asarray(result.getNearestPoint2()) - np.asarray(result.getNearestPoint1())) >= 0.0
-        if (below or distance <= 0.0) and distance < nearest:
+        toward = np.asarray(result.getNearestPoint2()) - pose.translation  # from the object's centre
+        below = down @ toward > 0.5 * np.linalg.norm(toward)
+        if below and distance < nearest:
             nearest, name = max(distance, 0.0), env_name
     return nearest, name
 

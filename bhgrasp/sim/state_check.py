@@ -123,9 +123,11 @@ def describe_divergence(
     if scene is not None and kind == 4 and contacts is not None and len(contacts):
         pair = scene.pairs[int(contacts.pair[int(np.argmax(contacts.depth))])]
         quantity += f" ({pair.body_b} in {pair.body_a})"
-    if start:
-        hint = "likely because " + summary(list(start))
-    return SimulationDiverged(t, quantity, value.format(**fields), hint.format(**fields))
+    hint = hint.format(**fields)  # before any name is added: a name may hold braces
+    if start:  # the likely cause instead of the generic cure (a bound passed stays named)
+        cause = f"likely because {summary(list(start))}"
+        hint = f"{hint}; {cause}" if kind == 5 else cause
+    return SimulationDiverged(t, quantity, value.format(**fields), hint)
 
 
 def coordinate_owner(scene: Scene, index: int, velocity: bool) -> str:

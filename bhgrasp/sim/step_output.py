@@ -55,13 +55,14 @@ class StepOutput:
     """What a step hands to its :class:`~bhgrasp.data.state.SimulatedState` to build derived fields from.
 
     ``simulator``: the Simulator whose step made the state; ``contacts``: the step's ``ContactSet`` or compiled
-    ``Contacts``; ``memory``: its ``ContactMemory`` or compiled ``Memory``.
+    ``Contacts``; ``memory``: its ``ContactMemory`` or compiled ``Memory``; ``start``: the problems of the initial
+    state the run began from (:mod:`~bhgrasp.sim.start_check`), handed on from step to step.
     """
 
-    __slots__ = ("contacts", "memory", "simulator")
+    __slots__ = ("contacts", "memory", "simulator", "start")
 
-    def __init__(self, simulator: StepSource, contacts: Any, memory: Any) -> None:
-        self.simulator, self.contacts, self.memory = simulator, contacts, memory
+    def __init__(self, simulator: StepSource, contacts: Any, memory: Any, start: tuple = ()) -> None:
+        self.simulator, self.contacts, self.memory, self.start = simulator, contacts, memory, start
 
     def derive(self, name: str, state: State) -> dict[str, Any]:
         """The derived field ``name`` of ``state`` (and its companions computed on the way)."""

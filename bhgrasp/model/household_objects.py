@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import warnings
 from typing import Any
 
 import numpy as np
@@ -60,12 +61,31 @@ def household(kind: str, position: Any = (0.0, 0.0, 0.0), collision: str | None 
     mass, concave = HOUSEHOLD[kind] if kind in HOUSEHOLD else (None, False)
     mesh = household_mesh(kind)
     collision = collision or ("decomposed" if concave else "hull")
+    if collision == "decomposed":
+        _warn_unless_shipped(kind, mesh, fields.get("concavity", 0.05))
     fields.setdefault("name", kind)
     if "density" not in fields:
         fields.setdefault("mass", mass)
     standing = Mesh(mesh, collision=collision, **fields)
     place = pin.SE3(np.eye(3), as_vector(position, "position", 3))
     return standing.at(place)
+
+
+def _warn_unless_shipped(kind: str, mesh, concavity: float) -> None:
+    """Warn when this machine builds a household mesh whose pieces were not shipped.
+
+    (Another trimesh or manifold3d may triangulate it otherwise: its pieces are then cut afresh and differ from those
+    behind the committed results.)
+    """
+    from bhgrasp.model import convex_decomposition as cd
+
+    key = cd.decomposition_key(np.asarray(mesh.vertices), np.asarray(mesh.faces), 1.0, concavity)
+    if not (cd.SHIPPED / f"{key}.npz").is_file():
+        warnings.warn(
+            f"the household {kind}'s mesh differs from the one its shipped pieces were cut from (another trimesh or "
+            "manifold3d?): it is cut afresh, and its simulations differ from the committed results",
+            stacklevel=3,
+        )
 
 
 def _revolved(profile: list[tuple[float, float]]):
