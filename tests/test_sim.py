@@ -5,6 +5,8 @@ Scenes keep the hand out of the way (base 5 m away, gravity-compensated) unless 
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -20,6 +22,7 @@ from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.start_check import StartWarning
 
 
 def far_hand(gravity=(0.0, 0.0, -G)) -> bh.Hand:
@@ -93,10 +96,13 @@ def test_implicit_contact_is_stable_where_explicit_is_not() -> None:
     assert 0.01 - implicit.object_position[-1, 0, 2] == pytest.approx(0.01 * G / 5e4, rel=1e-5)
     assert implicit.object_position[:, 0, 2].max() <= 0.0101 + 1e-12  # never above its release height
     explicit = Simulator(Scene(hand, [ball], [table()]), dt=1e-3, contact=law, integrator="semi-implicit")
-    bounced = explicit.run(hold_hand(hand), 0.5, progress=False)
+    with pytest.warns(StartWarning, match="too fast for the semi-implicit step at dt = 0.001 s: dt < 0.000894"):
+        bounced = explicit.run(hold_hand(hand), 0.5, progress=False)  # the start check foresees it: 2 sqrt(m / k)
     assert bounced.object_position[:, 0, 2].max() > 0.05  # energy from nowhere: the explicit step is unstable
     halved = Simulator(Scene(hand, [ball], [table()]), dt=5e-4, contact=law, integrator="semi-implicit")
-    settled = halved.run(hold_hand(hand), 0.5, progress=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", StartWarning)  # within the bound: nothing to say
+        settled = halved.run(hold_hand(hand), 0.5, progress=False)
     assert 0.01 - settled.object_position[-1, 0, 2] == pytest.approx(0.01 * G / 5e4, rel=1e-3)
 
 

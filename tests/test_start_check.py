@@ -166,3 +166,18 @@ def test_a_name_with_braces_does_not_break_the_divergence_message() -> None:
     record = SimpleNamespace(kind=3, index=0, value=250.0)
     error = describe_divergence(0.001, record, SimulatorSettings(), None, (problem,))
     assert "likely because the scene starts wrong: cup {big} sinks 30 mm" in str(error)
+
+
+@pytest.mark.parametrize(("integrator", "bound"), [("semi-implicit", 2.0), ("rk4", 2.0 * math.sqrt(2.0))])
+def test_a_contact_too_stiff_for_an_explicit_step_is_named_with_the_dt_it_needs(integrator: str, bound: float) -> None:
+    """A 10 g box on k = 1e6 N/m rings at omega = sqrt(k / m) = 1e4 rad/s: at dt = 1 ms far past the explicit
+    steps' stability bounds (omega dt < 2, and 2 sqrt(2) for RK4); the implicit step has none."""
+    box = Box(size=(0.02,) * 3, mass=0.01, pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.01])), name="die")
+    law = bh.SpringDamper(stiffness=1e6, damping=1.0)
+    scene = Scene(far_hand((0.0, 0.0, -G)), [box], [table()])
+    explicit = Simulator(scene, contact=law, integrator=integrator, start_check="off")
+    (problem,) = [p for p in explicit.check_start(explicit.initial_state()) if p.kind == "too stiff"]
+    assert problem.value == pytest.approx(bound / 1e4, rel=1e-12)
+    assert f"dt < {bound / 1e4:.3g} s" in problem.message
+    implicit = Simulator(scene, contact=law, start_check="off")
+    assert [p for p in implicit.check_start(implicit.initial_state()) if p.kind == "too stiff"] == []

@@ -194,7 +194,8 @@ class Simulator:
             return self._start_problems(state.scene_q, state.scene_v, contacts)
 
     def _start_problems(self, q: np.ndarray, v: np.ndarray, contacts: ContactSet) -> list[StartProblem]:
-        return start_problems(self.scene, q, v, contacts, self.law, self.dt, self.max_penetration)
+        settings = self.settings
+        return start_problems(self.scene, q, v, contacts, self.law, self.dt, self.max_penetration, settings.integrator)
 
     def _state(self, t: float, q: Any, v: Any, contacts: Any, memory: Any, start: tuple = ()) -> SimulatedState:
         """The state at ``t`` with the engine's ``contacts`` and ``memory`` (converted when first read).

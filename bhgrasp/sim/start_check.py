@@ -9,7 +9,8 @@
   needs, and one the contact law lets sink deeper than ``h`` or than ``max_penetration`` (at rest under gravity, or
   stopping from its speed: a 0.35 kg can falling 0.3 m onto k = 1e4 N/m stops 18 mm deep).
   Its speed ``u`` is what it may reach at its first contact: its initial speed plus its spin at its bounding radius,
-  plus the speed of a fall through its gap to the nearest environment shape, ``sqrt(2 g gap)``.
+  plus the speed of a fall through its gap to the nearest environment shape, ``sqrt(2 g gap)``;
+- with an explicit integrator, a contact spring too **stiff** for ``dt`` on the lightest object (``_too_stiff``).
 
 The stopping depth of a body of mass ``m`` arriving at ``u`` on the law ``f = k d^e`` (``e = 1`` linear) is the ``d``
 at which the spring's energy ``k d^(e+1) / (e+1)`` equals ``m u^2 / 2``; at rest it sinks ``d = (m g / k)^(1/e)``.
@@ -45,10 +46,10 @@ class StartProblem:
     """One thing wrong with a start configuration.
 
     Attributes:
-        kind: ``"interpenetrated"`` or ``"unresolved"``.
+        kind: ``"interpenetrated"``, ``"unresolved"`` or ``"too stiff"``.
         bodies: The bodies concerned (a pair, or one object).
-        value: The depth [m] of an interpenetration, or the ``dt`` [s] an unresolved object needs (0 when the
-            contact law, not ``dt``, is what cannot hold it).
+        value: The depth [m] of an interpenetration, or the ``dt`` [s] an unresolved or too stiff object needs (0
+            when the contact law, not ``dt``, is what cannot hold it).
         message: What is wrong (and, for an object, what to change), in words.
         limit: The depth [m] an interpenetration may have, or the object's smallest half-thickness [m].
     """
@@ -61,11 +62,45 @@ class StartProblem:
 
 
 def start_problems(
-    scene: Scene, q: np.ndarray, v: np.ndarray, contacts: ContactSet, law: SpringDamper, dt: float, max_depth: float
+    scene: Scene,
+    q: np.ndarray,
+    v: np.ndarray,
+    contacts: ContactSet,
+    law: SpringDamper,
+    dt: float,
+    max_depth: float,
+    integrator: str = "implicit",
 ) -> list[StartProblem]:
     """What is wrong with starting ``scene`` at ``(q, v)`` whose contacts are ``contacts`` (module docstring)."""
     limit = START_DEPTH_SHARE * max_depth
-    return _interpenetrations(scene, q, contacts, law, limit) + _unresolved(scene, q, v, law, dt, max_depth)
+    problems = _interpenetrations(scene, q, contacts, law, limit) + _unresolved(scene, q, v, law, dt, max_depth)
+    return problems + _too_stiff(scene, law, dt, integrator)
+
+
+def _too_stiff(scene: Scene, law: SpringDamper, dt: float, integrator: str) -> list[StartProblem]:
+    """The lightest free object whose contact spring an explicit integrator cannot step: omega dt beyond its bound.
+
+    A mass m on a spring k oscillates at omega = sqrt(k / m); semi-implicit Euler is stable while omega dt < 2, the
+    classical Runge-Kutta step while omega dt < 2.785 (its stability interval on the imaginary axis, 2 sqrt(2)).  The
+    implicit step has no such bound.  (The linear law's stiffness; Hunt-Crossley's grows with depth and is not
+    checked.)
+    """
+    bound = {"semi-implicit": 2.0, "rk4": 2.0 * math.sqrt(2.0)}.get(integrator)
+    masses = [
+        (item.mass, name) for item, name in zip(scene.objects, scene.object_names) if isinstance(item, RigidObject)
+    ]
+    if bound is None or law.normal_law != "linear" or not masses:
+        return []
+    mass, name = min(masses)
+    omega = math.sqrt(law.stiffness / mass)
+    if omega * dt < bound:
+        return []
+    needed = bound / omega
+    message = (
+        f"{name} ({mass:.3g} kg) on the contact stiffness {law.stiffness:.3g} N/m rings at {omega:.3g} rad/s, too fast "
+        f"for the {integrator} step at dt = {dt:g} s: dt < {needed:.3g} s, a softer contact, or integrator='implicit'"
+    )
+    return [StartProblem("too stiff", (name,), needed, message, 0.0)]
 
 
 def report(problems: list[StartProblem], mode: str) -> None:
