@@ -179,20 +179,13 @@ def _mesh_body(source, common: dict) -> RigidObject:
     from bhgrasp.model.mesh_object import Mesh
 
     standing = Mesh(source, mass=common["mass"], collision="hull")
-    if standing.volume < trimesh_hull_volume(standing) / 1.05:  # non-convex: its convex pieces
+    if standing.volume < standing.hull_volume / 1.05:  # non-convex: its convex pieces
         standing = Mesh(source, mass=common["mass"], collision="decomposed")
     low, high = np.min(standing.vertices, axis=0), np.max(standing.vertices, axis=0)
     centre = pin.SE3(np.eye(3), np.array([-(low[0] + high[0]) / 2, -(low[1] + high[1]) / 2, -low[2]]))
     return dataclasses.replace(
         standing, pose=centre, friction=common["friction"], name=common["name"], mass=common["mass"], density=None
     )
-
-
-def trimesh_hull_volume(item) -> float:
-    """The volume [m^3] of a Mesh's convex hull."""
-    import trimesh
-
-    return float(trimesh.Trimesh(*item.hull).volume)
 
 
 DEVELOPMENT_SET = (

@@ -60,7 +60,7 @@ class Mesh(RigidObject):
     def __post_init__(self) -> None:
         vertices, faces = _read(self.mesh)
         label = f"mesh {str(self.mesh)!r}" if isinstance(self.mesh, str | Path) else None
-        object.__setattr__(self, "mesh", (frozen_array(vertices), _frozen_faces(faces)))
+        object.__setattr__(self, "mesh", (frozen_array(vertices), frozen_array(faces, np.int64)))
         object.__setattr__(self, "_label", label or f"mesh of {len(vertices)} vertices, {len(faces)} faces")
         object.__setattr__(self, "scale", as_positive(self.scale, "scale"))
         object.__setattr__(self, "concavity", as_positive(self.concavity, "concavity"))
@@ -75,7 +75,7 @@ class Mesh(RigidObject):
         inertia_per_mass = np.asarray(solid.moment_inertia, dtype=float) / volume  # trimesh: density 1, about COM
         object.__setattr__(self, "center_of_mass", frozen_array(center))
         object.__setattr__(self, "vertices", frozen_array(solid.vertices - center))
-        object.__setattr__(self, "faces", _frozen_faces(solid.faces))
+        object.__setattr__(self, "faces", frozen_array(solid.faces, np.int64))
         object.__setattr__(self, "hull", _hull(solid.vertices - center))
         if self.collision == "hull":
             pieces: tuple = (self.hull,)
@@ -96,6 +96,13 @@ class Mesh(RigidObject):
     def mesh_label(self) -> str:
         """The mesh's name in messages: its file or its size."""
         return self._label
+
+    @property
+    def hull_volume(self) -> float:
+        """Volume [m^3] of the mesh's convex hull (equal to :attr:`volume` for a convex body)."""
+        import trimesh
+
+        return float(trimesh.Trimesh(*self.hull).volume)
 
     @property
     def inertia(self) -> np.ndarray:
@@ -207,7 +214,7 @@ def _hull(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     import trimesh
 
     hull = trimesh.convex.convex_hull(np.asarray(points, dtype=float))
-    return frozen_array(hull.vertices), _frozen_faces(hull.faces)
+    return frozen_array(hull.vertices), frozen_array(hull.faces, np.int64)
 
 
 def _convex(vertices: np.ndarray, faces: np.ndarray, label: str = "mesh") -> coal.Convex:
@@ -240,9 +247,3 @@ def _frozen(value: Any) -> Any:
         for item in value:
             _frozen(item)
     return value
-
-
-def _frozen_faces(faces: np.ndarray) -> np.ndarray:
-    array = np.array(faces, dtype=np.int64)
-    array.setflags(write=False)
-    return array

@@ -38,8 +38,9 @@ def _as_pose(value: Any, name: str = "pose") -> pin.SE3:
     return pin.SE3(value)  # a copy: SE3 is mutable
 
 
-def frozen_array(array: np.ndarray) -> np.ndarray:
-    array = np.array(array, dtype=np.float64)  # always a copy
+def frozen_array(array: np.ndarray, dtype: type = np.float64) -> np.ndarray:
+    """A read-only copy of ``array`` as ``dtype``."""
+    array = np.array(array, dtype=dtype)  # always a copy
     array.setflags(write=False)
     return array
 
