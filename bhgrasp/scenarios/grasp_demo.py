@@ -18,8 +18,10 @@ from typing import TYPE_CHECKING, Any
 
 from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.controllers.base import Controller
+from bhgrasp.controllers.estimated_object import EstimatedObject
 from bhgrasp.controllers.grasp_options import GraspOptions
 from bhgrasp.controllers.motor_commands import MotorCommands
+from bhgrasp.controllers.object_estimator import EstimatorSettings, HeldObjectEstimator
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.controllers.supervisor_options import Approach, Planning
 from bhgrasp.errors import InputError
@@ -41,6 +43,7 @@ if TYPE_CHECKING:
     from bhgrasp.plots import Figure
 
 HANDS = ("barrett", "allegro")
+ESTIMATORS = (None, "hand")
 OFFSET = (0.0, 0.0, 0.010, 0.1, 0.0, 0.0)  # [m, rad]: 10 mm up, 0.1 rad about x
 
 
@@ -59,6 +62,7 @@ SWEEPABLE = (
     "hand",
     "finger_spacing",
     "friction_margin",
+    "estimator",
     *UNCERTAINTIES,
 )
 """The parameters of :func:`run_grasp_demo` a sweep case may set (the case's seed comes from the sweep)."""
@@ -76,7 +80,13 @@ def check_demo_arguments(**arguments: Any) -> None:
     for name in ("mass", "estimate", "duration", "stiffness"):
         if name in arguments:
             as_positive(arguments[name], name)
-    choices = {"controller": CONTROLLERS, "adaptation": ADAPTATIONS, "distribution": ("qp", "pinv"), "hand": HANDS}
+    choices = {
+        "controller": CONTROLLERS,
+        "adaptation": ADAPTATIONS,
+        "distribution": ("qp", "pinv"),
+        "hand": HANDS,
+        "estimator": ESTIMATORS,
+    }
     for name, allowed in choices.items():
         if name in arguments and arguments[name] not in allowed:
             raise InputError(f"`{name}` must be one of {allowed}, got {arguments[name]!r}")
@@ -95,6 +105,8 @@ def check_demo_arguments(**arguments: Any) -> None:
         if (sigma < 0.0).any():
             raise InputError(f"`sensor_noise` (sigma_q, sigma_v) must be >= 0, got {sigma.tolist()}")
     barrett_only = sorted(name for name in (*UNCERTAINTIES, "finger_spacing") if name in arguments)
+    if arguments.get("estimator") is not None:
+        barrett_only.append("estimator")
     if barrett_only and arguments.get("hand", "barrett") != "barrett":
         raise InputError(f"the arguments {barrett_only} apply to the Barrett scene, not {arguments['hand']}")
     if "finger_spacing" in arguments:
@@ -122,6 +134,7 @@ def run_grasp_demo(
     finger_spacing: float | None = None,
     adaptation: str = "thesis",
     friction_margin: float | None = None,
+    estimator: str | None = None,
     **uncertainty: Any,
 ) -> GraspDemoResult:
     """Grasp, lift and turn the box; see the module docstring.
@@ -162,6 +175,10 @@ def run_grasp_demo(
         friction_margin: The fraction of the assumed ``mu`` kept in reserve (``None``: none): the QP's cones at
             (1 - m) mu and the grip raised with the measured tangential load
             (:class:`~bhgrasp.controllers.grasp_options.GraspOptions`).
+        estimator: ``None``: the controller reads the object's pose and twist as the tracker reports them;
+            ``"hand"``: through a :class:`~bhgrasp.controllers.object_estimator.HeldObjectEstimator` (Barrett
+            scene), which carries the estimate with the fingers' encoders once three fingers hold the box and
+            corrects it with the tracker (its noise taken as ``pose_noise``, or 0.5 mm / 5 mrad without one).
         uncertainty: What the controller does not know (:data:`UNCERTAINTIES`, Barrett scene only):
             ``pose_noise`` (sigma [m], sigma [rad]) on the object pose, ``twist_noise`` (sigma [m/s], sigma
             [rad/s]) on its twist, ``force_noise`` sigma [N] on the contact forces, ``delay`` [s] of every reading,
@@ -182,6 +199,7 @@ def run_grasp_demo(
         sensor_noise=sensor_noise,
         hand=hand,
         friction_margin=friction_margin,
+        estimator=estimator,
         **uncertainty,
         **({} if finger_spacing is None else {"finger_spacing": finger_spacing}),
     )
@@ -196,6 +214,10 @@ def run_grasp_demo(
     grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains, mu, adaptation, friction_margin)
     supervisor = _supervisor(setup, grasp, offset, approach_gains, hand)
     law: Controller = MotorCommands(supervisor, setup.simulator.actuation.drive) if setup.cancel_damping else supervisor
+    if estimator == "hand":
+        tracker = uncertainty.get("pose_noise") or None
+        settings = EstimatorSettings() if tracker is None or min(tracker) <= 0.0 else EstimatorSettings(tracker)
+        law = EstimatedObject(law, HeldObjectEstimator(setup.hand, settings))
     if viewer is not None:
         from bhgrasp.viz import LiveView
 
