@@ -112,11 +112,41 @@ def test_a_delayed_reading_is_the_true_state_of_delay_before() -> None:
     assert len({z for _, _, z in seen}) > 10  # the readings did change
 
 
+def test_a_tracker_delivers_its_frames_late_and_holds_each_until_the_next() -> None:
+    """30 frames/s taken at k/30 s (the control cycle at or before) and delivered 30 ms later: the object reading
+    at t is the true state of the newest frame delivered (the start state's before the first), with its capture
+    time, the same noisy frame repeated; the encoders stay current."""
+    simulator, hand = box_on_table()
+    seen: list[tuple[float, float | None, np.ndarray, np.ndarray]] = []
+
+    def controller(t: float, state: bh.State) -> np.ndarray:
+        seen.append((t, state.object_time, state.object_poses[0].translation.copy(), np.array(state.q)))
+        return hand.gravity_torques(state.q)
+
+    model = SensorModel(object_position=1e-4, tracker_rate=30.0, tracker_latency=0.03)
+    trajectory = simulator.run(controller, 0.2, progress=False, sensors=model, seed=3)
+    times, positions = trajectory.t, trajectory.object_position[:, 0]
+    repeated = {}
+    for t, frame, position, q in seen:
+        capture = max(0.0, np.floor((t - 0.03 + 1e-9) * 30.0) / 30.0)
+        k = int(np.searchsorted(times, capture + 1e-9)) - 1  # the last control cycle at or before the capture
+        assert frame == pytest.approx(times[k], abs=1e-12) and 0.0 <= capture - times[k] < 1e-3
+        assert np.linalg.norm(position - positions[k]) < 6e-4  # the frame's truth plus its 0.1 mm noise
+        repeated.setdefault(frame, []).append(position)
+        assert np.array_equal(q, trajectory.q[int(np.argmin(np.abs(times - t)))])
+    assert len(repeated) == 6  # frames of 0, 1/30, ..., 5/30 s delivered by 0.2 s
+    for positions_of_frame in repeated.values():
+        assert all(np.array_equal(p, positions_of_frame[0]) for p in positions_of_frame)
+    assert SensorModel(tracker_rate=30.0).tracked and not SensorModel(tracker_rate=30.0).exact
+
+
 def test_sensor_model_refuses_bad_values() -> None:
     with pytest.raises(bh.InputError, match="object_position"):
         SensorModel(object_position=-1e-3)
     with pytest.raises(bh.InputError, match="delay"):
         SensorModel(delay=float("nan"))
+    with pytest.raises(bh.InputError, match="tracker_rate"):
+        SensorModel(tracker_rate=-30.0)
     with pytest.raises(bh.InputError, match="needs a `seed`"):
         Sensors(SensorModel(contact_force=0.1), seed=None)
     with pytest.raises(bh.InputError, match="SensorModel"):

@@ -18,17 +18,21 @@ e = (p_true - p, log(R_true R^T)) (world, position first).  Each control cycle o
 - **Update** with a tracker reading (p_z, R_z) whose noise is N(0, sigma_p^2 I) on the position and R_z = exp(n) R,
   n ~ N(0, sigma_r^2 I): innovation v = (p_z - p, log(R_z R^T)), S = P + N, K = P S^-1, d = K v, p <- p + d[:3],
   R <- exp(d[3:]) R, P <- (I - K) P (I - K)^T + K N K^T (Joseph form, symmetric and positive by construction).
+  Only a new tracker frame updates (:attr:`~bhgrasp.data.state.State.object_time` changed).  A frame taken L [s]
+  before now is first carried by the grasp's motion since it was taken, C(t) C(t - L)^-1 (C: the predictions'
+  product; the identity before a hold), and its noise grows by Q L: a slow, late tracker costs no lag.
 - **Twist**: during a hold, from the anchors' velocities J_i(q) v (the encoders' rates): the least-squares
   (v_o, w) of a_dot_i = v_o - skew(a_i - p) w, at the estimated centre of mass; before one, the tracker's twist.
 
 For a still object with a still hand the filter is the scalar random-walk Kalman filter on each axis, whose
 steady-state variance is closed form (:func:`steady_variance`; tests/test_object_estimator.py checks both the
 filter's P and the spread of its estimates against it).  Left out: the contact forces as the process input (the
-object's dynamics), a bus-delay prediction and a slower, late tracker (the sensors here delay every reading alike).
+object's dynamics), a rolling model of the contacts, and a prediction over the bus's delay (every reading alike).
 """
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,6 +45,7 @@ from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
 
 MIN_SPAN = 5e-3  # [m] the anchors' least distance from the line through two of them: below it, no hold
+HORIZON = 1.0  # [s] how long the grasp's motion is remembered to carry a late tracker frame
 
 
 @dataclass(frozen=True)
@@ -157,6 +162,8 @@ class HeldObjectEstimator:
         self.covariance = 0.5 * (start + start.T)
         self.twist = np.array(state.object_twists[self.index], dtype=float)
         self.anchors, self._points, self._time = [], np.zeros((0, 3)), float(state.t)
+        self._carry: deque[tuple[float, pin.SE3]] = deque([(float(state.t), pin.SE3.Identity())])
+        self._frame = _frame_time(state)
         self.anchor(state)
 
     def step(self, state: State) -> tuple[pin.SE3, np.ndarray]:
@@ -171,12 +178,20 @@ class HeldObjectEstimator:
             self.anchors, self._points = [], np.zeros((0, 3))  # a finger let go: the grasp no longer carries it
         if not self.anchors:
             self.anchor(state)
+        motion = pin.SE3.Identity()
         if self.anchors:
-            self._predict_held(state, h)
+            motion = self._predict_held(state, h)
         else:
             self._spread(np.eye(3), h, self.settings.free_drift)
             self.twist = np.array(state.object_twists[self.index], dtype=float)
-        self._update(self._reading(state))
+        carry = self._carry
+        carry.append((self._time, motion * carry[-1][1]))
+        while len(carry) > 1 and carry[1][0] <= self._time - HORIZON:
+            carry.popleft()
+        frame = _frame_time(state)
+        if frame != self._frame:  # a new tracker frame
+            self._frame = frame
+            self._update(self._reading(state), frame)
         return self.pose, self.twist.copy()
 
     def _reading(self, state: State) -> pin.SE3:
@@ -212,7 +227,8 @@ class HeldObjectEstimator:
         base = hand.base.placement
         return np.array([(base * hand.data.oMf[hand.frame_id(link)]).act(point) for link, point in self.anchors])
 
-    def _predict_held(self, state: State, h: float) -> None:
+    def _predict_held(self, state: State, h: float) -> pin.SE3:
+        """Carry the estimate with the anchors' rigid motion since the last cycle; that motion."""
         points = self.anchor_points(state.q)
         turn, shift = rigid_fit(self._points, points)
         self._points = points
@@ -226,6 +242,7 @@ class HeldObjectEstimator:
             rows[3 * k : 3 * k + 3, 3:] = -pin.skew(point - self.position)
         self.twist = np.linalg.lstsq(rows, velocities.ravel(), rcond=None)[0]
         self._spread(turn, h, self.settings.drift)
+        return pin.SE3(turn, shift)
 
     def _spread(self, turn: np.ndarray, h: float, drift: tuple[float, float]) -> None:
         """P <- B P B^T + Q h, B = diag(turn, turn)."""
@@ -235,9 +252,14 @@ class HeldObjectEstimator:
         covariance = block @ self.covariance @ block.T + walk
         self.covariance = 0.5 * (covariance + covariance.T)
 
-    def _update(self, reading: pin.SE3) -> None:
+    def _update(self, reading: pin.SE3, frame: float) -> None:
+        """Correct with a tracker frame taken at ``frame`` [s], carried to now by the grasp's motion since."""
+        then = next((motion for t, motion in reversed(self._carry) if t <= frame + 1e-12), self._carry[0][1])
+        reading = self._carry[-1][1] * then.inverse() * reading
+        age = max(self._time - frame, 0.0)
+        drift = self.settings.drift if self.anchors else self.settings.free_drift
         sigma_p, sigma_r = self.settings.tracker
-        noise = np.diag([sigma_p**2] * 3 + [sigma_r**2] * 3)
+        noise = np.diag([sigma_p**2 + drift[0] ** 2 * age] * 3 + [sigma_r**2 + drift[1] ** 2 * age] * 3)
         innovation = np.concatenate((reading.translation - self.position, pin.log3(reading.rotation @ self.rotation.T)))
         gain = np.linalg.solve(self.covariance + noise, self.covariance).T  # P S^-1 (P, S symmetric)
         correction = gain @ innovation
@@ -250,4 +272,9 @@ class HeldObjectEstimator:
         self.covariance = 0.5 * (covariance + covariance.T)
 
 
-__all__ = ["MIN_SPAN", "EstimatorSettings", "HeldObjectEstimator", "rigid_fit", "span", "steady_variance"]
+def _frame_time(state: State) -> float:
+    """When the state's object readings were taken [s] (its tracker frame's time, else the state's)."""
+    return float(state.t if state.object_time is None else state.object_time)
+
+
+__all__ = ["HORIZON", "MIN_SPAN", "EstimatorSettings", "HeldObjectEstimator", "rigid_fit", "span", "steady_variance"]

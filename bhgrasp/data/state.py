@@ -40,6 +40,8 @@ class State:
         actuation_modes: The actuation's mode flags (e.g. TorqueSwitch per finger); ``None`` = re-armed.
         scene_signature: The signature of the scene whose ``scene_q`` and ``scene_v`` these are (a simulator
             refuses a state of another scene); ``None`` = not known (checked by sizes and values alone).
+        object_time: When the object readings (``object_poses``, ``object_twists``) were taken [s]: a tracker's
+            frame time, older than ``t`` by its latency and frame period; ``None`` = at ``t``.
     """
 
     t: float
@@ -56,6 +58,7 @@ class State:
     contact_memory: Any = None
     actuation_modes: np.ndarray | None = None
     scene_signature: str | None = None
+    object_time: float | None = None
 
 
 DERIVED_FIELDS = frozenset(
@@ -119,7 +122,7 @@ class SimulatedState(State):
         it computed on the way, e.g. twists with poses).
         """
         state = object.__new__(cls)
-        set_t, set_scene_q, set_scene_v, set_modes, set_source, set_q, set_v, set_signature = _SETTERS
+        set_t, set_scene_q, set_scene_v, set_modes, set_source, set_q, set_v, set_signature, set_object_time = _SETTERS
         scene_q.flags.writeable = scene_v.flags.writeable = False
         set_t(state, t)
         set_scene_q(state, scene_q)
@@ -127,6 +130,7 @@ class SimulatedState(State):
         set_modes(state, modes)
         set_source(state, source)
         set_signature(state, scene_signature)
+        set_object_time(state, None)
         if hand_sizes is not None:  # the hand's q and v: read-only views of the scene's (built for every state)
             q, v = scene_q[: hand_sizes[0]], scene_v[: hand_sizes[1]]
             q.flags.writeable = v.flags.writeable = False
@@ -147,6 +151,7 @@ _SETTERS = tuple(
         (State, "q"),
         (State, "v"),
         (State, "scene_signature"),
+        (State, "object_time"),
     )
 )
 

@@ -8,7 +8,9 @@ Sensors (:class:`~bhgrasp.sim.sensor_model.SensorModel`, the controller reads th
 - ``pose_noise`` = (sigma [m], sigma [rad]): the object tracker's position and orientation;
 - ``twist_noise`` = (sigma [m/s], sigma [rad/s]): its linear and angular velocity;
 - ``force_noise`` = sigma [N]: each component of each measured contact force;
-- ``delay`` [s]: the age of every reading (joints, object, contacts).
+- ``delay`` [s]: the age of every reading (joints, object, contacts);
+- ``tracker_rate`` [Hz] and ``tracker_latency`` [s]: the object's readings come from a tracker's frames, taken at
+  that rate and delivered that late (:class:`~bhgrasp.sim.sensor_model.SensorModel`).
 
 Plant (the simulated hand and box, not the controller's model):
 
@@ -34,7 +36,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.motion.pose_references import PoseMotion
 from bhgrasp.sim.sensor_model import SensorModel
 
-SENSED = ("pose_noise", "twist_noise", "force_noise", "delay")
+SENSED = ("pose_noise", "twist_noise", "force_noise", "delay", "tracker_rate", "tracker_latency")
 PLANT = ("friction", "joint_friction", "joint_damping", "torque_limit")
 UNCERTAINTIES = (*SENSED, *PLANT, "mu")
 
@@ -53,7 +55,7 @@ def check_uncertainty(**values: Any) -> None:
             sigma = as_vector(values[name], name, 2)
             if (sigma < 0.0).any():
                 raise InputError(f"`{name}` standard deviations must be >= 0, got {sigma.tolist()}")
-    for name in ("force_noise", "delay", "joint_friction", "joint_damping"):
+    for name in ("force_noise", "delay", "joint_friction", "joint_damping", "tracker_rate", "tracker_latency"):
         if name in values:
             as_real(values[name], name)
     for name in ("friction", "mu", "torque_limit"):
@@ -76,6 +78,8 @@ def sensor_model(sensor_noise: Any = None, **sensed: Any) -> SensorModel:
         object_angular_velocity=twist[1],
         contact_force=sensed.get("force_noise", 0.0),
         delay=sensed.get("delay", 0.0),
+        tracker_rate=sensed.get("tracker_rate", 0.0),
+        tracker_latency=sensed.get("tracker_latency", 0.0),
     )
 
 

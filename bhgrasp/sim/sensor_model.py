@@ -11,10 +11,15 @@ real hand's encoders, an object tracker and fingertip force sensors would report
 - ``delay`` [s]: every reading is the state of ``delay`` seconds before (the newest one at least that old; the
   start state until then), then the noise is drawn.  Time ``t`` passed to the controller stays the present: a
   delayed reading is what it is, a late picture of the world.
+- ``tracker_rate`` [Hz] and ``tracker_latency`` [s]: the object's pose and twist come from a tracker that takes a
+  frame every 1 / rate seconds (at 0, 1/rate, ...; rate 0: every control cycle) and delivers it ``latency`` later
+  (after the bus's ``delay``): the reading is the newest frame delivered, the same frame (and noise) until the next
+  one, with its capture time in :attr:`~bhgrasp.data.state.State.object_time`.
 
 Draws come from one seeded generator, in a fixed order per reading (joint positions, joint velocities, then the
-object's position, orientation, linear and angular velocity per object, then contact forces), and a reading whose
-standard deviation is zero draws nothing: the same model, seed and run give the same bits.
+object's position, orientation, linear and angular velocity per object, then contact forces; a tracker's frame
+keeps the noise drawn in the cycle it was taken), and a reading whose standard deviation is zero draws
+nothing: the same model, seed and run give the same bits.
 """
 
 from __future__ import annotations
@@ -29,6 +34,8 @@ from bhgrasp._validation import as_real
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
 
+TIMING = ("delay", "tracker_rate", "tracker_latency")
+
 
 @dataclass(frozen=True)
 class SensorModel:
@@ -40,6 +47,8 @@ class SensorModel:
         object_velocity: [m/s]; object_angular_velocity: [rad/s].
         contact_force: [N] per force component.
         delay: [s] the age of every reading.
+        tracker_rate: [Hz] the object tracker's frame rate (0: a frame every control cycle).
+        tracker_latency: [s] the age of a tracker frame when it is delivered (on top of ``delay``).
     """
 
     joint_position: float = 0.0
@@ -50,6 +59,8 @@ class SensorModel:
     object_angular_velocity: float = 0.0
     contact_force: float = 0.0
     delay: float = 0.0
+    tracker_rate: float = 0.0
+    tracker_latency: float = 0.0
 
     def __post_init__(self) -> None:
         for item in fields(self):
@@ -58,12 +69,17 @@ class SensorModel:
     @property
     def noisy(self) -> bool:
         """Whether any reading has noise (and so a run needs a seed)."""
-        return any(getattr(self, item.name) > 0.0 for item in fields(self) if item.name != "delay")
+        return any(getattr(self, item.name) > 0.0 for item in fields(self) if item.name not in TIMING)
+
+    @property
+    def tracked(self) -> bool:
+        """Whether the object readings come from a tracker's frames (a frame rate or a latency)."""
+        return self.tracker_rate > 0.0 or self.tracker_latency > 0.0
 
     @property
     def exact(self) -> bool:
-        """Whether the sensors report the true state: no noise and no delay."""
-        return not self.noisy and self.delay == 0.0
+        """Whether the sensors report the true state: no noise, no delay, no tracker frames."""
+        return not self.noisy and self.delay == 0.0 and not self.tracked
 
 
 class Sensors:
@@ -78,6 +94,9 @@ class Sensors:
         self.model = model
         self.rng = np.random.default_rng(seed)
         self._past: deque[State] = deque()
+        self._frames: deque[State] = deque()  # the bus's readings a tracker frame may still be taken from
+        self._frame: tuple[float, tuple, np.ndarray] | None = None  # the delivered frame: time, poses, twists
+        self._start: float | None = None
 
     def read(self, state: State) -> State:
         """The state the controller sees at ``state.t``: the delayed true state, with noise."""
@@ -85,7 +104,27 @@ class Sensors:
         if model.exact:
             return state
         seen = self._delayed(state) if model.delay > 0.0 else state
-        return self._noisy(seen) if model.noisy else seen
+        seen = self._noisy(seen) if model.noisy else seen
+        return self._tracked(seen) if model.tracked else seen
+
+    def _tracked(self, seen: State) -> State:
+        """``seen`` with the object readings of the newest tracker frame delivered by ``seen.t``."""
+        model, frames = self.model, self._frames
+        if self._start is None:
+            self._start = seen.t  # frames are taken at start, start + 1 / rate, ...
+        frames.append(seen)
+        start = self._start
+        ready = seen.t - model.tracker_latency + 1e-12
+        if model.tracker_rate > 0.0:
+            period = 1.0 / model.tracker_rate
+            ready = start + np.floor((ready - start) / period) * period + 1e-12
+        while len(frames) > 1 and frames[1].t <= ready:
+            frames.popleft()
+        taken = frames[0]
+        if self._frame is None or self._frame[0] != taken.t:  # a new frame: its noisy readings, drawn once
+            self._frame = (taken.t, taken.object_poses, np.array(taken.object_twists))
+        _, poses, twists = self._frame
+        return replace(seen, object_poses=poses, object_twists=twists, object_time=self._frame[0])
 
     def _delayed(self, state: State) -> State:
         """The newest remembered state at least ``delay`` old (the oldest one until there is such a state)."""
