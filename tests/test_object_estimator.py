@@ -2,20 +2,18 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
-from bhgrasp.controllers.object_estimator import (
-    EstimatorSettings,
-    HeldObjectEstimator,
-    rigid_fit,
-    span,
-    steady_variance,
-)
+from bhgrasp.controllers.estimated_object import EstimatedObject
+from bhgrasp.controllers.object_estimator import HORIZON, EstimatorSettings, HeldObjectEstimator, steady_variance
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
+from bhgrasp.grasp.rigid_fit import rigid_fit, span
 from bhgrasp.model.mount import mount_pose, mounted
 from bhgrasp.scenarios.estimation import rigid_model_drift
 from bhgrasp.scenarios.grasp_demo import check_demo_arguments, run_grasp_demo
@@ -229,6 +227,46 @@ def test_a_finger_that_lets_go_ends_the_hold(wrist_hand: bh.Hand) -> None:
     two = State(H, q, np.zeros(hand.nv), (box,), np.zeros((1, 6)), **tip_contacts(hand, q, ("F1", "F3")))
     estimator.step(two)
     assert not estimator.holding  # two fingers: F2's anchor no longer moves with the box
+
+
+def test_only_the_fingers_on_the_object_anchor(wrist_hand: bh.Hand) -> None:
+    """A finger pressing another body (here F3 on "cup") does not hold the box: no hold with ``body="box"``."""
+    hand = wrist_hand
+    q = grasp_q(hand, np.zeros(6))
+    box = pin.SE3(np.eye(3), hand.fingertip_positions(q).mean(axis=0))
+    contacts = tip_contacts(hand, q, hand.fingers)
+    contacts["contact_bodies"] = (*contacts["contact_bodies"][:2], (contacts["contact_bodies"][2][0], "cup"))
+    state = State(0.0, q, np.zeros(hand.nv), (box,), np.zeros((1, 6)), **contacts)
+    on_box = HeldObjectEstimator(hand, body="box")
+    on_box.reset(state)
+    assert not on_box.holding
+    anywhere = HeldObjectEstimator(hand)  # body=None: any contact anchors
+    anywhere.reset(state)
+    assert anywhere.holding
+
+
+def test_the_wrapped_estimator_starts_from_the_sensed_state_not_the_true_one(barrett: bh.Hand) -> None:
+    """A simulator resets its controller with the true start state; the estimator must start from the first
+    reading the sensors give (else a noisy run would begin with the truth)."""
+    seen = []
+    wrapped = EstimatedObject(lambda t, state: seen.append(state) or np.zeros(barrett.nv), HeldObjectEstimator(barrett))
+    truth, reading = pin.SE3.Identity(), pin.SE3(np.eye(3), np.array([1e-3, 0.0, 0.0]))
+    wrapped.reset(still_state(0.0, truth, barrett))
+    wrapped(0.0, still_state(0.0, reading, barrett))
+    assert np.allclose(seen[0].object_poses[0].translation, reading.translation)
+    assert seen[0].object_time is None  # the estimate is of now, whatever the tracker frame's age
+
+
+def test_a_frame_older_than_the_memory_is_skipped(barrett: bh.Hand) -> None:
+    estimator = HeldObjectEstimator(barrett)
+    pose = pin.SE3.Identity()
+    estimator.reset(still_state(0.0, pose, barrett))
+    for k in range(1, int(1.5 * HORIZON / H)):
+        estimator.step(still_state(k * H, pose, barrett))
+    before = estimator.covariance.copy()
+    stale = replace(still_state(1.5 * HORIZON, pin.SE3(np.eye(3), np.ones(3)), barrett), object_time=0.2 * HORIZON)
+    estimator.step(stale)
+    assert np.allclose(estimator.position, 0.0) and np.all(np.diag(estimator.covariance) >= np.diag(before))
 
 
 def test_bad_input_is_refused(barrett: bh.Hand) -> None:

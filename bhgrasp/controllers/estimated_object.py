@@ -31,16 +31,23 @@ class EstimatedObject(Controller):
         if not isinstance(estimator, HeldObjectEstimator):
             raise InputError(f"`estimator` must be a HeldObjectEstimator, got {type(estimator).__name__}")
         self.controller, self.estimator = controller, estimator
+        self._restart = True
         self.log = getattr(controller, "log", self.log)
 
     def reset(self, state: State) -> None:
-        """Restart the estimator from ``state`` and reset the controller with the estimate."""
-        self.estimator.reset(state)
+        """Reset the controller with ``state``; the estimator restarts from the first *sensed* state it is given.
+
+        (A simulator resets its controller with the true start state; the estimator must not start from it.)
+        """
+        self._restart = True
         if hasattr(self.controller, "reset"):
-            self.controller.reset(self._estimated(state))
+            self.controller.reset(state)
 
     def __call__(self, t: float, state: State) -> np.ndarray:
         """The controller's torques for ``state`` with the object's pose and twist estimated."""
+        if self._restart:
+            self.estimator.reset(state)
+            self._restart = False
         self.estimator.step(state)
         estimated = self._estimated(state)
         pose = self.estimator.pose
@@ -55,7 +62,7 @@ class EstimatedObject(Controller):
         poses[index] = self.estimator.pose
         twists = np.array(state.object_twists, dtype=float)
         twists[index] = self.estimator.twist
-        return replace(state, object_poses=tuple(poses), object_twists=twists)
+        return replace(state, object_poses=tuple(poses), object_twists=twists, object_time=None)  # estimated at t
 
 
 __all__ = ["EstimatedObject"]

@@ -20,7 +20,10 @@ e = (p_true - p, log(R_true R^T)) (world, position first).  Each control cycle o
   R <- exp(d[3:]) R, P <- (I - K) P (I - K)^T + K N K^T (Joseph form, symmetric and positive by construction).
   Only a new tracker frame updates (:attr:`~bhgrasp.data.state.State.object_time` changed).  A frame taken L [s]
   before now is first carried by the grasp's motion since it was taken, C(t) C(t - L)^-1 (C: the predictions'
-  product; the identity before a hold), and its noise grows by Q L: a slow, late tracker costs no lag.
+  product; the identity before a hold), and its noise grows by Q L: a slow, late tracker costs no lag.  (That drift
+  is also in P, so the two are not independent as the update takes them: P comes out smaller by 2 K (1 - K) Q L,
+  at most about 5 % of the tracker's variance before a hold, negligible during one.)  A frame older than
+  :data:`HORIZON` is skipped.
 - **Twist**: during a hold, from the anchors' velocities J_i(q) v (the encoders' rates): the least-squares
   (v_o, w) of a_dot_i = v_o - skew(a_i - p) w, at the estimated centre of mass; before one, the tracker's twist.
 
@@ -33,7 +36,7 @@ object's dynamics), a rolling model of the contacts, and a prediction over the b
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
@@ -41,6 +44,7 @@ import pinocchio as pin
 from bhgrasp._validation import as_vector
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
+from bhgrasp.grasp.rigid_fit import rigid_fit, span
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
 
@@ -88,31 +92,6 @@ def steady_variance(process: float, measurement: float) -> tuple[float, float]:
     return predicted, predicted * r / (predicted + r)
 
 
-def rigid_fit(before: np.ndarray, after: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(A, b) minimising sum |A before_i + b - after_i|^2 over rotations A (Kabsch: SVD of the cross-covariance).
-
-    ``before``, ``after``: (n, 3) points [m], n >= 3 and not on one line.
-    """
-    centre_a, centre_b = before.mean(axis=0), after.mean(axis=0)
-    u, _, vt = np.linalg.svd((after - centre_b).T @ (before - centre_a))
-    sign = np.sign(np.linalg.det(u @ vt)) or 1.0  # a proper rotation, never a reflection
-    rotation = u @ np.diag((1.0, 1.0, sign)) @ vt
-    return rotation, centre_b - rotation @ centre_a
-
-
-def span(points: np.ndarray) -> float:
-    """The least distance [m] of a point from the line through the two farthest apart (0 for fewer than 3)."""
-    if len(points) < 3:
-        return 0.0
-    gaps = np.linalg.norm(points[:, None] - points[None], axis=-1)
-    i, j = np.unravel_index(np.argmax(gaps), gaps.shape)
-    axis = (points[j] - points[i]) / max(gaps[i, j], 1e-300)
-    offsets = points - points[i]
-    off_line = offsets - np.outer(offsets @ axis, axis)
-    others = [k for k in range(len(points)) if k not in (i, j)]
-    return float(np.max(np.linalg.norm(off_line[others], axis=1)))
-
-
 class HeldObjectEstimator:
     """The Kalman filter of the module docstring for one object held by ``hand``.
 
@@ -120,14 +99,20 @@ class HeldObjectEstimator:
     (encoders, contacts, and the tracker's pose and twist of the object).
     """
 
-    def __init__(self, hand: Hand, settings: EstimatorSettings | None = None, index: int = 0) -> None:
-        """Estimate object ``index`` of the states (its pose in ``state.object_poses[index]``)."""
+    def __init__(
+        self, hand: Hand, settings: EstimatorSettings | None = None, index: int = 0, body: str | None = None
+    ) -> None:
+        """Estimate object ``index`` of the states (its pose in ``state.object_poses[index]``).
+
+        ``body``: the object's name in ``state.contact_bodies`` (a simulator's scene names it
+        ``scene.object_names[index]``); only the fingers touching it anchor.  ``None``: contacts with any body.
+        """
         if not isinstance(hand, Hand):
             raise InputError(f"`hand` must be a bhgrasp Hand, got {type(hand).__name__}")
         settings = EstimatorSettings() if settings is None else settings
         if not isinstance(settings, EstimatorSettings):
             raise InputError(f"`settings` must be EstimatorSettings, got {type(settings).__name__}")
-        self.hand, self.settings, self.index = hand, settings, int(index)
+        self.hand, self.settings, self.index, self.body = hand, settings, int(index), body
         self.sensing = ContactSensing(hand)
         self.position = np.zeros(3)
         self.rotation = np.eye(3)
@@ -163,6 +148,7 @@ class HeldObjectEstimator:
         self.twist = np.array(state.object_twists[self.index], dtype=float)
         self.anchors, self._points, self._time = [], np.zeros((0, 3)), float(state.t)
         self._carry: deque[tuple[float, pin.SE3]] = deque([(float(state.t), pin.SE3.Identity())])
+        self._start = float(state.t)
         self._frame = _frame_time(state)
         self.anchor(state)
 
@@ -174,16 +160,17 @@ class HeldObjectEstimator:
         if h < 0.0:
             raise InputError(f"time went backwards: t = {state.t} after {self._time}; call reset() to restart")
         self._time = float(state.t)
-        if self.anchors and not self._still_touching(state):
-            self.anchors, self._points = [], np.zeros((0, 3))  # a finger let go: the grasp no longer carries it
-        if not self.anchors:
-            self.anchor(state)
         motion = pin.SE3.Identity()
-        if self.anchors:
+        if self.anchors:  # carried as the grasp was, before a finger that let go is dropped (none of h is lost)
             motion = self._predict_held(state, h)
         else:
             self._spread(np.eye(3), h, self.settings.free_drift)
             self.twist = np.array(state.object_twists[self.index], dtype=float)
+        fingers = self._fingers(state)
+        if self.anchors and not all(fingers[self.sensing.finger_of(link)].touching for link, _ in self.anchors):
+            self.anchors, self._points = [], np.zeros((0, 3))  # a finger let go: the grasp no longer carries it
+        if not self.anchors:
+            self.anchor(state, fingers)
         carry = self._carry
         carry.append((self._time, motion * carry[-1][1]))
         while len(carry) > 1 and carry[1][0] <= self._time - HORIZON:
@@ -194,18 +181,32 @@ class HeldObjectEstimator:
             self._update(self._reading(state), frame)
         return self.pose, self.twist.copy()
 
+    def _fingers(self, state: State) -> dict:
+        """Per finger, its contacts with the object (with any body when ``body`` is ``None``)."""
+        if self.body is not None and any(other != self.body for _, other in state.contact_bodies):
+            rows = [k for k, (_, other) in enumerate(state.contact_bodies) if other == self.body]
+            state = replace(
+                state,
+                contact_points=state.contact_points[rows],
+                contact_normals=state.contact_normals[rows],
+                contact_forces=state.contact_forces[rows],
+                contact_bodies=tuple(state.contact_bodies[k] for k in rows),
+            )
+        return self.sensing.fingers(state)
+
     def _reading(self, state: State) -> pin.SE3:
         if len(state.object_poses) <= self.index:
             raise InputError(f"the state has no object {self.index} (it has {len(state.object_poses)})")
         return state.object_poses[self.index]
 
-    def anchor(self, state: State) -> bool:
+    def anchor(self, state: State, fingers: dict | None = None) -> bool:
         """Anchor each touching finger's contact point on its link if three or more span a plane; whether it did.
 
         The points are fixed in their links' frames where the encoders of ``state`` put the links (the contact
-        locations as a tactile pad reads them).
+        locations as a tactile pad reads them).  ``fingers``: the state's :meth:`ContactSensing.fingers`, if read.
         """
-        touching = [contact for contact in self.sensing.fingers(state).values() if contact.touching]
+        fingers = self._fingers(state) if fingers is None else fingers
+        touching = [contact for contact in fingers.values() if contact.touching]
         points = np.array([contact.point for contact in touching]).reshape(-1, 3)
         if len(touching) < 3 or span(points) < MIN_SPAN:
             return False
@@ -215,10 +216,6 @@ class HeldObjectEstimator:
         ]
         self._points = self.anchor_points(state.q)
         return True
-
-    def _still_touching(self, state: State) -> bool:
-        fingers = self.sensing.fingers(state)
-        return all(fingers[self.sensing.finger_of(link)].touching for link, _ in self.anchors)
 
     def anchor_points(self, q: np.ndarray) -> np.ndarray:
         """The anchors in the world [m], (n, 3), where the encoders ``q`` put their links (one kinematics pass)."""
@@ -236,11 +233,13 @@ class HeldObjectEstimator:
         self.rotation = turn @ self.rotation
         links = [link for link, _ in self.anchors]
         velocities = np.einsum("nij,j->ni", self.hand.point_jacobians(state.q, links, points), state.v)
-        rows = np.zeros((3 * len(points), 6))
-        for k, point in enumerate(points):
-            rows[3 * k : 3 * k + 3, :3] = np.eye(3)
-            rows[3 * k : 3 * k + 3, 3:] = -pin.skew(point - self.position)
-        self.twist = np.linalg.lstsq(rows, velocities.ravel(), rcond=None)[0]
+        arms = points - self.position
+        rows = np.zeros((len(points), 3, 6))
+        rows[:, :, :3] = np.eye(3)
+        rows[:, 0, 4], rows[:, 0, 5] = arms[:, 2], -arms[:, 1]  # -skew(arm): a_dot = v_o + w x arm
+        rows[:, 1, 3], rows[:, 1, 5] = -arms[:, 2], arms[:, 0]
+        rows[:, 2, 3], rows[:, 2, 4] = arms[:, 1], -arms[:, 0]
+        self.twist = np.linalg.lstsq(rows.reshape(-1, 6), velocities.ravel(), rcond=None)[0]
         self._spread(turn, h, self.settings.drift)
         return pin.SE3(turn, shift)
 
@@ -254,8 +253,11 @@ class HeldObjectEstimator:
 
     def _update(self, reading: pin.SE3, frame: float) -> None:
         """Correct with a tracker frame taken at ``frame`` [s], carried to now by the grasp's motion since."""
-        then = next((motion for t, motion in reversed(self._carry) if t <= frame + 1e-12), self._carry[0][1])
-        reading = self._carry[-1][1] * then.inverse() * reading
+        carry = self._carry
+        if frame < carry[0][0] - 1e-12 and carry[0][0] > self._start:
+            return  # older than the grasp's remembered motion (HORIZON): it cannot be carried to now
+        then = next((motion for t, motion in reversed(carry) if t <= frame + 1e-12), carry[0][1])
+        reading = carry[-1][1] * then.inverse() * reading
         age = max(self._time - frame, 0.0)
         drift = self.settings.drift if self.anchors else self.settings.free_drift
         sigma_p, sigma_r = self.settings.tracker
@@ -277,4 +279,4 @@ def _frame_time(state: State) -> float:
     return float(state.t if state.object_time is None else state.object_time)
 
 
-__all__ = ["HORIZON", "MIN_SPAN", "EstimatorSettings", "HeldObjectEstimator", "rigid_fit", "span", "steady_variance"]
+__all__ = ["HORIZON", "MIN_SPAN", "EstimatorSettings", "HeldObjectEstimator", "steady_variance"]

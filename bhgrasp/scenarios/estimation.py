@@ -15,9 +15,10 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_positive
-from bhgrasp.controllers.object_estimator import HeldObjectEstimator, rigid_fit
+from bhgrasp.controllers.object_estimator import HeldObjectEstimator
 from bhgrasp.data import State, Trajectory
 from bhgrasp.errors import InputError
+from bhgrasp.grasp.rigid_fit import rigid_fit
 from bhgrasp.model.hand import Hand
 
 

@@ -178,7 +178,7 @@ def run_grasp_demo(
         estimator: ``None``: the controller reads the object's pose and twist as the tracker reports them;
             ``"hand"``: through a :class:`~bhgrasp.controllers.object_estimator.HeldObjectEstimator` (Barrett
             scene), which carries the estimate with the fingers' encoders once three fingers hold the box and
-            corrects it with the tracker (its noise taken as ``pose_noise``, or 0.5 mm / 5 mrad without one).
+            corrects it with the tracker (its noise taken as ``pose_noise``; 0.5 mm / 5 mrad for a part without one).
         uncertainty: What the controller does not know (:data:`UNCERTAINTIES`, Barrett scene only):
             ``pose_noise`` (sigma [m], sigma [rad]) on the object pose, ``twist_noise`` (sigma [m/s], sigma
             [rad/s]) on its twist, ``force_noise`` sigma [N] on the contact forces, ``delay`` [s] of every reading,
@@ -215,9 +215,7 @@ def run_grasp_demo(
     supervisor = _supervisor(setup, grasp, offset, approach_gains, hand)
     law: Controller = MotorCommands(supervisor, setup.simulator.actuation.drive) if setup.cancel_damping else supervisor
     if estimator == "hand":
-        tracker = uncertainty.get("pose_noise") or None
-        settings = EstimatorSettings() if tracker is None or min(tracker) <= 0.0 else EstimatorSettings(tracker)
-        law = EstimatedObject(law, HeldObjectEstimator(setup.hand, settings))
+        law = EstimatedObject(law, _estimator(setup, uncertainty.get("pose_noise")))
     if viewer is not None:
         from bhgrasp.viz import LiveView
 
@@ -227,6 +225,15 @@ def run_grasp_demo(
     traj = setup.simulator.run(law, duration, state=setup.state, progress=progress, sensors=sensors, seed=seed)
     wall = time.perf_counter() - start
     return evaluate_demo(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
+
+
+def _estimator(setup: BoxGrasp, pose_noise: Any) -> HeldObjectEstimator:
+    """The demo's object estimator, its tracker's noise ``pose_noise`` (the default's for a zero or absent part)."""
+    default = EstimatorSettings().tracker
+    sigma = default if pose_noise is None else as_vector(pose_noise, "pose_noise", 2)
+    tracker = tuple(float(value) if value > 0.0 else fallback for value, fallback in zip(sigma, default))
+    body = setup.simulator.scene.object_names[0]
+    return HeldObjectEstimator(setup.hand, EstimatorSettings(tracker=tracker), body=body)
 
 
 def _supervisor(setup: BoxGrasp, grasp: Any, offset: Any, approach_gains: tuple, hand: str) -> GraspSupervisor:
