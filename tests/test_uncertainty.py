@@ -17,7 +17,8 @@ from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import FullyActuated
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.sensor_model import SensorModel, Sensors
-from bhgrasp.thesis.robustness import SCENARIOS, run_scenarios, summarise
+from bhgrasp.thesis.robustness import run_scenarios, success_interval, summarise
+from bhgrasp.thesis.robustness_scenarios import SCENARIOS
 
 FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))
 
@@ -219,3 +220,26 @@ def test_a_scenario_whose_runs_all_failed_reports_them() -> None:
     frame = pd.DataFrame({"case": [0, 1], "status": ["failed", "failed"], "error": ["InputError: ...", "..."]})
     figures = summarise(frame)
     assert figures["success_pct"] == 0.0 and figures["failed_runs"] == 2.0 and np.isnan(figures["mean_error_mm"])
+
+
+@pytest.mark.parametrize(("successes", "runs"), [(0, 30), (15, 30), (27, 30), (30, 30), (3, 12)])
+def test_the_success_interval_is_wilsons_score_interval(successes: int, runs: int) -> None:
+    """Wilson's interval is every p whose normal test does not reject the observed share: |s/n - p| <= z
+    sqrt(p (1 - p) / n).  Its bounds, found here by bisection on that inequality, are the closed form's."""
+    from scipy.stats import norm
+
+    z, share = norm.ppf(0.975), successes / runs
+
+    def inside(p: float) -> bool:
+        return abs(share - p) <= z * np.sqrt(p * (1 - p) / runs)
+
+    def edge(outside: float, within: float) -> float:
+        for _ in range(200):
+            middle = 0.5 * (outside + within)
+            outside, within = (outside, middle) if inside(middle) else (middle, within)
+        return within
+
+    low, high = success_interval(successes, runs)
+    assert low == pytest.approx(0.0 if successes == 0 else edge(0.0, share), abs=1e-12)
+    assert high == pytest.approx(1.0 if successes == runs else edge(1.0, share), abs=1e-12)
+    assert low <= share <= high

@@ -54,10 +54,16 @@ TOLERANCES: dict[str, Tolerance] = {
     "chapter*/*_within_*_s": Tolerance(1e-6, 1.5e-3, "the last exit from the 2 % band: a threshold crossing (1 ms)"),
     "chapter5/robustness/*/success_pct": Tolerance(
         0.0,
-        100.0 / 12,
-        "a share of 12 runs, each a threshold test "
+        100.0 / 30,
+        "a share of 30 runs, each a threshold test "
         "(0.5 mm, 5 mrad, zero slip): a run that grazes a threshold may "
-        "count either way (measured: no change)",
+        "count either way (measured with 12 runs: no change)",
+    ),
+    "chapter5/robustness/*/success_*_pct": Tolerance(
+        0.0,
+        5.4,
+        "a bound of the Wilson interval of a share of 30 runs: one run counted the other way moves it by "
+        "at most 5.3 points (29/30 -> 30/30: its low bound 83.3 -> 88.6 %)",
     ),
     "chapter5/*slip_events": Tolerance(
         0.0,
