@@ -25,6 +25,7 @@ from bhgrasp.model import convex_decomposition
 from bhgrasp.model.household_objects import HOUSEHOLD, household, household_mesh
 from bhgrasp.model.mesh_object import Mesh
 from bhgrasp.model.objects import Box, table
+from bhgrasp.scenarios.box_grasp import KNUCKLE_SPACING
 from bhgrasp.scenarios.object_grasp import CENTRE, object_grasp, run_object_grasp
 from bhgrasp.sim.geometry_text import HEADER, geometry_text
 from bhgrasp.sim.scene import Scene
@@ -247,7 +248,7 @@ def test_the_grasp_demo_holds_a_meshed_box_as_the_box(monkeypatch: pytest.Monkey
         return dataclasses.replace(setup, simulator=twin, state=twin.initial_state(setup.q_start))
 
     monkeypatch.setattr(grasp_demo, "grasp_scene", meshed)
-    result = grasp_demo.run_grasp_demo()
+    result = grasp_demo.run_grasp_demo(finger_spacing=KNUCKLE_SPACING)  # the given pinch: through grasp_scene
     assert type(result.scene.objects[0]) is Mesh
     gap = np.abs(result.trajectory.object_position - primitive.trajectory.object_position).max()
     assert gap < 1e-5, f"the meshed box's path is {gap * 1e3:.4f} mm from the box's"  # measured 2.9 um

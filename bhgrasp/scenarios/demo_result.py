@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -11,6 +12,9 @@ from bhgrasp.errors import InputError
 from bhgrasp.grasp.metrics import finger_normal_forces, slip_events_after
 from bhgrasp.scenarios.uncertainty import final_pose_error
 from bhgrasp.sim.scene import Scene
+
+if TYPE_CHECKING:
+    from bhgrasp.scenarios.grasp_choice import GraspChoice
 
 MU_ASSUMED = 0.6  # the true friction is 0.8
 SUCCESS = (0.5e-3, 5e-3)  # [m], [rad] a moved object's final error against the request (with no sliding sample)
@@ -27,7 +31,8 @@ class GraspDemoResult:
     ``true_position_error`` and ``true_rotation_error`` compare the object's true final pose with the requested
     motion's end (they differ when the sensors are noisy or late, :class:`~bhgrasp.sim.sensor_model.SensorModel`, or
     when the supervisor planned a motion other than the one requested: ``planned_offset``, ``None`` before the move;
-    ``requested_offset`` the request).
+    ``requested_offset`` the request).  ``grasp_choice``: the pinch the motion was given to, and why others were
+    refused (:mod:`bhgrasp.scenarios.grasp_choice`).
     """
 
     trajectory: Trajectory
@@ -52,6 +57,7 @@ class GraspDemoResult:
     true_rotation_error: float = float("nan")
     planned_offset: np.ndarray | None = None
     requested_offset: np.ndarray | None = None
+    grasp_choice: GraspChoice | None = None
 
     @property
     def object_label(self) -> str:

@@ -13,6 +13,7 @@ does) and the run time.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -21,7 +22,6 @@ from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.estimated_object import EstimatedObject
 from bhgrasp.controllers.grasp_options import GraspOptions
 from bhgrasp.controllers.motor_commands import MotorCommands
-from bhgrasp.controllers.object_estimator import EstimatorSettings, HeldObjectEstimator
 from bhgrasp.controllers.supervisor import GraspSupervisor
 from bhgrasp.controllers.supervisor_options import Approach, Planning
 from bhgrasp.errors import InputError
@@ -29,7 +29,9 @@ from bhgrasp.grasp.metrics import finger_normal_forces
 from bhgrasp.model.objects import Box
 from bhgrasp.scenarios.allegro_grasp import allegro_box_grasp
 from bhgrasp.scenarios.box_grasp import STIFFNESS, BoxGrasp, box_grasp
+from bhgrasp.scenarios.demo_estimator import demo_estimator
 from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult, evaluate_demo
+from bhgrasp.scenarios.grasp_choice import choose_pinch, given_grasp
 from bhgrasp.scenarios.grasp_controllers import ADAPTATIONS, CONTROLLERS, grasp_controller
 from bhgrasp.scenarios.uncertainty import (
     PLANT,
@@ -165,8 +167,10 @@ def run_grasp_demo(
             middle finger, :func:`~bhgrasp.scenarios.allegro_grasp.allegro_box_grasp`).  The controllers are
             the same; where the scene asks for it (the Allegro) the commands also cancel the joints' viscous
             damping (known to the controller), which dominates its light links' inertia.
-        finger_spacing: Distance [m] between F1's and F2's contacts (Barrett scene; default the thesis' 50 mm, the
-            spread on its stop; :data:`~bhgrasp.scenarios.box_grasp.OFF_STOP_SPACING` takes it off).
+        finger_spacing: Distance [m] between F1's and F2's contacts (Barrett scene; 50 mm: the thesis' pinch, the
+            spread on its stop; :data:`~bhgrasp.scenarios.box_grasp.OFF_STOP_SPACING` takes it off).  ``None``: the
+            first pinch that makes ``offset`` (:mod:`bhgrasp.scenarios.grasp_choice`; the result's
+            ``grasp_choice`` says which, and why the others were refused).
         adaptation: The SMC-adaptive law's object estimate
             (:data:`~bhgrasp.scenarios.grasp_controllers.ADAPTATIONS`): the thesis' (5.52), or ``"composite"``,
             which also fits the wrench the hand measures on the object once it is off its pedestal
@@ -205,17 +209,18 @@ def run_grasp_demo(
     )
     mass, estimate, duration, offset = float(mass), float(estimate), float(duration), as_vector(offset, "offset", 6)
     plant = {name: uncertainty[name] for name in PLANT if name in uncertainty}
-    if finger_spacing is not None:
-        plant["finger_spacing"] = finger_spacing
-    setup = grasp_scene(hand, mass, float(stiffness), **plant)
-    setup.manipulable_space().check(offset)  # a motion the grasp cannot make is refused before simulating
-    setup.check_clearance(offset)  # so is one that drives the box into its pedestal
+    if hand == "barrett" and finger_spacing is None:  # the first pinch that makes the motion, before simulating
+        setup, choice = choose_pinch(mass, offset, float(stiffness), **plant)
+    else:  # the given grasp, refused before simulating if it cannot make the motion
+        spacing = {} if finger_spacing is None else {"finger_spacing": finger_spacing}
+        setup = grasp_scene(hand, mass, float(stiffness), **plant, **spacing)
+        choice = given_grasp(setup, offset, finger_spacing)
     nominal_box, mu = Box(size=setup.box.size, mass=estimate), float(uncertainty.get("mu", MU_ASSUMED))
     grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains, mu, adaptation, friction_margin)
     supervisor = _supervisor(setup, grasp, offset, approach_gains, hand)
     law: Controller = MotorCommands(supervisor, setup.simulator.actuation.drive) if setup.cancel_damping else supervisor
     if estimator == "hand":
-        law = EstimatedObject(law, _estimator(setup, uncertainty.get("pose_noise")))
+        law = EstimatedObject(law, demo_estimator(setup, uncertainty.get("pose_noise")))
     if viewer is not None:
         from bhgrasp.viz import LiveView
 
@@ -224,16 +229,8 @@ def run_grasp_demo(
     sensors = sensor_model(sensor_noise, **{name: uncertainty[name] for name in SENSED if name in uncertainty})
     traj = setup.simulator.run(law, duration, state=setup.state, progress=progress, sensors=sensors, seed=seed)
     wall = time.perf_counter() - start
-    return evaluate_demo(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
-
-
-def _estimator(setup: BoxGrasp, pose_noise: Any) -> HeldObjectEstimator:
-    """The demo's object estimator, its tracker's noise ``pose_noise`` (the default's for a zero or absent part)."""
-    default = EstimatorSettings().tracker
-    sigma = default if pose_noise is None else as_vector(pose_noise, "pose_noise", 2)
-    tracker = tuple(float(value) if value > 0.0 else fallback for value, fallback in zip(sigma, default))
-    body = setup.simulator.scene.object_names[0]
-    return HeldObjectEstimator(setup.hand, EstimatorSettings(tracker=tracker), body=body)
+    result = evaluate_demo(traj, setup.hand, controller, mass, estimate, supervisor, wall, setup.simulator.scene)
+    return replace(result, grasp_choice=choice)
 
 
 def _supervisor(setup: BoxGrasp, grasp: Any, offset: Any, approach_gains: tuple, hand: str) -> GraspSupervisor:
