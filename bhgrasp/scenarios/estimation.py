@@ -22,11 +22,17 @@ from bhgrasp.grasp.rigid_fit import rigid_fit
 from bhgrasp.model.hand import Hand
 
 
+def pose_at(trajectory: Trajectory, k: int, index: int = 0) -> pin.SE3:
+    """Object ``index``'s recorded pose at sample ``k``."""
+    return pin.XYZQUATToSE3(
+        np.concatenate((trajectory.object_position[k, index], trajectory.object_quaternion[k, index]))
+    )
+
+
 def states_of(trajectory: Trajectory, index: int = 0) -> Iterator[State]:
     """The recorded samples as the controller's :class:`~bhgrasp.data.state.State` (object ``index`` only)."""
     for k, t in enumerate(trajectory.t):
-        x, y, z, w = trajectory.object_quaternion[k, index]
-        pose = pin.SE3(pin.Quaternion(w, x, y, z).toRotationMatrix(), trajectory.object_position[k, index])
+        pose = pose_at(trajectory, k, index)
         contacts = trajectory.contacts_at(k)
         yield State(
             float(t),
@@ -90,7 +96,7 @@ def drift_rate(times: np.ndarray, residual: np.ndarray, lag: float) -> tuple[flo
 def pre_hold_motion(times: np.ndarray, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
     """Times [s] and the object's true pose minus its first (n, 6) (world) before ``times[0]``, the hold's start."""
     before = trajectory.t < times[0]
-    poses = [state.object_poses[0] for state, keep in zip(states_of(trajectory), before) if keep]
+    poses = [pose_at(trajectory, k) for k in np.flatnonzero(before)]
     first = poses[0]
     motion = [
         np.concatenate((pose.translation - first.translation, pin.log3(pose.rotation @ first.rotation.T)))
@@ -120,4 +126,4 @@ def rigid_model_drift(
     return rates
 
 
-__all__ = ["drift_rate", "pre_hold_motion", "rigid_model_drift", "rigid_model_residual", "states_of"]
+__all__ = ["drift_rate", "pose_at", "pre_hold_motion", "rigid_model_drift", "rigid_model_residual", "states_of"]

@@ -42,19 +42,14 @@ ALL = {
 """The milder combined scenario: each uncertainty at a level a real set-up has (a tracker of 0.2 mm / 2 mrad, a 2 ms
 bus, friction a fifth of the hold torques, a true mu equal to the assumed one's)."""
 BENCH = {
+    **ALL,  # its encoders, forces, bus, joint friction and torque limit; its true mu is each scenario's own
     "pose_noise": (5e-4, 5e-3),
     "tracker_rate": 30.0,
     "tracker_latency": 0.03,
     "twist_noise": (5e-3, 5e-2),
-    "force_noise": 0.1,
-    "sensor_noise": (1e-4, 5e-3),
-    "delay": 0.002,
-    "joint_friction": 0.01,
-    "joint_damping": 0.1,
-    "torque_limit": 1.5,
     "friction_margin": MARGIN,
 }
-"""A real bench (issue 30): a tracker of 0.5 mm / 5 mrad at 30 frames/s delivered 30 ms late (its twist 5 mm/s /
+"""A real bench: a tracker of 0.5 mm / 5 mrad at 30 frames/s delivered 30 ms late (its twist 5 mm/s /
 50 mrad/s), encoders 1e-4 rad / 5e-3 rad/s, contact forces 0.1 N (the fingertip sensors' noise as forces), a 2 ms
 bus, joint friction, a 1.5 N m torque limit and the friction margin; the true mu is the scenario's."""
 SCENARIOS: dict[str, tuple[str, dict[str, Any]]] = {
