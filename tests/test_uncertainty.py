@@ -18,7 +18,7 @@ from bhgrasp.sim.actuation import FullyActuated
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.sensor_model import SensorModel, Sensors
 from bhgrasp.thesis.robustness import run_scenarios, success_interval, summarise
-from bhgrasp.thesis.robustness_scenarios import SCENARIOS
+from bhgrasp.thesis.robustness_scenarios import SCENARIOS, SLIDE
 
 FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))
 
@@ -212,6 +212,14 @@ def test_the_monte_carlo_is_seeded_and_counts_success() -> None:
     frame.loc[:, "slip_events"] = 0.0
     figures = summarise(frame)
     assert figures["success_pct"] == 50.0 and figures["max_error_mm"] == pytest.approx(1.0)
+    assert figures["lightest_failure_kg"] == frame["mass"].iloc[1]  # the run 1 mm off
+    # both within the pose bounds, both with samples at the Coulomb limit; one slid 20 um, the other 0.2 mm
+    frame.loc[:, "true_position_error"] = 1e-4
+    frame.loc[:, "slip_events"] = 3.0
+    frame.loc[:, "slide"] = [0.2 * SLIDE, 2.0 * SLIDE]
+    figures = summarise(frame)
+    assert figures["success_pct"] == 50.0 and figures["strict_success_pct"] == 0.0
+    assert figures["max_slide_mm"] == pytest.approx(2e3 * SLIDE)
 
 
 def test_a_scenario_whose_runs_all_failed_reports_them() -> None:

@@ -1,4 +1,4 @@
-"""Grasp quantities read back from a recorded :class:`~bhgrasp.data.trajectory.Trajectory`: forces and slip events."""
+"""Grasp quantities read back from a recorded :class:`~bhgrasp.data.trajectory.Trajectory`: forces, slip, slides."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import numpy as np
 from bhgrasp.data import Trajectory
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
+from bhgrasp.model.hand_kinematics import point_jacobians
 
 
 def finger_of(hand: Hand, link: str) -> str | None:
@@ -51,4 +52,41 @@ def slip_events_after(hand: Hand, traj: Trajectory, index: int) -> int:
     return slip_events(hand, traj, float(traj.t[min(int(index) + 1, len(traj.t) - 1)]))
 
 
-__all__ = ["finger_normal_forces", "finger_of", "slip_events", "slip_events_after"]
+def sliding_distances(hand: Hand, traj: Trajectory, start_time: float = 0.0) -> dict[str, float]:
+    """How far each hand link slid on the objects from ``start_time`` [s]: link name -> distance [m].
+
+    Each sample, a link's sliding contact points (``Trajectory.contact_sticking`` False) with an object move
+    against it at the relative tangential speed |(I - n n^T)(J_p(q) v - v_o - omega_o x (p - x_o))| (the link's
+    material point at p against the object's); the link's fastest point times the sample interval is added to
+    its distance (the points of a link move as one body, so its patch is counted once).  A patch whose edge
+    reaches the Coulomb limit while its other points stick (partial slip, Johnson's *Contact Mechanics* 7.2) moves
+    little; a finger whose whole contact slides adds its sliding speed.  Links that never slid are left out.
+    """
+    objects = list(traj.object_names)
+    distances: dict[str, float] = {}
+    first = int(np.searchsorted(traj.t, start_time))
+    for k in range(first, len(traj.t) - 1):
+        rows = np.arange(traj.contact_offsets[k], traj.contact_offsets[k + 1])
+        rows = rows[~traj.contact_sticking[rows]]
+        if len(rows) == 0:
+            continue
+        bodies = traj.pair_bodies[traj.contact_pair[rows]]
+        on = np.array([other in objects and hand.model.existFrame(str(link)) for link, other in bodies], dtype=bool)
+        if not on.any():
+            continue
+        rows, bodies = rows[on], bodies[on]
+        links = [str(link) for link in bodies[:, 0]]
+        points, normals = traj.contact_point[rows], traj.contact_normal[rows]
+        hand_velocity = point_jacobians(hand, traj.q[k], links, points) @ traj.v[k]
+        index = np.array([objects.index(str(other)) for other in bodies[:, 1]])
+        twist, origin = traj.object_twist[k, index], traj.object_position[k, index]
+        relative = hand_velocity - twist[:, :3] - np.cross(twist[:, 3:], points - origin)
+        relative -= np.sum(relative * normals, axis=1)[:, None] * normals
+        speed, interval = np.linalg.norm(relative, axis=1), float(traj.t[k + 1] - traj.t[k])
+        for link in set(links):
+            fastest = max(s for name, s in zip(links, speed) if name == link)
+            distances[link] = distances.get(link, 0.0) + fastest * interval
+    return distances
+
+
+__all__ = ["finger_normal_forces", "finger_of", "sliding_distances", "slip_events", "slip_events_after"]

@@ -9,7 +9,7 @@ import numpy as np
 
 from bhgrasp.data import Trajectory
 from bhgrasp.errors import InputError
-from bhgrasp.grasp.metrics import finger_normal_forces, slip_events_after
+from bhgrasp.grasp.metrics import finger_normal_forces, sliding_distances, slip_events_after
 from bhgrasp.scenarios.uncertainty import final_pose_error
 from bhgrasp.sim.scene import Scene
 
@@ -32,7 +32,9 @@ class GraspDemoResult:
     motion's end (they differ when the sensors are noisy or late, :class:`~bhgrasp.sim.sensor_model.SensorModel`, or
     when the supervisor planned a motion other than the one requested: ``planned_offset``, ``None`` before the move;
     ``requested_offset`` the request).  ``grasp_choice``: the pinch the motion was given to, and why others were
-    refused (:mod:`bhgrasp.scenarios.grasp_choice`).
+    refused (:mod:`bhgrasp.scenarios.grasp_choice`).  ``slide`` [m]: the farthest a hand link slid on the object
+    after the grasp closed (:func:`~bhgrasp.grasp.metrics.sliding_distances`), where ``slip_events`` counts the
+    contact samples at the Coulomb limit, a patch's lightly loaded edge among them.
     """
 
     trajectory: Trajectory
@@ -58,6 +60,7 @@ class GraspDemoResult:
     planned_offset: np.ndarray | None = None
     requested_offset: np.ndarray | None = None
     grasp_choice: GraspChoice | None = None
+    slide: float = float("nan")
 
     @property
     def object_label(self) -> str:
@@ -86,7 +89,8 @@ class GraspDemoResult:
                 f"{1e3 * self.rotation_error:.3f} mrad ({final})",
                 *self._plan_lines(),
                 f"  contact force error: {100 * self.force_error:.2f} % of the commanded normal force ({window})",
-                f"  slip events: {self.slip_events} (sliding hand-object contact samples after the grasp closed)",
+                f"  slip events: {self.slip_events} (sliding hand-object contact samples after the grasp closed; "
+                f"the farthest a link slid: {1e3 * self.slide:.3f} mm)",
                 f"  commanded forces: min cone margin {self.cone_margin:.3f} N at mu {MU_ASSUMED}, "
                 f"{self.infeasible_samples} infeasible samples",
                 f"  time: {duration:.2f} s simulated in {self.wall_time:.1f} s wall",
@@ -146,6 +150,7 @@ def evaluate_demo(traj, hand, controller, mass, estimate, supervisor, wall, scen
         rotation_error=float(np.linalg.norm(error[3:])),
         force_error=force_error,
         slip_events=slip_events_after(hand, traj, closed),
+        slide=max(sliding_distances(hand, traj, float(traj.t[min(closed + 1, len(traj.t) - 1)])).values(), default=0.0),
         cone_margin=float(np.nanmin(traj.log["cone_margin"][grasping])),
         infeasible_samples=int(np.sum(traj.log["feasible"][grasping] < 1.0)),
         wall_time=wall,

@@ -35,8 +35,9 @@ def grasp_rollout(parameters: dict[str, Any], seed: int) -> dict[str, float]:
     For example ``mass``, ``estimate``, ``controller``, ``distribution``, ``stiffness``, ``duration`` and
     ``sensor_noise`` and the uncertainties of :mod:`bhgrasp.scenarios.uncertainty` (whose draws use the case's
     ``seed``).  Returns the demo's figures of merit: pose errors [m, rad] (the controller's, and the true ones
-    against its reference), force error (fraction), slip events, the final mass estimate [kg] (NaN for non-adaptive
-    controllers), the grasp time [s], when the motion ends [s] and the minimum cone margin [N].
+    against its reference), force error (fraction), slip events, the farthest a link slid [m], the final mass
+    estimate [kg] (NaN for non-adaptive controllers), the grasp time [s], when the motion ends [s] and the minimum
+    cone margin [N].
     """
     check_grasp_case(parameters)
     result = run_grasp_demo(**parameters, seed=seed)
@@ -47,6 +48,7 @@ def grasp_rollout(parameters: dict[str, Any], seed: int) -> dict[str, float]:
         "true_rotation_error": result.true_rotation_error,
         "force_error": result.force_error,
         "slip_events": float(result.slip_events),
+        "slide": result.slide,
         "mass_estimate": float("nan") if result.mass_estimate is None else result.mass_estimate,
         "grasp_time": result.grasp_time,
         "motion_end": result.motion_end,

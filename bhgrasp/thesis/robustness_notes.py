@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from bhgrasp.scenarios.demo_result import MU_ASSUMED
-from bhgrasp.thesis.robustness_scenarios import CONFIDENCE, ESTIMATE, MARGIN, MASS_RANGE, SEED, SUCCESS
+from bhgrasp.thesis.robustness_scenarios import CONFIDENCE, ESTIMATE, MARGIN, MASS_RANGE, SEED, SLIDE, SUCCESS
 
 Summaries = dict[str, dict[str, float]]
 
@@ -17,8 +17,12 @@ def robustness_notes(samples: int, duration: float, summaries: Summaries) -> lis
         f"SMC-adaptive law, QP forces (mu {MU_ASSUMED} assumed, 0.8 true unless the scenario says).  Modules "
         "`bhgrasp.thesis.robustness`, `bhgrasp.thesis.robustness_scenarios`.",
         f"Success: the true final pose within {1e3 * SUCCESS[0]:g} mm and {1e3 * SUCCESS[1]:g} mrad of the "
-        "requested one and no sliding contact sample after the grasp closed; in brackets the success rate's "
-        f"{100 * CONFIDENCE:.0f} % Wilson score interval.  Errors are the object's true pose against the requested "
+        f"requested one and no link slid farther than {1e3 * SLIDE:g} mm on the box after the grasp closed "
+        "(bhgrasp.grasp.metrics.sliding_distances: a link's sliding contact points move against the box at their "
+        "relative tangential speed); in brackets the success rate's "
+        f"{100 * CONFIDENCE:.0f} % Wilson score interval.  Strict success: the same pose bounds and no hand-box "
+        "contact sample at the Coulomb limit after the grasp closed (the table's criterion before the slide bound).  "
+        "Errors are the object's true pose against the requested "
         "motion, not what the sensors report; force error: largest |measured - commanded| / commanded normal force "
         "over the fingers 0.5 s after the move (true forces).",
         "Noise is Gaussian, independent per reading and control step (1 ms): pose on the object's position and "
@@ -49,7 +53,8 @@ def limits(summaries: Summaries) -> list[str]:
         lines.append(
             f"Object pose noise read as it comes reaches the contact forces through the object-space feedback (force "
             f"error {pose['mean_force_error_pct']:.1f} % on average, {pose['mean_slip_events']:.0f} sliding samples "
-            f"per run), where noise on the twist, the contact forces or the encoders and a delay leave the mean pose "
+            f"per run, a finger sliding up to {pose['max_slide_mm']:.1f} mm), where noise on the twist, the contact "
+            "forces or the encoders and a delay leave the mean pose "
             f"error at or below {max(others):.3f} mm."
         )
     lines += estimator_limits(summaries)
@@ -63,9 +68,18 @@ def limits(summaries: Summaries) -> list[str]:
         lines.append(
             f"A true mu below the assumed one leaves no friction in reserve when the box leaves its pedestal and "
             f"the fingers meet a load the mass estimate does not yet know: the heavier boxes slide "
-            f"({mu['mean_slip_events']:.0f} sliding samples per run, rotation errors up to "
+            f"({mu['mean_slip_events']:.0f} sliding samples per run, a finger sliding {mu['mean_slide_mm']:.1f} mm on "
+            f"average and up to {mu['max_slide_mm']:.1f} mm, rotation errors up to "
             f"{mu['max_rotation_mrad']:.0f} mrad); cones below the true mu alone do not prevent it "
             "(bhgrasp.thesis.robustness_scenarios.MARGIN)."
+        )
+    limited = summaries.get("torque_limit")
+    if limited is not None and limited["success_pct"] < 100.0:
+        lines.append(
+            f"Under the torque limit the runs that fail are the heaviest boxes, from "
+            f"{limited['lightest_failure_kg']:.3f} kg up (rotation errors up to {limited['max_rotation_mrad']:.0f} "
+            f"mrad, {limited['mean_slip_events']:.1f} sliding samples per run): F3 opposes F1 and F2 together, so its "
+            "inner joint carries the hold's largest torque, and the heavier the box the more of it."
         )
     margin = summaries.get("mu_margin")
     if margin is not None:
@@ -96,7 +110,11 @@ def estimator_limits(summaries: Summaries) -> list[str]:
         lines.append(
             f"On the real bench with the true mu 20 % low the estimator makes {bench['success_pct']:.0f} % of the runs "
             f"succeed ({bench['mean_error_mm']:.3f} mm / {bench['mean_rotation_mrad']:.2f} mrad on average, "
-            f"{bench['mean_slip_events']:.1f} sliding samples per run), the tracker's pose read as it comes "
+            f"{bench['mean_slip_events']:.1f} sliding samples and {bench['mean_slide_mm']:.3f} mm of sliding per run; "
+            f"{bench['strict_success_pct']:.0f} % with no contact sample at the Coulomb limit: in the others a "
+            "fingertip patch's lightly loaded edge or the last finger in its first milliseconds on the box reached "
+            "it), "
+            "the tracker's pose read as it comes "
             f"{tracker['success_pct']:.0f} % ({tracker['mean_error_mm']:.3f} mm / "
             f"{tracker['mean_rotation_mrad']:.2f} mrad, {tracker['mean_slip_events']:.1f} sliding samples)."
         )

@@ -52,11 +52,11 @@ TOLERANCES: dict[str, Tolerance] = {
     ),
     "chapter*/*touched_s": Tolerance(1e-6, 1.5e-3, "the first sample with contact: a threshold crossing (1 ms)"),
     "chapter*/*_within_*_s": Tolerance(1e-6, 1.5e-3, "the last exit from the 2 % band: a threshold crossing (1 ms)"),
-    "chapter5/robustness/*/success_pct": Tolerance(
+    "chapter5/robustness/*success_pct": Tolerance(
         0.0,
         100.0 / 30,
         "a share of 30 runs, each a threshold test "
-        "(0.5 mm, 5 mrad, zero slip): a run that grazes a threshold may "
+        "(0.5 mm, 5 mrad, 0.1 mm of sliding or zero slip samples): a run that grazes a threshold may "
         "count either way (measured with 12 runs: no change)",
     ),
     "chapter5/robustness/*/success_*_pct": Tolerance(
