@@ -135,12 +135,15 @@ README_ROWS: list[tuple[str, str, str, str]] = [
     ),
     (
         "5",
-        "grasp synthesis: the planner's grasps of a box, a cube, a can and a ball, each lifted and turned (lift; "
-        "turns about x, y and z)",
+        "grasp synthesis: the planner's grasps of a box, a cube, a can and a ball, each lifted, turned and shifted "
+        "(lift; turns about x, y and z; shifts along x and y)",
         "box: the thesis' pinch, epsilon {5:synthesis/box/epsilon:.3f}; ball epsilon {5:synthesis/ball/epsilon:.3f}, "
         "can {5:synthesis/can/epsilon:.3f}; {5:synthesis/allowed_success_pct:.0f} % of the "
-        "{5:synthesis/allowed_motions:.0f} motions not refused succeed ({5:synthesis/refused_motions:.0f} of the "
-        "{5:synthesis/requested_motions:.0f} requested for the three grasps found are refused)",
+        "{5:synthesis/allowed_motions:.0f} motions not refused succeed, each given to the first grasp that makes it "
+        "({5:synthesis/refused_motions:.0f} of the {5:synthesis/requested_motions:.0f} requested for the three objects "
+        "grasped are refused: turns about z and shifts along x, which the finger without a spread makes only by "
+        "sliding, and the can's shift "
+        "along -y)",
         "-",
     ),
     (

@@ -1,24 +1,29 @@
-"""The chapter-5 synthesis case: grasps the planner chooses for boxes, cylinders and spheres, then run and moved.
+"""The chapter-5 synthesis case: grasps the planner finds for boxes, cylinders and spheres, chosen per motion and run.
 
 For each object of :data:`~bhgrasp.scenarios.object_grasp.OBJECTS` (household sizes the BH8-280 spans, each centred
-where the thesis' box is), :func:`~bhgrasp.grasp.synthesis.synthesize` picks the fingers, the spread and the contacts
-(:mod:`bhgrasp.scenarios.object_grasp` builds the scene around it, on a pedestal), then every motion of
-:data:`MOTIONS` is either refused before simulating (the grasp's manipulable space, the pedestal) or run with the
-SMC-adaptive law told half the mass (:func:`~bhgrasp.scenarios.object_grasp.run_object_grasp`), and judged as the
-motion table judges (:data:`~bhgrasp.scenarios.demo_result.SUCCESS`: no sliding contact sample after the grasp
+where the thesis' box is), :func:`~bhgrasp.grasp.synthesis.grasp_candidates` finds the grasps (fingers, spread,
+contacts; best first), then every motion of :data:`MOTIONS` is given to the first grasp that makes it
+(:func:`~bhgrasp.scenarios.object_choice.grasp_for_motion`: checked before simulating, then run with the SMC-adaptive
+law told half the mass on a pedestal, :mod:`bhgrasp.scenarios.object_grasp`) or refused when none does, and judged as
+the motion table judges (:data:`~bhgrasp.scenarios.demo_result.SUCCESS`: no sliding contact sample after the grasp
 closed, the true final pose within 0.5 mm and 5 mrad of the request).
 """
 
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from bhgrasp.errors import UnreachableError
-from bhgrasp.scenarios.demo_result import SUCCESS
-from bhgrasp.scenarios.object_grasp import OBJECTS, object_grasp, run_object_grasp
+from bhgrasp.grasp.synthesis import grasp_candidates, synthesize
+from bhgrasp.model.barrett_hand import BarrettHand
+from bhgrasp.scenarios.box_grasp import FRICTION
+from bhgrasp.scenarios.demo_result import MU_ASSUMED, SUCCESS
+from bhgrasp.scenarios.object_choice import grasp_for_motion
+from bhgrasp.scenarios.object_grasp import OBJECTS
 from bhgrasp.thesis.case import Case
 from bhgrasp.thesis.motions import short_reason
 
@@ -29,6 +34,9 @@ MOTIONS = {
     "ry+0.15": ("lift, turn +0.15 rad about y", (0.0, 0.0, 0.01, 0.0, 0.15, 0.0)),
     "ry+0.1": ("lift, turn +0.1 rad about y", (0.0, 0.0, 0.01, 0.0, 0.1, 0.0)),
     "rz+0.15": ("lift, turn +0.15 rad about z", (0.0, 0.0, 0.01, 0.0, 0.0, 0.15)),
+    "x+5": ("lift, shift 5 mm along x", (0.005, 0.0, 0.01, 0.0, 0.0, 0.0)),
+    "y+5": ("lift, shift 5 mm along y", (0.0, 0.005, 0.01, 0.0, 0.0, 0.0)),
+    "y-5": ("lift, shift 5 mm along -y", (0.0, -0.005, 0.01, 0.0, 0.0, 0.0)),
 }
 DURATION = 3.0  # [s] each run
 
@@ -41,29 +49,34 @@ def synthesis_case(scale: float = 1.0):
     )
     requested = allowed = succeeded = 0
     failed: list[str] = []
+    hand = BarrettHand()
     for object_key, (label, item) in OBJECTS.items():
         start = time.perf_counter()
-        try:
-            setup = object_grasp(item)
-        except UnreachableError as error:
-            case.values[f"{object_key}/grasp_found"] = 0.0
-            case.table.append([label, f"none: {str(error).split(':')[1].strip()}", "-", "-", "-", "-"])
-            continue
+        candidates = grasp_candidates(hand, replace(item, friction=FRICTION, density=None), MU_ASSUMED)
         planning = time.perf_counter() - start
+        if not candidates:
+            case.values[f"{object_key}/grasp_found"] = 0.0
+            case.table.append([label, f"none: {_no_grasp(hand, item)}", "-", "-", "-", "-"])
+            continue
         case.values[f"{object_key}/grasp_found"] = 1.0
-        grasp = _record_grasp(case, object_key, setup.candidate)
-        case.notes.append(f"{label}: synthesised in {planning:.1f} s (wall, this machine).")
+        case.values[f"{object_key}/candidates"] = float(len(candidates))
+        _record_grasp(case, object_key, candidates[0])
+        case.notes.append(f"{label}: {len(candidates)} grasps synthesised in {planning:.1f} s (wall, this machine).")
         for motion_key, (motion, offset) in MOTIONS.items():
             key = f"{object_key}/{motion_key}"
             requested += 1
             try:
-                result = run_object_grasp(setup, offset=offset, duration=DURATION * scale)
+                result = grasp_for_motion(item, offset, DURATION * scale, candidates)
             except UnreachableError as error:
                 case.values[f"{key}/refused"] = 1.0
-                case.table.append([label, grasp, motion, f"refused: {short_reason(str(error))}", "-", "-"])
+                case.values[f"{key}/candidate"] = 0.0
+                reason = short_reason(error.result[0][1]) if error.result else short_reason(str(error))
+                case.table.append([label, f"none of {len(candidates)}", motion, f"refused: {reason}", "-", "-"])
                 continue
             allowed += 1
-            succeeded += _record_motion(case, key, label, grasp, motion, result, failed)
+            choice = result.grasp_choice
+            case.values[f"{key}/candidate"] = float(len(choice.refused) + 1)
+            succeeded += _record_motion(case, key, label, choice.label, motion, result, failed)
     case.values["requested_motions"] = float(requested)
     case.values["refused_motions"] = float(requested - allowed)
     case.values["allowed_motions"] = float(allowed)
@@ -72,8 +85,17 @@ def synthesis_case(scale: float = 1.0):
     return case
 
 
-def _record_grasp(case: Case, object_key: str, c: Any) -> str:
-    """The synthesised grasp ``c``'s values (spread, epsilon, fingers, weight margin) and its description."""
+def _no_grasp(hand: Any, item: Any) -> str:
+    """Why the synthesis finds no grasp of ``item`` (its error's explanation)."""
+    try:
+        synthesize(hand, replace(item, friction=FRICTION, density=None), MU_ASSUMED)
+    except UnreachableError as error:
+        return str(error).split(":")[1].strip()
+    return "-"
+
+
+def _record_grasp(case: Case, object_key: str, c: Any) -> None:
+    """The best synthesised grasp ``c``'s values (spread, epsilon, fingers, weight margin)."""
     case.values.update(
         {
             f"{object_key}/spread_deg": float(np.degrees(c.spread)),
@@ -81,10 +103,6 @@ def _record_grasp(case: Case, object_key: str, c: Any) -> str:
             f"{object_key}/fingers": len(c.fingers),
             f"{object_key}/weight_margin_N": float(c.weight_margin),
         }
-    )
-    return (
-        f"{'+'.join(c.fingers)}, spread {np.degrees(c.spread):.0f} deg, epsilon {c.quality.epsilon:.3f}, "
-        f"weight margin {c.weight_margin:.2f} N"
     )
 
 
@@ -132,15 +150,14 @@ def _notes(allowed: int, succeeded: int, failed: list[str]) -> list[str]:
         "by the Ferrari-Canny epsilon (mu 0.6), then by the force QP's margin holding the weight with 5 N per "
         "contact.  The pre-grasp opens the proximal joints by 0.3 rad; the approach cancels the drive's known "
         "joint damping.  Module `bhgrasp.thesis.synthesis_case`.",
-        "Refusals come from the grasp's manipulable space at the planned contacts (before simulating) and, when the "
-        "move starts, from the supervisor's checks at the contacts the fingers sense: a request they miss by more "
-        "than 0.5 mm or 5 mrad (`GraspSupervisor(planning=Planning(tolerance=...))`; the can's turn of 0.1 rad "
-        "about y: run "
-        "anyway, it ends off the request by about what the plan misses, `tests/test_motion_planning.py`) and the "
-        "second-order path check (`bhgrasp.grasp.path_check`: another hand shape within 0.2 mm of the object along "
-        "the path; the ball's turn of 0.15 rad about y, run anyway, brings F1's distal link body "
-        "onto the ball, where it slides).  Both rules came with this table: before them, these two motions ran and "
-        "failed.",
+        "Each motion goes to the first grasp, best first, that makes it (`bhgrasp.scenarios.object_choice`): before "
+        "simulating, the request must lie in the grasp's manipulable space at the planned contacts, keep the object "
+        "off its pedestal and keep the hand's other shapes 0.2 mm off the object along the path with the contacts "
+        "rolling (`bhgrasp.grasp.path_check`); when the move starts the supervisor checks the request (missed by more "
+        "than 0.5 mm or 5 mrad: `Planning(tolerance=...)`) and the path again at the contacts the fingers sense, and "
+        "a refusal there passes the motion to the next grasp that passes (at most 3 runs).  The grasp column gives "
+        "the chosen grasp's rank among the object's candidates; 'none of N': no grasp makes the motion, with the "
+        "best grasp's reason.",
         "A single sliding sample counts as a failure, from the sample after the grasp controller took over (the "
         "switching sample records the contacts of the approach's last step: there the can's F3 pad, just touched, "
         "skids; counted from the switch, the can's lift and turn about x failed on that one sample).",
