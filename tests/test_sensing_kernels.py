@@ -75,6 +75,32 @@ def test_finger_sums_match_the_numpy_twin(m: int) -> None:
         assert_same_fingers(sensing, random_state(rng, hand, m))
 
 
+@pytest.mark.parametrize("m", [0, 1, 4, 9])
+def test_finger_sums_of_one_body_are_those_of_its_rows_alone(m: int) -> None:
+    """``fingers(state, body)``: exactly (to the bit) the sums of a state holding only ``body``'s rows."""
+    hand = bh.BarrettHand()
+    sensing = ContactSensing(hand)
+    rng = np.random.default_rng(10 + m)
+    for _ in range(20):
+        state = random_state(rng, hand, m)
+        bodies = tuple((link, "box" if rng.random() < 0.5 else "table") for link, _ in state.contact_bodies)
+        state = replace(state, contact_bodies=bodies)
+        rows = [k for k, (_, other) in enumerate(bodies) if other == "box"]
+        alone = replace(
+            state,
+            contact_points=state.contact_points[rows],
+            contact_normals=state.contact_normals[rows],
+            contact_forces=state.contact_forces[rows],
+            contact_bodies=tuple(bodies[k] for k in rows),
+        )
+        for fingers in (sensing.fingers, sensing._fingers_python):
+            got, expected = fingers(state, "box"), fingers(alone)
+            for finger, contact in expected.items():
+                assert (got[finger].count, got[finger].link) == (contact.count, contact.link)
+                for name in ("force", "normal", "point", "normal_force"):
+                    np.testing.assert_array_equal(getattr(got[finger], name), getattr(contact, name))
+
+
 def test_finger_sums_match_along_a_held_grasp() -> None:
     hold = reference_hold()
     sensing = ContactSensing(hold.simulator.scene.hand)

@@ -36,7 +36,7 @@ object's dynamics), a rolling model of the contacts, and a prediction over the b
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -183,16 +183,7 @@ class HeldObjectEstimator:
 
     def _fingers(self, state: State) -> dict:
         """Per finger, its contacts with the object (with any body when ``body`` is ``None``)."""
-        if self.body is not None and any(other != self.body for _, other in state.contact_bodies):
-            rows = [k for k, (_, other) in enumerate(state.contact_bodies) if other == self.body]
-            state = replace(
-                state,
-                contact_points=state.contact_points[rows],
-                contact_normals=state.contact_normals[rows],
-                contact_forces=state.contact_forces[rows],
-                contact_bodies=tuple(state.contact_bodies[k] for k in rows),
-            )
-        return self.sensing.fingers(state)
+        return self.sensing.fingers(state, self.body)
 
     def _reading(self, state: State) -> pin.SE3:
         if len(state.object_poses) <= self.index:

@@ -69,18 +69,20 @@ class ContactSensing:
         """The finger a link frame belongs to (``None`` for the palm or a frame of no finger)."""
         return self._finger_of.get(link)
 
-    def fingers(self, state: State) -> dict[str, FingerContact]:
-        """Per finger (every finger of the hand), its contacts in ``state``.
+    def fingers(self, state: State, body: str | None = None) -> dict[str, FingerContact]:
+        """Per finger (every finger of the hand), its contacts in ``state`` (with ``body`` only, if given).
 
         Sums in the compiled kernel (``src/sensing.cpp``) on the default engine (:mod:`bhgrasp._native`), else in
         :meth:`_fingers_python` (the same sums; tests/test_sensing_kernels.py holds them together).
         """
         core = default_core()
         if core is None:
-            return self._fingers_python(state)
+            return self._fingers_python(state, body)
         bodies = state.contact_bodies
         index = self._finger_index
-        finger = np.array([index.get(link, -1) for link, _ in bodies], dtype=np.int64)
+        finger = np.array(
+            [index.get(link, -1) if body is None or other == body else -1 for link, other in bodies], dtype=np.int64
+        )
         fingers = self.hand.fingers
         if not len(finger):
             return dict.fromkeys(fingers, self._empty)
@@ -105,12 +107,12 @@ class ContactSensing:
             )
         return result
 
-    def _fingers_python(self, state: State) -> dict[str, FingerContact]:
+    def _fingers_python(self, state: State, body: str | None = None) -> dict[str, FingerContact]:
         """:meth:`fingers` in NumPy (the readable twin of the compiled sums)."""
         grouped: dict[str, list[int]] = {finger: [] for finger in self.hand.fingers}
-        for k, (link, _) in enumerate(state.contact_bodies):
+        for k, (link, other) in enumerate(state.contact_bodies):
             finger = self._finger_of.get(link)
-            if finger is not None:
+            if finger is not None and (body is None or other == body):
                 grouped[finger].append(k)
         result = {}
         for finger, rows in grouped.items():
