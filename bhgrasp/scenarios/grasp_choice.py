@@ -27,12 +27,13 @@ PINCHES = (
 
 @dataclass(frozen=True)
 class GraspChoice:
-    """The pinch a motion was given to, and why the pinches tried before it were refused.
+    """The grasp a motion was given to, and why the grasps tried before it were refused.
 
     Attributes:
-        label: The chosen pinch (one of :data:`PINCHES`), or the grasp the caller gave.
-        finger_spacing: Its F1-F2 contact spacing [m] (``None`` for another hand's grasp).
-        refused: (label, reason) of each pinch tried before it.
+        label: The chosen grasp: a pinch of :data:`PINCHES`, the grasp the caller gave, or a synthesised candidate
+            (:func:`~bhgrasp.scenarios.object_choice.grasp_for_motion`).
+        finger_spacing: Its F1-F2 contact spacing [m] (``None`` for another hand's or a synthesised grasp).
+        refused: (label, reason) of each grasp tried before it.
     """
 
     label: str
