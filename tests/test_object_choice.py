@@ -56,9 +56,19 @@ def test_a_motion_no_grasp_makes_is_refused_before_any_run_with_the_best_grasps_
         checked_candidate(object_grasp(CAN, candidate=candidates[0]), TURN_Z)
 
 
-def test_tries_must_allow_a_run() -> None:
-    with pytest.raises(InputError, match="`tries` must be at least 1, got 0"):
-        grasp_for_motion(CAN, TURN_X, tries=0)
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        ({"tries": 0}, "`tries` must be an integer >= 1, got 0"),
+        ({"tries": 1.5}, "`tries` must be an integer >= 1, got 1.5"),
+        ({"offset": (0.0, 0.01)}, r"`offset` must have shape \(6,\)"),
+        ({"item": "can"}, "`item` must be a bhgrasp rigid object"),
+    ],
+)
+def test_bad_arguments_are_named(arguments: dict, message: str) -> None:
+    call = {"item": CAN, "offset": TURN_X, **arguments}
+    with pytest.raises(InputError, match=message):
+        grasp_for_motion(call.pop("item"), call.pop("offset"), **call)
 
 
 def test_grasps_without_force_closure_are_never_run() -> None:

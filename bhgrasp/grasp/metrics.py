@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from bhgrasp._validation import as_real
 from bhgrasp.data import Trajectory
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
@@ -55,17 +56,20 @@ def slip_events_after(hand: Hand, traj: Trajectory, index: int) -> int:
 def sliding_distances(hand: Hand, traj: Trajectory, start_time: float = 0.0) -> dict[str, float]:
     """How far each hand link slid on the objects from ``start_time`` [s]: link name -> distance [m].
 
-    Each sample, a link's sliding contact points (``Trajectory.contact_sticking`` False) with an object move
-    against it at the relative tangential speed |(I - n n^T)(J_p(q) v - v_o - omega_o x (p - x_o))| (the link's
-    material point at p against the object's); the link's fastest point times the sample interval is added to
-    its distance (the points of a link move as one body, so its patch is counted once).  A patch whose edge
-    reaches the Coulomb limit while its other points stick (partial slip, Johnson's *Contact Mechanics* 7.2) moves
-    little; a finger whose whole contact slides adds its sliding speed.  Links that never slid are left out.
+    Sample k holds the contacts of the step that ended at t_k (and q, v, the object's pose and twist then).  Its
+    sliding contact points (``Trajectory.contact_sticking`` False) between a link and an object move against the
+    object at the relative tangential speed |(I - n n^T)(J_p(q) v - v_o - omega_o x (p - x_o))| (the link's material
+    point at p against the object's; v_o at the object's origin x_o); the link's fastest point times
+    t_k - t_(k-1) is added to its distance (the points of a link move as one body, so its patch counts once).  A
+    patch whose edge reaches the Coulomb limit while its other points stick (partial slip, Johnson's *Contact
+    Mechanics* 7.2) moves little; a link whose whole contact slides adds its sliding speed.  Links that never slid
+    are left out.
     """
+    start_time = as_real(start_time, "start_time", nonnegative=False)
     objects = list(traj.object_names)
     distances: dict[str, float] = {}
-    first = int(np.searchsorted(traj.t, start_time))
-    for k in range(first, len(traj.t) - 1):
+    first = max(int(np.searchsorted(traj.t, start_time)), 1)  # the first sample has no step behind it
+    for k in range(first, len(traj.t)):
         rows = np.arange(traj.contact_offsets[k], traj.contact_offsets[k + 1])
         rows = rows[~traj.contact_sticking[rows]]
         if len(rows) == 0:
@@ -82,7 +86,7 @@ def sliding_distances(hand: Hand, traj: Trajectory, start_time: float = 0.0) -> 
         twist, origin = traj.object_twist[k, index], traj.object_position[k, index]
         relative = hand_velocity - twist[:, :3] - np.cross(twist[:, 3:], points - origin)
         relative -= np.sum(relative * normals, axis=1)[:, None] * normals
-        speed, interval = np.linalg.norm(relative, axis=1), float(traj.t[k + 1] - traj.t[k])
+        speed, interval = np.linalg.norm(relative, axis=1), float(traj.t[k] - traj.t[k - 1])
         for link in set(links):
             fastest = max(s for name, s in zip(links, speed) if name == link)
             distances[link] = distances.get(link, 0.0) + fastest * interval

@@ -1,11 +1,11 @@
 """The grasp chosen for the motion asked, for any object: the first synthesised BH8-280 grasp that makes it.
 
-The candidates are :func:`~bhgrasp.grasp.synthesis.grasp_candidates`' (best first: force closure, then the weight
-margin).  Those in force closure that hold the weight in their cones are checked before anything is simulated: the
-requested offset must lie in the grasp's manipulable space at the planned contacts (no contact slides or rolls, no
-joint passes its limit), keep the object off its pedestal, and keep the hand's other shapes off the object along the
-path with the contacts rolling
-(:func:`~bhgrasp.grasp.path_check.path_contacts`).  The first that passes is run
+The candidates are :func:`~bhgrasp.grasp.synthesis.grasp_candidates`' (best first: the Ferrari-Canny epsilon, then
+whether and by how much the weight is held).  Those in force closure that hold the weight in their cones are checked
+before anything is simulated: the requested offset must lie in the grasp's manipulable space at the planned contacts
+(no contact slides or rolls, no joint passes its limit), keep the object off its pedestal, and keep the hand's other
+shapes off the object along the path with the contacts rolling (:func:`~bhgrasp.grasp.path_check.path_contacts`).
+The first that passes is run
 (:func:`~bhgrasp.scenarios.object_grasp.run_object_grasp`).  When the move starts the supervisor checks the path again
 at the contacts the fingers sense (the pads have sunk about half a millimetre under the squeeze, and land a little off
 the plan); if it refuses, the next candidate that passes is run, at most :data:`TRIES` runs in all.  The result keeps
@@ -20,11 +20,13 @@ from typing import Any
 
 import numpy as np
 
+from bhgrasp._validation import as_vector
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.grasp.candidates import GraspCandidate
 from bhgrasp.grasp.path_check import path_contacts
 from bhgrasp.grasp.synthesis import grasp_candidates
 from bhgrasp.model.barrett_hand import BarrettHand
+from bhgrasp.model.objects import RigidObject
 from bhgrasp.scenarios.box_grasp import FRICTION
 from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult
 from bhgrasp.scenarios.grasp_choice import GraspChoice
@@ -70,17 +72,22 @@ def grasp_for_motion(
         duration: Simulated time of each run [s].
         candidates: The grasps to choose from, best first (default: :func:`~bhgrasp.grasp.synthesis.grasp_candidates`
             of ``item`` at ``mu``).
-        tries: Most runs (each refused when its move starts passes to the next candidate).
+        tries: Most runs, an integer >= 1 (each refused when its move starts passes to the next candidate).
+        mu: The friction coefficient the synthesis and the controller assume (the candidates' when given).
 
     Returns:
         The chosen grasp's run; its ``grasp_choice`` names the grasp and why the ones before it were refused.
 
     Raises:
+        InputError: ``item`` is not a rigid object, ``offset`` not 6 finite numbers, or ``tries`` not an integer >= 1.
         UnreachableError: No candidate makes the motion (or ``tries`` runs were refused); the message gives the
             count and the first candidate's reason, its ``result`` every (candidate, reason).
     """
-    if int(tries) < 1:
-        raise InputError(f"`tries` must be at least 1, got {tries}")
+    if not isinstance(item, RigidObject):
+        raise InputError(f"`item` must be a bhgrasp rigid object (Box, Cylinder, Sphere, ...), got {item!r}")
+    offset = as_vector(offset, "offset", 6)
+    if isinstance(tries, bool) or not isinstance(tries, (int, np.integer)) or tries < 1:
+        raise InputError(f"`tries` must be an integer >= 1, got {tries!r}")
     if candidates is None:
         candidates = grasp_candidates(BarrettHand(), replace(item, friction=FRICTION, density=None), mu)
     refused: list[tuple[str, str]] = []
@@ -101,13 +108,13 @@ def grasp_for_motion(
             result = run_object_grasp(setup, offset=offset, duration=duration)
         except UnreachableError as error:
             refused.append((label, f"refused when the move started: {error}"))
-            if runs >= int(tries):
+            if runs >= tries:
                 break
             continue
         return replace(result, grasp_choice=GraspChoice(label, None, tuple(refused)))
     motion = np.round(np.asarray(offset, dtype=float), 6).tolist()
     first = f" The first, {refused[0][0]}: {refused[0][1]}" if refused else ""
-    if runs >= int(tries):
+    if runs >= tries:
         raise UnreachableError(
             f"the supervisor refused the motion {motion} when the move started in all {runs} runs allowed "
             f"(`tries`), after {len(refused) - runs} grasps refused before simulating.{first}",

@@ -106,7 +106,7 @@ README_ROWS: list[tuple[str, str, str, str]] = [
         "robustness Monte-Carlo, 30 boxes of 0.2-1.0 kg per scenario (pose noise 0.5 mm / 5 mrad, force noise 0.2 "
         "N, delay 5 ms, torque limit 0.75 N m, true mu 0.5 for 0.6 assumed; true mu 0.48 with a 30 % friction "
         "margin; a real bench: a 30 Hz tracker 30 ms late, encoder and force noise, a 2 ms bus, joint friction, true "
-        "mu 20 % low): runs within 0.5 mm / 5 mrad, no finger sliding 0.1 mm on the box; [95 % interval]",
+        "mu 20 % low): runs within 0.5 mm / 5 mrad, no hand link sliding over 0.1 mm on the box; [95 % interval]",
         "exact {5:robustness/exact/success_pct:.0f} %; pose noise {5:robustness/pose_noise/success_pct:.0f} % "
         "[{5:robustness/pose_noise/success_low_pct:.0f}, {5:robustness/pose_noise/success_high_pct:.0f}], with the "
         "pose from the encoders {5:robustness/pose_noise_hand/success_pct:.0f} % "

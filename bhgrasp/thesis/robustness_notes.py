@@ -17,7 +17,7 @@ def robustness_notes(samples: int, duration: float, summaries: Summaries) -> lis
         f"SMC-adaptive law, QP forces (mu {MU_ASSUMED} assumed, 0.8 true unless the scenario says).  Modules "
         "`bhgrasp.thesis.robustness`, `bhgrasp.thesis.robustness_scenarios`.",
         f"Success: the true final pose within {1e3 * SUCCESS[0]:g} mm and {1e3 * SUCCESS[1]:g} mrad of the "
-        f"requested one and no link slid farther than {1e3 * SLIDE:g} mm on the box after the grasp closed "
+        f"requested one and no hand link slid farther than {1e3 * SLIDE:g} mm on the box after the grasp closed "
         "(bhgrasp.grasp.metrics.sliding_distances: a link's sliding contact points move against the box at their "
         "relative tangential speed); in brackets the success rate's "
         f"{100 * CONFIDENCE:.0f} % Wilson score interval.  Strict success: the same pose bounds and no hand-box "
@@ -76,10 +76,10 @@ def limits(summaries: Summaries) -> list[str]:
     limited = summaries.get("torque_limit")
     if limited is not None and limited["success_pct"] < 100.0:
         lines.append(
-            f"Under the torque limit the runs that fail are the heaviest boxes, from "
-            f"{limited['lightest_failure_kg']:.3f} kg up (rotation errors up to {limited['max_rotation_mrad']:.0f} "
-            f"mrad, {limited['mean_slip_events']:.1f} sliding samples per run): F3 opposes F1 and F2 together, so its "
-            "inner joint carries the hold's largest torque, and the heavier the box the more of it."
+            f"Under the torque limit heavy boxes fail, the lightest {limited['lightest_failure_kg']:.3f} kg "
+            f"(rotation errors up to {limited['max_rotation_mrad']:.0f} mrad, {limited['mean_slip_events']:.1f} "
+            "sliding samples per run): F3 opposes F1 and F2 together, so its inner joint carries the hold's largest "
+            "torque, and the heavier the box the more of it."
         )
     margin = summaries.get("mu_margin")
     if margin is not None:
@@ -110,7 +110,8 @@ def estimator_limits(summaries: Summaries) -> list[str]:
         lines.append(
             f"On the real bench with the true mu 20 % low the estimator makes {bench['success_pct']:.0f} % of the runs "
             f"succeed ({bench['mean_error_mm']:.3f} mm / {bench['mean_rotation_mrad']:.2f} mrad on average, "
-            f"{bench['mean_slip_events']:.1f} sliding samples and {bench['mean_slide_mm']:.3f} mm of sliding per run; "
+            f"{bench['mean_slip_events']:.1f} sliding samples per run, its farthest-sliding link "
+            f"{bench['mean_slide_mm']:.3f} mm on average; "
             f"{bench['strict_success_pct']:.0f} % with no contact sample at the Coulomb limit: in the others a "
             "fingertip patch's lightly loaded edge or the last finger in its first milliseconds on the box reached "
             "it), "

@@ -22,10 +22,10 @@ ESTIMATE = 0.5  # [kg] the controller's initial mass
 SEED = 17  # the sweep's seed: the masses' design and every run's noise seed
 SUCCESS = (0.5e-3, 5e-3)  # [m], [rad] true final error
 SLIDE = 1e-4
-"""[m] the farthest any link may slide on the box after the grasp closed (a fifth of the position bound).  Before
+"""[m] the farthest any hand link may slide on the box after the grasp closed (a fifth of the position bound).  Before
 it, a run failed on any contact sample at the Coulomb limit; in the bench runs those were a fingertip patch's edge
 at 0.1-0.2 N (partial slip: the patch's loaded point stuck) and the last finger in its first 1-5 ms on the box (19 um
-of sliding), while the box that slid out of its grasp slid 1.6 mm.  The table keeps that count and its rate
+of sliding), while the box that slid out of its grasp slid about 1.5 mm.  The table keeps that count and its rate
 (strict success)."""
 CONFIDENCE = 0.95  # the success rates' Wilson score intervals
 MARGIN = 0.3

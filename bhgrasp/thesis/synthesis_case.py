@@ -70,8 +70,10 @@ def synthesis_case(scale: float = 1.0):
             except UnreachableError as error:
                 case.values[f"{key}/refused"] = 1.0
                 case.values[f"{key}/candidate"] = 0.0
-                reason = short_reason(error.result[0][1]) if error.result else short_reason(str(error))
-                case.table.append([label, f"none of {len(candidates)}", motion, f"refused: {reason}", "-", "-"])
+                reasons = error.result or (("", str(error)),)
+                ran = sum(reason.startswith("refused when the move started") for _, reason in reasons)
+                grasps = f"none of {len(candidates)}" if not ran else f"{ran} run, refused when the move started"
+                case.table.append([label, grasps, motion, f"refused: {short_reason(reasons[0][1])}", "-", "-"])
                 continue
             allowed += 1
             choice = result.grasp_choice

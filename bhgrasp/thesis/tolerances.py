@@ -65,6 +65,18 @@ TOLERANCES: dict[str, Tolerance] = {
         "a bound of the Wilson interval of a share of 30 runs: one run counted the other way moves it by "
         "at most 5.3 points (29/30 -> 30/30: its low bound 83.3 -> 88.6 %)",
     ),
+    "chapter5/robustness/*slide_mm": Tolerance(
+        1e-2,
+        1e-3,
+        "a run's farthest slide sums its sliding samples (speed x 1 ms): a contact that grazes the cone may switch "
+        "one sample earlier or later, as the slip counts may (measured: no change)",
+    ),
+    "chapter5/robustness/*/lightest_failure_kg": Tolerance(
+        0.0,
+        1.0,
+        "the lightest of the boxes that failed: one run counted the other way, as the success rates allow, makes it "
+        "another box of the design (0.2-1.0 kg)",
+    ),
     "chapter5/*slip_events": Tolerance(
         0.0,
         1.0,
