@@ -73,7 +73,7 @@ def grasp_for_motion(
         candidates: The grasps to choose from, best first (default: :func:`~bhgrasp.grasp.synthesis.grasp_candidates`
             of ``item`` at ``mu``).
         tries: Most runs, an integer >= 1 (each refused when its move starts passes to the next candidate).
-        mu: The friction coefficient the synthesis and the controller assume (the candidates' when given).
+        mu: The friction coefficient the synthesis assumes (unused when ``candidates`` are given).
 
     Returns:
         The chosen grasp's run; its ``grasp_choice`` names the grasp and why the ones before it were refused.
