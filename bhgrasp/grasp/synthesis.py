@@ -53,6 +53,10 @@ from bhgrasp.grasp.probes import HandClearance, ObjectProbe
 from bhgrasp.model.hand import Hand
 from bhgrasp.model.hand_ik import ik
 
+NO_GRASP = (
+    "at no searched spread and height do the fingers reach it with their pads alone (move the object toward the "
+    "fingers, or give other `spreads` / `heights`)"
+)  # why no candidate was found
 FLEXIONS = (0.6, 1.4)  # [rad] the two closings that give a finger's line of approach
 
 
@@ -167,9 +171,7 @@ def synthesize(hand: Hand, item: Any, mu: float = 0.6, **options: Any) -> GraspC
     candidates = grasp_candidates(hand, item, mu, **options)
     if not candidates:
         raise UnreachableError(
-            f"no grasp of {type(item).__name__} at {np.round(item.pose.translation, 4).tolist()} m: at no searched "
-            "spread and height do the fingers reach it with their pads alone (move the object toward the fingers, "
-            "or give other `spreads` / `heights`)"
+            f"no grasp of {type(item).__name__} at {np.round(item.pose.translation, 4).tolist()} m: {NO_GRASP}"
         )
     return candidates[0]
 
@@ -205,4 +207,4 @@ def _approach_line(hand: Hand, q_spread: np.ndarray, finger: str) -> tuple[np.nd
     return start[:2], (direction / norm if norm > 1e-9 else np.zeros(2))
 
 
-__all__ = ["FLEXIONS", "GraspCandidate", "grasp_candidates", "rate_grasp", "synthesize"]
+__all__ = ["FLEXIONS", "NO_GRASP", "GraspCandidate", "grasp_candidates", "rate_grasp", "synthesize"]

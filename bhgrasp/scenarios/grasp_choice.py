@@ -41,14 +41,18 @@ class GraspChoice:
     refused: tuple[tuple[str, str], ...] = ()
 
     def summary(self) -> str:
-        """One line per pinch tried: refused ones with their reason, then the chosen one."""
+        """One line per grasp tried: refused ones with their reason, then the chosen one."""
         lines = [f"refused {label}: {reason}" for label, reason in self.refused]
         spacing = "" if self.finger_spacing is None else f" ({1e3 * self.finger_spacing:.1f} mm between F1 and F2)"
         return "\n".join([*lines, f"chosen {self.label}{spacing}"])
 
 
-def checked_pinch(setup: BoxGrasp, offset: Any) -> None:
-    """Raise :class:`UnreachableError` unless ``setup``'s pinch makes ``offset`` (manipulable space, clearance)."""
+def checked_pinch(setup: Any, offset: Any) -> None:
+    """Raise :class:`UnreachableError` unless ``setup``'s grasp makes ``offset`` (manipulable space, clearance).
+
+    ``setup``: a :class:`~bhgrasp.scenarios.box_grasp.BoxGrasp` or an
+    :class:`~bhgrasp.scenarios.object_grasp.ObjectGrasp` (both offer the two checks).
+    """
     setup.manipulable_space().check(offset)
     setup.check_clearance(offset)
 

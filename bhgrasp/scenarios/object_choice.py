@@ -29,7 +29,7 @@ from bhgrasp.model.barrett_hand import BarrettHand
 from bhgrasp.model.objects import RigidObject
 from bhgrasp.scenarios.box_grasp import FRICTION
 from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult
-from bhgrasp.scenarios.grasp_choice import GraspChoice
+from bhgrasp.scenarios.grasp_choice import GraspChoice, checked_pinch
 from bhgrasp.scenarios.object_grasp import ObjectGrasp, object_grasp, run_object_grasp
 
 TRIES = 3  # runs the supervisor may refuse when the move starts before the choice gives up (each costs a run)
@@ -48,8 +48,7 @@ def checked_candidate(setup: ObjectGrasp, offset: Any) -> None:
 
     Its manipulable space at the planned contacts, the pedestal's clearance and the path with the contacts rolling.
     """
-    setup.manipulable_space().check(offset)
-    setup.check_clearance(offset)
+    checked_pinch(setup, offset)  # the manipulable space and the pedestal, as for the demo's pinches
     c, hand = setup.candidate, setup.hand
     frames = [hand.fingertip_frames[f] for f in c.fingers]
     shape, pose = setup.item.geometry(), setup.item.pose
