@@ -16,6 +16,7 @@ from bhgrasp.errors import (
     FrozenSettingError,
     InputError,
     ModelError,
+    NotSettled,
     SimulationDiverged,
     UnreachableError,
 )
@@ -110,6 +111,7 @@ __all__ = [
     "InputError",
     "Mesh",
     "ModelError",
+    "NotSettled",
     "Plane",
     "Scene",
     "SimulationDiverged",

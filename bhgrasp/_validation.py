@@ -69,6 +69,13 @@ def as_positive(value: Any, name: str) -> float:
     return number
 
 
+def as_count(value: Any, name: str, least: int = 1) -> int:
+    """Return ``value`` as an int >= ``least`` (a bool is refused)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+        raise InputError(f"`{name}` must be an integer >= {least}, got {value!r}")
+    return int(value)
+
+
 def as_real(value: Any, name: str, nonnegative: bool = True) -> float:
     """Return ``value`` as a finite float (>= 0 unless ``nonnegative`` is false)."""
     expected = "a finite number >= 0" if nonnegative else "a finite number"

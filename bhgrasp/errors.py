@@ -57,3 +57,22 @@ class SimulationDiverged(BhgraspError, RuntimeError):
         self.time = time
         self.quantity = quantity
         self.value = value
+
+
+class NotSettled(BhgraspError, RuntimeError):
+    """Objects left to settle were still moving when the time allowed ran out.
+
+    Attributes:
+        time: Simulated time [s] when it stopped.
+        speeds: Each object's fastest surface speed [m/s] then, by name.
+    """
+
+    def __init__(self, time: float, speeds: dict[str, float], rest_speed: float) -> None:
+        moving = {name: speed for name, speed in speeds.items() if speed >= rest_speed}
+        listed = ", ".join(f"{name} {speed:.3g} m/s" for name, speed in sorted(moving.items(), key=lambda i: -i[1]))
+        super().__init__(
+            f"the objects did not settle in {time:.3g} s: still moving faster than {rest_speed:.3g} m/s: {listed}; "
+            "allow more time (`max_time`) or drop them lower"
+        )
+        self.time = time
+        self.speeds = speeds

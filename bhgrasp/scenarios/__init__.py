@@ -8,13 +8,15 @@ uncertainties (:mod:`~bhgrasp.scenarios.uncertainty`), the tour of the hand (:mo
 object loop (:mod:`~bhgrasp.scenarios.object_loop`), the identification runs (:mod:`~bhgrasp.scenarios.identification`),
 grasped objects carried along paths (:mod:`~bhgrasp.scenarios.carry`), a finger pressing a spring-mounted box
 (:mod:`~bhgrasp.scenarios.finger_press`, chapter 4's benches) and the fitness that tunes its impedance
-(:mod:`~bhgrasp.scenarios.press_fitness`), and the sweep rollouts built on them (:mod:`~bhgrasp.scenarios.rollouts`);
+(:mod:`~bhgrasp.scenarios.press_fitness`), piles of mixed objects dropped into a bin or onto a table and settled
+(:mod:`~bhgrasp.scenarios.clutter`), and the sweep rollouts built on them (:mod:`~bhgrasp.scenarios.rollouts`);
 joint tracking with the thesis' joint controllers by name (:mod:`~bhgrasp.scenarios.joint_tracking`).
 """
 
 from bhgrasp.scenarios.allegro_grasp import allegro_box_grasp, allegro_hand
 from bhgrasp.scenarios.box_grasp import BoxGrasp, box_grasp
 from bhgrasp.scenarios.carry import PathRun, circle, run_path, waypoints
+from bhgrasp.scenarios.clutter import Pile, bin_walls, drop_pile, mixed_objects
 from bhgrasp.scenarios.demo_result import MU_ASSUMED, SUCCESS, GraspDemoResult, evaluate_demo
 from bhgrasp.scenarios.finger_press import ForceMetrics, Setup, f3_setup, force_metrics, normal_force, planar_setup
 from bhgrasp.scenarios.grasp_controllers import ADAPTATIONS, CONTROLLERS, grasp_controller
@@ -45,13 +47,16 @@ __all__ = [
     "ObjectGrasp",
     "ObjectLoopRun",
     "PathRun",
+    "Pile",
     "Setup",
     "allegro_box_grasp",
     "allegro_hand",
+    "bin_walls",
     "box_grasp",
     "check_grasp_case",
     "circle",
     "demo_figure",
+    "drop_pile",
     "evaluate_demo",
     "f3_case",
     "f3_setup",
@@ -64,6 +69,7 @@ __all__ = [
     "ideal_object_loop",
     "identification_run",
     "impedance_fitness",
+    "mixed_objects",
     "normal_force",
     "object_grasp",
     "planar_setup",

@@ -18,6 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp._validation import as_real
 from bhgrasp.errors import InputError
 from bhgrasp.model.hand import Hand
 from bhgrasp.model.objects import FixedBox, Plane, RigidObject
@@ -36,6 +37,7 @@ class Scene:
         objects: Sequence[RigidObject | SpringMounted] = (),
         environment: Sequence[Environment] = (),
         environment_touches_hand: bool = True,
+        object_drag: float = 0.0,
     ) -> None:
         """Assemble the scene.
 
@@ -47,11 +49,15 @@ class Scene:
             environment_touches_hand: Whether the environment also stops the hand's moving links (a table under a
                 closing finger); :class:`~bhgrasp.grasp.sensing.ContactSensing` reads object contacts only (body a a
                 hand link), the BH8-280's sensors (:mod:`bhgrasp.barrett.sensors`) both.
+            object_drag: A viscous drag rate d [1/s] on every free object, stepped implicitly with the joint
+                damping: -d m v on its centre's velocity, -d I_ii w_i about its principal axes (a pile settling,
+                :mod:`bhgrasp.scenarios.clutter`); 0 (the default) adds none.
         """
         self.hand = hand
         self.objects = tuple(objects)
         self.environment = tuple(environment)
         self.environment_touches_hand = bool(environment_touches_hand)
+        self.object_drag = as_real(object_drag, "object_drag")
         for i, item in enumerate(self.objects):
             if not isinstance(item, RigidObject | SpringMounted):
                 raise InputError(f"`objects[{i}]` must be a RigidObject or SpringMounted, got {type(item).__name__}")
@@ -82,7 +88,7 @@ class Scene:
                 damping.append(item.damping)
             else:
                 stiffness += [0.0] * 6
-                damping += [0.0] * 6
+                damping += list(self.object_drag * np.concatenate(([item.mass] * 3, np.diag(item.inertia))))
         self._q_slices, self._v_slices = [], []  # read every step: looked up in the model once
         for root, joint in zip(self._object_root, self.object_joints):
             first, body = self.model.joints[root], self.model.joints[joint]
@@ -248,7 +254,7 @@ class Scene:
 
     def __reduce__(self) -> tuple:
         """Pickles and copies rebuild the scene from its hand, objects and environment."""
-        return Scene, (self.hand, self.objects, self.environment, self.environment_touches_hand)
+        return Scene, (self.hand, self.objects, self.environment, self.environment_touches_hand, self.object_drag)
 
     def __repr__(self) -> str:
         return (
