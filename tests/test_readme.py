@@ -70,6 +70,9 @@ def check_truths(namespace: dict, tmp_path: Path) -> None:
     if "forces" in namespace and "G" in namespace:  # the forces exert the weight exactly
         forces = namespace["forces"]
         np.testing.assert_allclose(namespace["G"] @ forces.forces.ravel(), namespace["weight"], atol=1e-6)
+    if "pile" in namespace:  # the settled pile: the bin carries its weight (object-object forces cancel in pairs)
+        weight = sum(item.mass for item in namespace["pile"].objects) * 9.81
+        assert namespace["pile"].support_force() == pytest.approx([0.0, 0.0, weight], rel=1e-4, abs=1e-2)
     if "viewer" in namespace:  # the MeshCat example's offline page
         assert (tmp_path / "replay.html").stat().st_size > 200_000
 

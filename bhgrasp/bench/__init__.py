@@ -4,7 +4,8 @@
 :class:`~bhgrasp.bench.protocol.Trial`); :mod:`~bhgrasp.bench.objects` the object sets (development, two held-out);
 :mod:`~bhgrasp.bench.placement` where the hand goes over the object and :mod:`~bhgrasp.bench.height` how high, both
 from :mod:`~bhgrasp.bench.reach`'s touch angles; :mod:`~bhgrasp.bench.closing` when each finger starts to close;
-:mod:`~bhgrasp.bench.trial` runs one trial;
+:mod:`~bhgrasp.bench.trial` runs one trial, alone on its stand or, with :mod:`~bhgrasp.bench.neighbours`, among
+settled neighbours on the table around it (:mod:`~bhgrasp.bench.table`);
 :mod:`~bhgrasp.bench.metrics` scores it; :mod:`~bhgrasp.bench.report` runs many and writes the JSON and markdown
 report (``bhgrasp grasp-bench``).
 """
@@ -12,6 +13,7 @@ report (``bhgrasp grasp-bench``).
 from bhgrasp.bench.closing import finger_starts
 from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN, grasp_clearance, stand_clearance
 from bhgrasp.bench.metrics import contact_summary, evaluate, failure_reason, held_forces, least_grip, relative_poses
+from bhgrasp.bench.neighbours import DISTURBED, neighbour_displacements, run_among_neighbours, settle_neighbours
 from bhgrasp.bench.objects import DEVELOPMENT_SET, HELD_OUT_SET, HELD_OUT_SET_2, KINDS, OBJECT_SET, SETS, BenchObject
 from bhgrasp.bench.placement import closing_planes_meet, grasp_offset
 from bhgrasp.bench.protocol import (
@@ -41,6 +43,7 @@ from bhgrasp.bench.protocol import (
 )
 from bhgrasp.bench.reach import hand_depth
 from bhgrasp.bench.report import bench_rollout, compare, markdown, run_bench, success_rates, write_json
+from bhgrasp.bench.table import TABLE_REACH, Clutter, stand_of, table_around
 from bhgrasp.bench.trial import (
     BenchController,
     fallen,
@@ -57,6 +60,7 @@ __all__ = [
     "CLOSE_AT",
     "DEVELOPMENT_SET",
     "DIRECTIONS",
+    "DISTURBED",
     "DROP",
     "DT",
     "FORCE_LIMIT",
@@ -80,9 +84,11 @@ __all__ = [
     "STAND_MARGIN",
     "STIFFNESS",
     "STRICT",
+    "TABLE_REACH",
     "THREE_FINGER_SPREAD",
     "BenchController",
     "BenchObject",
+    "Clutter",
     "Trial",
     "bench_rollout",
     "closing_planes_meet",
@@ -99,14 +105,19 @@ __all__ = [
     "idealised_damping",
     "least_grip",
     "markdown",
+    "neighbour_displacements",
     "relative_poses",
+    "run_among_neighbours",
     "run_bench",
     "run_trial",
+    "settle_neighbours",
     "setup",
     "shake_force",
     "simulate_trial",
     "spread_of",
     "stand_clearance",
+    "stand_of",
     "success_rates",
+    "table_around",
     "write_json",
 ]

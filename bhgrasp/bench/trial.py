@@ -13,7 +13,7 @@ from bhgrasp.barrett.commands import BarrettDriver
 from bhgrasp.barrett.pucks import FINGER_PUCK
 from bhgrasp.barrett.transmission import PROXIMAL_RATIO, WORM_EFFICIENCY, BarrettTransmission
 from bhgrasp.bench.closing import finger_starts
-from bhgrasp.bench.height import STAND_HEIGHT, trial_clearance
+from bhgrasp.bench.height import trial_clearance
 from bhgrasp.bench.metrics import GRAVITY, evaluate
 from bhgrasp.bench.placement import grasp_offset
 from bhgrasp.bench.protocol import (
@@ -34,9 +34,9 @@ from bhgrasp.bench.protocol import (
     Trial,
 )
 from bhgrasp.bench.reach import hand_depth
+from bhgrasp.bench.table import Clutter, stand_of
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.model.mount import mounted
-from bhgrasp.model.objects import FixedBox
 from bhgrasp.motion.pose_references import PosePath
 from bhgrasp.motion.trajectories import Reference, Sample
 from bhgrasp.motion.wrist import MountReference
@@ -72,8 +72,12 @@ def contact_law() -> SpringDamper:
     )
 
 
-def setup(trial: Trial, dt: float = DT):
-    """The simulator, its start state, the mounted hand and the wrist path of a trial."""
+def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None):
+    """The simulator, its start state, the mounted hand and the wrist path of a trial.
+
+    ``clutter``: the object where it settled and its neighbours on the table around its stand
+    (:mod:`~bhgrasp.bench.neighbours`); default: the object alone on its stand.
+    """
     item = trial.item
     top = 2 * item.half_extents[2]
     spread = trial.preshape_spread
@@ -83,14 +87,11 @@ def setup(trial: Trial, dt: float = DT):
     offset = np.array([0.0, grasp_offset(item, spread, clearance, PRESHAPE), 0.0])
     base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + APPROACH]) - rotation @ offset)  # fingers together
     hand = mounted(bh.BarrettHand(base_placement=base))
-    width = 2 * item.half_extents[:2]  # the stand: the object's footprint
-    pedestal = FixedBox(
-        size=(*width, STAND_HEIGHT),
-        pose=pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.5 * STAND_HEIGHT])),
-        friction=FRICTION,
-        name=STAND,
-    )
-    scene = Scene(hand, [item.body(FRICTION)], environment=[pedestal])
+    pedestal = stand_of(item)
+    if clutter is None:
+        scene = Scene(hand, [item.body(FRICTION)], environment=[pedestal])
+    else:
+        scene = Scene(hand, clutter.objects, environment=[pedestal, *clutter.table])
     if trial.actuation == "barrett":
         actuation = BarrettActuation(hand, saturate=True)
     else:  # the same motors' damping on each joint, reflected as through the worms (bench.protocol)
@@ -210,27 +211,33 @@ class BenchController:
         return tau
 
 
-def shake_force(mass: float):
-    """The shake, ``t -> (1, 3)`` world force [N]: 10 m newtons along each direction for 2 s.
+def shake_force(mass: float, objects: int = 1):
+    """The shake, ``t -> (objects, 3)`` world force [N]: 10 m newtons along each direction for 2 s, on object 0.
 
-    The directions: :data:`~bhgrasp.bench.protocol.DIRECTIONS`.
+    The directions: :data:`~bhgrasp.bench.protocol.DIRECTIONS`; the other objects (neighbours) are not pushed.
     """
     axes = np.vstack([np.eye(3)[[0, 0, 1, 1, 2, 2]] * np.array([1, -1, 1, -1, 1, -1])[:, None]])
-    none = np.zeros((1, 3))
+    none = np.zeros((objects, 3))
 
     def force(t: float) -> np.ndarray:
         k = math.floor((t - HELD_AT) / SHAKE_TIME)
-        return 10.0 * mass * axes[k][None, :] if 0 <= k < 6 else none
+        if not 0 <= k < 6:
+            return none
+        pushed = none.copy()
+        pushed[0] = 10.0 * mass * axes[k]
+        return pushed
 
     return force
 
 
-def simulate_trial(trial: Trial, dt: float = DT, record_every: int = 40, duration: float | None = None):
+def simulate_trial(
+    trial: Trial, dt: float = DT, record_every: int = 40, duration: float | None = None, clutter: Clutter | None = None
+):
     """The trial's trajectory (a sample every ``record_every`` steps) and its mounted hand.
 
-    ``duration`` [s] cuts the protocol short (default: all of it).
+    ``duration`` [s] cuts the protocol short (default: all of it); ``clutter`` as :func:`setup` takes it.
     """
-    simulator, state, hand, path = setup(trial, dt)
+    simulator, state, hand, path = setup(trial, dt, clutter)
     controller = BenchController(trial, hand, path)
     duration = HELD_AT + 6 * SHAKE_TIME + 1.0 + RELEASE if duration is None else duration
     trajectory = simulator.run(
@@ -239,7 +246,7 @@ def simulate_trial(trial: Trial, dt: float = DT, record_every: int = 40, duratio
         state=state,
         progress=False,
         record_every=record_every,
-        object_forces=shake_force(trial.item.mass),
+        object_forces=shake_force(trial.item.mass, len(simulator.scene.objects)),
         until=fallen(simulator.scene),
     )
     return trajectory, hand

@@ -1,14 +1,15 @@
 """Clutter: mixed objects dropped into a bin or onto a table and left to settle, with a seed.
 
 :func:`mixed_objects` draws boxes, cylinders, spheres and capsules of household sizes; :func:`bin_walls` builds a
-bin of fixed boxes; :func:`drop_pile` drops objects over a rectangle of the world, in layers of non-overlapping
-bounding spheres at random orientations, and simulates them until every object has stayed at rest for
-``rest_time`` (the fastest point of each, |v| + |w| r, below ``rest_speed``).  The hand stays where it is, held
-against gravity; a pile it must grasp from is dropped with the hand in the scene, so that the settled state is
-the grasp's start.  Same objects, seed and settings, same bits.
+bin of fixed boxes; :func:`drop_pile` drops objects over a rectangle of the world, at random non-overlapping
+positions from the floor up (:func:`drop_poses`) and random orientations, and simulates them until every object has
+stayed at rest for ``rest_time`` (its fastest point, |v| + |w| r, under ``rest_speed``).  Objects already in place
+(``placed``, e.g. one on a stand) settle with them.  The hand stays where it is, held against gravity.  The settled
+objects (:attr:`Pile.objects`) start another scene, e.g. a grasp among them
+(:mod:`bhgrasp.bench.neighbours`).  Same objects, seed and settings, same bits.
 
-The objects live in the hand's one Pinocchio model (:class:`~bhgrasp.sim.scene.Scene`), so scene building and a
-step cost more than linearly in the number of objects: measured in ``benchmarks/bench_clutter.py`` (BENCHMARKS.md).
+The objects live in the hand's one Pinocchio model (:class:`~bhgrasp.sim.scene.Scene`), so a step costs more than
+linearly in their number (4 objects 0.1 ms, 16 objects 0.9 ms, 36 objects 10 ms a step on the test machine).
 """
 
 from __future__ import annotations
@@ -46,15 +47,16 @@ CONTACT = SpringDamper(stiffness=3e4, damping=60.0, friction=0.8)
 # [1/s] the settling scene's object drag (Scene.object_drag): point contacts have no rolling or spinning
 # resistance, so a ball rolling on a flat floor or spinning on its contact point would never stop; zero at rest
 DRAG = 5.0
-GAP = 0.005  # [m] between the bounding spheres of the drop's layers and cells
+GAP = 0.005  # [m] between the bounding spheres of the drop, and above the floor
+TRIES = 100  # positions drawn per object and layer
 
 
 @dataclass(frozen=True)
 class Pile:
     """A settled pile: its simulator, the settled state, the objects at their settled poses, the time it took.
 
-    ``objects`` are copies of the dropped ones placed where they came to rest (at rest: zero velocity), e.g. to
-    build another scene around them.
+    ``objects``: copies of the ``placed`` objects, then of the dropped ones (the scene's order), where they came to
+    rest (zero velocity), e.g. to build another scene around them.
     """
 
     simulator: Simulator
@@ -126,35 +128,48 @@ def bin_walls(
     ]
 
 
-def drop_poses(objects: Sequence[RigidObject], region: Any, floor: float, rng: np.random.Generator) -> list[pin.SE3]:
+def drop_poses(
+    objects: Sequence[RigidObject],
+    region: Any,
+    floor: float,
+    rng: np.random.Generator,
+    keep_out: Sequence[RigidObject] = (),
+) -> list[pin.SE3]:
     """Drop poses over ``region`` = (x_min, y_min, x_max, y_max) [m], from ``floor`` [m] up.
 
-    A grid of cells one bounding diameter (+ :data:`GAP`) wide, filled layer by layer in a shuffled order, each
-    object jittered in its cell and turned at random (uniform on SO(3)).  No two bounding spheres overlap, none
-    reaches below ``floor + GAP``.
+    Each object in turn: up to :data:`TRIES` positions drawn uniformly over the region at the lowest layer, its
+    bounding sphere :data:`GAP` above ``floor``; the first whose sphere clears (by GAP) every sphere placed before and
+    every ``keep_out`` object's is taken, else the next layer up (one largest bounding diameter + GAP higher) is
+    tried.  Turned at random (uniform on SO(3)).
     """
     region = as_vector(region, "region", 4)
-    cell = 2.0 * max(item.bounding_radius for item in objects) + GAP
-    counts = np.floor((region[2:] - region[:2]) / cell).astype(int)
-    if np.any(counts < 1):
+    radii = [item.bounding_radius for item in objects]
+    if np.any(region[2:] - region[:2] < 2.0 * max(radii)):
         raise InputError(
-            f"`region` {region.tolist()} must be at least {cell:.3f} m wide each way: the largest object's bounding "
-            "diameter and the drop's gap"
+            f"`region` {region.tolist()} must be at least {2.0 * max(radii):.3f} m wide each way: the largest "
+            "object's bounding diameter"
         )
-    per_layer = int(counts[0] * counts[1])
-    poses, order = [], []
-    for i, item in enumerate(objects):
-        if i % per_layer == 0:
-            order = list(rng.permutation(per_layer))
-        layer, index = divmod(i, per_layer)
-        column, row = divmod(int(order[index]), int(counts[1]))
-        slack = 0.5 * (cell - GAP) - item.bounding_radius
-        jitter = rng.uniform(-slack, slack, 2)
-        x, y = region[:2] + (np.array([column, row]) + 0.5) * cell + jitter
-        z = floor + GAP + layer * cell + 0.5 * (cell - GAP)
+    layer_height = 2.0 * max(radii) + GAP
+    spheres = [(item.pose.translation, item.bounding_radius) for item in keep_out]
+    poses = []
+    for radius in radii:
+        low, high = region[:2] + radius, region[2:] - radius
+        centre = None
+        for layer in range(len(objects) + 1):
+            z = floor + GAP + radius + layer * layer_height
+            for _ in range(TRIES):
+                trial = np.array([*rng.uniform(low, high), z])
+                if all(np.linalg.norm(trial - c) >= r + radius + GAP for c, r in spheres):
+                    centre = trial
+                    break
+            if centre is not None:
+                break
+        if centre is None:
+            raise InputError(f"`region` {region.tolist()} has no room clear of `keep_out` for {len(objects)} objects")
+        spheres.append((centre, radius))
         quaternion = rng.normal(size=4)
         rotation = pin.Quaternion(*(quaternion / np.linalg.norm(quaternion))).toRotationMatrix()
-        poses.append(pin.SE3(rotation, np.array([x, y, z])))
+        poses.append(pin.SE3(rotation, centre))
     return poses
 
 
@@ -173,6 +188,7 @@ def drop_pile(
     rest_time: float = 0.1,
     max_time: float = 5.0,
     engine: str | None = None,
+    placed: Sequence[RigidObject] = (),
 ) -> Pile:
     """Drop ``objects`` over ``region`` (x_min, y_min, x_max, y_max) [m] onto ``environment`` and let them settle.
 
@@ -189,6 +205,8 @@ def drop_pile(
         rest_speed, rest_time: At rest: every object's fastest point below ``rest_speed`` [m/s] for ``rest_time`` [s].
         max_time: Simulated time [s] allowed.
         engine: ``"compiled"``, ``"python"`` or None (the default engine).
+        placed: Objects already in place (e.g. one on its stand): first in the scene, kept where they are, no drop
+            cell meets their bounding spheres; they settle with the others.
 
     Raises:
         NotSettled: Still moving after ``max_time`` (the message names the objects and their speeds).
@@ -199,8 +217,10 @@ def drop_pile(
     rest_speed, rest_time = as_positive(rest_speed, "rest_speed"), as_positive(rest_time, "rest_time")
     max_time, drag = as_positive(max_time, "max_time"), as_real(drag, "drag")
     rng = as_generator(seed, "seed")
-    poses = drop_poses(objects, region, as_real(floor, "floor", nonnegative=False), rng)
-    dropped = [_placed(item, pose) for item, pose in zip(objects, poses)]
+    if not all(isinstance(item, RigidObject) for item in placed):
+        raise InputError(f"`placed` must hold RigidObject only, got {placed!r}")
+    poses = drop_poses(objects, region, as_real(floor, "floor", nonnegative=False), rng, placed)
+    dropped = [*placed, *(_placed(item, pose) for item, pose in zip(objects, poses))]
     if hand is None:
         above = np.array([*(0.5 * (np.asarray(region[:2]) + np.asarray(region[2:]))), floor + 1.0])
         hand = BarrettHand(base_placement=pin.SE3(np.eye(3), above))

@@ -1,0 +1,58 @@
+"""The stand under a benchmark object and, for a trial among neighbours, the table around it, flush with its top.
+
+The stand is the object's footprint, :data:`~bhgrasp.bench.height.STAND_HEIGHT` tall, its top the plane z = 0
+(:func:`stand_of`).  :func:`table_around` frames it with four fixed boxes out to :data:`TABLE_REACH` from its axis, so
+that neighbours stand level with the object while the closing fingers still pass beside the stand as the height
+rule (:mod:`~bhgrasp.bench.height`) plans them.  :class:`Clutter` is what a trial among neighbours starts from.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp.bench.height import STAND_HEIGHT
+from bhgrasp.bench.objects import BenchObject
+from bhgrasp.bench.protocol import FRICTION, STAND
+from bhgrasp.model.objects import FixedBox, RigidObject
+
+TABLE_REACH = 0.2  # [m] the table reaches this far from the stand's axis along x and y
+TABLE_THICKNESS = 0.02  # [m]
+
+
+@dataclass(frozen=True)
+class Clutter:
+    """A trial's objects where they settled, the trial's object first, and the table around its stand."""
+
+    objects: tuple[RigidObject, ...]
+    table: tuple[FixedBox, ...]
+
+
+def stand_of(item: BenchObject) -> FixedBox:
+    """The stand: a fixed box of the object's footprint, its top at z = 0, named :data:`~.protocol.STAND`."""
+    width = 2 * item.half_extents[:2]
+    pose = pin.SE3(np.eye(3), np.array([0.0, 0.0, -0.5 * STAND_HEIGHT]))
+    return FixedBox(size=(*width, STAND_HEIGHT), pose=pose, friction=FRICTION, name=STAND)
+
+
+def table_around(item: BenchObject) -> tuple[FixedBox, ...]:
+    """Four fixed boxes, top at z = 0, filling the square of half side :data:`TABLE_REACH` around the stand."""
+    hx, hy = item.half_extents[:2]
+    reach, z = TABLE_REACH, -0.5 * TABLE_THICKNESS
+
+    def box(name: str, x: tuple[float, float], y: tuple[float, float]) -> FixedBox:
+        centre = np.array([0.5 * (x[0] + x[1]), 0.5 * (y[0] + y[1]), z])
+        size = (x[1] - x[0], y[1] - y[0], TABLE_THICKNESS)
+        return FixedBox(size=size, pose=pin.SE3(np.eye(3), centre), friction=FRICTION, name=name)
+
+    return (
+        box("table -x", (-reach, -hx), (-reach, reach)),
+        box("table +x", (hx, reach), (-reach, reach)),
+        box("table -y", (-hx, hx), (-reach, -hy)),
+        box("table +y", (-hx, hx), (hy, reach)),
+    )
+
+
+__all__ = ["TABLE_REACH", "TABLE_THICKNESS", "Clutter", "stand_of", "table_around"]

@@ -1,0 +1,90 @@
+"""A benchmark trial among neighbours (bhgrasp.bench.neighbours, bench.table): the table, the settling, the record."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from bhgrasp.bench.neighbours import DISTURBED, neighbour_displacements, run_among_neighbours, settle_neighbours
+from bhgrasp.bench.objects import BenchObject
+from bhgrasp.bench.protocol import CLOSE_AT, FRICTION, HELD_AT, STIFFNESS, Trial
+from bhgrasp.bench.table import TABLE_REACH, Clutter, stand_of, table_around
+from bhgrasp.bench.trial import setup, shake_force, simulate_trial
+from bhgrasp.errors import InputError
+from bhgrasp.model.objects import Box
+
+CAN = Trial(BenchObject.parse("cylinder:0.033x0.1:0.35"), "power")
+
+
+def test_the_table_frames_the_stand_flush_with_its_top():
+    item = BenchObject.parse("box:0.06x0.05x0.05:0.3")
+    stand, table = stand_of(item), table_around(item)
+    boxes = [stand, *table]
+    lows = np.array([b.pose.translation - 0.5 * b.size for b in boxes])
+    highs = np.array([b.pose.translation + 0.5 * b.size for b in boxes])
+    assert np.allclose(highs[:, 2], 0.0)  # one top plane, z = 0
+    assert np.isclose(np.sum(np.prod((highs - lows)[:, :2], axis=1)), (2 * TABLE_REACH) ** 2)  # the whole square
+    for i in range(len(boxes)):  # ... and no two overlap
+        for j in range(i):
+            overlap = np.minimum(highs[i], highs[j]) - np.maximum(lows[i], lows[j])
+            assert np.any(overlap[:2] <= 1e-12), (boxes[i].name, boxes[j].name)
+
+
+def test_settled_neighbours_stand_on_the_table_clear_of_the_object():
+    clutter = settle_neighbours(CAN, 6, seed=1)
+    target, *neighbours = clutter.objects
+    assert target.name == CAN.item.name and len(neighbours) == 6
+    assert np.linalg.norm(target.pose.translation - CAN.item.body(FRICTION).pose.translation) < 1e-3
+    half = CAN.item.half_extents[:2]
+    for item in neighbours:
+        x, y, z = item.pose.translation
+        assert max(abs(x) - half[0], abs(y) - half[1]) > 0.0, item.name  # off the stand
+        assert max(abs(x), abs(y)) < TABLE_REACH and 0.0 < z < 0.1, item.name  # on the table
+    again = settle_neighbours(CAN, 6, seed=1)
+    assert all(np.array_equal(a.pose.homogeneous, b.pose.homogeneous) for a, b in zip(clutter.objects, again.objects))
+
+
+def test_far_neighbours_leave_the_grasp_as_alone_and_only_sink_into_the_table():
+    """Boxes at the table's corners: the can's close is the lone trial's, each box sinks its weight over k."""
+    corners = [(0.17, 0.17), (-0.17, 0.17), (0.17, -0.17), (-0.17, -0.17)]
+    far = [
+        Box(size=(0.04, 0.04, 0.06), mass=0.2, pose=pin.SE3(np.eye(3), np.array([x, y, 0.03])), friction=FRICTION)
+        for x, y in corners
+    ]
+    clutter = Clutter((CAN.item.body(FRICTION), *far), table_around(CAN.item))
+    duration = CLOSE_AT + 1.0
+    alone, _ = simulate_trial(CAN, duration=duration)
+    among, _ = simulate_trial(CAN, duration=duration, clutter=clutter)
+    # the same run up to round-off amplified by stick-slip (measured 25 um through the lift)
+    assert np.max(np.abs(among.object_position[:, 0] - alone.object_position[:, 0])) < 1e-4
+    assert np.allclose(neighbour_displacements(among), 0.2 * 9.81 / STIFFNESS, rtol=0.01)
+
+
+def test_a_neighbour_in_a_fingers_path_is_disturbed():
+    """A post 2 cm under F3's fingertip: the hand's 5 cm descent must push it away."""
+    _, state, hand, _ = setup(CAN)
+    x, y, z = hand.fingertip_positions(state.q)[hand.fingers.index("F3")]
+    height = z - 0.02
+    post = Box(size=(0.02, 0.02, height), mass=0.2, pose=pin.SE3(np.eye(3), np.array([x, y, height / 2])))
+    clutter = Clutter((CAN.item.body(FRICTION), post), table_around(CAN.item))
+    trajectory, _ = simulate_trial(CAN, duration=CLOSE_AT + 0.5, clutter=clutter)
+    assert neighbour_displacements(trajectory)[0] > DISTURBED
+
+
+def test_the_record_counts_the_disturbed_neighbours():
+    record = run_among_neighbours(CAN, 3, seed=2, duration=CLOSE_AT + 0.5)
+    assert len(record["neighbours"]) == len(record["neighbour_moved"]) == 3
+    assert record["neighbours_disturbed"] == sum(m > DISTURBED for m in record["neighbour_moved"])
+
+
+def test_the_shake_pushes_only_the_trials_object():
+    force = shake_force(0.5, objects=3)
+    assert force(0.0).shape == (3, 3) and not force(0.0).any()
+    pushed = force(HELD_AT + 0.1)
+    assert np.allclose(pushed[0], [5.0, 0.0, 0.0]) and not pushed[1:].any()
+
+
+def test_bad_neighbour_count_is_named():
+    with pytest.raises(InputError, match="`count` must be an integer >= 1"):
+        settle_neighbours(CAN, 0, seed=1)
