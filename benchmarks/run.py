@@ -23,6 +23,7 @@ QUICK = {  # script -> its arguments for a smoke run
     "bench_scaling.py": ["--steps", "20"],
     "bench_instructions.py": ["--cases", "free", "--engine", "compiled", "--short", "2", "--long", "12"],
     "bench_meshes.py": ["--steps", "20", "--repeat", "1"],
+    "bench_clutter.py": ["--sizes", "4", "--steps", "20"],
 }
 
 

@@ -2,17 +2,31 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pinocchio as pin
 import pytest
 
-from bhgrasp.bench.neighbours import DISTURBED, neighbour_displacements, run_among_neighbours, settle_neighbours
+import bhgrasp as bh
+from bhgrasp.bench.height import STAND_HEIGHT, TABLE_REACH, grasp_clearance, stand_clearance
+from bhgrasp.bench.neighbours import (
+    DISTURBED,
+    RAISE,
+    neighbour_displacements,
+    peak_force_on,
+    run_among_neighbours,
+    settle_neighbours,
+)
 from bhgrasp.bench.objects import BenchObject
-from bhgrasp.bench.protocol import CLOSE_AT, FRICTION, HELD_AT, STIFFNESS, Trial
-from bhgrasp.bench.table import TABLE_REACH, Clutter, stand_of, table_around
+from bhgrasp.bench.protocol import APPROACH, CLOSE_AT, FRICTION, HELD_AT, PRESHAPE, STIFFNESS, Trial
+from bhgrasp.bench.table import Clutter, floor_below, stand_of, table_around
 from bhgrasp.bench.trial import setup, shake_force, simulate_trial
-from bhgrasp.errors import InputError
+from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.model.objects import Box
+from bhgrasp.sim import Simulator
+from bhgrasp.sim.contact_law import SpringDamper
+from bhgrasp.sim.scene import Scene
 
 CAN = Trial(BenchObject.parse("cylinder:0.033x0.1:0.35"), "power")
 
@@ -52,7 +66,7 @@ def test_far_neighbours_leave_the_grasp_as_alone_and_only_sink_into_the_table():
         Box(size=(0.04, 0.04, 0.06), mass=0.2, pose=pin.SE3(np.eye(3), np.array([x, y, 0.03])), friction=FRICTION)
         for x, y in corners
     ]
-    clutter = Clutter((CAN.item.body(FRICTION), *far), table_around(CAN.item))
+    clutter = Clutter((CAN.item.body(FRICTION), *far), (*table_around(CAN.item), floor_below()))
     duration = CLOSE_AT + 1.0
     alone, _ = simulate_trial(CAN, duration=duration)
     among, _ = simulate_trial(CAN, duration=duration, clutter=clutter)
@@ -66,16 +80,62 @@ def test_a_neighbour_in_a_fingers_path_is_disturbed():
     _, state, hand, _ = setup(CAN)
     x, y, z = hand.fingertip_positions(state.q)[hand.fingers.index("F3")]
     height = z - 0.02
-    post = Box(size=(0.02, 0.02, height), mass=0.2, pose=pin.SE3(np.eye(3), np.array([x, y, height / 2])))
-    clutter = Clutter((CAN.item.body(FRICTION), post), table_around(CAN.item))
-    trajectory, _ = simulate_trial(CAN, duration=CLOSE_AT + 0.5, clutter=clutter)
+    post = Box(size=(0.02, 0.02, height), mass=0.2, pose=pin.SE3(np.eye(3), np.array([x, y, height / 2])), name="post")
+    clutter = Clutter((CAN.item.body(FRICTION), post), (*table_around(CAN.item), floor_below()))
+    trajectory, hand = simulate_trial(CAN, duration=CLOSE_AT + 0.5, clutter=clutter)
     assert neighbour_displacements(trajectory)[0] > DISTURBED
+    assert peak_force_on(trajectory, hand, ["post"]) > 1.0 and peak_force_on(trajectory, hand, ["none"]) == 0.0
+
+
+def test_the_table_can_only_raise_the_grasp_or_leave_none():
+    """The table contains the stand: the fingers' distance from it is never larger, the grasp never lower."""
+    for spec in ("cylinder:0.033x0.1:0.35", "box:0.06x0.05x0.05:0.3", "sphere:0.045:0.15"):
+        item = BenchObject.parse(spec)
+        spread = Trial(item, "power").preshape_spread
+        for clearance in (0.0, 0.01, 0.03):
+            alone = stand_clearance(item, spread, clearance, PRESHAPE)
+            assert stand_clearance(item, spread, clearance, PRESHAPE, table=True) <= alone + 1e-12
+        alone, among = (grasp_clearance(item, spread, "power", PRESHAPE, table=t) for t in (False, True))
+        assert among is None or (alone is not None and among >= alone)
+
+
+def test_a_neighbour_pushed_off_the_table_lands_on_the_floor():
+    item = BenchObject.parse("box:0.06x0.05x0.05:0.3")
+    edge = pin.SE3(np.eye(3), np.array([TABLE_REACH - 0.01, 0.0, 0.02]))
+    box = Box(size=(0.04, 0.04, 0.04), mass=0.1, pose=edge, velocity=(0.5, 0.0, 0.0, 0.0, 0.0, 0.0))
+    hand = bh.BarrettHand(base_placement=pin.SE3(np.eye(3), np.array([0.0, 0.0, 1.0])))
+    scene = Scene(hand, [box], [stand_of(item), *table_around(item), floor_below()], environment_touches_hand=False)
+    simulator = Simulator(scene, dt=5e-4, contact=SpringDamper(stiffness=3e4, damping=60.0))
+    trajectory = simulator.run(lambda t, state: hand.gravity_torques(state.q), duration=1.0, progress=False)
+    assert trajectory.object_position[-1, 0, 2] == pytest.approx(-STAND_HEIGHT + 0.02, abs=2e-3)
 
 
 def test_the_record_counts_the_disturbed_neighbours():
     record = run_among_neighbours(CAN, 3, seed=2, duration=CLOSE_AT + 0.5)
     assert len(record["neighbours"]) == len(record["neighbour_moved"]) == 3
     assert record["neighbours_disturbed"] == sum(m > DISTURBED for m in record["neighbour_moved"])
+
+
+def test_the_open_hand_starts_over_the_neighbours_as_low_as_it_can():
+    """The ball's grasp among six neighbours (seed 1): its start rises until no hand link touches a neighbour."""
+    ball = Trial(BenchObject.parse("sphere:0.035:0.2"), "power", table=True)
+    clutter = settle_neighbours(ball, 6, seed=1)
+    names = {item.name for item in clutter.objects[1:]}
+
+    def touches(approach: float) -> bool:
+        _, state, hand, _ = setup(ball, clutter=dataclasses.replace(clutter, approach=approach), start_check="off")
+        links = {frame.name for frame in hand.model.frames}
+        return any({a, b} & links and {a, b} & names for a, b in state.contact_bodies)
+
+    assert clutter.approach > APPROACH  # a neighbour stood where the usual start puts a finger
+    assert not touches(clutter.approach) and touches(clutter.approach - RAISE)
+
+
+def test_a_low_object_among_neighbours_is_refused_with_the_hand_inside_the_table():
+    """The 3 cm flat box has no grasp height: the open hand would start with its fingertips below the table."""
+    flat = Trial(BenchObject.parse("box:0.085x0.07x0.03:0.1"), "power")
+    with pytest.raises(UnreachableError, match=r"no trial among neighbours: .*_distal_link .* mm inside table"):
+        run_among_neighbours(flat, 2, seed=1)
 
 
 def test_the_shake_pushes_only_the_trials_object():

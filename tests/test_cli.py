@@ -156,6 +156,8 @@ BAD_ARGUMENTS = {
     "got 'cube'",
     "grasp-bench --object box:0.3x0.05x0.05:0.3": "argument --object: an object must be at most 0.15 m wide",
     "grasp-bench --grasp pinch": "argument --grasp: invalid choice: 'pinch'",
+    "grasp-bench --neighbours 0": "argument --neighbours: must be a positive integer, got '0'",
+    "grasp-bench --neighbour-seed -1": "argument --neighbour-seed: must be an integer >= 0, got '-1'",
     "grasp-bench --spread 4": "argument --spread: must be an angle in [0, pi] rad (the spread's range), got '4'",
     "grasp-bench --compare /nonexistent/bench.json": "argument --compare: no such file: '/nonexistent/bench.json'",
 }

@@ -6,12 +6,12 @@
 from :mod:`~bhgrasp.bench.reach`'s touch angles; :mod:`~bhgrasp.bench.closing` when each finger starts to close;
 :mod:`~bhgrasp.bench.trial` runs one trial, alone on its stand or, with :mod:`~bhgrasp.bench.neighbours`, among
 settled neighbours on the table around it (:mod:`~bhgrasp.bench.table`);
-:mod:`~bhgrasp.bench.metrics` scores it; :mod:`~bhgrasp.bench.report` runs many and writes the JSON and markdown
-report (``bhgrasp grasp-bench``).
+:mod:`~bhgrasp.bench.metrics` scores it; :mod:`~bhgrasp.bench.runs` runs many and :mod:`~bhgrasp.bench.report`
+writes their JSON and markdown report (``bhgrasp grasp-bench``).
 """
 
 from bhgrasp.bench.closing import finger_starts
-from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN, grasp_clearance, stand_clearance
+from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN, TABLE_REACH, grasp_clearance, stand_clearance
 from bhgrasp.bench.metrics import contact_summary, evaluate, failure_reason, held_forces, least_grip, relative_poses
 from bhgrasp.bench.neighbours import DISTURBED, neighbour_displacements, run_among_neighbours, settle_neighbours
 from bhgrasp.bench.objects import DEVELOPMENT_SET, HELD_OUT_SET, HELD_OUT_SET_2, KINDS, OBJECT_SET, SETS, BenchObject
@@ -42,8 +42,9 @@ from bhgrasp.bench.protocol import (
     spread_of,
 )
 from bhgrasp.bench.reach import hand_depth
-from bhgrasp.bench.report import bench_rollout, compare, markdown, run_bench, success_rates, write_json
-from bhgrasp.bench.table import TABLE_REACH, Clutter, stand_of, table_around
+from bhgrasp.bench.report import compare, markdown, success_rates, write_json
+from bhgrasp.bench.runs import bench_rollout, run_bench
+from bhgrasp.bench.table import Clutter, floor_below, stand_of, table_around
 from bhgrasp.bench.trial import (
     BenchController,
     fallen,
@@ -98,6 +99,7 @@ __all__ = [
     "failure_reason",
     "fallen",
     "finger_starts",
+    "floor_below",
     "grasp_clearance",
     "grasp_offset",
     "hand_depth",

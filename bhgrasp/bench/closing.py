@@ -79,7 +79,7 @@ def finger_starts(trial: Trial) -> dict[str, float]:
     item, spread = trial.item, trial.preshape_spread
     if trial.actuation != "barrett" or item.kind == "box" or closing_planes_meet(spread) is None:
         return dict.fromkeys(("F1", "F2", "F3"), 0.0)
-    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE)
+    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)
     angles = touch_angles(item, spread, clearance, PRESHAPE)
     needs = {finger: close_time(angles[finger]) for finger in ("F1", "F3")}
     last = max(needs.values())

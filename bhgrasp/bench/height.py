@@ -23,13 +23,17 @@ from bhgrasp.bench.placement import grasp_centre
 from bhgrasp.bench.reach import reach_of
 
 STAND_HEIGHT = 0.2  # [m] the stand under the object (its top the table plane z = 0)
+TABLE_REACH = 0.2  # [m] a trial among neighbours: the table around the stand reaches this far from its axis in x, y
 STAND_MARGIN = 0.003  # [m] the fingers' least distance from the stand when they touch the object (~3x the contact's
 # 1 mm penetration under the power close)
 SWEEP = 0.01  # [rad] the close's proximal steps in :func:`stand_clearance`
 
 
-def stand_clearance(item: BenchObject, spread: float, clearance: float, opening: float) -> float:
+def stand_clearance(item: BenchObject, spread: float, clearance: float, opening: float, table: bool = False) -> float:
     """The fingers' least distance [m] from the stand up to where each first touches the object (negative: apart).
+
+    ``table``: the stand is flush with a table :data:`TABLE_REACH` around (a trial among neighbours): its top is the
+    table's.
 
     The hand as :func:`~bhgrasp.bench.placement.grasp_centre` places it for ``clearance`` [m] (knuckles to the
     object's top); each finger closes from ``opening`` [rad] with the distal at a third of the proximal (before the
@@ -38,7 +42,7 @@ def stand_clearance(item: BenchObject, spread: float, clearance: float, opening:
     """
     reach = reach_of(item, spread, opening)
     centre = grasp_centre(item, spread, clearance, opening)
-    stand = coal.Box(*(2 * item.half_extents[:2]), STAND_HEIGHT)
+    stand = coal.Box(*((2 * TABLE_REACH,) * 2 if table else 2 * item.half_extents[:2]), STAND_HEIGHT)
     stand_centre = centre + np.array([0.0, 0.0, item.half_extents[2] + 0.5 * STAND_HEIGHT])  # below it: hand +z
     nearest = np.inf
     for finger in reach.hand.fingers:
@@ -96,7 +100,7 @@ def grasp_ready(item: BenchObject, spread: float, clearance: float, opening: flo
 
 @functools.lru_cache(maxsize=256)
 def grasp_clearance(
-    item: BenchObject, spread: float, grasp: str, opening: float, highest: float = 0.06
+    item: BenchObject, spread: float, grasp: str, opening: float, highest: float = 0.06, table: bool = False
 ) -> float | None:
     """The knuckles' height [m] above the object's top for a ``grasp`` ('power' or 'precision'), by one rule.
 
@@ -109,25 +113,26 @@ def grasp_clearance(
     - every finger touches the object before the stand (:func:`stand_clearance` at least 0 on the object's top,
       :data:`STAND_MARGIN` once raised).
 
-    ``None`` if no height qualifies; computed once per process for each set of arguments.
+    ``table``: the stand flush with a table around it (:func:`stand_clearance`).  ``None`` if no height qualifies;
+    computed once per process for each set of arguments.
     """
     for clearance in np.arange(0.0, highest + 1e-9, 0.002):
         clearance = float(clearance)
         margin = 0.0 if clearance == 0.0 else STAND_MARGIN
         if not grasp_ready(item, spread, clearance, opening, grasp):
             continue
-        if stand_clearance(item, spread, clearance, opening) >= margin:
+        if stand_clearance(item, spread, clearance, opening, table) >= margin:
             return clearance
     return None
 
 
-def trial_clearance(item: BenchObject, spread: float, grasp: str, opening: float) -> float:
+def trial_clearance(item: BenchObject, spread: float, grasp: str, opening: float, table: bool = False) -> float:
     """Where a trial puts the knuckles [m above the object's top]: :func:`grasp_clearance`, or 0.
 
     0 (on its top) where no height qualifies; the trial's failure then says so
     (:data:`~bhgrasp.bench.metrics.NO_HEIGHT`).
     """
-    clearance = grasp_clearance(item, spread, grasp, opening)
+    clearance = grasp_clearance(item, spread, grasp, opening, table=table)
     return 0.0 if clearance is None else clearance
 
 
@@ -135,6 +140,7 @@ __all__ = [
     "STAND_HEIGHT",
     "STAND_MARGIN",
     "SWEEP",
+    "TABLE_REACH",
     "faces_up",
     "first_touches",
     "grasp_clearance",

@@ -68,7 +68,8 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
         "lifted": lifted,
         "max_displacement": float(offsets.max()),
         "max_rotation": float(turns.max()),
-        "height_found": grasp_clearance(trial.item, trial.preshape_spread, trial.grasp, PRESHAPE) is not None,
+        "height_found": grasp_clearance(trial.item, trial.preshape_spread, trial.grasp, PRESHAPE, table=trial.table)
+        is not None,
     }
     record.update(contact_summary(trajectory, hand, held, shaken))
     record.update(joint_load(trajectory, hand))

@@ -10,34 +10,68 @@ were disturbed, moved more than :data:`DISTURBED`.  The trial's own success is s
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
 
 from bhgrasp._validation import as_count, as_generator
+from bhgrasp.bench.height import TABLE_REACH
 from bhgrasp.bench.metrics import evaluate
-from bhgrasp.bench.protocol import DT, FRICTION, Trial
-from bhgrasp.bench.table import TABLE_REACH, Clutter, stand_of, table_around
-from bhgrasp.bench.trial import simulate_trial
+from bhgrasp.bench.protocol import APPROACH, DT, FRICTION, STAND, Trial
+from bhgrasp.bench.table import Clutter, floor_below, stand_of, table_around
+from bhgrasp.bench.trial import contact_law, setup, simulate_trial
 from bhgrasp.data import Trajectory
+from bhgrasp.errors import UnreachableError
+from bhgrasp.model.hand import Hand
 from bhgrasp.scenarios.clutter import drop_pile, mixed_objects
 
 DISTURBED = 0.005  # [m] a neighbour moved further than this from where it settled was disturbed
+RAISE, HIGHEST = 0.01, 0.3  # [m] the open hand's start rises in these steps, at most this far above the grasp
 
 
-def settle_neighbours(trial: Trial, count: int, seed: Any) -> Clutter:
-    """The trial's object on its stand and ``count`` mixed neighbours, settled on the table around it."""
+def settle_neighbours(trial: Trial, count: int, seed: Any, dt: float = DT) -> Clutter:
+    """The trial's object on its stand and ``count`` mixed neighbours, settled on the table around it.
+
+    Settled under the trial's own contact law and step, so that the trial starts from rest.  The open hand starts
+    :data:`~bhgrasp.bench.protocol.APPROACH` above its grasp, or higher, in :data:`RAISE` steps, until it clears
+    every neighbour (:attr:`~bhgrasp.bench.table.Clutter.approach`): it comes down over the clutter as a real arm
+    would.
+
+    Raises:
+        UnreachableError: The open hand would start inside the table or the stand (a low object), or no start up
+            to :data:`HIGHEST` clears the neighbours.
+    """
     rng = as_generator(seed, "seed")
-    item, table = trial.item, table_around(trial.item)
-    reach = TABLE_REACH
-    pile = drop_pile(
-        mixed_objects(as_count(count, "count"), rng, friction=FRICTION),
-        [stand_of(item), *table],
-        (-reach, -reach, reach, reach),
-        seed=rng,
-        placed=[item.body(FRICTION)],
+    item, table = trial.item, (*table_around(trial.item), floor_below())
+    objects = mixed_objects(as_count(count, "count"), rng, friction=FRICTION)
+    region = (-TABLE_REACH, -TABLE_REACH, TABLE_REACH, TABLE_REACH)
+    environment = [stand_of(item), *table]
+    pile = drop_pile(objects, environment, region, seed=rng, placed=[item.body(FRICTION)], dt=dt, contact=contact_law())
+    fixed = {STAND, *(part.name for part in table)}
+    names = {item.name for item in pile.objects[1:]}
+    touched: list[tuple[str, str]] = []
+    for approach in np.arange(APPROACH, HIGHEST + 1e-9, RAISE):
+        clutter = Clutter(pile.objects, table, round(float(approach), 6))
+        simulator, state, hand, _ = setup(trial, dt, clutter, start_check="off")
+        below = [p for p in simulator.check_start(state) if fixed & set(p.bodies)]
+        if below:
+            raise UnreachableError(f"no trial among neighbours: the open hand starts {below[0].message}")
+        links = {frame.name for frame in hand.model.frames}
+        touched = [(a, b) for a, b in state.contact_bodies if {a, b} & links and {a, b} & names]
+        if not touched:  # the open hand touches no neighbour at its start
+            return clutter
+    raise UnreachableError(
+        f"no trial among neighbours: {HIGHEST:.2f} m above its grasp the open hand still touches {touched[0]}"
     )
-    return Clutter(pile.objects, table)
+
+
+def peak_force_on(trajectory: Trajectory, hand: Hand, names: list[str]) -> float:
+    """The hand's peak contact force [N] on the bodies ``names`` (a hand link body a, a named body b)."""
+    links = {frame.name for frame in hand.model.frames}
+    bodies = trajectory.pair_bodies[trajectory.contact_pair]
+    on = np.array([a in links and b in names for a, b in bodies], dtype=bool)
+    return float((np.linalg.norm(trajectory.contact_force, axis=1) * on).max(initial=0.0))
 
 
 def neighbour_displacements(trajectory: Trajectory) -> np.ndarray:
@@ -51,17 +85,34 @@ def run_among_neighbours(
 ) -> dict:
     """The trial's record (:func:`~bhgrasp.bench.metrics.evaluate`) among ``count`` settled neighbours.
 
-    It adds ``neighbours`` (their names), ``neighbour_moved`` (each one's farthest displacement [m]) and
+    The trial stands flush with the table (``Trial.table``: the height rule keeps the fingers off all of it).  The
+    record adds ``neighbours`` (their names), ``peak_neighbour_force`` (the hand's peak contact force on any of
+    them [N]: against :data:`~bhgrasp.bench.protocol.FORCE_LIMIT` it says whether the hand stayed in its envelope
+    there too), ``neighbour_moved`` (each one's farthest displacement [m]) and
     ``neighbours_disturbed`` (how many moved more than :data:`DISTURBED`).  ``duration`` [s] cuts the protocol short.
+
+    Raises:
+        UnreachableError: As :func:`settle_neighbours` (the benchmark counts the trial failed with its message).
     """
-    clutter = settle_neighbours(trial, count, seed)
+    trial = dataclasses.replace(trial, table=True)  # the height rule keeps the fingers off the whole table
+    clutter = settle_neighbours(trial, count, seed, dt)
     trajectory, hand = simulate_trial(trial, dt, record_every, duration, clutter)
     record = evaluate(trial, trajectory, hand)
     moved = neighbour_displacements(trajectory)
-    record["neighbours"] = [item.name for item in clutter.objects[1:]]
+    names = [item.name for item in clutter.objects[1:]]
+    record["neighbours"] = names
+    record["peak_neighbour_force"] = peak_force_on(trajectory, hand, names)
     record["neighbour_moved"] = moved.tolist()
     record["neighbours_disturbed"] = int(np.sum(moved > DISTURBED))
     return record
 
 
-__all__ = ["DISTURBED", "neighbour_displacements", "run_among_neighbours", "settle_neighbours"]
+__all__ = [
+    "DISTURBED",
+    "HIGHEST",
+    "RAISE",
+    "neighbour_displacements",
+    "peak_force_on",
+    "run_among_neighbours",
+    "settle_neighbours",
+]

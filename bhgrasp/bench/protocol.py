@@ -113,6 +113,7 @@ class Trial:
     grasp: str
     actuation: str = "barrett"
     spread: float | None = None
+    table: bool = False  # the stand flush with a table around it (a trial among neighbours, bench.neighbours)
 
     def __post_init__(self) -> None:
         if self.grasp not in GRASPS:

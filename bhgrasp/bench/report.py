@@ -1,29 +1,24 @@
-"""The grasp benchmark's runs and report: its trials on the sweep executor, its JSON and markdown files.
+"""The grasp benchmark's report: its JSON and markdown files, its summary, its comparison with committed trials.
 
-Every object x grasp x actuation trial runs through :func:`~bhgrasp.sweep.run_sweep`; ``grasp_benchmark.json``
-(``{"protocol": ..., "trials": [...]}``, SI units) and ``grasp_benchmark.md`` (the success tables) report them.
+The trials run in :mod:`~bhgrasp.bench.runs`; ``grasp_benchmark.json`` (``{"protocol": ..., "trials": [...]}``, SI
+units) and ``grasp_benchmark.md`` (the success tables) report them.
 A trial's ``set`` names the object set it came from (:data:`~bhgrasp.bench.objects.SETS`: ``development``, on
 which the protocol's constants were chosen, or ``held-out``; ``""`` for an object given on the command line): the
 report counts each set apart, so a held-out rate is never mixed with the rate the constants were chosen on.
 
-A trial that raises (e.g. :class:`~bhgrasp.errors.SimulationDiverged`) is a failed trial whose ``failure`` is the
-error; the sweep goes on (:func:`~bhgrasp.sweep.run_sweep`).  ``python -m bhgrasp grasp-bench`` is the command line.
+``python -m bhgrasp grasp-bench`` is the command line.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import json
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from bhgrasp.bench.objects import BenchObject
-from bhgrasp.bench.protocol import ACTUATIONS, DIRECTIONS, FORCE_LIMIT, GRASPS, LOOSE, STRICT, Trial
-from bhgrasp.bench.trial import run_trial
-from bhgrasp.sweep import run_sweep
+from bhgrasp.bench.protocol import ACTUATIONS, DIRECTIONS, FORCE_LIMIT, LOOSE, STRICT
 
 OUTCOMES = ("success", "strict_success", "placed", "inside_envelope", "gripped")
 METRICS = (
@@ -39,84 +34,6 @@ METRICS = (
     "held_force_F2",
     "held_force_F3",
 )
-
-
-def bench_rollout(parameters: dict[str, Any], seed: int) -> dict[str, Any]:
-    """One trial as a sweep rollout (deterministic: ``seed`` is unused)."""
-    item = dataclasses.replace(BenchObject.parse(parameters["spec"]), name=parameters["name"])
-    record = run_trial(Trial(item, parameters["grasp"], parameters["actuation"], parameters.get("spread")))
-    return {key: value for key, value in record.items() if key not in parameters and key != "object"}
-
-
-def run_bench(
-    objects: Sequence[BenchObject],
-    grasps: Sequence[str] = GRASPS,
-    actuations: Sequence[str] = ("barrett",),
-    workers: int | None = None,
-    progress: bool = False,
-    executor: Any = None,
-    spreads: Sequence[float] | None = None,
-    sets: Sequence[str] | None = None,
-    on_row: Callable[[dict[str, Any]], None] | None = None,
-) -> tuple[list[dict[str, Any]], list[float]]:
-    """Every trial of ``objects`` x ``grasps`` x ``actuations`` (a process pool of ``workers``).
-
-    ``spreads`` [rad]: run every trial at each of these pre-shape spreads instead of its grasp's own
-    (:attr:`~bhgrasp.bench.protocol.Trial.spread`).  ``sets``: each object's set name (default ``""``).
-    ``on_row``: called with each trial's sweep row as it finishes (:func:`~bhgrasp.sweep.run_sweep`).
-    Returns the trial records and each trial's wall time [s] (kept apart: records repeat bit for bit, times not).
-    """
-    labels = [""] * len(objects) if sets is None else list(sets)
-    if len(labels) != len(objects):
-        raise ValueError(f"`sets` names {len(labels)} sets for {len(objects)} objects")
-    design = [
-        {"name": o.name, "spec": o.spec, "set": label, "grasp": g, "actuation": a}
-        for a in actuations
-        for o, label in zip(objects, labels)
-        for g in grasps
-    ]
-    if spreads:
-        design = [{**case, "spread": float(spread)} for case in design for spread in spreads]
-    for case in design:  # refuse bad cases before running
-        Trial(BenchObject.parse(case["spec"]), case["grasp"], case["actuation"], case.get("spread"))
-    table = run_sweep(
-        bench_rollout,
-        design,
-        executor=executor or ("serial" if workers == 1 else None),
-        workers=workers,
-        progress=progress,
-        on_row=on_row,
-    )
-    trials, walls = [], []
-    for row in table.to_dict("records"):
-        trial = {key: row[key] for key in ("spec", "set", "grasp", "actuation")}
-        trial["object"] = row["name"]
-        if row["status"] == "ok":
-            trial.update({key: row[key] for key in ("spread", *OUTCOMES, *METRICS, "most_loaded_joint", "failure")})
-        else:
-            trial.update(
-                spread=row.get("spread"),
-                success=False,
-                strict_success=False,
-                placed=False,
-                inside_envelope=None,
-                gripped=False,
-                most_loaded_joint=None,
-                failure=row["error"],
-                **dict.fromkeys(METRICS),
-            )
-        trials.append({key: _plain(value) for key, value in trial.items()})
-        walls.append(row["wall_time"])
-    return trials, walls
-
-
-def _plain(value: Any) -> Any:
-    """JSON-ready: numpy scalars to Python, NaN to None."""
-    if hasattr(value, "item"):
-        value = value.item()
-    if isinstance(value, float) and math.isnan(value):
-        return None
-    return value
 
 
 def write_json(trials: list[dict[str, Any]], path: Path) -> None:
@@ -181,6 +98,10 @@ def summary_lines(trials: list[dict[str, Any]], walls: Sequence[float] = (), spr
         if not trial["success"]:
             at = f" at spread {trial['spread']:g} rad" if spreads else ""
             lines.append(f"  {trial['object']} {trial['grasp']} {trial['actuation']}{at}: {trial['failure']}")
+    among = [t for t in trials if t.get("neighbours")]
+    if among:
+        disturbed = int(sum(t["neighbours_disturbed"] or 0 for t in among))
+        lines.append(f"among {among[0]['neighbours']} neighbours each: {disturbed} disturbed (moved over 5 mm) in all")
     if walls:
         lines.append(f"wall time per trial: {min(walls):.1f}-{max(walls):.1f} s")
     return lines
@@ -250,7 +171,32 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
             f"{number('peak_joint_torque', fmt='.2f')} | {number('torque_to_rating', fmt='.2f')} | "
             f"{_mark(t['inside_envelope'])} | {t['failure'] or ''} |"
         )
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + _neighbour_lines(trials)) + "\n"
+
+
+def _neighbour_lines(trials: list[dict[str, Any]]) -> list[str]:
+    """The table of the neighbours each trial disturbed (moved over 5 mm), if the trials ran among neighbours."""
+    among = [t for t in trials if t.get("neighbours")]
+    if not among:
+        return []
+    lines = [
+        "",
+        f"Among neighbours: each trial ran among {among[0]['neighbours']} mixed household-sized objects (seed "
+        f"{among[0]['neighbour_seed']}) dropped and settled on a table flush with its stand "
+        "(`bhgrasp/bench/neighbours.py`); a neighbour moved over 5 mm was disturbed.",
+        "",
+        "| object | grasp | actuation | success | neighbours disturbed | farthest moved [mm] | "
+        "hand's peak on them [N] |",
+        "|---|---|---|---|---:|---:|---:|",
+    ]
+    for t in among:
+        moved, force = _number(t, "max_neighbour_moved", 1e3), _number(t, "peak_neighbour_force")
+        disturbed = "-" if t["neighbours_disturbed"] is None else t["neighbours_disturbed"]
+        lines.append(
+            f"| {t['object']} | {t['grasp']} | {t['actuation']} | {_mark(t['success'])} | {disturbed} | {moved} | "
+            f"{force} |"
+        )
+    return lines
 
 
 def compare(trials: list[dict[str, Any]], reference: list[dict[str, Any]], rel: float = 1e-6) -> list[str]:
@@ -267,7 +213,12 @@ def compare(trials: list[dict[str, Any]], reference: list[dict[str, Any]], rel: 
         if known is None:
             problems.append(f"{key}: not in the reference")
             continue
-        for name in (*OUTCOMES, "most_loaded_joint", "failure"):
+        for name in (
+            *OUTCOMES,
+            "most_loaded_joint",
+            "failure",
+            *(("neighbours_disturbed",) if known.get("neighbours") else ()),
+        ):
             if trial[name] != known[name]:
                 problems.append(f"{key} {name}: {trial[name]!r}, reference {known[name]!r}")
         problems += _metric_problems(trial, known, str(key), rel)
@@ -277,7 +228,8 @@ def compare(trials: list[dict[str, Any]], reference: list[dict[str, Any]], rel: 
 def _metric_problems(trial: dict[str, Any], known: dict[str, Any], key: str, rel: float) -> list[str]:
     """The metrics of ``trial`` off those of ``known`` by more than ``rel`` (relative; 1e-9 absolute)."""
     problems = []
-    for name in METRICS:
+    among = ("max_neighbour_moved", "peak_neighbour_force") if known.get("neighbours") else ()
+    for name in (*METRICS, *among):
         new, old = trial[name], known[name]
         if (new is None) != (old is None) or (new is not None and abs(new - old) > max(rel * abs(old), 1e-9)):
             problems.append(f"{key} {name}: {new!r}, reference {old!r}")
@@ -292,4 +244,4 @@ def _mark(value: bool) -> str:
     return "yes" if value else "no"
 
 
-__all__ = ["bench_rollout", "compare", "distinct", "groups", "markdown", "run_bench", "success_rates", "write_json"]
+__all__ = ["METRICS", "OUTCOMES", "compare", "distinct", "groups", "markdown", "success_rates", "write_json"]

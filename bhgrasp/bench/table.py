@@ -1,9 +1,10 @@
 """The stand under a benchmark object and, for a trial among neighbours, the table around it, flush with its top.
 
 The stand is the object's footprint, :data:`~bhgrasp.bench.height.STAND_HEIGHT` tall, its top the plane z = 0
-(:func:`stand_of`).  :func:`table_around` frames it with four fixed boxes out to :data:`TABLE_REACH` from its axis, so
-that neighbours stand level with the object while the closing fingers still pass beside the stand as the height
-rule (:mod:`~bhgrasp.bench.height`) plans them.  :class:`Clutter` is what a trial among neighbours starts from.
+(:func:`stand_of`).  :func:`table_around` frames it with four fixed boxes out to
+:data:`~bhgrasp.bench.height.TABLE_REACH` from its axis, so that neighbours stand level with the object; the height
+rule then keeps the fingers off the whole table (:mod:`~bhgrasp.bench.height`, ``table=True``), and
+:func:`floor_below` catches what falls off it.  :class:`Clutter` is what a trial among neighbours starts from.
 """
 
 from __future__ import annotations
@@ -13,21 +14,25 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.bench.height import STAND_HEIGHT
+from bhgrasp.bench.height import STAND_HEIGHT, TABLE_REACH
 from bhgrasp.bench.objects import BenchObject
-from bhgrasp.bench.protocol import FRICTION, STAND
-from bhgrasp.model.objects import FixedBox, RigidObject
+from bhgrasp.bench.protocol import APPROACH, FRICTION, STAND
+from bhgrasp.model.objects import FixedBox, Plane, RigidObject
 
-TABLE_REACH = 0.2  # [m] the table reaches this far from the stand's axis along x and y
 TABLE_THICKNESS = 0.02  # [m]
 
 
 @dataclass(frozen=True)
 class Clutter:
-    """A trial's objects where they settled, the trial's object first, and the table around its stand."""
+    """A trial's objects where they settled, the trial's object first; the table around its stand and the floor.
+
+    ``approach`` [m]: how far above its grasp the open hand starts, clear of the neighbours (at least
+    :data:`~bhgrasp.bench.protocol.APPROACH`).
+    """
 
     objects: tuple[RigidObject, ...]
-    table: tuple[FixedBox, ...]
+    table: tuple[FixedBox | Plane, ...]
+    approach: float = APPROACH
 
 
 def stand_of(item: BenchObject) -> FixedBox:
@@ -55,4 +60,9 @@ def table_around(item: BenchObject) -> tuple[FixedBox, ...]:
     )
 
 
-__all__ = ["TABLE_REACH", "TABLE_THICKNESS", "Clutter", "stand_of", "table_around"]
+def floor_below() -> Plane:
+    """The floor under the stand's foot (z = -STAND_HEIGHT), where a neighbour pushed off the table lands."""
+    return Plane(offset=-STAND_HEIGHT, friction=FRICTION, name="floor")
+
+
+__all__ = ["TABLE_THICKNESS", "Clutter", "floor_below", "stand_of", "table_around"]

@@ -72,20 +72,26 @@ def contact_law() -> SpringDamper:
     )
 
 
-def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None):
+def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None, start_check: str | None = None):
     """The simulator, its start state, the mounted hand and the wrist path of a trial.
 
-    ``clutter``: the object where it settled and its neighbours on the table around its stand
-    (:mod:`~bhgrasp.bench.neighbours`); default: the object alone on its stand.
+    ``clutter``: the object where it settled and its neighbours on the table around its stand, and how high over
+    them the hand starts (:mod:`~bhgrasp.bench.neighbours`); default: the object alone on its stand.
+
+    ``start_check``: the simulator's (default: ``"warn"`` alone, ``"error"`` among neighbours).
+
+    Raises:
+        InputError: Among neighbours, a start that interpenetrates (e.g. a low object's fingers inside the table).
     """
     item = trial.item
     top = 2 * item.half_extents[2]
     spread = trial.preshape_spread
-    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE)  # one rule for both grasps (bench.height)
+    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)  # one rule for both grasps
     grasp_height = top + clearance + hand_depth(spread, PRESHAPE)  # the hand base
     rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
     offset = np.array([0.0, grasp_offset(item, spread, clearance, PRESHAPE), 0.0])
-    base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + APPROACH]) - rotation @ offset)  # fingers together
+    approach = APPROACH if clutter is None else clutter.approach  # [m] the open hand starts this far above
+    base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + approach]) - rotation @ offset)  # fingers together
     hand = mounted(bh.BarrettHand(base_placement=base))
     pedestal = stand_of(item)
     if clutter is None:
@@ -96,12 +102,13 @@ def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None):
         actuation = BarrettActuation(hand, saturate=True)
     else:  # the same motors' damping on each joint, reflected as through the worms (bench.protocol)
         actuation = FullyActuated(hand, damping=idealised_damping(hand))
-    simulator = Simulator(scene, dt=dt, contact=contact_law(), actuation=actuation)
+    check = start_check or ("warn" if clutter is None else "error")  # among neighbours: no trial from inside
+    simulator = Simulator(scene, dt=dt, contact=contact_law(), actuation=actuation, start_check=check)
     q = hand.neutral()
     for finger in hand.fingers:
         q[hand.joint_index(f"{finger}_proximal")], q[hand.joint_index(f"{finger}_distal")] = PRESHAPE, PRESHAPE / 3
     q[[hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]] = spread
-    down, up = np.array([0, 0, -APPROACH, 0, 0, 0]), np.array([0, 0, LIFT, 0, 0, 0])
+    down, up = np.array([0, 0, -approach, 0, 0, 0]), np.array([0, 0, LIFT, 0, 0, 0])
     shake = 6 * SHAKE_TIME
     moves = [
         (down, CLOSE_AT),

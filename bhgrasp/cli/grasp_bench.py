@@ -62,6 +62,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="run every trial at this pre-shape spread [rad, 0 to pi] instead of its grasp's own (0 for boxes, "
         "pi/3 for spheres and cylinders); repeatable",
     )
+    add(
+        "--neighbours",
+        type=checked.positive_int,
+        default=0,
+        metavar="N",
+        help="run each trial among N mixed household-sized objects dropped and settled on a table flush with its "
+        "stand; the report counts the neighbours each trial disturbed (moved over 5 mm) (default: alone)",
+    )
+    add("--neighbour-seed", type=checked.seed, default=0, metavar="S", help="seed of the neighbours")
     add("--json", type=checked.output_file, default=None, help="write the trials here")
     add("--report", type=checked.output_file, default=None, help="write the markdown report")
     add(
@@ -75,7 +84,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the trials, print the summary, write JSON and report; with ``--compare``, status 1 on a difference."""
-    from bhgrasp.bench import report
+    from bhgrasp.bench import report, runs
     from bhgrasp.bench.objects import SETS as OBJECT_SETS
 
     names = list(dict.fromkeys(args.sets or [])) if args.sets or args.objects else list(OBJECT_SETS)
@@ -86,8 +95,16 @@ def run(args: argparse.Namespace) -> int:
     count = len(objects) * len(grasps) * len(actuations) * len(args.spreads or [None])
     print(f"grasp benchmark: {count} trials ({len(objects)} objects x {grasps} x {actuations}{spreads}), 18 s each ...")
     lines = TrialLines(count)
-    trials, walls = report.run_bench(
-        objects, grasps, actuations, workers=args.workers, spreads=args.spreads, sets=sets, on_row=lines.print
+    trials, walls = runs.run_bench(
+        objects,
+        grasps,
+        actuations,
+        workers=args.workers,
+        spreads=args.spreads,
+        sets=sets,
+        on_row=lines.print,
+        neighbours=args.neighbours,
+        neighbour_seed=args.neighbour_seed,
     )
     print("\n".join(report.summary_lines(trials, walls, spreads=bool(args.spreads))))
     if args.json is not None:
@@ -110,7 +127,7 @@ class TrialLines:
         self.total, self.done = total, 0
 
     def print(self, row: dict) -> None:
-        """The line of a finished sweep row (:func:`bhgrasp.bench.report.run_bench`'s ``on_row``)."""
+        """The line of a finished sweep row (:func:`bhgrasp.bench.runs.run_bench`'s ``on_row``)."""
         self.done += 1
         print(self.line(row), flush=True)
 
@@ -136,6 +153,7 @@ def command(args: argparse.Namespace) -> str:
         *(f"--grasp {grasp}" for grasp in args.grasps or []),
         *(f"--actuation {actuation}" for actuation in args.actuations or []),
         *(f"--spread {spread:g}" for spread in args.spreads or []),
+        *([f"--neighbours {args.neighbours} --neighbour-seed {args.neighbour_seed}"] if args.neighbours else []),
     ]
     parts += [f"--{name} {getattr(args, name)}" for name in ("json", "report") if getattr(args, name) is not None]
     return " ".join(parts)
