@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pickle
+from dataclasses import replace
 
 import numpy as np
 import pinocchio as pin
@@ -111,17 +112,19 @@ def test_object_drag_decays_velocity_as_the_implicit_step_does(engine):
         state, _ = simulator.step(state, u)
     expected = np.asarray(ball.velocity) / (1.0 + drag * dt) ** steps
     assert np.allclose(state.object_twists[0], expected, rtol=1e-9, atol=1e-12)
-    undamped = Simulator(Scene(hand, [ball]), dt=dt, engine=engine)
-    state = undamped.initial_state()
+    other = replace(ball, pose=pin.SE3(np.eye(3), np.array([0.0, 0.5, 1.0])), mass=0.2)  # apart: no contact
+    per_object = Simulator(Scene(hand, [ball, other], object_drag=(0.0, drag)), dt=dt, engine=engine)
+    state = per_object.initial_state()
     for _ in range(steps):
-        state, _ = undamped.step(state, u)
-    assert np.allclose(state.object_twists[0], ball.velocity, rtol=1e-12, atol=1e-12)
+        state, _ = per_object.step(state, u)
+    assert np.allclose(state.object_twists[0], ball.velocity, rtol=1e-12, atol=1e-12)  # no drag on the first
+    assert np.allclose(state.object_twists[1], expected, rtol=1e-9, atol=1e-12)
 
 
 def test_scene_keeps_its_drag_through_pickling():
     scene = Scene(bh.BarrettHand(), [Box(size=(0.05, 0.04, 0.03), mass=0.3)], [table()], object_drag=2.0)
     copy = pickle.loads(pickle.dumps(scene))
-    assert copy.object_drag == 2.0 and np.array_equal(copy.joint_damping, scene.joint_damping)
+    assert copy.object_drag == (2.0,) and np.array_equal(copy.joint_damping, scene.joint_damping)
     assert np.allclose(scene.joint_damping[scene.nv_hand :][:3], 0.6)
 
 
@@ -143,6 +146,7 @@ def test_a_pile_without_time_to_settle_says_which_objects_move():
         (lambda: drop_pile(mixed_objects(2, seed=1), [table()], (0, 0, 0.05, 0.05)), "`region`"),
         (lambda: drop_pile(mixed_objects(2, seed=1), [table()], REGION, max_time=0), "`max_time`"),
         (lambda: Scene(bh.BarrettHand(), [], object_drag=-1.0), "`object_drag`"),
+        (lambda: Scene(bh.BarrettHand(), [Sphere(radius=0.02, mass=0.1)], object_drag=(1.0, 2.0)), "one rate per"),
     ],
 )
 def test_bad_input_is_named(call, message):

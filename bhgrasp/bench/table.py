@@ -18,8 +18,14 @@ from bhgrasp.bench.height import STAND_HEIGHT, TABLE_REACH
 from bhgrasp.bench.objects import BenchObject
 from bhgrasp.bench.protocol import APPROACH, FRICTION, STAND
 from bhgrasp.model.objects import FixedBox, Plane, RigidObject
+from bhgrasp.scenarios.clutter import DRAG
 
 TABLE_THICKNESS = 0.02  # [m]
+# [1/s] the neighbours' drag in a trial (Scene.object_drag; the object's is zero): a stand-in for the rolling
+# resistance point contacts lack, without which a capsule or ball left resting against another rolls off on a force
+# of millinewtons (measured: a capsule crept 10 mm in 18 s with no hand near it); it opposes a push of the hand with
+# 0.1 N at 0.1 m/s for 0.2 kg
+NEIGHBOUR_DRAG = DRAG
 
 
 @dataclass(frozen=True)
@@ -65,4 +71,4 @@ def floor_below() -> Plane:
     return Plane(offset=-STAND_HEIGHT, friction=FRICTION, name="floor")
 
 
-__all__ = ["TABLE_THICKNESS", "Clutter", "floor_below", "stand_of", "table_around"]
+__all__ = ["NEIGHBOUR_DRAG", "TABLE_THICKNESS", "Clutter", "floor_below", "stand_of", "table_around"]

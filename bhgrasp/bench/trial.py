@@ -34,7 +34,7 @@ from bhgrasp.bench.protocol import (
     Trial,
 )
 from bhgrasp.bench.reach import hand_depth
-from bhgrasp.bench.table import Clutter, stand_of
+from bhgrasp.bench.table import NEIGHBOUR_DRAG, Clutter, stand_of
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.model.mount import mounted
 from bhgrasp.motion.pose_references import PosePath
@@ -97,7 +97,8 @@ def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None, start_ch
     if clutter is None:
         scene = Scene(hand, [item.body(FRICTION)], environment=[pedestal])
     else:
-        scene = Scene(hand, clutter.objects, environment=[pedestal, *clutter.table])
+        drag = (0.0, *[NEIGHBOUR_DRAG] * (len(clutter.objects) - 1))  # no rolling on forever of a neighbour
+        scene = Scene(hand, clutter.objects, environment=[pedestal, *clutter.table], object_drag=drag)
     if trial.actuation == "barrett":
         actuation = BarrettActuation(hand, saturate=True)
     else:  # the same motors' damping on each joint, reflected as through the worms (bench.protocol)

@@ -37,7 +37,7 @@ class Scene:
         objects: Sequence[RigidObject | SpringMounted] = (),
         environment: Sequence[Environment] = (),
         environment_touches_hand: bool = True,
-        object_drag: float = 0.0,
+        object_drag: float | Sequence[float] = 0.0,
     ) -> None:
         """Assemble the scene.
 
@@ -49,15 +49,16 @@ class Scene:
             environment_touches_hand: Whether the environment also stops the hand's moving links (a table under a
                 closing finger); :class:`~bhgrasp.grasp.sensing.ContactSensing` reads object contacts only (body a a
                 hand link), the BH8-280's sensors (:mod:`bhgrasp.barrett.sensors`) both.
-            object_drag: A viscous drag rate d [1/s] on every free object, stepped implicitly with the joint
-                damping: -d m v on its centre's velocity, -d I_ii w_i about its principal axes (a pile settling,
-                :mod:`bhgrasp.scenarios.clutter`); 0 (the default) adds none.
+            object_drag: A viscous drag rate d [1/s] on every free object, or one rate per object, stepped
+                implicitly with the joint damping: -d m v on its centre's velocity, -d I_ii w_i about its principal
+                axes (a pile settling, :mod:`bhgrasp.scenarios.clutter`; a stand-in for the rolling resistance point
+                contacts lack); 0 (the default) adds none.
         """
         self.hand = hand
         self.objects = tuple(objects)
         self.environment = tuple(environment)
         self.environment_touches_hand = bool(environment_touches_hand)
-        self.object_drag = as_real(object_drag, "object_drag")
+        self.object_drag = _drag_rates(object_drag, len(self.objects))
         for i, item in enumerate(self.objects):
             if not isinstance(item, RigidObject | SpringMounted):
                 raise InputError(f"`objects[{i}]` must be a RigidObject or SpringMounted, got {type(item).__name__}")
@@ -79,7 +80,7 @@ class Scene:
         self.object_joints: list[int] = []  # the joint carrying each object's body (its spherical joint)
         self._object_root: list[int] = []  # the object's first joint (its translation joint when free)
         stiffness, damping = [], []
-        for name, item in zip(self.object_names, self.objects):
+        for name, item, drag in zip(self.object_names, self.objects, self.object_drag):
             root, joint = self._add_object(name, item)
             self._object_root.append(root)
             self.object_joints.append(joint)
@@ -88,7 +89,7 @@ class Scene:
                 damping.append(item.damping)
             else:
                 stiffness += [0.0] * 6
-                damping += list(self.object_drag * np.concatenate(([item.mass] * 3, np.diag(item.inertia))))
+                damping += list(drag * np.concatenate(([item.mass] * 3, np.diag(item.inertia))))
         self._q_slices, self._v_slices = [], []  # read every step: looked up in the model once
         for root, joint in zip(self._object_root, self.object_joints):
             first, body = self.model.joints[root], self.model.joints[joint]
@@ -278,6 +279,16 @@ def _placed_copy(model: pin.Model, placement: pin.SE3) -> pin.Model:
         base.mass, placement.act(base.lever), placement.rotation @ base.inertia @ placement.rotation.T
     )
     return placed
+
+
+def _drag_rates(value: float | Sequence[float], count: int) -> tuple[float, ...]:
+    """``object_drag`` as one rate [1/s] >= 0 per object."""
+    if np.ndim(value) == 0:
+        return (as_real(value, "object_drag"),) * count
+    rates = tuple(as_real(rate, f"object_drag[{i}]") for i, rate in enumerate(value))
+    if len(rates) != count:
+        raise InputError(f"`object_drag` must hold one rate per object ({count}), got {len(rates)}")
+    return rates
 
 
 def _unique_names(names: Sequence[str | None], kind: str) -> list[str]:
