@@ -69,11 +69,21 @@ def as_positive(value: Any, name: str) -> float:
     return number
 
 
-def as_count(value: Any, name: str, least: int = 1) -> int:
-    """Return ``value`` as an int >= ``least`` (a bool is refused)."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
-        raise InputError(f"`{name}` must be an integer >= {least}, got {value!r}")
+def as_int(value: Any, name: str, minimum: int) -> int:
+    """``value`` as an int >= ``minimum`` (bools and non-integral numbers are rejected)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise InputError(f"`{name}` must be an int >= {minimum}, got {value!r}")
     return int(value)
+
+
+def as_rates(value: Any, name: str, count: int) -> tuple[float, ...]:
+    """``value`` (one number, or one per item) as ``count`` finite floats >= 0."""
+    if np.ndim(value) == 0:
+        return (as_real(value, name),) * count
+    rates = tuple(as_real(rate, f"{name}[{i}]") for i, rate in enumerate(value))
+    if len(rates) != count:
+        raise InputError(f"`{name}` must hold one rate per item ({count}), got {len(rates)}")
+    return rates
 
 
 def as_real(value: Any, name: str, nonnegative: bool = True) -> float:

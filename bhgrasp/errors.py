@@ -70,9 +70,10 @@ class NotSettled(BhgraspError, RuntimeError):
     def __init__(self, time: float, speeds: dict[str, float], rest_speed: float) -> None:
         moving = {name: speed for name, speed in speeds.items() if speed >= rest_speed}
         listed = ", ".join(f"{name} {speed:.3g} m/s" for name, speed in sorted(moving.items(), key=lambda i: -i[1]))
+        now = f"still moving faster than {rest_speed:.3g} m/s: {listed}" if moving else "all slower just now"
         super().__init__(
-            f"the objects did not settle in {time:.3g} s: still moving faster than {rest_speed:.3g} m/s: {listed}; "
-            "allow more time (`max_time`) or drop them lower"
+            f"the objects did not settle in {time:.3g} s (at rest: every one slower than {rest_speed:.3g} m/s for "
+            f"`rest_time`): {now}; allow more time (`max_time`) or drop them lower"
         )
         self.time = time
         self.speeds = speeds

@@ -11,7 +11,6 @@ import pytest
 import bhgrasp as bh
 from bhgrasp.bench.height import STAND_HEIGHT, TABLE_REACH, grasp_clearance, stand_clearance
 from bhgrasp.bench.neighbours import (
-    DISTURBED,
     RAISE,
     neighbour_displacements,
     peak_force_on,
@@ -19,7 +18,7 @@ from bhgrasp.bench.neighbours import (
     settle_neighbours,
 )
 from bhgrasp.bench.objects import BenchObject
-from bhgrasp.bench.protocol import APPROACH, CLOSE_AT, FRICTION, HELD_AT, PRESHAPE, STIFFNESS, Trial
+from bhgrasp.bench.protocol import APPROACH, CLOSE_AT, DISTURBED, FRICTION, HELD_AT, PRESHAPE, STIFFNESS, Trial
 from bhgrasp.bench.table import Clutter, floor_below, stand_of, table_around
 from bhgrasp.bench.trial import setup, shake_force, simulate_trial
 from bhgrasp.errors import InputError, UnreachableError
@@ -29,6 +28,7 @@ from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
 
 CAN = Trial(BenchObject.parse("cylinder:0.033x0.1:0.35"), "power")
+CAN_ON_TABLE = dataclasses.replace(CAN, table=True)  # its height is the same with the table (checked below)
 
 
 def test_the_table_frames_the_stand_flush_with_its_top():
@@ -68,8 +68,12 @@ def test_far_neighbours_leave_the_grasp_as_alone_and_only_sink_into_the_table():
     ]
     clutter = Clutter((CAN.item.body(FRICTION), *far), (*table_around(CAN.item), floor_below()))
     duration = CLOSE_AT + 1.0
+    alone_hand, table_hand = setup(CAN)[2], setup(CAN_ON_TABLE, clutter=clutter)[2]  # the hand starts at one place
+    assert np.array_equal(alone_hand.base_placement.homogeneous, table_hand.base_placement.homogeneous)
     alone, _ = simulate_trial(CAN, duration=duration)
-    among, _ = simulate_trial(CAN, duration=duration, clutter=clutter)
+    among, _ = simulate_trial(CAN_ON_TABLE, duration=duration, clutter=clutter)
+    with pytest.raises(InputError, match=r"Trial\(\.\.\., table=True\)"):
+        setup(CAN, clutter=clutter)
     # the same run up to round-off amplified by stick-slip (measured 25 um through the lift)
     assert np.max(np.abs(among.object_position[:, 0] - alone.object_position[:, 0])) < 1e-4
     assert np.allclose(neighbour_displacements(among), 0.2 * 9.81 / STIFFNESS, rtol=0.01)
@@ -77,12 +81,12 @@ def test_far_neighbours_leave_the_grasp_as_alone_and_only_sink_into_the_table():
 
 def test_a_neighbour_in_a_fingers_path_is_disturbed():
     """A post 2 cm under F3's fingertip: the hand's 5 cm descent must push it away."""
-    _, state, hand, _ = setup(CAN)
+    _, state, hand, _ = setup(CAN_ON_TABLE)
     x, y, z = hand.fingertip_positions(state.q)[hand.fingers.index("F3")]
     height = z - 0.02
     post = Box(size=(0.02, 0.02, height), mass=0.2, pose=pin.SE3(np.eye(3), np.array([x, y, height / 2])), name="post")
     clutter = Clutter((CAN.item.body(FRICTION), post), (*table_around(CAN.item), floor_below()))
-    trajectory, hand = simulate_trial(CAN, duration=CLOSE_AT + 0.5, clutter=clutter)
+    trajectory, hand = simulate_trial(CAN_ON_TABLE, duration=CLOSE_AT + 0.5, clutter=clutter)
     assert neighbour_displacements(trajectory)[0] > DISTURBED
     assert peak_force_on(trajectory, hand, ["post"]) > 1.0 and peak_force_on(trajectory, hand, ["none"]) == 0.0
 
@@ -146,5 +150,5 @@ def test_the_shake_pushes_only_the_trials_object():
 
 
 def test_bad_neighbour_count_is_named():
-    with pytest.raises(InputError, match="`count` must be an integer >= 1"):
+    with pytest.raises(InputError, match="`count` must be an int >= 1"):
         settle_neighbours(CAN, 0, seed=1)

@@ -178,6 +178,11 @@ def test_bad_arguments_are_named_by_their_flag_before_anything_runs(
     assert not Path("/nonexistent").exists()
 
 
+def test_a_neighbour_seed_needs_neighbours(capsys: pytest.CaptureFixture) -> None:
+    assert main(["grasp-bench", "--neighbour-seed", "3"]) == 2
+    assert "--neighbour-seed 3 seeds neighbours: give their number, --neighbours N" in capsys.readouterr().err
+
+
 def test_help_shows_the_defaults(capsys: pytest.CaptureFixture) -> None:
     with pytest.raises(SystemExit):
         main(["demo", "--help"])

@@ -13,7 +13,7 @@ writes their JSON and markdown report (``bhgrasp grasp-bench``).
 from bhgrasp.bench.closing import finger_starts
 from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN, TABLE_REACH, grasp_clearance, stand_clearance
 from bhgrasp.bench.metrics import contact_summary, evaluate, failure_reason, held_forces, least_grip, relative_poses
-from bhgrasp.bench.neighbours import DISTURBED, neighbour_displacements, run_among_neighbours, settle_neighbours
+from bhgrasp.bench.neighbours import neighbour_displacements, run_among_neighbours, settle_neighbours
 from bhgrasp.bench.objects import DEVELOPMENT_SET, HELD_OUT_SET, HELD_OUT_SET_2, KINDS, OBJECT_SET, SETS, BenchObject
 from bhgrasp.bench.placement import closing_planes_meet, grasp_offset
 from bhgrasp.bench.protocol import (
@@ -21,6 +21,7 @@ from bhgrasp.bench.protocol import (
     APPROACH,
     CLOSE_AT,
     DIRECTIONS,
+    DISTURBED,
     DROP,
     DT,
     FORCE_LIMIT,

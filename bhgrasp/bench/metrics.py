@@ -29,6 +29,7 @@ from bhgrasp.bench.protocol import (
     STRICT,
     Trial,
 )
+from bhgrasp.bench.table import supports
 from bhgrasp.model.hand import STANDARD_GRAVITY
 
 GRAVITY = -STANDARD_GRAVITY[2]  # [m/s^2] the simulated hand's (bhgrasp.model.hand)
@@ -71,7 +72,7 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
         "height_found": grasp_clearance(trial.item, trial.preshape_spread, trial.grasp, PRESHAPE, table=trial.table)
         is not None,
     }
-    record.update(contact_summary(trajectory, hand, held, shaken))
+    record.update(contact_summary(trajectory, hand, held, shaken, supports(trial)))
     record.update(joint_load(trajectory, hand))
     forces = held_forces(trajectory, hand, held)
     record.update({f"held_force_{finger}": float(f) for finger, f in zip(hand.fingers, forces)})
@@ -139,16 +140,19 @@ def relative_poses(hand: bh.Hand, trajectory) -> tuple[np.ndarray, np.ndarray]:
     return np.array(positions), np.array(rotations)
 
 
-def contact_summary(trajectory, hand: bh.Hand, held: int, shaken: int) -> dict:
+def contact_summary(
+    trajectory, hand: bh.Hand, held: int, shaken: int, stand: frozenset[str] = frozenset({STAND})
+) -> dict:
     """The hand's peak force [N] on the object, its sliding contact samples while held, its peak force on the stand.
 
     Contacts of a hand link (body a) on the object (body b) count, not the stand's; "held" is the lift's end to the
-    shake's end.
+    shake's end.  ``stand``: the bodies the hand may press instead (the stand; among neighbours the table too,
+    :func:`~bhgrasp.bench.table.supports`).
     """
     links = {frame.name for frame in hand.model.frames}
     bodies = trajectory.pair_bodies[trajectory.contact_pair]
     on_object = np.array([a in links and b == trajectory.object_names[0] for a, b in bodies], dtype=bool)
-    on_stand = np.array([STAND in (a, b) and (a in links or b in links) for a, b in bodies], dtype=bool)
+    on_stand = np.array([(a in stand or b in stand) and (a in links or b in links) for a, b in bodies], dtype=bool)
     magnitudes = np.linalg.norm(trajectory.contact_force, axis=1)
     forces = magnitudes * on_object
     rows = slice(trajectory.contact_offsets[held], trajectory.contact_offsets[shaken + 1])

@@ -100,6 +100,7 @@ LOOSE, STRICT = (0.05, math.radians(15.0)), (0.01, math.radians(5.0))  # [m], [r
 # than its rating (the URDF's effort limit: the pucks' MT through ideal gears), needed what the hand cannot give
 FORCE_LIMIT = 2 * 25.0  # [N]
 STAND = "pedestal"  # the stand's body name
+DISTURBED = 0.005  # [m] among neighbours (bench.neighbours): one moved further than this from where it settled
 
 
 @dataclass(frozen=True)
@@ -120,6 +121,8 @@ class Trial:
             raise InputError(f"`grasp` must be one of {GRASPS}, got {self.grasp!r}")
         if self.actuation not in ACTUATIONS:
             raise InputError(f"`actuation` must be one of {ACTUATIONS}, got {self.actuation!r}")
+        if not isinstance(self.table, bool):
+            raise InputError(f"`table` must be True or False, got {self.table!r}")
         if self.spread is not None and not (math.isfinite(self.spread) and 0.0 <= self.spread <= math.pi):
             raise InputError(f"`spread` must be in [0, pi] rad (the BH8-280's spread range), got {self.spread!r}")
 
@@ -143,6 +146,7 @@ __all__ = [
     "APPROACH",
     "CLOSE_AT",
     "DIRECTIONS",
+    "DISTURBED",
     "DROP",
     "DT",
     "FRICTION",

@@ -16,7 +16,7 @@ import pinocchio as pin
 
 from bhgrasp.bench.height import STAND_HEIGHT, TABLE_REACH
 from bhgrasp.bench.objects import BenchObject
-from bhgrasp.bench.protocol import APPROACH, FRICTION, STAND
+from bhgrasp.bench.protocol import APPROACH, FRICTION, STAND, Trial
 from bhgrasp.model.objects import FixedBox, Plane, RigidObject
 from bhgrasp.scenarios.clutter import DRAG
 
@@ -26,6 +26,7 @@ TABLE_THICKNESS = 0.02  # [m]
 # of millinewtons (measured: a capsule crept 10 mm in 18 s with no hand near it); it opposes a push of the hand with
 # 0.1 N at 0.1 m/s for 0.2 kg
 NEIGHBOUR_DRAG = DRAG
+TABLE_PARTS = ("table -x", "table +x", "table -y", "table +y")  # the names of table_around's boxes
 
 
 @dataclass(frozen=True)
@@ -58,12 +59,17 @@ def table_around(item: BenchObject) -> tuple[FixedBox, ...]:
         size = (x[1] - x[0], y[1] - y[0], TABLE_THICKNESS)
         return FixedBox(size=size, pose=pin.SE3(np.eye(3), centre), friction=FRICTION, name=name)
 
-    return (
-        box("table -x", (-reach, -hx), (-reach, reach)),
-        box("table +x", (hx, reach), (-reach, reach)),
-        box("table -y", (-hx, hx), (-reach, -hy)),
-        box("table +y", (-hx, hx), (hy, reach)),
-    )
+    spans = [((-reach, -hx), (-reach, reach)), ((hx, reach), (-reach, reach)), ((-hx, hx), (-reach, -hy))]
+    spans.append(((-hx, hx), (hy, reach)))
+    return tuple(box(name, x, y) for name, (x, y) in zip(TABLE_PARTS, spans))
+
+
+def supports(trial: Trial) -> frozenset[str]:
+    """What the object stands on: the stand, and with ``trial.table`` the table around it.
+
+    A finger pressing any of them counts as pressing the stand (:func:`~bhgrasp.bench.metrics.contact_summary`).
+    """
+    return frozenset({STAND, *(TABLE_PARTS if trial.table else ())})
 
 
 def floor_below() -> Plane:
@@ -71,4 +77,13 @@ def floor_below() -> Plane:
     return Plane(offset=-STAND_HEIGHT, friction=FRICTION, name="floor")
 
 
-__all__ = ["NEIGHBOUR_DRAG", "TABLE_THICKNESS", "Clutter", "floor_below", "stand_of", "table_around"]
+__all__ = [
+    "NEIGHBOUR_DRAG",
+    "TABLE_PARTS",
+    "TABLE_THICKNESS",
+    "Clutter",
+    "floor_below",
+    "stand_of",
+    "supports",
+    "table_around",
+]

@@ -29,13 +29,13 @@ from bhgrasp.bench.protocol import (
     PRESHAPE,
     RELEASE,
     SHAKE_TIME,
-    STAND,
     STIFFNESS,
     Trial,
 )
 from bhgrasp.bench.reach import hand_depth
-from bhgrasp.bench.table import NEIGHBOUR_DRAG, Clutter, stand_of
+from bhgrasp.bench.table import NEIGHBOUR_DRAG, Clutter, stand_of, supports
 from bhgrasp.controllers.mount import MountServo
+from bhgrasp.errors import InputError
 from bhgrasp.model.mount import mounted
 from bhgrasp.motion.pose_references import PosePath
 from bhgrasp.motion.trajectories import Reference, Sample
@@ -81,8 +81,11 @@ def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None, start_ch
     ``start_check``: the simulator's (default: ``"warn"`` alone, ``"error"`` among neighbours).
 
     Raises:
-        InputError: Among neighbours, a start that interpenetrates (e.g. a low object's fingers inside the table).
+        InputError: Among neighbours, a start that interpenetrates (e.g. a low object's fingers inside the table), or
+            a trial without ``table``.
     """
+    if clutter is not None and not trial.table:
+        raise InputError("a trial among neighbours stands flush with a table: give it as Trial(..., table=True)")
     item = trial.item
     top = 2 * item.half_extents[2]
     spread = trial.preshape_spread
@@ -161,6 +164,7 @@ class BenchController:
         self.place_from = HELD_AT + 6 * SHAKE_TIME  # the place's descent starts
         self.place_at = self.place_from + 1.0  # open here, or where the stand takes the object's weight first
         self.set_down = 0.5 * trial.item.mass * GRAVITY  # [N] the stand's push that ends the descent
+        self.stand = supports(trial)  # the stand, and the table around it among neighbours
         self.log: dict = {}
         mt = GRIP_MT  # the force-limited close, in both grasps
         self.starts = finger_starts(trial)  # [s] after CLOSE_AT: all 0 but on the closing planes (bench.closing)
@@ -183,7 +187,7 @@ class BenchController:
 
         What a wrist force sensor feels when the held load meets the stand, whichever touches it first.
         """
-        pushes = [f for f, pair in zip(state.contact_forces, state.contact_bodies) if STAND in pair]
+        pushes = [f for f, pair in zip(state.contact_forces, state.contact_bodies) if self.stand & set(pair)]
         return float(np.sum(pushes, axis=0)[2]) >= self.set_down if pushes else False
 
     def reset(self, state: bh.State) -> None:

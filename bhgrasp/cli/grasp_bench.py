@@ -70,7 +70,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="run each trial among N mixed household-sized objects dropped and settled on a table flush with its "
         "stand; the report counts the neighbours each trial disturbed (moved over 5 mm) (default: alone)",
     )
-    add("--neighbour-seed", type=checked.seed, default=0, metavar="S", help="seed of the neighbours")
+    add("--neighbour-seed", type=checked.seed, default=None, metavar="S", help="seed of the neighbours (default 0)")
     add("--json", type=checked.output_file, default=None, help="write the trials here")
     add("--report", type=checked.output_file, default=None, help="write the markdown report")
     add(
@@ -85,6 +85,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the trials, print the summary, write JSON and report; with ``--compare``, status 1 on a difference."""
     from bhgrasp.bench import report, runs
+    from bhgrasp.errors import InputError
+
+    if args.neighbour_seed is not None and not args.neighbours:
+        raise InputError(f"--neighbour-seed {args.neighbour_seed} seeds neighbours: give their number, --neighbours N")
+    seed = args.neighbour_seed or 0
     from bhgrasp.bench.objects import SETS as OBJECT_SETS
 
     names = list(dict.fromkeys(args.sets or [])) if args.sets or args.objects else list(OBJECT_SETS)
@@ -104,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
         sets=sets,
         on_row=lines.print,
         neighbours=args.neighbours,
-        neighbour_seed=args.neighbour_seed,
+        neighbour_seed=seed,
     )
     print("\n".join(report.summary_lines(trials, walls, spreads=bool(args.spreads))))
     if args.json is not None:
@@ -153,7 +158,7 @@ def command(args: argparse.Namespace) -> str:
         *(f"--grasp {grasp}" for grasp in args.grasps or []),
         *(f"--actuation {actuation}" for actuation in args.actuations or []),
         *(f"--spread {spread:g}" for spread in args.spreads or []),
-        *([f"--neighbours {args.neighbours} --neighbour-seed {args.neighbour_seed}"] if args.neighbours else []),
+        *([f"--neighbours {args.neighbours} --neighbour-seed {args.neighbour_seed or 0}"] if args.neighbours else []),
     ]
     parts += [f"--{name} {getattr(args, name)}" for name in ("json", "report") if getattr(args, name) is not None]
     return " ".join(parts)

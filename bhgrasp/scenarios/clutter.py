@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_count, as_generator, as_positive, as_real, as_vector
+from bhgrasp._validation import as_generator, as_int, as_positive, as_real, as_vector
 from bhgrasp.data import State
 from bhgrasp.errors import InputError, NotSettled
 from bhgrasp.model.barrett_hand import BarrettHand
@@ -78,7 +78,7 @@ def mixed_objects(n: int, seed: Any, friction: float = 0.8) -> list[RigidObject]
     Named ``"{kind}{i}"``; placed at the origin (:func:`drop_pile` places them).  ``seed``: an integer or a numpy
     Generator.
     """
-    n = as_count(n, "n")
+    n = as_int(n, "n", 1)
     rng = as_generator(seed, "seed")
     friction = as_real(friction, "friction")
     kinds = list(SIZES)
@@ -138,9 +138,9 @@ def drop_poses(
     """Drop poses over ``region`` = (x_min, y_min, x_max, y_max) [m], from ``floor`` [m] up.
 
     Each object in turn: up to :data:`TRIES` positions drawn uniformly over the region at the lowest layer, its
-    bounding sphere :data:`GAP` above ``floor``; the first whose sphere clears (by GAP) every sphere placed before and
-    every ``keep_out`` object's is taken, else the next layer up (one largest bounding diameter + GAP higher) is
-    tried.  Turned at random (uniform on SO(3)).
+    bounding sphere :data:`GAP` above ``floor``; the first whose sphere clears (by GAP) every sphere placed before,
+    and in x, y every ``keep_out`` object's (nothing is dropped above one), is taken, else the next layer up (one
+    largest bounding diameter + GAP higher) is tried.  Turned at random (uniform on SO(3)).
     """
     region = as_vector(region, "region", 4)
     radii = [item.bounding_radius for item in objects]
@@ -150,7 +150,8 @@ def drop_poses(
             "object's bounding diameter"
         )
     layer_height = 2.0 * max(radii) + GAP
-    spheres = [(item.pose.translation, item.bounding_radius) for item in keep_out]
+    columns = [(item.pose.translation[:2], item.bounding_radius) for item in keep_out]
+    spheres: list[tuple[np.ndarray, float]] = []
     poses = []
     for radius in radii:
         low, high = region[:2] + radius, region[2:] - radius
@@ -159,7 +160,8 @@ def drop_poses(
             z = floor + GAP + radius + layer * layer_height
             for _ in range(TRIES):
                 trial = np.array([*rng.uniform(low, high), z])
-                if all(np.linalg.norm(trial - c) >= r + radius + GAP for c, r in spheres):
+                clear = all(np.linalg.norm(trial[:2] - c) >= r + radius + GAP for c, r in columns)
+                if clear and all(np.linalg.norm(trial - c) >= r + radius + GAP for c, r in spheres):
                     centre = trial
                     break
             if centre is not None:

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp._validation import as_real
+from bhgrasp._validation import as_rates
 from bhgrasp.errors import InputError
 from bhgrasp.model.hand import Hand
 from bhgrasp.model.objects import FixedBox, Plane, RigidObject
@@ -50,15 +50,15 @@ class Scene:
                 closing finger); :class:`~bhgrasp.grasp.sensing.ContactSensing` reads object contacts only (body a a
                 hand link), the BH8-280's sensors (:mod:`bhgrasp.barrett.sensors`) both.
             object_drag: A viscous drag rate d [1/s] on every free object, or one rate per object, stepped
-                implicitly with the joint damping: -d m v on its centre's velocity, -d I_ii w_i about its principal
-                axes (a pile settling, :mod:`bhgrasp.scenarios.clutter`; a stand-in for the rolling resistance point
-                contacts lack); 0 (the default) adds none.
+                implicitly with the joint damping: -d m v on its centre's velocity, -d I_ii w_i about its body axes
+                (a primitive's principal axes); for a pile settling (:mod:`bhgrasp.scenarios.clutter`), a stand-in
+                for the rolling resistance point contacts lack; 0 (the default) adds none.
         """
         self.hand = hand
         self.objects = tuple(objects)
         self.environment = tuple(environment)
         self.environment_touches_hand = bool(environment_touches_hand)
-        self.object_drag = _drag_rates(object_drag, len(self.objects))
+        self.object_drag = as_rates(object_drag, "object_drag", len(self.objects))
         for i, item in enumerate(self.objects):
             if not isinstance(item, RigidObject | SpringMounted):
                 raise InputError(f"`objects[{i}]` must be a RigidObject or SpringMounted, got {type(item).__name__}")
@@ -279,16 +279,6 @@ def _placed_copy(model: pin.Model, placement: pin.SE3) -> pin.Model:
         base.mass, placement.act(base.lever), placement.rotation @ base.inertia @ placement.rotation.T
     )
     return placed
-
-
-def _drag_rates(value: float | Sequence[float], count: int) -> tuple[float, ...]:
-    """``object_drag`` as one rate [1/s] >= 0 per object."""
-    if np.ndim(value) == 0:
-        return (as_real(value, "object_drag"),) * count
-    rates = tuple(as_real(rate, f"object_drag[{i}]") for i, rate in enumerate(value))
-    if len(rates) != count:
-        raise InputError(f"`object_drag` must hold one rate per object ({count}), got {len(rates)}")
-    return rates
 
 
 def _unique_names(names: Sequence[str | None], kind: str) -> list[str]:

@@ -19,13 +19,6 @@ def as_start(x0: Any) -> np.ndarray:
     return x0.copy()
 
 
-def as_int(value: Any, name: str, minimum: int) -> int:
-    """``value`` as an int >= ``minimum`` (bools and non-integral numbers are rejected)."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise InputError(f"`{name}` must be an int >= {minimum}, got {value!r}")
-    return int(value)
-
-
 def as_bounds(bounds: Any, x0: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
     """``(lower, upper)`` as (n,) arrays with ``lower < upper`` and ``lower <= x0 <= upper``, or ``(None, None)``."""
     if bounds is None:
@@ -62,4 +55,4 @@ def check_objective_and_executor(objective: Any, executor: Any) -> None:
             ) from error
 
 
-__all__ = ["as_bounds", "as_int", "as_start", "check_objective_and_executor"]
+__all__ = ["as_bounds", "as_start", "check_objective_and_executor"]

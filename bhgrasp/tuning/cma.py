@@ -12,10 +12,10 @@ from typing import Any, Literal
 
 import numpy as np
 
-from bhgrasp._validation import as_positive, as_real
+from bhgrasp._validation import as_int, as_positive, as_real
 from bhgrasp.errors import InputError
 from bhgrasp.parallel import describe_error, executor_for, parallel_map, progress_bar
-from bhgrasp.tuning.arguments import as_bounds, as_int, as_start, check_objective_and_executor
+from bhgrasp.tuning.arguments import as_bounds, as_start, check_objective_and_executor
 from bhgrasp.tuning.result import Evaluation, History, TuningError, TuningResult
 
 Objective = Callable[[np.ndarray], float]
