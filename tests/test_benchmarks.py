@@ -16,4 +16,4 @@ def test_every_benchmark_script_runs() -> None:
     result = subprocess.run([sys.executable, str(RUNNER), "--quick"], capture_output=True, text=True, check=False)
     assert result.returncode == 0, result.stderr[-2000:]
     scripts = sorted(path.name for path in RUNNER.parent.glob("bench_*.py"))
-    assert len(scripts) == 9 and all(f"== {name}" in result.stdout for name in scripts)
+    assert len(scripts) == 10 and all(f"== {name}" in result.stdout for name in scripts)
