@@ -4,7 +4,7 @@
 the table of :func:`~bhgrasp.bench.table.table_around`, clear of the trial's object on its stand, and lets all of
 them settle (:func:`~bhgrasp.scenarios.clutter.drop_pile`); :func:`run_among_neighbours` runs the trial's protocol
 from there and adds to its record how far each neighbour was moved (:func:`neighbour_displacements`) and how many
-were disturbed, moved more than :data:`DISTURBED`.  The trial's own success is scored as alone
+were disturbed, moved more than :data:`~bhgrasp.bench.protocol.DISTURBED`.  The trial's own success is scored as alone
 (:func:`~bhgrasp.bench.metrics.evaluate`).
 """
 
