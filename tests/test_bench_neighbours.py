@@ -14,6 +14,7 @@ from bhgrasp.bench.neighbours import (
     RAISE,
     neighbour_displacements,
     peak_force_on,
+    raised,
     run_among_neighbours,
     settle_neighbours,
 )
@@ -121,13 +122,16 @@ def test_the_record_counts_the_disturbed_neighbours():
 
 
 def test_the_open_hand_starts_over_the_neighbours_as_low_as_it_can():
-    """The ball's grasp among six neighbours (seed 1): its start rises until no hand link touches a neighbour."""
+    """The ball's grasp among six neighbours (seed 1), not turned: its start rises until no hand link touches one."""
     ball = Trial(BenchObject.parse("sphere:0.035:0.2"), "power", table=True)
-    clutter = settle_neighbours(ball, 6, seed=1)
+    turned = settle_neighbours(ball, 6, seed=1)  # turned away from them, it starts as usual
+    assert turned.heading != 0.0 and turned.approach == APPROACH
+    clutter = raised(ball, dataclasses.replace(turned, approach=APPROACH, heading=0.0))
     names = {item.name for item in clutter.objects[1:]}
 
     def touches(approach: float) -> bool:
-        _, state, hand, _ = setup(ball, clutter=dataclasses.replace(clutter, approach=approach), start_check="off")
+        start = dataclasses.replace(clutter, approach=approach)
+        _, state, hand, _ = setup(ball, clutter=start, start_check="off")
         links = {frame.name for frame in hand.model.frames}
         return any({a, b} & links and {a, b} & names for a, b in state.contact_bodies)
 

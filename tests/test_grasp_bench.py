@@ -205,15 +205,16 @@ def test_the_report_compares_outcomes_and_metrics_and_renders_the_rates(tmp_path
     assert json.loads(path.read_text())["trials"] == trials
     # among neighbours: their count and seed, how many a trial disturbed and how far the farthest moved
     clutter = {"neighbours": 6, "neighbour_seed": 1, "neighbours_disturbed": 2, "max_neighbour_moved": 0.0123}
-    clutter["peak_neighbour_force"] = 7.25
+    clutter.update(peak_neighbour_force=7.25, heading=-0.5 * np.pi)
     among = [{**trial, **clutter}, {**failed, **clutter, "neighbours_disturbed": 1}]
     assert "among 6 neighbours each: 3 disturbed (moved over 5 mm) in all" in bench_report.summary_lines(among)
-    assert "| box | power | barrett | yes | 2 | 12.3 | 7.2 |" in bench_report.markdown(among)
+    assert "| box | power | barrett | yes | -90 | 2 | 12.3 | 7.2 |" in bench_report.markdown(among)
     assert "(seed 1)" in bench_report.markdown(among) and "neighbours" not in bench_report.markdown(trials)
     assert bench_report.compare(among, among) == []
     assert len(bench_report.compare([{**among[0], "neighbours_disturbed": 3}], among)) == 1
     assert len(bench_report.compare([{**among[0], "max_neighbour_moved": 0.02}], among)) == 1
     assert len(bench_report.compare([{**among[0], "peak_neighbour_force": 9.0}], among)) == 1
+    assert len(bench_report.compare([{**among[0], "heading": 0.0}], among)) == 1
 
 
 def test_a_trial_not_lifted_names_the_fingers_force_on_the_stand_when_they_pressed_it() -> None:

@@ -5,12 +5,14 @@
 :mod:`~bhgrasp.bench.placement` where the hand goes over the object and :mod:`~bhgrasp.bench.height` how high, both
 from :mod:`~bhgrasp.bench.reach`'s touch angles; :mod:`~bhgrasp.bench.closing` when each finger starts to close;
 :mod:`~bhgrasp.bench.trial` runs one trial, alone on its stand or, with :mod:`~bhgrasp.bench.neighbours`, among
-settled neighbours on the table around it (:mod:`~bhgrasp.bench.table`);
+settled neighbours on the table around it (:mod:`~bhgrasp.bench.table`), the hand turned away from them
+(:mod:`~bhgrasp.bench.heading`);
 :mod:`~bhgrasp.bench.metrics` scores it; :mod:`~bhgrasp.bench.runs` runs many and :mod:`~bhgrasp.bench.report`
 writes their JSON and markdown report (``bhgrasp grasp-bench``).
 """
 
 from bhgrasp.bench.closing import finger_starts
+from bhgrasp.bench.heading import clearest_heading, hand_base, heading_clearance
 from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN, TABLE_REACH, grasp_clearance, stand_clearance
 from bhgrasp.bench.metrics import contact_summary, evaluate, failure_reason, held_forces, least_grip, relative_poses
 from bhgrasp.bench.neighbours import neighbour_displacements, run_among_neighbours, settle_neighbours
@@ -93,6 +95,7 @@ __all__ = [
     "Clutter",
     "Trial",
     "bench_rollout",
+    "clearest_heading",
     "closing_planes_meet",
     "compare",
     "contact_summary",
@@ -103,7 +106,9 @@ __all__ = [
     "floor_below",
     "grasp_clearance",
     "grasp_offset",
+    "hand_base",
     "hand_depth",
+    "heading_clearance",
     "held_forces",
     "idealised_damping",
     "least_grip",

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from bhgrasp._validation import as_generator, as_int
+from bhgrasp.bench.heading import clearest_heading
 from bhgrasp.bench.height import TABLE_REACH
 from bhgrasp.bench.metrics import evaluate
 from bhgrasp.bench.protocol import APPROACH, DISTURBED, DT, FRICTION, STAND, Trial
@@ -32,7 +33,8 @@ RAISE, HIGHEST = 0.01, 0.3  # [m] the open hand's start rises in these steps, at
 def settle_neighbours(trial: Trial, count: int, seed: Any, dt: float = DT) -> Clutter:
     """The trial's object on its stand and ``count`` mixed neighbours, settled on the table around it.
 
-    Settled under the trial's own contact law and step, so that the trial starts from rest.  The open hand starts
+    Settled under the trial's own contact law and step, so that the trial starts from rest.  The hand turns about
+    the object's axis away from the neighbours (:func:`~bhgrasp.bench.heading.clearest_heading`).  The open hand starts
     :data:`~bhgrasp.bench.protocol.APPROACH` above its grasp, or higher, in :data:`RAISE` steps, until it touches no
     neighbour (:attr:`~bhgrasp.bench.table.Clutter.approach`); it still comes down in the protocol's
     :data:`~bhgrasp.bench.protocol.CLOSE_AT`, so faster the higher it starts (0.08 m/s on average from 8 cm, against
@@ -49,19 +51,29 @@ def settle_neighbours(trial: Trial, count: int, seed: Any, dt: float = DT) -> Cl
     region = (-TABLE_REACH, -TABLE_REACH, TABLE_REACH, TABLE_REACH)
     environment = [stand_of(item), *table]
     pile = drop_pile(objects, environment, region, seed=rng, placed=[item.body(FRICTION)], dt=dt, contact=contact_law())
-    fixed = {STAND, *(part.name for part in table)}
-    names = {item.name for item in pile.objects[1:]}
+    heading, _ = clearest_heading(trial, pile.objects[1:])
+    return raised(trial, Clutter(pile.objects, table, APPROACH, heading), dt)
+
+
+def raised(trial: Trial, clutter: Clutter, dt: float = DT) -> Clutter:
+    """``clutter`` with the open hand's start raised from its ``approach`` in :data:`RAISE` steps to touch no neighbour.
+
+    Raises:
+        UnreachableError: As :func:`settle_neighbours`.
+    """
+    fixed = {STAND, *(part.name for part in clutter.table)}
+    names = {item.name for item in clutter.objects[1:]}
     touched: list[tuple[str, str]] = []
-    for approach in np.arange(APPROACH, HIGHEST + 1e-9, RAISE):
-        clutter = Clutter(pile.objects, table, round(float(approach), 6))
-        simulator, state, hand, _ = setup(trial, dt, clutter, start_check="off")
+    for approach in np.arange(clutter.approach, HIGHEST + 1e-9, RAISE):
+        start = dataclasses.replace(clutter, approach=round(float(approach), 6))
+        simulator, state, hand, _ = setup(trial, dt, start, start_check="off")
         links = {frame.name for frame in hand.model.frames}
         below = [p for p in simulator.check_start(state) if fixed & set(p.bodies) and links & set(p.bodies)]
         if below:
             raise UnreachableError(f"no trial among neighbours: the open hand starts {below[0].message}")
         touched = [(a, b) for a, b in state.contact_bodies if {a, b} & links and {a, b} & names]
         if not touched:  # the open hand touches no neighbour at its start
-            return clutter
+            return start
     raise UnreachableError(
         f"no trial among neighbours: {HIGHEST:.2f} m above its grasp the open hand still touches {touched[0]}"
     )
@@ -87,10 +99,11 @@ def run_among_neighbours(
     """The trial's record (:func:`~bhgrasp.bench.metrics.evaluate`) among ``count`` settled neighbours.
 
     The trial stands flush with the table (``Trial.table``: the height rule keeps the fingers off all of it).  The
-    record adds ``neighbours`` (their names), ``peak_neighbour_force`` (the hand's peak contact force on any of
-    them [N]: against :data:`~bhgrasp.bench.protocol.FORCE_LIMIT` it says whether the hand stayed in its envelope
-    there too), ``neighbour_moved`` (each one's farthest displacement [m]) and
-    ``neighbours_disturbed`` (how many moved more than :data:`DISTURBED`).  ``duration`` [s] cuts the protocol short.
+    record adds ``neighbours`` (their names), ``heading`` (the hand's turn about the object's axis [rad]),
+    ``peak_neighbour_force`` (the hand's peak contact force on any of them [N]: against
+    :data:`~bhgrasp.bench.protocol.FORCE_LIMIT` it says whether the hand stayed in its envelope there too),
+    ``neighbour_moved`` (each one's farthest displacement [m]) and ``neighbours_disturbed`` (how many moved more than
+    :data:`DISTURBED`).  ``duration`` [s] cuts the protocol short.
 
     Raises:
         UnreachableError: As :func:`settle_neighbours` (the benchmark counts the trial failed with its message).
@@ -102,6 +115,7 @@ def run_among_neighbours(
     moved = neighbour_displacements(trajectory)
     names = [item.name for item in clutter.objects[1:]]
     record["neighbours"] = names
+    record["heading"] = clutter.heading
     record["peak_neighbour_force"] = peak_force_on(trajectory, hand, names)
     record["neighbour_moved"] = moved.tolist()
     record["neighbours_disturbed"] = int(np.sum(moved > DISTURBED))
@@ -113,6 +127,7 @@ __all__ = [
     "RAISE",
     "neighbour_displacements",
     "peak_force_on",
+    "raised",
     "run_among_neighbours",
     "settle_neighbours",
 ]

@@ -185,19 +185,22 @@ def _neighbour_lines(trials: list[dict[str, Any]]) -> list[str]:
         f"Among neighbours: each trial ran among {among[0]['neighbours']} mixed household-sized objects (seed "
         f"{among[0]['neighbour_seed']}) dropped and settled on a table flush with its stand "
         f"(`bhgrasp/bench/neighbours.py`); a neighbour moved over {1e3 * DISTURBED:.0f} mm was disturbed. The stand's "
-        "columns count the table around it too; the open hand starts high enough to clear every neighbour and comes "
-        "down in the protocol's 1 s.",
+        "columns count the table around it too. The hand turns about the object's axis to the first heading (0, +-15 "
+        "deg, ... for a round object; 0 or 180 deg for a box) at which it passes every neighbour by 1 cm on its way "
+        "down and while its fingers close, or else to the clearest (`bhgrasp/bench/heading.py`); the open hand starts "
+        "high enough to clear every neighbour and comes down in the protocol's 1 s.",
         "",
-        "| object | grasp | actuation | success | neighbours disturbed | farthest moved [mm] | "
+        "| object | grasp | actuation | success | heading [deg] | neighbours disturbed | farthest moved [mm] | "
         "hand's peak on them [N] |",
-        "|---|---|---|---|---:|---:|---:|",
+        "|---|---|---|---|---:|---:|---:|---:|",
     ]
     for t in among:
         moved, force = _number(t, "max_neighbour_moved", 1e3), _number(t, "peak_neighbour_force")
         disturbed = "-" if t["neighbours_disturbed"] is None else t["neighbours_disturbed"]
+        heading = _number(t, "heading", 180.0 / math.pi, ".0f")
         lines.append(
-            f"| {t['object']} | {t['grasp']} | {t['actuation']} | {_mark(t['success'])} | {disturbed} | {moved} | "
-            f"{force} |"
+            f"| {t['object']} | {t['grasp']} | {t['actuation']} | {_mark(t['success'])} | {heading} | {disturbed} | "
+            f"{moved} | {force} |"
         )
     return lines
 
@@ -227,7 +230,7 @@ def compare(trials: list[dict[str, Any]], reference: list[dict[str, Any]], rel: 
 def _metric_problems(trial: dict[str, Any], known: dict[str, Any], key: str, rel: float) -> list[str]:
     """The metrics of ``trial`` off those of ``known`` by more than ``rel`` (relative; 1e-9 absolute)."""
     problems = []
-    among = ("max_neighbour_moved", "peak_neighbour_force") if _among(trial, known) else ()
+    among = ("heading", "max_neighbour_moved", "peak_neighbour_force") if _among(trial, known) else ()
     for name in (*METRICS, *among):
         new, old = trial.get(name), known.get(name)
         if (new is None) != (old is None) or (new is not None and abs(new - old) > max(rel * abs(old), 1e-9)):

@@ -21,7 +21,7 @@ from bhgrasp.bench.trial import run_trial
 from bhgrasp.sweep import run_sweep
 
 # a trial among neighbours adds these to its record
-NEIGHBOURS = ("neighbours_disturbed", "max_neighbour_moved", "peak_neighbour_force")
+NEIGHBOURS = ("heading", "neighbours_disturbed", "max_neighbour_moved", "peak_neighbour_force")
 CLUTTER = ("neighbours", "neighbour_seed")  # ... and says among how many, from which seed
 
 

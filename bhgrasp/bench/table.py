@@ -34,12 +34,14 @@ class Clutter:
     """A trial's objects where they settled, the trial's object first; the table around its stand and the floor.
 
     ``approach`` [m]: how far above its grasp the open hand starts, clear of the neighbours (at least
-    :data:`~bhgrasp.bench.protocol.APPROACH`).
+    :data:`~bhgrasp.bench.protocol.APPROACH`); ``heading`` [rad]: the hand's turn about the object's vertical axis,
+    away from the neighbours (:mod:`~bhgrasp.bench.heading`).
     """
 
     objects: tuple[RigidObject, ...]
     table: tuple[FixedBox | Plane, ...]
     approach: float = APPROACH
+    heading: float = 0.0
 
 
 def stand_of(item: BenchObject) -> FixedBox:

@@ -6,16 +6,14 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-import pinocchio as pin
 
 import bhgrasp as bh
 from bhgrasp.barrett.commands import BarrettDriver
 from bhgrasp.barrett.pucks import FINGER_PUCK
 from bhgrasp.barrett.transmission import PROXIMAL_RATIO, WORM_EFFICIENCY, BarrettTransmission
 from bhgrasp.bench.closing import finger_starts
-from bhgrasp.bench.height import trial_clearance
+from bhgrasp.bench.heading import hand_base
 from bhgrasp.bench.metrics import GRAVITY, evaluate
-from bhgrasp.bench.placement import grasp_offset
 from bhgrasp.bench.protocol import (
     APPROACH,
     CLOSE_AT,
@@ -32,7 +30,6 @@ from bhgrasp.bench.protocol import (
     STIFFNESS,
     Trial,
 )
-from bhgrasp.bench.reach import hand_depth
 from bhgrasp.bench.table import NEIGHBOUR_DRAG, Clutter, stand_of, supports
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.errors import InputError
@@ -87,14 +84,9 @@ def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None, start_ch
     if clutter is not None and not trial.table:
         raise InputError("a trial among neighbours stands flush with a table: give it as Trial(..., table=True)")
     item = trial.item
-    top = 2 * item.half_extents[2]
     spread = trial.preshape_spread
-    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)  # one rule for both grasps
-    grasp_height = top + clearance + hand_depth(spread, PRESHAPE)  # the hand base
-    rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
-    offset = np.array([0.0, grasp_offset(item, spread, clearance, PRESHAPE), 0.0])
     approach = APPROACH if clutter is None else clutter.approach  # [m] the open hand starts this far above
-    base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + approach]) - rotation @ offset)  # fingers together
+    base = hand_base(trial, approach, 0.0 if clutter is None else clutter.heading)  # fingers together
     hand = mounted(bh.BarrettHand(base_placement=base))
     pedestal = stand_of(item)
     if clutter is None:

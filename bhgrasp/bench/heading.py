@@ -1,0 +1,114 @@
+"""Where the open hand starts over a trial's object, and which way it faces among neighbours.
+
+:func:`hand_base`: the mounted hand's base, palm down, at the grasp height of the rules of
+:mod:`~bhgrasp.bench.height` and :mod:`~bhgrasp.bench.placement`, ``approach`` above it, turned by ``heading``
+about the object's vertical axis.  Turning about that axis leaves the grasp of an upright primitive as it is when the
+object is symmetric about it: any heading for a sphere or an upright cylinder, a half turn for a box
+(:func:`headings`).  A mesh object keeps heading 0 (its mesh need not share its plan's symmetry).
+
+Among neighbours (:mod:`~bhgrasp.bench.neighbours`) the hand takes the first of these headings, in order of size,
+whose :func:`heading_clearance` is at least :data:`CLEAR`; if none is, the clearest (:func:`clearest_heading`).  A
+rule of the hand's geometry and the neighbours' poses: :data:`CLEAR` and :data:`HEADING_STEP` were set before any trial
+ran with them, not chosen on the benchmark's trials.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from bhgrasp.bench.height import SWEEP, trial_clearance
+from bhgrasp.bench.placement import grasp_centre, grasp_offset
+from bhgrasp.bench.protocol import APPROACH, PRESHAPE, Trial
+from bhgrasp.bench.reach import hand_depth, reach_of
+from bhgrasp.grasp.probes import coal_transform
+from bhgrasp.model.objects import RigidObject
+
+CLEAR = 0.01  # [m] the least distance to every neighbour on the way down and while closing that takes a heading
+HEADING_STEP = math.radians(15.0)  # [rad] the headings tried for a round object
+DESCENT_STEP = 0.005  # [m] the open hand's heights checked on its way down
+
+
+def hand_base(trial: Trial, approach: float = 0.0, heading: float = 0.0) -> pin.SE3:
+    """The hand base (world) ``approach`` [m] above the trial's grasp, turned ``heading`` [rad] about +z.
+
+    Palm down, the fingers together at the grasp's offset along F3's axis (:func:`~.placement.grasp_offset`), the
+    knuckles the height rule's clearance above the object's top (:func:`~.height.trial_clearance`); the object's
+    axis is the world z axis.
+    """
+    item, spread = trial.item, trial.preshape_spread
+    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)  # one rule for both grasps
+    grasp_height = 2 * item.half_extents[2] + clearance + hand_depth(spread, PRESHAPE)
+    rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
+    offset = np.array([0.0, grasp_offset(item, spread, clearance, PRESHAPE), 0.0])
+    base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + approach]) - rotation @ offset)
+    if heading == 0.0:
+        return base
+    return pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, heading), np.zeros(3)) * base
+
+
+def headings(trial: Trial) -> list[float]:
+    """The headings [rad] that leave the trial's grasp as it is, by size: 0, +15 deg, -15 deg, ... (module doc)."""
+    item = trial.item
+    if item.mesh and item.mesh != "meshed":
+        return [0.0]
+    if item.kind == "box":
+        return [0.0, math.pi]
+    steps = round(math.pi / HEADING_STEP)
+    turns = [0.0]
+    for k in range(1, steps):
+        turns += [k * HEADING_STEP, -k * HEADING_STEP]
+    return [*turns, math.pi]
+
+
+def heading_clearance(trial: Trial, neighbours: Sequence[RigidObject], heading: float) -> float:
+    """The hand's least distance [m] from the neighbours at ``heading`` (negative: it would press into one).
+
+    Over the open hand's way down from :data:`~bhgrasp.bench.protocol.APPROACH` above its grasp (every
+    :data:`DESCENT_STEP`, every collision shape of the hand) and each finger's close from the pre-shape to its first
+    touch of the object (the finger's links, in :data:`~bhgrasp.bench.height.SWEEP` steps; coal's distances, the
+    distal at a third of the proximal as before the TorqueSwitch breaks away).  The neighbours where they rest.
+    """
+    item, spread = trial.item, trial.preshape_spread
+    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)
+    reach = reach_of(item, spread, PRESHAPE)
+    centre = grasp_centre(item, spread, clearance, PRESHAPE)
+    shapes = [(shape, coal_transform(body.pose)) for body in neighbours for shape in body.collision_shapes()]
+    every = list(range(len(reach.geometry.geometryObjects)))
+    poses: list[tuple[float, float, list[int]]] = []  # (height above the grasp, proximal angle, the shapes measured)
+    for height in np.arange(0.0, APPROACH + 1e-9, DESCENT_STEP):
+        poses.append((float(height), PRESHAPE, every))
+    for finger in reach.hand.fingers:
+        touch = reach.touch(finger, centre)
+        for angle in [*np.arange(PRESHAPE + SWEEP, touch, SWEEP), touch]:
+            poses.append((0.0, float(angle), reach.shapes[finger]))
+    request, nearest = coal.DistanceRequest(), math.inf
+    for height, angle, measured in poses:
+        base = hand_base(trial, height, heading)
+        q = reach.configuration(angle)
+        pin.updateGeometryPlacements(reach.hand.model, reach.model_data, reach.geometry, reach.data, q)
+        for i in measured:
+            link = reach.geometry.geometryObjects[i].geometry
+            frame = coal_transform(base * reach.data.oMg[i])
+            for shape, placement in shapes:
+                nearest = min(nearest, coal.distance(link, frame, shape, placement, request, coal.DistanceResult()))
+    return nearest
+
+
+def clearest_heading(trial: Trial, neighbours: Sequence[RigidObject]) -> tuple[float, float]:
+    """(heading [rad], its clearance [m]): the first of :func:`headings` clear by :data:`CLEAR`, else the clearest."""
+    best = (0.0, -math.inf)
+    for heading in headings(trial):
+        clearance = heading_clearance(trial, neighbours, heading)
+        if clearance >= CLEAR:
+            return heading, clearance
+        if clearance > best[1]:
+            best = (heading, clearance)
+    return best
+
+
+__all__ = ["CLEAR", "DESCENT_STEP", "HEADING_STEP", "clearest_heading", "hand_base", "heading_clearance", "headings"]
