@@ -10,6 +10,7 @@ import pytest
 
 import bhgrasp as bh
 from bhgrasp.bench.height import STAND_HEIGHT, TABLE_REACH, grasp_clearance, stand_clearance
+from bhgrasp.bench.metrics import stand_support
 from bhgrasp.bench.neighbours import (
     RAISE,
     neighbour_displacements,
@@ -20,7 +21,7 @@ from bhgrasp.bench.neighbours import (
 )
 from bhgrasp.bench.objects import BenchObject
 from bhgrasp.bench.protocol import APPROACH, CLOSE_AT, DISTURBED, FRICTION, HELD_AT, PRESHAPE, STIFFNESS, Trial
-from bhgrasp.bench.table import Clutter, floor_below, stand_of, table_around
+from bhgrasp.bench.table import Clutter, floor_below, stand_of, supports, table_around
 from bhgrasp.bench.trial import setup, shake_force, simulate_trial
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.model.objects import Box
@@ -151,8 +152,29 @@ def test_the_shake_pushes_only_the_trials_object():
     assert force(0.0).shape == (3, 3) and not force(0.0).any()
     pushed = force(HELD_AT + 0.1)
     assert np.allclose(pushed[0], [5.0, 0.0, 0.0]) and not pushed[1:].any()
+    turned = shake_force(0.5, objects=3, heading=0.5 * np.pi)  # with the hand: its +x push is the world's +y
+    assert np.allclose(turned(HELD_AT + 0.1)[0], [0.0, 5.0, 0.0], atol=1e-12)
+    assert np.array_equal(turned(HELD_AT + 4 * 2.0 + 0.1)[0], force(HELD_AT + 4 * 2.0 + 0.1)[0])  # +z: the same
 
 
 def test_bad_neighbour_count_is_named():
     with pytest.raises(InputError, match="`count` must be an int >= 1"):
         settle_neighbours(CAN, 0, seed=1)
+
+
+def test_an_object_set_down_across_the_stands_seam_rests_on_the_stand_and_the_table():
+    """Among neighbours the table is flush with the stand: a box resting across their seam is carried by both, and
+    the place counts both (force balance: together they carry its weight)."""
+    item = BenchObject.parse("box:0.095x0.058x0.19:0.6")
+    shifted = pin.SE3(np.eye(3), np.array([0.01, 0.005, item.half_extents[2]]))
+    box = dataclasses.replace(item.body(FRICTION), pose=shifted)
+    hand = bh.BarrettHand(base_placement=pin.SE3(np.eye(3), np.array([0.0, 0.0, 1.0])))
+    scene = Scene(hand, [box], [stand_of(item), *table_around(item)], environment_touches_hand=False)
+    simulator = Simulator(scene, dt=5e-4, contact=SpringDamper(stiffness=3e4, damping=60.0))
+    trajectory = simulator.run(lambda t, state: hand.gravity_torques(state.q), duration=0.5, progress=False)
+    last, weight = len(trajectory.t) - 1, item.mass * 9.81
+    on_stand = stand_support(trajectory, last)
+    both = stand_support(trajectory, last, supports(dataclasses.replace(CAN, table=True)))
+    assert 0.05 * weight < on_stand < 0.95 * weight  # it rests on both ...
+    assert both == pytest.approx(weight, rel=1e-3)  # ... which carry its weight together
+    assert stand_support(trajectory, last, supports(CAN)) == on_stand  # alone: the stand only

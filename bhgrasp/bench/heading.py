@@ -3,13 +3,17 @@
 :func:`hand_base`: the mounted hand's base, palm down, at the grasp height of the rules of
 :mod:`~bhgrasp.bench.height` and :mod:`~bhgrasp.bench.placement`, ``approach`` above it, turned by ``heading``
 about the object's vertical axis.  Turning about that axis leaves the grasp of an upright primitive as it is when the
-object is symmetric about it: any heading for a sphere or an upright cylinder, a half turn for a box
-(:func:`headings`).  A mesh object keeps heading 0 (its mesh need not share its plan's symmetry).
+object is symmetric about it: any heading for a sphere or an upright cylinder, a half turn for a box or a box's mesh
+(:func:`headings`).  Any other mesh keeps heading 0: its facets (a meshed cylinder's 64 sides, an icosphere) or its
+shape need not share its plan's symmetry.  The trial's shake turns with the hand
+(:func:`~bhgrasp.bench.trial.shake_force`), so a turned trial is the same test.
 
 Among neighbours (:mod:`~bhgrasp.bench.neighbours`) the hand takes the first of these headings, in order of size,
 whose :func:`heading_clearance` is at least :data:`CLEAR`; if none is, the clearest (:func:`clearest_heading`).  A
 rule of the hand's geometry and the neighbours' poses: :data:`CLEAR` and :data:`HEADING_STEP` were set before any trial
-ran with them, not chosen on the benchmark's trials.
+ran with them, not chosen on the benchmark's trials.  The way down is checked from
+:data:`~bhgrasp.bench.protocol.APPROACH`; where no heading is clear the start may rise higher
+(:func:`~bhgrasp.bench.neighbours.raised`), and that stretch is not checked.
 """
 
 from __future__ import annotations
@@ -21,7 +25,9 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp._validation import as_real
 from bhgrasp.bench.height import SWEEP, trial_clearance
+from bhgrasp.bench.objects import MESHED
 from bhgrasp.bench.placement import grasp_centre, grasp_offset
 from bhgrasp.bench.protocol import APPROACH, PRESHAPE, Trial
 from bhgrasp.bench.reach import hand_depth, reach_of
@@ -38,8 +44,13 @@ def hand_base(trial: Trial, approach: float = 0.0, heading: float = 0.0) -> pin.
 
     Palm down, the fingers together at the grasp's offset along F3's axis (:func:`~.placement.grasp_offset`), the
     knuckles the height rule's clearance above the object's top (:func:`~.height.trial_clearance`); the object's
-    axis is the world z axis.
+    axis is the world z axis.  A heading other than 0 or a half turn assumes what the object stands on is symmetric
+    under it: a table, as among neighbours (a round object's square stand is not).
+
+    Raises:
+        InputError: A non-finite ``approach`` or ``heading``.
     """
+    approach, heading = as_real(approach, "approach", False), as_real(heading, "heading", False)
     item, spread = trial.item, trial.preshape_spread
     clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)  # one rule for both grasps
     grasp_height = 2 * item.half_extents[2] + clearance + hand_depth(spread, PRESHAPE)
@@ -54,10 +65,10 @@ def hand_base(trial: Trial, approach: float = 0.0, heading: float = 0.0) -> pin.
 def headings(trial: Trial) -> list[float]:
     """The headings [rad] that leave the trial's grasp as it is, by size: 0, +15 deg, -15 deg, ... (module doc)."""
     item = trial.item
-    if item.mesh and item.mesh != "meshed":
-        return [0.0]
-    if item.kind == "box":
+    if item.kind == "box" and item.mesh in ("", MESHED):  # a box's hull is symmetric under a half turn too
         return [0.0, math.pi]
+    if item.mesh:
+        return [0.0]
     steps = round(math.pi / HEADING_STEP)
     turns = [0.0]
     for k in range(1, steps):

@@ -85,7 +85,7 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
         and record["torque_to_rating"] <= 1.0
     )
     final = trajectory.object_position[-1, 0, 2] - trajectory.object_position[0, 0, 2]
-    resting = stand_support(trajectory, len(t) - 1) >= 0.5 * trial.item.mass * GRAVITY
+    resting = stand_support(trajectory, len(t) - 1, supports(trial)) >= 0.5 * trial.item.mass * GRAVITY
     record["placed"] = bool(held_through and abs(final) < PLACED and resting)  # set down on its stand and let go
     kept = held_through and record["inside_envelope"] and record["gripped"] and record["placed"]
     record["success"] = bool(kept and offsets.max() < LOOSE[0] and turns.max() < LOOSE[1])
@@ -119,12 +119,15 @@ def held_forces(trajectory, hand: bh.Hand, k: int) -> np.ndarray:
     return totals
 
 
-def stand_support(trajectory, k: int) -> float:
-    """The stand's upward push [N] on the object at sample ``k``."""
+def stand_support(trajectory, k: int, stand: frozenset[str] = frozenset({STAND})) -> float:
+    """The stand's upward push [N] on the object at sample ``k``.
+
+    ``stand``: the bodies it stands on (among neighbours the table around the stand too, flush with it,
+    :func:`~bhgrasp.bench.table.supports`: an object set down across their seam rests on both).
+    """
     contacts = trajectory.contacts_at(k)
-    rows = [
-        i for i, (a, b) in enumerate(contacts["bodies"]) if STAND in (a, b) and trajectory.object_names[0] in (a, b)
-    ]
+    obj = trajectory.object_names[0]
+    rows = [i for i, (a, b) in enumerate(contacts["bodies"]) if {a, b} & stand and obj in (a, b)]
     return float(contacts["force"][rows, 2].sum()) if rows else 0.0
 
 

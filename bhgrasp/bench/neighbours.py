@@ -23,7 +23,7 @@ from bhgrasp.bench.protocol import APPROACH, DISTURBED, DT, FRICTION, STAND, Tri
 from bhgrasp.bench.table import Clutter, floor_below, stand_of, table_around
 from bhgrasp.bench.trial import contact_law, setup, simulate_trial
 from bhgrasp.data import Trajectory
-from bhgrasp.errors import UnreachableError
+from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.model.hand import Hand
 from bhgrasp.scenarios.clutter import drop_pile, mixed_objects
 
@@ -59,8 +59,11 @@ def raised(trial: Trial, clutter: Clutter, dt: float = DT) -> Clutter:
     """``clutter`` with the open hand's start raised from its ``approach`` in :data:`RAISE` steps to touch no neighbour.
 
     Raises:
+        InputError: A start above :data:`HIGHEST`.
         UnreachableError: As :func:`settle_neighbours`.
     """
+    if clutter.approach > HIGHEST:
+        raise InputError(f"the open hand starts at most {HIGHEST} m above its grasp, got approach {clutter.approach!r}")
     fixed = {STAND, *(part.name for part in clutter.table)}
     names = {item.name for item in clutter.objects[1:]}
     touched: list[tuple[str, str]] = []

@@ -185,10 +185,11 @@ def _neighbour_lines(trials: list[dict[str, Any]]) -> list[str]:
         f"Among neighbours: each trial ran among {among[0]['neighbours']} mixed household-sized objects (seed "
         f"{among[0]['neighbour_seed']}) dropped and settled on a table flush with its stand "
         f"(`bhgrasp/bench/neighbours.py`); a neighbour moved over {1e3 * DISTURBED:.0f} mm was disturbed. The stand's "
-        "columns count the table around it too. The hand turns about the object's axis to the first heading (0, +-15 "
-        "deg, ... for a round object; 0 or 180 deg for a box) at which it passes every neighbour by 1 cm on its way "
-        "down and while its fingers close, or else to the clearest (`bhgrasp/bench/heading.py`); the open hand starts "
-        "high enough to clear every neighbour and comes down in the protocol's 1 s.",
+        "columns, and the stand's share of the object's weight once placed, count the table around it too. The hand "
+        "turns about the object's axis to the first heading (0, +-15 deg, ... for a round object; 0 or 180 deg for a "
+        "box) at which it passes every neighbour by 1 cm on its way down and while its fingers close, or else to the "
+        "clearest (`bhgrasp/bench/heading.py`); the open hand starts high enough to clear every neighbour and comes "
+        "down in the protocol's 1 s.",
         "",
         "| object | grasp | actuation | success | heading [deg] | neighbours disturbed | farthest moved [mm] | "
         "hand's peak on them [N] |",

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp._validation import as_real
 from bhgrasp.bench.height import STAND_HEIGHT, TABLE_REACH
 from bhgrasp.bench.objects import BenchObject
 from bhgrasp.bench.protocol import APPROACH, FRICTION, STAND, Trial
@@ -36,12 +37,19 @@ class Clutter:
     ``approach`` [m]: how far above its grasp the open hand starts, clear of the neighbours (at least
     :data:`~bhgrasp.bench.protocol.APPROACH`); ``heading`` [rad]: the hand's turn about the object's vertical axis,
     away from the neighbours (:mod:`~bhgrasp.bench.heading`).
+
+    Raises:
+        InputError: A negative or non-finite ``approach``, a non-finite ``heading``.
     """
 
     objects: tuple[RigidObject, ...]
     table: tuple[FixedBox | Plane, ...]
     approach: float = APPROACH
     heading: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "approach", as_real(self.approach, "approach"))
+        object.__setattr__(self, "heading", as_real(self.heading, "heading", nonnegative=False))
 
 
 def stand_of(item: BenchObject) -> FixedBox:

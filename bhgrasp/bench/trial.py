@@ -6,6 +6,7 @@ import math
 from collections.abc import Callable
 
 import numpy as np
+import pinocchio as pin
 
 import bhgrasp as bh
 from bhgrasp.barrett.commands import BarrettDriver
@@ -215,12 +216,16 @@ class BenchController:
         return tau
 
 
-def shake_force(mass: float, objects: int = 1):
+def shake_force(mass: float, objects: int = 1, heading: float = 0.0):
     """The shake, ``t -> (objects, 3)`` world force [N]: 10 m newtons along each direction for 2 s, on object 0.
 
-    The directions: :data:`~bhgrasp.bench.protocol.DIRECTIONS`; the other objects (neighbours) are not pushed.
+    The directions: :data:`~bhgrasp.bench.protocol.DIRECTIONS`, turned ``heading`` [rad] about +z with the hand
+    (:mod:`~bhgrasp.bench.heading`: the same pushes in the hand's frame); the other objects (neighbours) are not
+    pushed.
     """
     axes = np.vstack([np.eye(3)[[0, 0, 1, 1, 2, 2]] * np.array([1, -1, 1, -1, 1, -1])[:, None]])
+    if heading != 0.0:
+        axes = axes @ pin.rpy.rpyToMatrix(0.0, 0.0, heading).T
     none = np.zeros((objects, 3))
 
     def force(t: float) -> np.ndarray:
@@ -250,7 +255,9 @@ def simulate_trial(
         state=state,
         progress=False,
         record_every=record_every,
-        object_forces=shake_force(trial.item.mass, len(simulator.scene.objects)),
+        object_forces=shake_force(
+            trial.item.mass, len(simulator.scene.objects), 0.0 if clutter is None else clutter.heading
+        ),
         until=fallen(simulator.scene),
     )
     return trajectory, hand
