@@ -18,6 +18,7 @@ ran with them, not chosen on the benchmark's trials.  The way down is checked fr
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 
@@ -84,11 +85,31 @@ def heading_clearance(trial: Trial, neighbours: Sequence[RigidObject], heading: 
     touch of the object (the finger's links, in :data:`~bhgrasp.bench.height.SWEEP` steps; coal's distances, the
     distal at a third of the proximal as before the TorqueSwitch breaks away).  The neighbours where they rest.
     """
+    shapes = [(shape, coal_transform(body.pose)) for body in neighbours for shape in body.collision_shapes()]
+    request, nearest, bases = coal.DistanceRequest(), math.inf, {}
+    for height, placed in hand_poses(trial):
+        base = bases.get(height)
+        if base is None:
+            base = bases[height] = hand_base(trial, height, heading)
+        for link, placement in placed:
+            frame = coal_transform(base * placement)
+            for shape, where in shapes:
+                nearest = min(nearest, coal.distance(link, frame, shape, where, request, coal.DistanceResult()))
+    return nearest
+
+
+@functools.lru_cache(maxsize=64)
+def hand_poses(trial: Trial) -> tuple[tuple[float, tuple[tuple[coal.CollisionGeometry, pin.SE3], ...]], ...]:
+    """The hand poses :func:`heading_clearance` measures, whatever the heading, once per trial and process.
+
+    ``(height above the grasp [m], ((a hand shape, its placement in the hand base frame), ...))``: the open hand
+    every :data:`DESCENT_STEP` on its way down, all its shapes; each finger's links in
+    :data:`~bhgrasp.bench.height.SWEEP` steps of its close to its first touch of the object.
+    """
     item, spread = trial.item, trial.preshape_spread
     clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)
     reach = reach_of(item, spread, PRESHAPE)
     centre = grasp_centre(item, spread, clearance, PRESHAPE)
-    shapes = [(shape, coal_transform(body.pose)) for body in neighbours for shape in body.collision_shapes()]
     every = list(range(len(reach.geometry.geometryObjects)))
     poses: list[tuple[float, float, list[int]]] = []  # (height above the grasp, proximal angle, the shapes measured)
     for height in np.arange(0.0, APPROACH + 1e-9, DESCENT_STEP):
@@ -97,17 +118,13 @@ def heading_clearance(trial: Trial, neighbours: Sequence[RigidObject], heading: 
         touch = reach.touch(finger, centre)
         for angle in [*np.arange(PRESHAPE + SWEEP, touch, SWEEP), touch]:
             poses.append((0.0, float(angle), reach.shapes[finger]))
-    request, nearest = coal.DistanceRequest(), math.inf
+    placed = []
     for height, angle, measured in poses:
-        base = hand_base(trial, height, heading)
         q = reach.configuration(angle)
         pin.updateGeometryPlacements(reach.hand.model, reach.model_data, reach.geometry, reach.data, q)
-        for i in measured:
-            link = reach.geometry.geometryObjects[i].geometry
-            frame = coal_transform(base * reach.data.oMg[i])
-            for shape, placement in shapes:
-                nearest = min(nearest, coal.distance(link, frame, shape, placement, request, coal.DistanceResult()))
-    return nearest
+        shapes = tuple((reach.geometry.geometryObjects[i].geometry, pin.SE3(reach.data.oMg[i])) for i in measured)
+        placed.append((height, shapes))
+    return tuple(placed)
 
 
 def clearest_heading(trial: Trial, neighbours: Sequence[RigidObject]) -> tuple[float, float]:
@@ -122,4 +139,13 @@ def clearest_heading(trial: Trial, neighbours: Sequence[RigidObject]) -> tuple[f
     return best
 
 
-__all__ = ["CLEAR", "DESCENT_STEP", "HEADING_STEP", "clearest_heading", "hand_base", "heading_clearance", "headings"]
+__all__ = [
+    "CLEAR",
+    "DESCENT_STEP",
+    "HEADING_STEP",
+    "clearest_heading",
+    "hand_base",
+    "hand_poses",
+    "heading_clearance",
+    "headings",
+]
