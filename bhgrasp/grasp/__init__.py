@@ -4,15 +4,17 @@ Modules, one concept each: :mod:`~bhgrasp.grasp.frames` (contact frames, the gra
 grasp constraint and the conventions they share), :mod:`~bhgrasp.grasp.cones` (friction cones and their inscribed
 pyramids), :mod:`~bhgrasp.grasp.quality` (force closure, Ferrari-Canny epsilon, grasp wrench space volume),
 :mod:`~bhgrasp.grasp.forces` (the contact-force QP; its Python twin of the compiled solver is the private
-``_force_qp``), :mod:`~bhgrasp.grasp.kinematics` (P = J_h^+ G^T and its rate), :mod:`~bhgrasp.grasp.dynamics` (the
-reduced hand-object dynamics, the object motions a grasp allows), :mod:`~bhgrasp.grasp.manipulability` (the manipulable
+``_force_qp``), :mod:`~bhgrasp.grasp.hold_torque` (the least joint torque with which a grasp can hold a wrench),
+:mod:`~bhgrasp.grasp.kinematics` (P = J_h^+ G^T and its rate), :mod:`~bhgrasp.grasp.dynamics` (the reduced hand-object
+dynamics, the object motions a grasp allows), :mod:`~bhgrasp.grasp.manipulability` (the manipulable
 space: which offsets a grasp can make before anything is simulated), :mod:`~bhgrasp.grasp.clearance` (whether an
 offset's path clears the support and other fixed shapes), :mod:`~bhgrasp.grasp.path_check` (the fingers followed along
 an offset's path: links that meet the object beside the planned contacts, second order), :mod:`~bhgrasp.grasp.sensing`
 (per-finger contact forces and reaction torques) and :mod:`~bhgrasp.grasp.metrics` (finger forces and slip events read
 back from a trajectory).  Every public name is re-exported here (``from bhgrasp.grasp import grasp_map``).
 
-``import bhgrasp.grasp`` does not import scipy: the force-closure LP and the convex hull import it when called.
+``import bhgrasp.grasp`` does not import scipy: the force-closure LP, the hold-torque LP and the convex hull import it
+when called.
 """
 
 from bhgrasp.grasp.clearance import check_clearance, path_clearance
@@ -33,6 +35,7 @@ from bhgrasp.grasp.frames import (
     grasp_map,
     hand_jacobian,
 )
+from bhgrasp.grasp.hold_torque import HoldTorque, least_hold_torque, static_hold_torque
 from bhgrasp.grasp.kinematics import (
     GraspKinematics,
     ObjectState,
@@ -71,6 +74,7 @@ __all__ = [
     "GraspDynamics",
     "GraspKinematics",
     "GraspQuality",
+    "HoldTorque",
     "ManipulableSpace",
     "ObjectState",
     "PathContacts",
@@ -99,6 +103,7 @@ __all__ = [
     "in_friction_cone",
     "internal_forces",
     "is_force_closure",
+    "least_hold_torque",
     "manipulable_space",
     "parent_joints",
     "path_clearance",
@@ -107,4 +112,5 @@ __all__ = [
     "pseudo_inverse_forces",
     "sensed_path_contacts",
     "slip_events",
+    "static_hold_torque",
 ]

@@ -29,22 +29,26 @@ def pose_at(trajectory: Trajectory, k: int, index: int = 0) -> pin.SE3:
     )
 
 
+def state_at(trajectory: Trajectory, k: int, index: int = 0) -> State:
+    """Recorded sample ``k`` as the controller's :class:`~bhgrasp.data.state.State` (object ``index`` only)."""
+    contacts = trajectory.contacts_at(k)
+    return State(
+        float(trajectory.t[k]),
+        trajectory.q[k],
+        trajectory.v[k],
+        object_poses=(pose_at(trajectory, k, index),),
+        object_twists=trajectory.object_twist[k, index][None],
+        contact_points=contacts["point"],
+        contact_normals=contacts["normal"],
+        contact_forces=contacts["force"],
+        contact_bodies=tuple((str(a), str(b)) for a, b in contacts["bodies"]),
+    )
+
+
 def states_of(trajectory: Trajectory, index: int = 0) -> Iterator[State]:
     """The recorded samples as the controller's :class:`~bhgrasp.data.state.State` (object ``index`` only)."""
-    for k, t in enumerate(trajectory.t):
-        pose = pose_at(trajectory, k, index)
-        contacts = trajectory.contacts_at(k)
-        yield State(
-            float(t),
-            trajectory.q[k],
-            trajectory.v[k],
-            object_poses=(pose,),
-            object_twists=trajectory.object_twist[k, index][None],
-            contact_points=contacts["point"],
-            contact_normals=contacts["normal"],
-            contact_forces=contacts["force"],
-            contact_bodies=tuple((str(a), str(b)) for a, b in contacts["bodies"]),
-        )
+    for k in range(len(trajectory.t)):
+        yield state_at(trajectory, k, index)
 
 
 def rigid_model_residual(hand: Hand, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
@@ -126,4 +130,12 @@ def rigid_model_drift(
     return rates
 
 
-__all__ = ["drift_rate", "pose_at", "pre_hold_motion", "rigid_model_drift", "rigid_model_residual", "states_of"]
+__all__ = [
+    "drift_rate",
+    "pose_at",
+    "pre_hold_motion",
+    "rigid_model_drift",
+    "rigid_model_residual",
+    "state_at",
+    "states_of",
+]

@@ -11,7 +11,12 @@ from typing import Any
 
 import numpy as np
 
+from bhgrasp.controllers.grasp_options import DEFAULT_GRASP
 from bhgrasp.errors import InputError
+from bhgrasp.grasp.hold_torque import static_hold_torque
+from bhgrasp.scenarios.box_grasp import FRICTION
+from bhgrasp.scenarios.demo_result import MU_ASSUMED, GraspDemoResult
+from bhgrasp.scenarios.estimation import state_at
 from bhgrasp.scenarios.grasp_demo import check_demo_arguments, run_grasp_demo
 from bhgrasp.scenarios.hold import POSTURE_GAIN, SQUEEZE, reference_hold
 from bhgrasp.sim.batch import BatchSimulator
@@ -36,11 +41,15 @@ def grasp_rollout(parameters: dict[str, Any], seed: int) -> dict[str, float]:
     ``sensor_noise`` and the uncertainties of :mod:`bhgrasp.scenarios.uncertainty` (whose draws use the case's
     ``seed``).  Returns the demo's figures of merit: pose errors [m, rad] (the controller's, and the true ones
     against its reference), force error (fraction), slip events, the farthest a link slid [m], the final mass
-    estimate [kg] (NaN for non-adaptive controllers), the grasp time [s], when the motion ends [s] and the minimum
-    cone margin [N].
+    estimate [kg] (NaN for non-adaptive controllers), the grasp time [s], when the motion ends [s], the minimum
+    cone margin [N], and the least peak joint torque [N m] with which the final grasp can hold the box at rest
+    (:func:`final_hold_torque`) inside the cones the controller commands (``hold_torque``) and inside the true
+    friction's (``hold_torque_true_mu``).
     """
     check_grasp_case(parameters)
     result = run_grasp_demo(**parameters, seed=seed)
+    margin = parameters.get("friction_margin")
+    assumed = float(parameters.get("mu", MU_ASSUMED)) * (1.0 if margin is None else 1.0 - float(margin))
     return {
         "position_error": result.position_error,
         "rotation_error": result.rotation_error,
@@ -53,7 +62,23 @@ def grasp_rollout(parameters: dict[str, Any], seed: int) -> dict[str, float]:
         "grasp_time": result.grasp_time,
         "motion_end": result.motion_end,
         "cone_margin": result.cone_margin,
+        "hold_torque": final_hold_torque(result, assumed),
+        "hold_torque_true_mu": final_hold_torque(result, float(parameters.get("friction", FRICTION))),
     }
+
+
+def final_hold_torque(result: GraspDemoResult, mu: float) -> float:
+    """The least peak joint torque [N m] that holds the box at rest in the run's final grasp, with cones of ``mu``.
+
+    :func:`~bhgrasp.grasp.hold_torque.static_hold_torque` of the last sample (the true mass, the controller's least
+    normal force): no contact forces inside those cones hold the box's weight with every joint torque below it.
+    ``inf`` when the fingers no longer touch the box, or no forces inside the cones hold it.
+    """
+    state = state_at(result.trajectory, len(result.trajectory.t) - 1)
+    scene = result.scene
+    options = {"body": scene.objects[0].name, "min_normal_force": DEFAULT_GRASP.min_normal_force}
+    hold = static_hold_torque(scene.hand, state, result.true_mass, mu, **options)
+    return hold.fraction
 
 
 def _hold_batch(parameters: list[dict[str, Any]], seeds: list[int]) -> list[dict[str, float]]:
@@ -89,4 +114,4 @@ hold_rollout = BatchedRollout(_hold_batch, size=64)
 box's fall [m]), ``diverged`` (0 or 1) and ``contacts`` (contact points at the end)."""
 
 
-__all__ = ["check_grasp_case", "grasp_rollout", "hold_rollout"]
+__all__ = ["check_grasp_case", "final_hold_torque", "grasp_rollout", "hold_rollout"]

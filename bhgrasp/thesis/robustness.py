@@ -85,6 +85,7 @@ def summarise(runs) -> dict[str, float]:
             "success_high_pct": 100.0 * high,
             "strict_success_pct": 0.0,
             "lightest_failure_kg": _lightest(runs, runs.index[:0]),
+            **_hold_torques(runs, runs.index[:0]),
             "failed_runs": float(len(runs)),
             **dict.fromkeys(names, float("nan")),
         }
@@ -110,6 +111,7 @@ def summarise(runs) -> dict[str, float]:
         "max_slide_mm": _max(slide),
         "strict_success_pct": 100.0 * float(np.sum(within & (slip == 0))) / len(runs),
         "lightest_failure_kg": _lightest(runs, done.index[good]),
+        **_hold_torques(runs, done.index[good]),
         "mean_force_error_pct": _mean(100 * done["force_error"].to_numpy(float)),
         "mean_mass_error_pct": _mean(mass_error),
         "unfinished_runs": float(np.sum(done["motion_end"].to_numpy(float) > done["duration"].to_numpy(float))),
@@ -142,6 +144,41 @@ def _lightest(runs, succeeded) -> float:
         return float("nan")
     failed = runs["mass"][~runs.index.isin(succeeded)].to_numpy(float)
     return float(np.min(failed)) if len(failed) else float("nan")
+
+
+def _hold_torques(runs, succeeded) -> dict[str, float]:
+    """The least peak joint torques [N m] the runs' final grasps need to hold their boxes at rest (NaN: none).
+
+    ``hold_torque_success_max_nm``: the largest over the runs that succeeded, ``hold_torque_failure_min_nm`` the
+    smallest over those that failed but ran, both inside the cones the controller commands;
+    ``hold_torque_true_mu_max_nm``: the largest over every run that ran, inside the true friction's cones
+    (:func:`~bhgrasp.scenarios.rollouts.final_hold_torque`; ``inf`` where the fingers let go).  Under a torque
+    limit, also how many runs needed more than it (``over_torque_limit_runs``) and how many failed above it and
+    within it (``over_torque_limit_failures``, ``within_torque_limit_failures``).
+    """
+    if "hold_torque" not in runs:
+        return dict.fromkeys(HOLD_TORQUES, float("nan"))
+    ran = (runs["status"] == "ok").to_numpy() if "status" in runs else np.ones(len(runs), dtype=bool)
+    won = runs.index.isin(succeeded)
+    need, true_mu = runs["hold_torque"].to_numpy(float), runs["hold_torque_true_mu"].to_numpy(float)
+    figures = {
+        "hold_torque_success_max_nm": _max(need[won]),
+        "hold_torque_failure_min_nm": _min(need[ran & ~won]),
+        "hold_torque_true_mu_max_nm": _max(true_mu[ran]),
+    }
+    if "torque_limit" in runs:
+        over = ran & (need > runs["torque_limit"].to_numpy(float))
+        figures["over_torque_limit_runs"] = float(np.sum(over))
+        figures["over_torque_limit_failures"] = float(np.sum(over & ~won))
+        figures["within_torque_limit_failures"] = float(np.sum(ran & ~over & ~won))
+    return figures
+
+
+HOLD_TORQUES = ("hold_torque_success_max_nm", "hold_torque_failure_min_nm", "hold_torque_true_mu_max_nm")
+
+
+def _min(values: np.ndarray) -> float:
+    return float(np.min(values)) if len(values) else float("nan")
 
 
 def _mean(values: np.ndarray) -> float:

@@ -2,8 +2,20 @@
 
 from __future__ import annotations
 
+from bhgrasp.scenarios.box_grasp import FRICTION
 from bhgrasp.scenarios.demo_result import MU_ASSUMED
-from bhgrasp.thesis.robustness_scenarios import CONFIDENCE, ESTIMATE, MARGIN, MASS_RANGE, SEED, SLIDE, SUCCESS
+from bhgrasp.thesis.robustness_scenarios import (
+    CONFIDENCE,
+    ESTIMATE,
+    MARGIN,
+    MASS_RANGE,
+    SCENARIOS,
+    SEED,
+    SLIDE,
+    SUCCESS,
+)
+
+TORQUE_LIMIT = SCENARIOS["torque_limit"][1]["torque_limit"]  # [N m]
 
 Summaries = dict[str, dict[str, float]]
 
@@ -79,7 +91,7 @@ def limits(summaries: Summaries) -> list[str]:
             f"Under the torque limit heavy boxes fail, the lightest {limited['lightest_failure_kg']:.3f} kg "
             f"(rotation errors up to {limited['max_rotation_mrad']:.0f} mrad, {limited['mean_slip_events']:.1f} "
             "sliding samples per run): F3 opposes F1 and F2 together, so its inner joint carries the hold's largest "
-            "torque, and the heavier the box the more of it."
+            "torque, and the heavier the box the more of it.  " + torque_need(limited)
         )
     margin = summaries.get("mu_margin")
     if margin is not None:
@@ -90,6 +102,25 @@ def limits(summaries: Summaries) -> list[str]:
             f"runs ({margin['mean_slip_events']:.1f} sliding samples per run)."
         )
     return lines
+
+
+def torque_need(limited: dict[str, float]) -> str:
+    """What the torque-limit scenario's boxes need: the least peak joint torque of their final grasps' holds."""
+    over, failed_over = limited["over_torque_limit_runs"], limited["over_torque_limit_failures"]
+    need = (
+        "The least peak joint torque with which any contact forces inside the controller's cones "
+        f"(mu {MU_ASSUMED}) hold a box at rest in its final grasp (a linear program, bhgrasp.grasp.hold_torque) "
+        f"is at most {limited['hold_torque_success_max_nm']:.3f} N m for the boxes that held and at least "
+        f"{limited['hold_torque_failure_min_nm']:.3f} N m for those that failed; {over:.0f} boxes need more than "
+        f"the {TORQUE_LIMIT:g} N m limit, whatever the force distribution, and {failed_over:.0f} of them fail "
+        f"(the rest tilt less than the {1e3 * SUCCESS[1]:g} mrad bound), while "
+        f"{limited['within_torque_limit_failures']:.0f} boxes within the limit fail."
+    )
+    return (
+        f"{need}  Inside the true friction's cones (mu {FRICTION:g}) every box needs at most "
+        f"{limited['hold_torque_true_mu_max_nm']:.3f} N m: the limit takes away the reserve the assumed mu keeps, "
+        "which only a better-known friction returns."
+    )
 
 
 def estimator_limits(summaries: Summaries) -> list[str]:
@@ -122,4 +153,4 @@ def estimator_limits(summaries: Summaries) -> list[str]:
     return lines
 
 
-__all__ = ["estimator_limits", "limits", "robustness_notes"]
+__all__ = ["estimator_limits", "limits", "robustness_notes", "torque_need"]

@@ -77,6 +77,19 @@ TOLERANCES: dict[str, Tolerance] = {
         "the lightest of the boxes that failed: one run counted the other way, as the success rates allow, makes it "
         "another box of the design (0.2-1.0 kg)",
     ),
+    "chapter5/robustness/*/hold_torque_*_nm": Tolerance(
+        1e-5,
+        1e-7,
+        "a linear program (HiGHS, feasibility tolerance 1e-7) on a run's final contacts: its optimum moves with its "
+        "inputs (the default's 3e-11) and within the solver's tolerance (a run counted the other way, which the "
+        "success rates allow, would make these another box's: reported, not hidden)",
+    ),
+    "chapter5/robustness/*_torque_limit_*": Tolerance(
+        0.0,
+        1.0,
+        "counts of runs that failed among those whose hold needs more than the torque limit and among the others: "
+        "one run counted the other way, as the success rates allow",
+    ),
     "chapter5/*slip_events": Tolerance(
         0.0,
         1.0,

@@ -1,0 +1,182 @@
+"""The least joint torque with which a grasp can exert a wrench: can the hand's actuators hold the object at all?
+
+Contact forces f (contact frames (t1, t2, n), :mod:`~bhgrasp.grasp.frames`) exert ``G f`` on the object and load the
+joints with ``J_h^T f`` (thesis (5.20): the torques that press the fingers on the object with f), on top of the
+torque ``tau_0`` the joints carry anyway (the fingers' own weight).  With a torque limit L_j > 0 on each joint, the
+linear program
+
+    min_{f, s}  s   s.t.   G f = w,   f_i in the inscribed friction pyramid of mu,   f_n,i >= f_min,
+                           -s L_j <= tau_0,j + (J_h^T f)_j <= s L_j   for every limited joint j
+
+gives s*, the smallest fraction of its limits that every joint can stay within while the contacts exert w inside
+their cones.  s* <= 1: some admissible forces hold w within the limits; s* > 1: none do, whatever the controller
+distributes, and a joint driven at its limit leaves part of w unmet.  With every limit 1 N m, s* is the least peak
+joint torque [N m].  The pyramids are the force QP's (:mod:`~bhgrasp.grasp.forces`), so the certificate is about the
+forces a controller assuming ``mu`` may command, not what a higher true friction would let through.
+
+Solved with HiGHS (``scipy.optimize.linprog``), exact up to its tolerances (1e-7 relative); bounded cost (one LP of
+3n + 1 variables).  :func:`least_hold_torque` takes the maps; :func:`static_hold_torque` reads them off a state with the
+object at rest in the hand (its weight as w, the hand's gravity torques as tau_0).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from bhgrasp._validation import as_array, as_real, as_vector
+from bhgrasp.data import State
+from bhgrasp.errors import InputError
+from bhgrasp.grasp.cones import friction_pyramid
+from bhgrasp.grasp.frames import contact_frames, grasp_map_from_frames, hand_jacobian
+from bhgrasp.grasp.sensing import ContactSensing
+from bhgrasp.model.hand import Hand
+from bhgrasp.model.hand_joints import finger_indices
+
+
+@dataclass(frozen=True)
+class HoldTorque:
+    """The least-torque way of exerting a wrench (:func:`least_hold_torque`).
+
+    Attributes:
+        fraction: s*, the least max_j |tau_j| / L_j over admissible forces that exert the wrench; ``inf`` when no
+            admissible forces exert it at any torque (``forces`` and ``torques`` are then ``None``).
+        forces: (n, 3) contact-frame forces [N] that reach it (one of them, when several do).
+        torques: (nv,) joint torques tau_0 + J_h^T f [N m] of those forces.
+        joint: Index of the joint at the largest fraction of its limit (-1 when infeasible).
+    """
+
+    fraction: float
+    forces: np.ndarray | None
+    torques: np.ndarray | None
+    joint: int
+
+    @property
+    def within(self) -> bool:
+        """Whether some admissible forces exert the wrench with every joint within its limit (s* <= 1)."""
+        return self.fraction <= 1.0
+
+
+def least_hold_torque(
+    grasp_map: Any,
+    hand_jacobian: Any,
+    wrench: Any,
+    mu: float,
+    limits: Any = 1.0,
+    offset: Any = None,
+    min_normal_force: float = 0.0,
+    facets: int = 8,
+) -> HoldTorque:
+    """s* of the module's linear program, and the forces and joint torques that reach it.
+
+    Args:
+        grasp_map: G (6, 3n) about the object's reference point.
+        hand_jacobian: J_h (3n, nv) in the same contact coordinates (:func:`~bhgrasp.grasp.frames.hand_jacobian`).
+        wrench: w (6,) [N, N m] the contacts must exert on the object, about the same point.
+        mu: Friction coefficient the pyramids are inscribed in (>= 0).
+        limits: L (nv,) or one value [N m] > 0 per joint; ``inf`` leaves a joint unlimited.
+        offset: tau_0 (nv,) [N m] the joints carry besides the contacts (default 0).
+        min_normal_force: f_min [N] >= 0.
+        facets: Sides of each pyramid (>= 3).
+
+    Raises:
+        InputError: Bad shapes, non-finite values, a limit <= 0, no limited joint, or the LP solver failing for a
+            reason other than infeasibility.
+    """
+    grasp = as_array(grasp_map, "grasp_map", (6, None))
+    if grasp.shape[1] == 0 or grasp.shape[1] % 3:
+        raise InputError(f"`grasp_map` must have shape (6, 3n), got shape {grasp.shape}")
+    n = grasp.shape[1] // 3
+    jacobian = as_array(hand_jacobian, "hand_jacobian", (3 * n, None))
+    nv = jacobian.shape[1]
+    w = as_vector(wrench, "wrench", 6)
+    try:
+        limit = np.array(np.broadcast_to(np.asarray(limits, dtype=float), (nv,)))
+    except (TypeError, ValueError) as error:
+        raise InputError(f"`limits` must be one number or {nv} numbers > 0 [N m], got {limits!r}") from error
+    if np.any(np.isnan(limit)) or np.any(limit <= 0.0):
+        raise InputError(f"`limits` must be > 0 [N m] (inf: unlimited), got {limit}")
+    tau_0 = np.zeros(nv) if offset is None else as_vector(offset, "offset", nv)
+    f_min = as_real(min_normal_force, "min_normal_force")
+    if f_min < 0.0:
+        raise InputError(f"`min_normal_force` must be >= 0, got {f_min}")
+    from scipy.optimize import linprog  # here: importing bhgrasp.grasp does not import scipy
+
+    limited = np.flatnonzero(np.isfinite(limit))
+    if not len(limited):
+        raise InputError("`limits` must limit at least one joint (all are inf)")
+    pyramid, _ = friction_pyramid(mu, facets)
+
+    size = 3 * n + 1  # x = (f, s)
+    cones = np.zeros((n * len(pyramid), size))
+    for i in range(n):
+        cones[i * len(pyramid) : (i + 1) * len(pyramid), 3 * i : 3 * i + 3] = pyramid
+    torque = jacobian.T[limited] / limit[limited, None]  # (J_h^T f)_j / L_j
+    upper = np.hstack((torque, -np.ones((len(limited), 1))))  # tau_j / L_j - s <= -tau_0,j / L_j
+    lower = np.hstack((-torque, -np.ones((len(limited), 1))))  # -tau_j / L_j - s <= tau_0,j / L_j
+    scaled_offset = tau_0[limited] / limit[limited]
+    bounds = [(None, None), (None, None), (f_min, None)] * n + [(0.0, None)]
+    result = linprog(
+        np.eye(size)[-1],
+        A_ub=np.vstack((cones, upper, lower)),
+        b_ub=np.concatenate((np.zeros(len(cones)), -scaled_offset, scaled_offset)),
+        A_eq=np.hstack((grasp, np.zeros((6, 1)))),
+        b_eq=w,
+        bounds=bounds,
+        method="highs",
+    )
+    if result.status == 2:  # infeasible: no admissible forces exert w
+        return HoldTorque(math.inf, None, None, -1)
+    if result.status != 0:
+        raise InputError(f"the hold-torque LP did not solve: {result.message}")
+    forces = result.x[:-1].reshape(n, 3)
+    torques = tau_0 + jacobian.T @ result.x[:-1]
+    ratios = np.where(np.isfinite(limit), np.abs(torques) / limit, 0.0)
+    return HoldTorque(float(result.x[-1]), forces, torques, int(np.argmax(ratios)))
+
+
+def static_hold_torque(
+    hand: Hand,
+    state: State,
+    mass: float,
+    mu: float,
+    limits: Any = None,
+    gravity: Any = (0.0, 0.0, -9.81),
+    body: str | None = None,
+    **kw: Any,
+) -> HoldTorque:
+    """:func:`least_hold_torque` of the grasp in ``state``: the fingers hold object 0 (``mass`` [kg]) at rest.
+
+    The contacts are the state's, one per finger touching the object (force-weighted point and normal, on the link
+    that presses hardest, as a grasp controller senses them: :class:`~bhgrasp.grasp.sensing.ContactSensing`); w is
+    the object's weight reversed, about its position (its centre of mass); tau_0 the hand's gravity torques.
+    ``limits``: as :func:`least_hold_torque`'s; default 1 N m on every finger joint and none on the joints that move
+    the whole hand (a wrist mount's), so that ``fraction`` is the least peak finger joint torque [N m].
+    ``body``: the object's body name, to leave out the fingers' contacts with anything else (default: every
+    contact of a finger link).  ``kw``: ``min_normal_force`` and ``facets``.
+
+    No finger touching the object: ``fraction`` ``inf`` (nothing holds it).
+
+    Raises:
+        InputError: No object in the state.
+    """
+    if not state.object_poses:
+        raise InputError("static_hold_torque needs the object's pose in the state (a scene with an object)")
+    touching = [c for c in ContactSensing(hand).fingers(state, body).values() if c.link is not None]
+    if not touching:
+        return HoldTorque(math.inf, None, None, -1)
+    points, normals = np.array([c.point for c in touching]), np.array([c.normal for c in touching])
+    grasp = grasp_map_from_frames(points, contact_frames(normals), state.object_poses[0].translation)
+    jacobian = hand_jacobian(hand, state.q, points, [c.link for c in touching], normals)
+    if limits is None:
+        limits = np.full(hand.nv, math.inf)
+        limits[np.concatenate([finger_indices(hand, finger) for finger in hand.fingers])] = 1.0
+    weight = as_real(mass, "mass") * as_vector(gravity, "gravity", 3)
+    wrench = np.concatenate((-weight, np.zeros(3)))
+    return least_hold_torque(grasp, jacobian, wrench, mu, limits, hand.gravity_torques(state.q), **kw)
+
+
+__all__ = ["HoldTorque", "least_hold_torque", "static_hold_torque"]
