@@ -15,6 +15,7 @@ import pinocchio as pin
 
 import bhgrasp as bh
 from bhgrasp.bench.height import grasp_clearance
+from bhgrasp.bench.need import protocol_need
 from bhgrasp.bench.protocol import (
     DIRECTIONS,
     FORCE_LIMIT,
@@ -42,14 +43,15 @@ STOP_MARGIN = 0.01  # [rad] a distal joint this close to its upper limit rests o
 PLACED = 0.002  # [m] placed: back within this of its resting height, the stand carrying at least half its weight
 
 
-def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
+def evaluate(trial: Trial, trajectory, hand: bh.Hand, heading: float = 0.0) -> dict:
     """A trial's record from its trajectory.
 
     Lifted height; displacement and rotation in the palm frame from the closed grasp before the lift (the lift's sag
     counts) through the shake; the grip once lifted (each finger's normal force on the object against
     :func:`least_grip`, distal joints off their stops); the envelope (peak forces, finger joint torques against their
-    ratings); success (held, gripped, inside the envelope, within the thresholds, and placed back), slip, and why
-    it failed.
+    ratings) and what the protocol's loads need of the ratings at the held grasp (``need_to_rating``, ``need_joint``:
+    :mod:`~bhgrasp.bench.need`; the pushes turned ``heading`` [rad] with the hand); success (held, gripped, inside
+    the envelope, within the thresholds, and placed back), slip, and why it failed.
     """
     t = trajectory.t
     closed = min(int(np.searchsorted(t, LIFT_AT - 1e-9)), len(t) - 1)
@@ -74,6 +76,7 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand) -> dict:
     }
     record.update(contact_summary(trajectory, hand, held, shaken, supports(trial)))
     record.update(joint_load(trajectory, hand))
+    record["need_to_rating"], record["need_joint"] = protocol_need(trajectory, hand, held, trial.item.mass, heading)
     forces = held_forces(trajectory, hand, held)
     record.update({f"held_force_{finger}": float(f) for finger, f in zip(hand.fingers, forces)})
     distal = [hand.joint_index(f"{finger}_distal") for finger in hand.fingers]
@@ -198,6 +201,16 @@ def failure_reason(
     return f"{NO_HEIGHT}; {reason}" if reason and not record.get("height_found", True) else reason
 
 
+def _need(record: dict) -> str:
+    """What the held grasp needed of the ratings (bench.need), as the envelope failure's last clause."""
+    need, joint = record.get("need_to_rating"), record.get("need_joint")
+    if need is None:
+        return ""
+    if need > 1.0:
+        return f"; at the held grasp the protocol's loads need {need:.2f} x the ratings ({joint}) whatever the forces"
+    return f"; at the held grasp forces within {need:.2f} x the ratings ({joint}) carry the protocol's loads"
+
+
 def _failure(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.ndarray, end: float, mass: float) -> str:
     """:func:`failure_reason` once the grasp height is known to exist, or not."""
     if record["lifted"] <= 0.5 * LIFT:
@@ -219,7 +232,7 @@ def _failure(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.nda
         force = max(record["peak_contact_force"], record["peak_stand_force"])
         return (
             f"outside the real hand's envelope: peak contact {force:.0f} N (limit {FORCE_LIMIT:.0f}), "
-            f"{record['most_loaded_joint']} at {record['torque_to_rating']:.2f} x its rating"
+            f"{record['most_loaded_joint']} at {record['torque_to_rating']:.2f} x its rating{_need(record)}"
         )
     moved = np.flatnonzero((offsets >= LOOSE[0]) | (turns >= LOOSE[1]))
     if len(moved) == 0:

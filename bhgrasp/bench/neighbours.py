@@ -114,7 +114,7 @@ def run_among_neighbours(
     trial = dataclasses.replace(trial, table=True)  # the height rule keeps the fingers off the whole table
     clutter = settle_neighbours(trial, count, seed, dt)
     trajectory, hand = simulate_trial(trial, dt, record_every, duration, clutter)
-    record = evaluate(trial, trajectory, hand)
+    record = evaluate(trial, trajectory, hand, clutter.heading)
     moved = neighbour_displacements(trajectory)
     names = [item.name for item in clutter.objects[1:]]
     record["neighbours"] = names

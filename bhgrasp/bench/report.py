@@ -30,6 +30,7 @@ METRICS = (
     "peak_stand_force",
     "peak_joint_torque",
     "torque_to_rating",
+    "need_to_rating",
     "held_force_F1",
     "held_force_F2",
     "held_force_F3",
@@ -128,7 +129,10 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
         f"hand's envelope all along (no contact force above {FORCE_LIMIT:.0f} N, twice Barrett's stalled "
         "fingertip force; no finger joint torque above its rating, the pucks' MT through ideal gears); and "
         "placed back on its stand (within 2 mm of its resting height, the stand carrying half its weight). "
-        "Strict: 1 cm and 5 deg. Held F1/F2/F3: each finger's normal force on the object once lifted.",
+        "Strict: 1 cm and 5 deg. Held F1/F2/F3: each finger's normal force on the object once lifted. Need x "
+        "rating: the least fraction of the inner and outer joints' ratings with which any contact forces inside the "
+        "friction cones carry the object's weight and each push at rest in the grasp it was held with before the "
+        "pushes (a lower bound of the x rating column there, `bhgrasp/bench/need.py`; - where nothing held it).",
         "",
         *(
             [
@@ -156,8 +160,8 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
         "",
         "| object | set | grasp | spread [deg] | actuation | success | strict | placed | max disp. [mm] | "
         "max rot. [deg] | slip samples | held F1/F2/F3 [N] | peak contact [N] | peak on stand [N] | "
-        "peak joint torque [N m] | x rating | envelope | failure |",
-        "|---|---|---|---:|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|",
+        "peak joint torque [N m] | x rating | need x rating | envelope | failure |",
+        "|---|---|---|---:|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|",
     ]
     for t in trials:
         number = functools.partial(_number, t)
@@ -170,7 +174,7 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
             f"{'/'.join(number(f'held_force_{f}') for f in ('F1', 'F2', 'F3'))} | "
             f"{number('peak_contact_force')} | {number('peak_stand_force')} | "
             f"{number('peak_joint_torque', fmt='.2f')} | {number('torque_to_rating', fmt='.2f')} | "
-            f"{_mark(t['inside_envelope'])} | {t['failure'] or ''} |"
+            f"{number('need_to_rating', fmt='.2f')} | {_mark(t['inside_envelope'])} | {t['failure'] or ''} |"
         )
     return "\n".join(lines + _neighbour_lines(trials)) + "\n"
 
@@ -221,7 +225,7 @@ def compare(trials: list[dict[str, Any]], reference: list[dict[str, Any]], rel: 
             problems.append(f"{key}: not in the reference")
             continue
         among = ("neighbours", "neighbour_seed", "neighbours_disturbed") if _among(trial, known) else ()
-        for name in (*OUTCOMES, "most_loaded_joint", "failure", *among):
+        for name in (*OUTCOMES, "most_loaded_joint", "need_joint", "failure", *among):
             if trial.get(name) != known.get(name):
                 problems.append(f"{key} {name}: {trial.get(name)!r}, reference {known.get(name)!r}")
         problems += _metric_problems(trial, known, str(key), rel)
@@ -245,7 +249,9 @@ def _among(*trials: dict[str, Any]) -> bool:
 
 
 def _number(trial: dict[str, Any], key: str, scale: float = 1.0, fmt: str = ".1f") -> str:
-    return "-" if trial[key] is None else format(scale * trial[key], fmt)
+    """``trial[key]`` scaled and formatted; "-" where it is None or absent (a report written before it existed)."""
+    value = trial.get(key)
+    return "-" if value is None else format(scale * value, fmt)
 
 
 def _mark(value: bool) -> str:

@@ -88,7 +88,8 @@ def run_bench(
         trial = {key: row[key] for key in ("spec", "set", "grasp", "actuation", *(CLUTTER if neighbours else ()))}
         trial["object"] = row["name"]
         if row["status"] == "ok":
-            trial.update({key: row[key] for key in ("spread", *OUTCOMES, *METRICS, "most_loaded_joint", "failure")})
+            named = ("spread", *OUTCOMES, *METRICS, "most_loaded_joint", "need_joint", "failure")
+            trial.update({key: row[key] for key in named})
             trial.update({key: row[key] for key in NEIGHBOURS if neighbours})
             if neighbours:  # a count (the table's column is float where an errored trial left it empty)
                 trial["neighbours_disturbed"] = int(trial["neighbours_disturbed"])
@@ -101,6 +102,7 @@ def run_bench(
                 inside_envelope=None,
                 gripped=False,
                 most_loaded_joint=None,
+                need_joint=None,
                 failure=row["error"],
                 **dict.fromkeys(METRICS),
                 **dict.fromkeys(NEIGHBOURS if neighbours else ()),
