@@ -18,6 +18,7 @@ from bhgrasp.errors import (
     ModelError,
     NotSettled,
     SimulationDiverged,
+    SolverFailed,
     UnreachableError,
 )
 
@@ -117,6 +118,7 @@ __all__ = [
     "SimulationDiverged",
     "Simulator",
     "SimulatorSettings",
+    "SolverFailed",
     "Sphere",
     "SpringDamper",
     "SpringMounted",

@@ -77,3 +77,7 @@ class NotSettled(BhgraspError, RuntimeError):
         )
         self.time = time
         self.speeds = speeds
+
+
+class SolverFailed(BhgraspError, RuntimeError):
+    """A numerical solver stopped without an answer (an iteration limit, numerical trouble), naming why."""

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import numpy as np
 import pinocchio as pin
 import pytest
 
 import bhgrasp as bh
+from bhgrasp.bench import report as bench_report
 from bhgrasp.bench.height import STAND_HEIGHT, TABLE_REACH, grasp_clearance, stand_clearance
 from bhgrasp.bench.metrics import stand_support
 from bhgrasp.bench.neighbours import (
@@ -178,3 +180,21 @@ def test_an_object_set_down_across_the_stands_seam_rests_on_the_stand_and_the_ta
     assert 0.05 * weight < on_stand < 0.95 * weight  # it rests on both ...
     assert both == pytest.approx(weight, rel=1e-3)  # ... which carry its weight together
     assert stand_support(trajectory, last, supports(CAN)) == on_stand  # alone: the stand only
+
+
+def test_the_readme_states_the_committed_rates_among_neighbours() -> None:
+    """The README's prose rates among neighbours (both piles) are the committed reports' (compared in CI)."""
+    from bhgrasp.thesis.results import REFERENCE
+
+    readme = " ".join((REFERENCE.parents[1] / "README.md").read_text().split())
+
+    def rate(name: str, group: str) -> str:
+        trials = json.loads((REFERENCE / f"{name}.json").read_text())["trials"]
+        good, _, total = bench_report.success_rates(trials, group)["barrett"]
+        return f"{good}/{total}"
+
+    first = rate("grasp_neighbours", "development"), rate("grasp_neighbours", "held-out")
+    assert f"the development set holds {first[0]} among six neighbours and the held-out set {first[1]}" in readme
+    second = rate("grasp_neighbours_seed2", "development"), rate("grasp_neighbours_seed2", "held-out")
+    assert f"holds {second[0]} and {second[1]}, the held-out set's rate alone" in readme
+    assert rate("grasp_benchmark", "held-out") == second[1]  # alone

@@ -541,21 +541,3 @@ def test_the_meshed_development_set_ends_as_its_primitives_do() -> None:
             assert trial[outcome] == twin[outcome], f"{trial['object']} {trial['grasp']}: {outcome} differs"
         bound = 0.01 if trial["spec"].startswith("box:") else 0.1
         assert trial["peak_contact_force"] == pytest.approx(twin["peak_contact_force"], rel=bound)
-
-
-def test_the_readme_states_the_committed_rates_among_neighbours() -> None:
-    """The README's prose rates among neighbours (both piles) are the committed reports' (compared in CI)."""
-    from bhgrasp.thesis.results import REFERENCE
-
-    readme = " ".join((REFERENCE.parents[1] / "README.md").read_text().split())
-
-    def rate(name: str, group: str) -> str:
-        trials = json.loads((REFERENCE / f"{name}.json").read_text())["trials"]
-        good, _, total = bench_report.success_rates(trials, group)["barrett"]
-        return f"{good}/{total}"
-
-    first = rate("grasp_neighbours", "development"), rate("grasp_neighbours", "held-out")
-    assert f"the development set holds {first[0]} among six neighbours and the held-out set {first[1]}" in readme
-    second = rate("grasp_neighbours_seed2", "development"), rate("grasp_neighbours_seed2", "held-out")
-    assert f"holds {second[0]} and {second[1]}, the held-out set's rate alone" in readme
-    assert rate("grasp_benchmark", "held-out") == second[1]  # alone

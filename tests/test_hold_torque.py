@@ -10,8 +10,8 @@ from scipy.linalg import null_space
 
 import bhgrasp as bh
 from bhgrasp.grasp.cones import friction_pyramid
-from bhgrasp.grasp.frames import contact_frames, grasp_map_from_frames
-from bhgrasp.grasp.hold_torque import least_hold_torque, static_hold_torque
+from bhgrasp.grasp.frames import contact_frames, grasp_map_from_frames, hand_jacobian
+from bhgrasp.grasp.hold_torque import grasp_contacts, least_hold_torque, static_hold_torque
 from bhgrasp.scenarios.estimation import state_at
 from bhgrasp.scenarios.grasp_demo import run_grasp_demo
 from bhgrasp.scenarios.rollouts import final_hold_torque
@@ -80,24 +80,18 @@ def heavy_hold():
     return result, state_at(result.trajectory, len(result.trajectory.t) - 1)
 
 
-def test_no_admissible_forces_hold_the_demos_box_with_less_torque(heavy_hold) -> None:
-    """A second method: admissible forces drawn at random on the internal-force space of G f = w (f = f* + N z)
-    never need less peak torque than the LP's optimum, and the LP's own forces meet every constraint."""
+def test_no_forces_of_the_model_hold_the_demos_box_with_less_torque(heavy_hold) -> None:
+    """A second method: forces drawn at random on the internal-force space of G f = w (f = f* + N z) inside the
+    pyramids never need less peak torque than the LP's optimum, and the LP's own forces meet every constraint."""
     result, state = heavy_hold
-    hand = result.scene.hand
-    hold = static_hold_torque(hand, state, 0.9, 0.6, body=result.scene.objects[0].name)
+    hand, body = result.scene.hand, result.trajectory.object_names[0]
+    hold = static_hold_torque(hand, state, body, 0.9, 0.6)
     assert 0.7 < hold.fraction < 1.0  # F3's inner joint: it opposes F1 and F2 together
     assert result.trajectory.joint_names[hold.joint] == "F3_proximal"
-    # rebuild the maps as the function does, to check its answer independently
-    from bhgrasp.grasp.sensing import ContactSensing
-
-    touching = [c for c in ContactSensing(hand).fingers(state, result.scene.objects[0].name).values() if c.link]
-    points = np.array([c.point for c in touching])
-    frames = contact_frames(np.array([c.normal for c in touching]))
-    grasp = grasp_map_from_frames(points, frames, state.object_poses[0].translation)
-    jacobian = np.vstack(
-        [frames[i].T @ hand.point_jacobians(state.q, [c.link], points[i : i + 1])[0] for i, c in enumerate(touching)]
-    )
+    points, normals, links = grasp_contacts(hand, state, body)
+    assert len(links) == 3  # one per finger
+    grasp = grasp_map_from_frames(points, contact_frames(normals), state.object_poses[0].translation)
+    jacobian = hand_jacobian(hand, state.q, points, links, normals)
     wrench = np.array([0.0, 0.0, 0.9 * 9.81, 0.0, 0.0, 0.0])
     tau_0 = hand.gravity_torques(state.q)
     pyramid, _ = friction_pyramid(0.6, 8)
@@ -114,16 +108,36 @@ def test_no_admissible_forces_hold_the_demos_box_with_less_torque(heavy_hold) ->
     assert inside.sum() > 1000 and peaks.min() >= hold.fraction - 1e-9
 
 
-def test_the_rollouts_figure_is_the_final_grasps_hold(heavy_hold) -> None:
-    result, state = heavy_hold
-    needed = final_hold_torque(result, 0.6)
-    assert (
-        needed
-        == static_hold_torque(
-            result.scene.hand, state, 0.9, 0.6, body=result.scene.objects[0].name, min_normal_force=0.5
-        ).fraction
-    )
-    assert final_hold_torque(result, 0.8) < needed  # more friction, less squeeze: less torque
+def test_the_joints_carry_the_gravity_torques_and_the_contacts_at_rest() -> None:
+    """The convention against the simulator: in the demo's hold at rest, tau = g(q) + J_h^T f with every contact
+    point on its own link and f the simulated forces on the box (contact frames) is the torque the joints apply."""
+    result = run_grasp_demo(mass=0.5, duration=3.0)
+    trajectory, hand = result.trajectory, result.scene.hand
+    k = len(trajectory.t) - 1
+    state, body = state_at(trajectory, k), trajectory.object_names[0]
+    assert np.abs(state.v).max() < 1e-3  # at rest
+    points, normals, links = grasp_contacts(hand, state, body, contacts="point")
+    on_box = [i for i, (link, other) in enumerate(state.contact_bodies) if other == body]
+    forces = np.einsum("nji,nj->ni", contact_frames(normals), state.contact_forces[on_box]).ravel()
+    predicted = hand.gravity_torques(state.q) + hand_jacobian(hand, state.q, points, links, normals).T @ forces
+    np.testing.assert_allclose(predicted, trajectory.tau[k], atol=2e-3 * np.abs(trajectory.tau[k]).max())
+
+
+def test_the_circumscribed_pyramid_holds_the_cone() -> None:
+    """Four facets put the inscribed pyramid's edges on the cone along t1; the circumscribed one's faces touch it,
+    its edges at mu / cos(pi / 4): the pinch needs f_n = W cos(pi / 4) / (2 mu)."""
+    weight, mu = 9.0, 0.6
+    grasp, jacobian, wrench = pinch(weight)
+    outer = least_hold_torque(grasp, jacobian, wrench, mu, facets=4, cone="circumscribed")
+    assert outer.fraction == pytest.approx(weight * math.cos(math.pi / 4) / (2 * mu), rel=1e-7)
+    with pytest.raises(bh.InputError, match="`cone` must be one of"):
+        least_hold_torque(grasp, jacobian, wrench, mu, cone="exact")
+
+
+def test_the_rollouts_figure_falls_with_more_friction(heavy_hold) -> None:
+    result, _ = heavy_hold
+    assumed, true = final_hold_torque(result, 0.6), final_hold_torque(result, 0.8)
+    assert 0.7 < assumed < 1.0 and true < assumed  # more friction, less squeeze: less torque
 
 
 def test_the_table_counts_the_boxes_beyond_the_limit() -> None:

@@ -207,8 +207,11 @@ def _need(record: dict) -> str:
     if need is None:
         return ""
     if need > 1.0:
-        return f"; at the held grasp the protocol's loads need {need:.2f} x the ratings ({joint}) whatever the forces"
-    return f"; at the held grasp forces within {need:.2f} x the ratings ({joint}) carry the protocol's loads"
+        return (
+            f"; at the held grasp's contacts, forces inside the friction cones need {need:.2f} x the ratings ({joint}) "
+            "to carry the protocol's loads at rest"
+        )
+    return f"; at the held grasp's contacts, forces within {need:.2f} x the ratings ({joint}) carry the loads at rest"
 
 
 def _failure(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.ndarray, end: float, mass: float) -> str:

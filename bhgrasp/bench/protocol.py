@@ -67,6 +67,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+import pinocchio as pin
+
 from bhgrasp.bench.objects import BenchObject
 from bhgrasp.errors import InputError
 
@@ -94,6 +97,7 @@ DROP = 0.005  # [m] the place stops this far above the lift's start: a stiff wri
 DT = 2.5e-4  # [s]
 STIFFNESS = 3e5  # [N/m] normal; tangential a tenth; damping 2e-3 s of each
 DIRECTIONS = ("+x", "-x", "+y", "-y", "+z", "-z")
+PUSH = 10.0  # [N per kg of the object] the shake's push along each direction in turn (bench.trial.shake_force)
 GRIP_MT = 600.0  # puck torque units (0.0058 N m at the motor, 27 % of MT): the force-limited close (both grasps)
 LOOSE, STRICT = (0.05, math.radians(15.0)), (0.01, math.radians(5.0))  # [m], [rad]
 # The real hand's envelope (bhgrasp.barrett.transmission, urdf/README.md): Barrett's stalled fingertip force is
@@ -133,6 +137,14 @@ class Trial:
         return spread_of(self.item) if self.spread is None else float(self.spread)
 
 
+def push_axes(heading: float = 0.0) -> np.ndarray:
+    """(6, 3) unit world directions of the shake's pushes, :data:`DIRECTIONS` turned ``heading`` [rad] about +z."""
+    axes = np.vstack([np.eye(3)[[0, 0, 1, 1, 2, 2]] * np.array([1, -1, 1, -1, 1, -1])[:, None]])
+    if heading != 0.0:
+        axes = axes @ pin.rpy.rpyToMatrix(0.0, 0.0, heading).T
+    return axes
+
+
 def spread_of(item: BenchObject) -> float:
     """The pre-shape spread [rad], the same for both grasps: 0 for a box, else :data:`THREE_FINGER_SPREAD`.
 
@@ -158,6 +170,7 @@ __all__ = [
     "LIFT_AT",
     "LOOSE",
     "PRESHAPE",
+    "PUSH",
     "RELEASE",
     "SHAKE_TIME",
     "STAND",
@@ -165,5 +178,6 @@ __all__ = [
     "STRICT",
     "THREE_FINGER_SPREAD",
     "Trial",
+    "push_axes",
     "spread_of",
 ]

@@ -130,9 +130,9 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
         "fingertip force; no finger joint torque above its rating, the pucks' MT through ideal gears); and "
         "placed back on its stand (within 2 mm of its resting height, the stand carrying half its weight). "
         "Strict: 1 cm and 5 deg. Held F1/F2/F3: each finger's normal force on the object once lifted. Need x "
-        "rating: the least fraction of the inner and outer joints' ratings with which any contact forces inside the "
-        "friction cones carry the object's weight and each push at rest in the grasp it was held with before the "
-        "pushes (a lower bound of the x rating column there, `bhgrasp/bench/need.py`; - where nothing held it).",
+        "rating: the least fraction of the inner and outer joints' ratings with which forces at the hand's contact "
+        "points on the object, inside the friction cones, carry its weight and each push at rest, in the grasp held "
+        "before the pushes (`bhgrasp/bench/need.py`; - where the hand did not touch it).",
         "",
         *(
             [
@@ -225,7 +225,7 @@ def compare(trials: list[dict[str, Any]], reference: list[dict[str, Any]], rel: 
             problems.append(f"{key}: not in the reference")
             continue
         among = ("neighbours", "neighbour_seed", "neighbours_disturbed") if _among(trial, known) else ()
-        for name in (*OUTCOMES, "most_loaded_joint", "need_joint", "failure", *among):
+        for name in (*OUTCOMES, "most_loaded_joint", "failure", *among):
             if trial.get(name) != known.get(name):
                 problems.append(f"{key} {name}: {trial.get(name)!r}, reference {known.get(name)!r}")
         problems += _metric_problems(trial, known, str(key), rel)

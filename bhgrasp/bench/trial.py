@@ -6,7 +6,6 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-import pinocchio as pin
 
 import bhgrasp as bh
 from bhgrasp.barrett.commands import BarrettDriver
@@ -26,10 +25,12 @@ from bhgrasp.bench.protocol import (
     LIFT,
     LIFT_AT,
     PRESHAPE,
+    PUSH,
     RELEASE,
     SHAKE_TIME,
     STIFFNESS,
     Trial,
+    push_axes,
 )
 from bhgrasp.bench.table import NEIGHBOUR_DRAG, Clutter, stand_of, supports
 from bhgrasp.controllers.mount import MountServo
@@ -223,9 +224,7 @@ def shake_force(mass: float, objects: int = 1, heading: float = 0.0):
     (:mod:`~bhgrasp.bench.heading`: the same pushes in the hand's frame); the other objects (neighbours) are not
     pushed.
     """
-    axes = np.vstack([np.eye(3)[[0, 0, 1, 1, 2, 2]] * np.array([1, -1, 1, -1, 1, -1])[:, None]])
-    if heading != 0.0:
-        axes = axes @ pin.rpy.rpyToMatrix(0.0, 0.0, heading).T
+    axes = push_axes(heading)
     none = np.zeros((objects, 3))
 
     def force(t: float) -> np.ndarray:
@@ -233,7 +232,7 @@ def shake_force(mass: float, objects: int = 1, heading: float = 0.0):
         if not 0 <= k < 6:
             return none
         pushed = none.copy()
-        pushed[0] = 10.0 * mass * axes[k]
+        pushed[0] = PUSH * mass * axes[k]
         return pushed
 
     return force

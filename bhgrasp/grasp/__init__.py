@@ -35,7 +35,7 @@ from bhgrasp.grasp.frames import (
     grasp_map,
     hand_jacobian,
 )
-from bhgrasp.grasp.hold_torque import HoldTorque, least_hold_torque, static_hold_torque
+from bhgrasp.grasp.hold_torque import HoldTorque, grasp_contacts, least_hold_torque, static_hold_torque
 from bhgrasp.grasp.kinematics import (
     GraspKinematics,
     ObjectState,
@@ -93,6 +93,7 @@ __all__ = [
     "friction_cone_edges",
     "friction_pyramid",
     "grasp_constraint_residual",
+    "grasp_contacts",
     "grasp_dynamics",
     "grasp_kinematics",
     "grasp_map",

@@ -1,22 +1,26 @@
 """The least joint torque with which a grasp can exert a wrench: can the hand's actuators hold the object at all?
 
-Contact forces f (contact frames (t1, t2, n), :mod:`~bhgrasp.grasp.frames`) exert ``G f`` on the object and load the
-joints with ``J_h^T f`` (thesis (5.20): the torques that press the fingers on the object with f), on top of the
-torque ``tau_0`` the joints carry anyway (the fingers' own weight).  With a torque limit L_j > 0 on each joint, the
-linear program
+Contact forces f (contact frames (t1, t2, n), forces on the object, :mod:`~bhgrasp.grasp.frames`) exert ``G f`` on the
+object and load the joints with ``J_h^T f`` (thesis (5.20): at rest the hand's joints carry ``tau = tau_0 + J_h^T f``,
+``tau_0`` what they carry anyway, the fingers' own weight).  With a torque limit L_j > 0 on each joint, the linear
+program
 
-    min_{f, s}  s   s.t.   G f = w,   f_i in the inscribed friction pyramid of mu,   f_n,i >= f_min,
+    min_{f, s}  s   s.t.   G f = w,   f_i in a friction pyramid of mu,   f_n,i >= f_min,
                            -s L_j <= tau_0,j + (J_h^T f)_j <= s L_j   for every limited joint j
 
-gives s*, the smallest fraction of its limits that every joint can stay within while the contacts exert w inside
-their cones.  s* <= 1: some admissible forces hold w within the limits; s* > 1: none do, whatever the controller
-distributes, and a joint driven at its limit leaves part of w unmet.  With every limit 1 N m, s* is the least peak
-joint torque [N m].  The pyramids are the force QP's (:mod:`~bhgrasp.grasp.forces`), so the certificate is about the
-forces a controller assuming ``mu`` may command, not what a higher true friction would let through.
+gives s*, the smallest fraction of its limits that every joint can stay within while these contacts exert w.  With
+every limit 1 N m, s* is the least peak joint torque [N m].  Two pyramids (``cone``):
 
-Solved with HiGHS (``scipy.optimize.linprog``), exact up to its tolerances (1e-7 relative); bounded cost (one LP of
-3n + 1 variables).  :func:`least_hold_torque` takes the maps; :func:`static_hold_torque` reads them off a state with the
-object at rest in the hand (its weight as w, the hand's gravity torques as tau_0).
+- ``"inscribed"`` (the force QP's, :mod:`~bhgrasp.grasp.forces`): inside the cone, the forces a controller assuming
+  ``mu`` may command.  s* > 1: none of those holds w within the limits, whatever the controller distributes.
+- ``"circumscribed"``: the pyramid whose faces touch the cone (slope mu / cos(pi / facets) on its edges), which holds
+  every force of the cone.  Then s* is a lower bound: forces a Coulomb contact of ``mu`` can take, at these contacts,
+  need at least s* of the limits to hold w at rest.
+
+Solved with HiGHS (``scipy.optimize.linprog``, imported when called): one LP of 3n + 1 variables, bounded cost.
+:func:`least_hold_torque` takes the maps; :func:`static_hold_torque` reads them off a state's contacts with one
+object, as a controller senses them (one per finger) or point by point (every contact point on its own link, the
+palm's too).
 """
 
 from __future__ import annotations
@@ -29,12 +33,15 @@ import numpy as np
 
 from bhgrasp._validation import as_array, as_real, as_vector
 from bhgrasp.data import State
-from bhgrasp.errors import InputError
+from bhgrasp.errors import InputError, SolverFailed
 from bhgrasp.grasp.cones import friction_pyramid
 from bhgrasp.grasp.frames import contact_frames, grasp_map_from_frames, hand_jacobian
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
 from bhgrasp.model.hand_joints import finger_indices
+
+CONES = ("inscribed", "circumscribed")
+CONTACTS = ("finger", "point")
 
 
 @dataclass(frozen=True)
@@ -42,11 +49,12 @@ class HoldTorque:
     """The least-torque way of exerting a wrench (:func:`least_hold_torque`).
 
     Attributes:
-        fraction: s*, the least max_j |tau_j| / L_j over admissible forces that exert the wrench; ``inf`` when no
-            admissible forces exert it at any torque (``forces`` and ``torques`` are then ``None``).
+        fraction: s*, the least max_j |tau_j| / L_j over the pyramids' forces that exert the wrench; ``inf`` when no
+            such forces exert it at any torque (``forces`` and ``torques`` are then ``None``).
         forces: (n, 3) contact-frame forces [N] that reach it (one of them, when several do).
         torques: (nv,) joint torques tau_0 + J_h^T f [N m] of those forces.
-        joint: Index of the joint at the largest fraction of its limit (-1 when infeasible).
+        joint: Index of the limited joint at the largest fraction of its limit (the first of equals; -1 when
+            infeasible).
     """
 
     fraction: float
@@ -56,7 +64,7 @@ class HoldTorque:
 
     @property
     def within(self) -> bool:
-        """Whether some admissible forces exert the wrench with every joint within its limit (s* <= 1)."""
+        """Whether some of the pyramids' forces exert the wrench with every joint within its limit (s* <= 1)."""
         return self.fraction <= 1.0
 
 
@@ -69,6 +77,7 @@ def least_hold_torque(
     offset: Any = None,
     min_normal_force: float = 0.0,
     facets: int = 8,
+    cone: str = "inscribed",
 ) -> HoldTorque:
     """s* of the module's linear program, and the forces and joint torques that reach it.
 
@@ -76,15 +85,16 @@ def least_hold_torque(
         grasp_map: G (6, 3n) about the object's reference point.
         hand_jacobian: J_h (3n, nv) in the same contact coordinates (:func:`~bhgrasp.grasp.frames.hand_jacobian`).
         wrench: w (6,) [N, N m] the contacts must exert on the object, about the same point.
-        mu: Friction coefficient the pyramids are inscribed in (>= 0).
+        mu: Friction coefficient (>= 0).
         limits: L (nv,) or one value [N m] > 0 per joint; ``inf`` leaves a joint unlimited.
         offset: tau_0 (nv,) [N m] the joints carry besides the contacts (default 0).
         min_normal_force: f_min [N] >= 0.
         facets: Sides of each pyramid (>= 3).
+        cone: ``"inscribed"`` or ``"circumscribed"`` pyramids (module docstring).
 
     Raises:
-        InputError: Bad shapes, non-finite values, a limit <= 0, no limited joint, or the LP solver failing for a
-            reason other than infeasibility.
+        InputError: Bad shapes, non-finite values, a limit <= 0, no limited joint, or an unknown ``cone``.
+        SolverFailed: HiGHS stopped without an answer (an iteration limit or numerical trouble).
     """
     grasp = as_array(grasp_map, "grasp_map", (6, None))
     if grasp.shape[1] == 0 or grasp.shape[1] % 3:
@@ -101,14 +111,16 @@ def least_hold_torque(
         raise InputError(f"`limits` must be > 0 [N m] (inf: unlimited), got {limit}")
     tau_0 = np.zeros(nv) if offset is None else as_vector(offset, "offset", nv)
     f_min = as_real(min_normal_force, "min_normal_force")
-    if f_min < 0.0:
-        raise InputError(f"`min_normal_force` must be >= 0, got {f_min}")
+    if cone not in CONES:
+        raise InputError(f"`cone` must be one of {CONES}, got {cone!r}")
     from scipy.optimize import linprog  # here: importing bhgrasp.grasp does not import scipy
 
     limited = np.flatnonzero(np.isfinite(limit))
     if not len(limited):
         raise InputError("`limits` must limit at least one joint (all are inf)")
-    pyramid, _ = friction_pyramid(mu, facets)
+    pyramid, _ = friction_pyramid(as_real(mu, "mu"), facets)
+    if cone == "circumscribed":  # faces moved out to touch the cone: slope mu / cos(pi / facets) on the edges
+        pyramid, _ = friction_pyramid(mu / math.cos(math.pi / len(pyramid)), len(pyramid))
 
     size = 3 * n + 1  # x = (f, s)
     cones = np.zeros((n * len(pyramid), size))
@@ -118,65 +130,85 @@ def least_hold_torque(
     upper = np.hstack((torque, -np.ones((len(limited), 1))))  # tau_j / L_j - s <= -tau_0,j / L_j
     lower = np.hstack((-torque, -np.ones((len(limited), 1))))  # -tau_j / L_j - s <= tau_0,j / L_j
     scaled_offset = tau_0[limited] / limit[limited]
-    bounds = [(None, None), (None, None), (f_min, None)] * n + [(0.0, None)]
     result = linprog(
         np.eye(size)[-1],
         A_ub=np.vstack((cones, upper, lower)),
         b_ub=np.concatenate((np.zeros(len(cones)), -scaled_offset, scaled_offset)),
         A_eq=np.hstack((grasp, np.zeros((6, 1)))),
         b_eq=w,
-        bounds=bounds,
+        bounds=[(None, None), (None, None), (f_min, None)] * n + [(0.0, None)],
         method="highs",
     )
-    if result.status == 2:  # infeasible: no admissible forces exert w
+    if result.status == 2:  # infeasible: no forces of the pyramids exert w
         return HoldTorque(math.inf, None, None, -1)
-    if result.status != 0:
-        raise InputError(f"the hold-torque LP did not solve: {result.message}")
+    if result.status != 0:  # s >= 0 bounds it below: not unbounded
+        raise SolverFailed(
+            f"the hold-torque LP stopped without an answer (HiGHS status {result.status}): {result.message}"
+        )
     forces = result.x[:-1].reshape(n, 3)
     torques = tau_0 + jacobian.T @ result.x[:-1]
-    ratios = np.where(np.isfinite(limit), np.abs(torques) / limit, 0.0)
-    return HoldTorque(float(result.x[-1]), forces, torques, int(np.argmax(ratios)))
+    ratios = np.abs(torques[limited]) / limit[limited]
+    return HoldTorque(float(result.x[-1]), forces, torques, int(limited[np.argmax(ratios)]))
+
+
+def grasp_contacts(hand: Hand, state: State, body: str, contacts: str = "finger") -> tuple[np.ndarray, ...] | None:
+    """The hand's contacts with ``body`` in ``state``: (points (n, 3), normals (n, 3), link names), or ``None``.
+
+    ``contacts``: ``"finger"``, one per finger pressing ``body``, as a grasp controller senses them
+    (:class:`~bhgrasp.grasp.sensing.ContactSensing`: the force-weighted point and normal, on the link that presses
+    hardest); ``"point"``, every contact point between a frame of the hand (the palm's too) and ``body``.
+    """
+    if contacts not in CONTACTS:
+        raise InputError(f"`contacts` must be one of {CONTACTS}, got {contacts!r}")
+    if contacts == "finger":
+        touching = [c for c in ContactSensing(hand).fingers(state, body).values() if c.link is not None]
+        rows = [(c.point, c.normal, c.link) for c in touching]
+    else:
+        model = hand.model
+        rows = [
+            (point, normal, link)
+            for point, normal, (link, other) in zip(state.contact_points, state.contact_normals, state.contact_bodies)
+            if other == body and model.existFrame(link)
+        ]
+    if not rows:
+        return None
+    return np.array([r[0] for r in rows]), np.array([r[1] for r in rows]), [r[2] for r in rows]
 
 
 def static_hold_torque(
     hand: Hand,
     state: State,
+    body: str,
     mass: float,
     mu: float,
     limits: Any = None,
-    gravity: Any = (0.0, 0.0, -9.81),
-    body: str | None = None,
+    contacts: str = "finger",
     **kw: Any,
 ) -> HoldTorque:
-    """:func:`least_hold_torque` of the grasp in ``state``: the fingers hold object 0 (``mass`` [kg]) at rest.
+    """:func:`least_hold_torque` of the grasp of ``body`` (object 0 of ``state``, ``mass`` [kg]) holding it at rest.
 
-    The contacts are the state's, one per finger touching the object (force-weighted point and normal, on the link
-    that presses hardest, as a grasp controller senses them: :class:`~bhgrasp.grasp.sensing.ContactSensing`); w is
-    the object's weight reversed, about its position (its centre of mass); tau_0 the hand's gravity torques.
-    ``limits``: as :func:`least_hold_torque`'s; default 1 N m on every finger joint and none on the joints that move
-    the whole hand (a wrist mount's), so that ``fraction`` is the least peak finger joint torque [N m].
-    ``body``: the object's body name, to leave out the fingers' contacts with anything else (default: every
-    contact of a finger link).  ``kw``: ``min_normal_force`` and ``facets``.
-
-    No finger touching the object: ``fraction`` ``inf`` (nothing holds it).
+    The contacts with ``body`` (:func:`grasp_contacts`); w the object's weight (the hand's gravity) reversed, about
+    its position (its centre of mass); tau_0 the hand's gravity torques.  ``limits``: as :func:`least_hold_torque`'s;
+    default 1 N m on every finger joint and none on the joints that move the whole hand (a wrist mount's), so that
+    ``fraction`` is the least peak finger joint torque [N m].  ``kw``: ``min_normal_force``, ``facets``, ``cone``.
+    Nothing touching the object: ``fraction`` ``inf``.
 
     Raises:
-        InputError: No object in the state.
+        InputError: No object in the state, or a bad argument.
     """
     if not state.object_poses:
         raise InputError("static_hold_torque needs the object's pose in the state (a scene with an object)")
-    touching = [c for c in ContactSensing(hand).fingers(state, body).values() if c.link is not None]
-    if not touching:
+    found = grasp_contacts(hand, state, body, contacts)
+    if found is None:
         return HoldTorque(math.inf, None, None, -1)
-    points, normals = np.array([c.point for c in touching]), np.array([c.normal for c in touching])
+    points, normals, links = found
     grasp = grasp_map_from_frames(points, contact_frames(normals), state.object_poses[0].translation)
-    jacobian = hand_jacobian(hand, state.q, points, [c.link for c in touching], normals)
+    jacobian = hand_jacobian(hand, state.q, points, links, normals)
     if limits is None:
         limits = np.full(hand.nv, math.inf)
         limits[np.concatenate([finger_indices(hand, finger) for finger in hand.fingers])] = 1.0
-    weight = as_real(mass, "mass") * as_vector(gravity, "gravity", 3)
-    wrench = np.concatenate((-weight, np.zeros(3)))
+    wrench = np.concatenate((-as_real(mass, "mass") * hand.gravity, np.zeros(3)))
     return least_hold_torque(grasp, jacobian, wrench, mu, limits, hand.gravity_torques(state.q), **kw)
 
 
-__all__ = ["HoldTorque", "least_hold_torque", "static_hold_torque"]
+__all__ = ["CONES", "CONTACTS", "HoldTorque", "grasp_contacts", "least_hold_torque", "static_hold_torque"]

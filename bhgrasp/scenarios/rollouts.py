@@ -70,15 +70,15 @@ def grasp_rollout(parameters: dict[str, Any], seed: int) -> dict[str, float]:
 def final_hold_torque(result: GraspDemoResult, mu: float) -> float:
     """The least peak joint torque [N m] that holds the box at rest in the run's final grasp, with cones of ``mu``.
 
-    :func:`~bhgrasp.grasp.hold_torque.static_hold_torque` of the last sample (the true mass, the controller's least
-    normal force): no contact forces inside those cones hold the box's weight with every joint torque below it.
-    ``inf`` when the fingers no longer touch the box, or no forces inside the cones hold it.
+    :func:`~bhgrasp.grasp.hold_torque.static_hold_torque` of the last sample as the controller models the grasp (one
+    contact per finger, the pyramids inscribed in the cones of ``mu``, its least normal force, the true mass): no
+    forces of that model hold the box's weight with every finger joint torque below it.  ``inf`` when the fingers no
+    longer touch the box, or no such forces hold it.
     """
     state = state_at(result.trajectory, len(result.trajectory.t) - 1)
     scene = result.scene
-    options = {"body": scene.objects[0].name, "min_normal_force": DEFAULT_GRASP.min_normal_force}
-    hold = static_hold_torque(scene.hand, state, result.true_mass, mu, **options)
-    return hold.fraction
+    body, least = result.trajectory.object_names[0], DEFAULT_GRASP.min_normal_force
+    return static_hold_torque(scene.hand, state, body, result.true_mass, mu, min_normal_force=least).fraction
 
 
 def _hold_batch(parameters: list[dict[str, Any]], seeds: list[int]) -> list[dict[str, float]]:

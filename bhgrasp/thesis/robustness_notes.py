@@ -108,19 +108,19 @@ def torque_need(limited: dict[str, float]) -> str:
     """What the torque-limit scenario's boxes need: the least peak joint torque of their final grasps' holds."""
     over, failed_over = limited["over_torque_limit_runs"], limited["over_torque_limit_failures"]
     need = (
-        "The least peak joint torque with which any contact forces inside the controller's cones "
-        f"(mu {MU_ASSUMED}) hold a box at rest in its final grasp (a linear program, bhgrasp.grasp.hold_torque) "
-        f"is at most {limited['hold_torque_success_max_nm']:.3f} N m for the boxes that held and at least "
-        f"{limited['hold_torque_failure_min_nm']:.3f} N m for those that failed; {over:.0f} boxes need more than "
-        f"the {TORQUE_LIMIT:g} N m limit, whatever the force distribution, and {failed_over:.0f} of them fail "
-        f"(the rest tilt less than the {1e3 * SUCCESS[1]:g} mrad bound), while "
+        "In the controller's model of each run's final grasp (one contact per finger, the pyramids of its cones at "
+        f"mu {MU_ASSUMED}, each contact at least its least normal force; bhgrasp.grasp.hold_torque) the least peak "
+        f"joint torque that holds the box at rest is at most {limited['hold_torque_success_max_nm']:.3f} N m for the "
+        f"boxes that held and at least {limited['hold_torque_failure_min_nm']:.3f} N m for those that failed; "
+        f"{over:.0f} boxes need more than the {TORQUE_LIMIT:g} N m limit, so no forces the controller can command "
+        f"hold them within it, and {failed_over:.0f} of them fail (the rest stay within the success bounds), while "
         f"{limited['within_torque_limit_failures']:.0f} boxes within the limit fail."
     )
-    return (
-        f"{need}  Inside the true friction's cones (mu {FRICTION:g}) every box needs at most "
-        f"{limited['hold_torque_true_mu_max_nm']:.3f} N m: the limit takes away the reserve the assumed mu keeps, "
-        "which only a better-known friction returns."
-    )
+    true_mu = limited["hold_torque_true_mu_max_nm"]
+    within = true_mu <= TORQUE_LIMIT
+    reserve = ", within the limit: the limit takes away the reserve the assumed mu keeps" if within else ""
+    same = f"In the same model with the true mu ({FRICTION:g}) every box needs at most {true_mu:.3f} N m"
+    return f"{need}  {same}{reserve}."
 
 
 def estimator_limits(summaries: Summaries) -> list[str]:
