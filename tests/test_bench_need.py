@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
-from bhgrasp.bench.need import protocol_loads, protocol_need, rating_limits
+from bhgrasp.bench.need import NO_CONTACT, protocol_loads, protocol_need, rating_limits
 from bhgrasp.bench.protocol import FRICTION, HELD_AT, SHAKE_TIME, BenchObject, Trial
 from bhgrasp.bench.trial import shake_force, simulate_trial
+from bhgrasp.grasp.cones import friction_pyramid
 from bhgrasp.grasp.frames import contact_frames, grasp_map_from_frames, hand_jacobian
 from bhgrasp.grasp.hold_torque import grasp_contacts, least_hold_torque
 from bhgrasp.scenarios.estimation import state_at
@@ -35,33 +38,39 @@ def held_box():
 
 
 def test_the_weight_needs_no_more_than_the_held_grasp_carries(held_box) -> None:
-    """The simulated contact forces are Coulomb forces of the protocol's mu at the held sample's contact points, so
-    they are among the LP's (circumscribed pyramids): the least fraction of the ratings that carries the weight is
-    at most what the joints carry there (the hand at rest: tau = g(q) + J_h^T f, tests/test_hold_torque.py)."""
+    """At the held sample the bound's conditions hold and so does the bound: the simulated hand-object forces lie in
+    the LP's pyramids (circumscribing the cones of the protocol's mu), they carry the weight (the box at rest, touching
+    only the hand), and with the fingers' gravity they are the joint torques (no joint on a stop); so they are one of
+    the LP's solutions, and its optimum is at most the fraction of the ratings the joints carry there."""
     trial, trajectory, hand = held_box
     k = len(trajectory.t) - 1
     state, body = state_at(trajectory, k), trajectory.object_names[0]
-    assert np.abs(state.v[6:]).max() < 1e-2  # the fingers at rest on the held box
     points, normals, links = grasp_contacts(hand, state, body, contacts="point")
+    on_box = [
+        i for i, (link, other) in enumerate(state.contact_bodies) if other == body and hand.model.existFrame(link)
+    ]
+    assert len(on_box) == len(state.contact_bodies)  # the box touches only the hand
+    forces = np.einsum("nji,nj->ni", contact_frames(normals), state.contact_forces[on_box])
+    outer, _ = friction_pyramid(FRICTION / math.cos(math.pi / 8), 8)
+    assert np.max(forces @ outer.T) <= 1e-9 * np.abs(forces).max()  # inside the LP's pyramids
     grasp = grasp_map_from_frames(points, contact_frames(normals), state.object_poses[0].translation)
     jacobian = hand_jacobian(hand, state.q, points, links, normals)
-    limits = rating_limits(hand)
     weight = protocol_loads(trial.item.mass, hand.gravity)[0]
-    least = least_hold_torque(
-        grasp, jacobian, weight, FRICTION, limits, hand.gravity_torques(state.q), cone="circumscribed"
-    )
+    np.testing.assert_allclose(grasp @ forces.ravel(), weight, atol=1e-2 * weight[2])  # static: G f = w
+    limits = rating_limits(hand)
     rated = np.isfinite(limits)
-    carried = np.max(np.abs(trajectory.tau[k][rated]) / limits[rated])
-    assert 0.0 < least.fraction <= carried
+    carried = hand.gravity_torques(state.q) + jacobian.T @ forces.ravel()
+    np.testing.assert_allclose(carried[rated], trajectory.tau[k][rated], atol=2e-3 * np.abs(carried).max())
+    offset = hand.gravity_torques(state.q)
+    least = least_hold_torque(grasp, jacobian, weight, FRICTION, limits, offset, cone="circumscribed")
+    assert 0.0 < least.fraction <= np.max(np.abs(trajectory.tau[k][rated]) / limits[rated])
     need, joint = protocol_need(trajectory, hand, k, trial.item.mass)
     assert least.fraction < need < 1.0 and joint.endswith(("proximal", "distal"))  # a push needs more
     # the ratings scale the fraction: half the ratings, twice the fraction
-    half = least_hold_torque(
-        grasp, jacobian, weight, FRICTION, limits / 2, hand.gravity_torques(state.q), cone="circumscribed"
-    )
+    half = least_hold_torque(grasp, jacobian, weight, FRICTION, limits / 2, offset, cone="circumscribed")
     assert half.fraction == pytest.approx(2 * least.fraction, rel=1e-6)
 
 
 def test_nothing_held_needs_nothing(held_box) -> None:
     trial, trajectory, hand = held_box
-    assert protocol_need(trajectory, hand, 0, trial.item.mass) == (None, "")  # the open hand above the box
+    assert protocol_need(trajectory, hand, 0, trial.item.mass) == (None, NO_CONTACT)  # the open hand above the box

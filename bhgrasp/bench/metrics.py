@@ -15,7 +15,7 @@ import pinocchio as pin
 
 import bhgrasp as bh
 from bhgrasp.bench.height import grasp_clearance
-from bhgrasp.bench.need import protocol_need
+from bhgrasp.bench.need import INFEASIBLE, protocol_need
 from bhgrasp.bench.protocol import (
     DIRECTIONS,
     FORCE_LIMIT,
@@ -202,16 +202,16 @@ def failure_reason(
 
 
 def _need(record: dict) -> str:
-    """What the held grasp needed of the ratings (bench.need), as the envelope failure's last clause."""
+    """What the held grasp needed of the ratings at least (bench.need), as the envelope failure's last clause."""
     need, joint = record.get("need_to_rating"), record.get("need_joint")
+    if joint == INFEASIBLE:
+        return "; at the held grasp's contacts no forces inside the friction cones carry some protocol load at rest"
     if need is None:
         return ""
-    if need > 1.0:
-        return (
-            f"; at the held grasp's contacts, forces inside the friction cones need {need:.2f} x the ratings ({joint}) "
-            "to carry the protocol's loads at rest"
-        )
-    return f"; at the held grasp's contacts, forces within {need:.2f} x the ratings ({joint}) carry the loads at rest"
+    return (
+        f"; at the held grasp's contacts no forces inside the friction cones carry the protocol's loads at rest with "
+        f"less than {need:.2f} x the ratings ({joint})"
+    )
 
 
 def _failure(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.ndarray, end: float, mass: float) -> str:

@@ -10,11 +10,13 @@ true friction's cones (:data:`~bhgrasp.bench.protocol.FRICTION`, ``cone="circums
 the fingers' own weight; the spreads and the wrist are left free, as the envelope leaves them.  The need is the
 largest of the seven.
 
-Every force the simulated contacts can take is one of the LP's, so for the weight the need is at most what the held
-sample's joint torques carry (``tests/test_bench_need.py`` checks it on a held grasp).  For the pushes it is the
-held grasp's: the grasp a push deforms differs by the millimetres it moves.  A trial outside the envelope whose need
-is well below 1 pressed harder than its grasp needed; a need above 1 says its grasp cannot carry the protocol's loads
-within the ratings.
+The simulated hand-object forces lie in these pyramids (a pair's mu is at most FRICTION), so where the held sample is
+static, the object touches only the hand and no finger joint rests on a stop, the weight's need is at most what the
+joints carry there (``tests/test_bench_need.py`` checks those conditions and the bound on a held box).  The need is a
+lower bound: the pyramids hold the cones with up to 1 / cos(pi / 8) - 1 = 8 % more friction at their edges.  For the
+pushes it is the held grasp's: a push deforms the grasp by the millimetres it moves the object.  A trial outside the
+envelope whose need is well below 1 pressed harder than its grasp needed; a need above 1 says its grasp cannot carry
+the protocol's loads within the ratings.
 """
 
 from __future__ import annotations
@@ -31,7 +33,9 @@ from bhgrasp.grasp.frames import contact_frames, grasp_map_from_frames, hand_jac
 from bhgrasp.grasp.hold_torque import grasp_contacts, least_hold_torque
 from bhgrasp.scenarios.estimation import state_at
 
+NO_CONTACT = ""  # need_joint where the hand does not touch the object at the held sample
 INFEASIBLE = "infeasible"  # need_joint where no forces in the cones carry some load (friction cannot hold it)
+SOLVER_FAILED = "solver failed"  # need_joint where HiGHS stopped without an answer
 
 
 def protocol_loads(mass: float, gravity: np.ndarray, heading: float = 0.0) -> np.ndarray:
@@ -56,13 +60,13 @@ def protocol_need(
 ) -> tuple[float | None, str]:
     """The need (the module's) at sample ``k`` and the joint that sets it.
 
-    ``(None, "")`` when nothing of the hand touches the object; ``(None, INFEASIBLE)`` when no forces in the cones
-    carry some load at all; ``(None, "solver failed: ...")`` if HiGHS stops without an answer.
+    ``(None, NO_CONTACT)`` when nothing of the hand touches the object; ``(None, INFEASIBLE)`` when no forces in the
+    cones carry some load at all; ``(None, SOLVER_FAILED)`` if HiGHS stops without an answer.
     """
     state = state_at(trajectory, k)
     found = grasp_contacts(hand, state, trajectory.object_names[0], contacts="point")
     if found is None:
-        return None, ""
+        return None, NO_CONTACT
     points, normals, links = found
     grasp = grasp_map_from_frames(points, contact_frames(normals), state.object_poses[0].translation)
     jacobian = hand_jacobian(hand, state.q, points, links, normals)
@@ -72,12 +76,12 @@ def protocol_need(
             least_hold_torque(grasp, jacobian, w, FRICTION, limits, offset, cone="circumscribed")
             for w in protocol_loads(mass, hand.gravity, heading)
         ]
-    except SolverFailed as error:
-        return None, f"solver failed: {error}"
+    except SolverFailed:
+        return None, SOLVER_FAILED
     worst = max(holds, key=lambda hold: hold.fraction)  # the first of equals
     if not math.isfinite(worst.fraction):
         return None, INFEASIBLE
     return worst.fraction, hand.joint_names[worst.joint]
 
 
-__all__ = ["INFEASIBLE", "protocol_loads", "protocol_need", "rating_limits"]
+__all__ = ["INFEASIBLE", "NO_CONTACT", "SOLVER_FAILED", "protocol_loads", "protocol_need", "rating_limits"]

@@ -130,9 +130,10 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
         "fingertip force; no finger joint torque above its rating, the pucks' MT through ideal gears); and "
         "placed back on its stand (within 2 mm of its resting height, the stand carrying half its weight). "
         "Strict: 1 cm and 5 deg. Held F1/F2/F3: each finger's normal force on the object once lifted. Need x "
-        "rating: the least fraction of the inner and outer joints' ratings with which forces at the hand's contact "
-        "points on the object, inside the friction cones, carry its weight and each push at rest, in the grasp held "
-        "before the pushes (`bhgrasp/bench/need.py`; - where the hand did not touch it).",
+        "rating: a lower bound of the least fraction of the inner and outer joints' ratings with which forces at the "
+        "hand's contact points on the object, inside the friction cones, carry its weight and each push at rest, in "
+        "the grasp held before the pushes (pyramids circumscribing the cones, `bhgrasp/bench/need.py`; - where the "
+        "hand did not touch it, no such forces carry a load, or the solver failed).",
         "",
         *(
             [

@@ -118,7 +118,8 @@ def least_hold_torque(
     limited = np.flatnonzero(np.isfinite(limit))
     if not len(limited):
         raise InputError("`limits` must limit at least one joint (all are inf)")
-    pyramid, _ = friction_pyramid(as_real(mu, "mu"), facets)
+    mu = as_real(mu, "mu")
+    pyramid, _ = friction_pyramid(mu, facets)
     if cone == "circumscribed":  # faces moved out to touch the cone: slope mu / cos(pi / facets) on the edges
         pyramid, _ = friction_pyramid(mu / math.cos(math.pi / len(pyramid)), len(pyramid))
 
@@ -151,7 +152,9 @@ def least_hold_torque(
     return HoldTorque(float(result.x[-1]), forces, torques, int(limited[np.argmax(ratios)]))
 
 
-def grasp_contacts(hand: Hand, state: State, body: str, contacts: str = "finger") -> tuple[np.ndarray, ...] | None:
+def grasp_contacts(
+    hand: Hand, state: State, body: str, contacts: str = "finger"
+) -> tuple[np.ndarray, np.ndarray, list[str]] | None:
     """The hand's contacts with ``body`` in ``state``: (points (n, 3), normals (n, 3), link names), or ``None``.
 
     ``contacts``: ``"finger"``, one per finger pressing ``body``, as a grasp controller senses them

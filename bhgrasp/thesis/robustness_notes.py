@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from bhgrasp.scenarios.box_grasp import FRICTION
 from bhgrasp.scenarios.demo_result import MU_ASSUMED
 from bhgrasp.thesis.robustness_scenarios import (
@@ -113,11 +115,12 @@ def torque_need(limited: dict[str, float]) -> str:
         f"joint torque that holds the box at rest is at most {limited['hold_torque_success_max_nm']:.3f} N m for the "
         f"boxes that held and at least {limited['hold_torque_failure_min_nm']:.3f} N m for those that failed; "
         f"{over:.0f} boxes need more than the {TORQUE_LIMIT:g} N m limit, so no forces the controller can command "
-        f"hold them within it, and {failed_over:.0f} of them fail (the rest stay within the success bounds), while "
+        f"hold them within it, and {failed_over:.0f} of them fail"
+        f"{' (the rest stay within the success bounds)' if over > failed_over else ''}, while "
         f"{limited['within_torque_limit_failures']:.0f} boxes within the limit fail."
     )
     true_mu = limited["hold_torque_true_mu_max_nm"]
-    within = true_mu <= TORQUE_LIMIT
+    within = math.isfinite(true_mu) and true_mu <= TORQUE_LIMIT
     reserve = ", within the limit: the limit takes away the reserve the assumed mu keeps" if within else ""
     same = f"In the same model with the true mu ({FRICTION:g}) every box needs at most {true_mu:.3f} N m"
     return f"{need}  {same}{reserve}."
