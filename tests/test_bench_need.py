@@ -74,3 +74,15 @@ def test_the_weight_needs_no_more_than_the_held_grasp_carries(held_box) -> None:
 def test_nothing_held_needs_nothing(held_box) -> None:
     trial, trajectory, hand = held_box
     assert protocol_need(trajectory, hand, 0, trial.item.mass) == (None, NO_CONTACT)  # the open hand above the box
+
+
+def test_the_readme_states_the_bleach_bottles_committed_need() -> None:
+    """The README's figure for the one held-out-2 object outside the envelope is the committed report's."""
+    import json
+
+    from bhgrasp.thesis.results import REFERENCE
+
+    trials = json.loads((REFERENCE / "grasp_benchmark.json").read_text())["trials"]
+    (need,) = {round(t["need_to_rating"], 2) for t in trials if t["object"] == "bleach cleanser"}
+    readme = " ".join((REFERENCE.parents[1] / "README.md").read_text().split())
+    assert f"grasp needs at least {need:.2f} of the ratings to carry the pushes at rest" in readme
