@@ -15,7 +15,7 @@ import pinocchio as pin
 
 import bhgrasp as bh
 from bhgrasp.bench.height import grasp_clearance
-from bhgrasp.bench.need import INFEASIBLE, protocol_need
+from bhgrasp.bench.need import INFEASIBLE, protocol_need, rated_joints
 from bhgrasp.bench.protocol import (
     DIRECTIONS,
     FORCE_LIMIT,
@@ -176,7 +176,7 @@ def joint_load(trajectory, hand: bh.Hand) -> dict:
     The torques are the drive's with the worms' reactions; a rating is the hand's effort limit; the most loaded
     joint is named.
     """
-    joints = [hand.joint_index(f"{f}_{j}") for f in hand.fingers for j in ("proximal", "distal")]
+    joints = rated_joints(hand)
     peaks = np.abs(trajectory.tau[:, joints]).max(axis=0)
     ratios = peaks / hand.effort_limit[joints]
     worst = int(np.argmax(ratios))

@@ -29,8 +29,7 @@ import bhgrasp as bh
 from bhgrasp.bench.protocol import FRICTION, PUSH, push_axes
 from bhgrasp.data import Trajectory
 from bhgrasp.errors import SolverFailed
-from bhgrasp.grasp.frames import contact_frames, grasp_map_from_frames, hand_jacobian
-from bhgrasp.grasp.hold_torque import grasp_contacts, least_hold_torque
+from bhgrasp.grasp.hold_torque import contact_maps, least_hold_torque
 from bhgrasp.scenarios.estimation import state_at
 
 NO_CONTACT = ""  # need_joint where the hand does not touch the object at the held sample
@@ -47,9 +46,14 @@ def protocol_loads(mass: float, gravity: np.ndarray, heading: float = 0.0) -> np
     return np.hstack((-on_object, np.zeros((7, 3))))
 
 
+def rated_joints(hand: bh.Hand) -> list[int]:
+    """Velocity indices of the joints the envelope rates: each finger's inner then outer joint, finger by finger."""
+    return [hand.joint_index(f"{f}_{j}") for f in hand.fingers for j in ("proximal", "distal")]
+
+
 def rating_limits(hand: bh.Hand) -> np.ndarray:
     """(nv,) [N m]: the inner and outer finger joints' ratings (effort limits); inf on every other joint."""
-    joints = [hand.joint_index(f"{f}_{j}") for f in hand.fingers for j in ("proximal", "distal")]
+    joints = rated_joints(hand)
     limits = np.full(hand.nv, math.inf)
     limits[joints] = hand.effort_limit[joints]
     return limits
@@ -64,12 +68,10 @@ def protocol_need(
     cones carry some load at all; ``(None, SOLVER_FAILED)`` if HiGHS stops without an answer.
     """
     state = state_at(trajectory, k)
-    found = grasp_contacts(hand, state, trajectory.object_names[0], contacts="point")
-    if found is None:
+    maps = contact_maps(hand, state, trajectory.object_names[0], contacts="point")
+    if maps is None:
         return None, NO_CONTACT
-    points, normals, links = found
-    grasp = grasp_map_from_frames(points, contact_frames(normals), state.object_poses[0].translation)
-    jacobian = hand_jacobian(hand, state.q, points, links, normals)
+    grasp, jacobian = maps
     limits, offset = rating_limits(hand), hand.gravity_torques(state.q)
     try:
         holds = [
@@ -84,4 +86,12 @@ def protocol_need(
     return worst.fraction, hand.joint_names[worst.joint]
 
 
-__all__ = ["INFEASIBLE", "NO_CONTACT", "SOLVER_FAILED", "protocol_loads", "protocol_need", "rating_limits"]
+__all__ = [
+    "INFEASIBLE",
+    "NO_CONTACT",
+    "SOLVER_FAILED",
+    "protocol_loads",
+    "protocol_need",
+    "rated_joints",
+    "rating_limits",
+]

@@ -35,7 +35,13 @@ from bhgrasp.grasp.frames import (
     grasp_map,
     hand_jacobian,
 )
-from bhgrasp.grasp.hold_torque import HoldTorque, grasp_contacts, least_hold_torque, static_hold_torque
+from bhgrasp.grasp.hold_torque import (
+    HoldTorque,
+    contact_maps,
+    grasp_contacts,
+    least_hold_torque,
+    static_hold_torque,
+)
 from bhgrasp.grasp.kinematics import (
     GraspKinematics,
     ObjectState,
@@ -84,6 +90,7 @@ __all__ = [
     "contact_frames",
     "contact_kinematics",
     "contact_kinematics_python",
+    "contact_maps",
     "default_torque_scale",
     "describe",
     "ferrari_canny",

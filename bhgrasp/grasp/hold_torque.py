@@ -178,6 +178,16 @@ def grasp_contacts(
     return np.array([r[0] for r in rows]), np.array([r[1] for r in rows]), [r[2] for r in rows]
 
 
+def contact_maps(hand: Hand, state: State, body: str, contacts: str = "finger") -> tuple[np.ndarray, np.ndarray] | None:
+    """G (6, 3n) about object 0's position and J_h (3n, nv) of :func:`grasp_contacts`, or ``None`` (no contact)."""
+    found = grasp_contacts(hand, state, body, contacts)
+    if found is None:
+        return None
+    points, normals, links = found
+    grasp = grasp_map_from_frames(points, contact_frames(normals), state.object_poses[0].translation)
+    return grasp, hand_jacobian(hand, state.q, points, links, normals)
+
+
 def static_hold_torque(
     hand: Hand,
     state: State,
@@ -201,12 +211,10 @@ def static_hold_torque(
     """
     if not state.object_poses:
         raise InputError("static_hold_torque needs the object's pose in the state (a scene with an object)")
-    found = grasp_contacts(hand, state, body, contacts)
-    if found is None:
+    maps = contact_maps(hand, state, body, contacts)
+    if maps is None:
         return HoldTorque(math.inf, None, None, -1)
-    points, normals, links = found
-    grasp = grasp_map_from_frames(points, contact_frames(normals), state.object_poses[0].translation)
-    jacobian = hand_jacobian(hand, state.q, points, links, normals)
+    grasp, jacobian = maps
     if limits is None:
         limits = np.full(hand.nv, math.inf)
         limits[np.concatenate([finger_indices(hand, finger) for finger in hand.fingers])] = 1.0
@@ -214,4 +222,12 @@ def static_hold_torque(
     return least_hold_torque(grasp, jacobian, wrench, mu, limits, hand.gravity_torques(state.q), **kw)
 
 
-__all__ = ["CONES", "CONTACTS", "HoldTorque", "grasp_contacts", "least_hold_torque", "static_hold_torque"]
+__all__ = [
+    "CONES",
+    "CONTACTS",
+    "HoldTorque",
+    "contact_maps",
+    "grasp_contacts",
+    "least_hold_torque",
+    "static_hold_torque",
+]
