@@ -196,5 +196,5 @@ def test_the_readme_states_the_committed_rates_among_neighbours() -> None:
     first = rate("grasp_neighbours", "development"), rate("grasp_neighbours", "held-out")
     assert f"the development set holds {first[0]} among six neighbours and the held-out set {first[1]}" in readme
     second = rate("grasp_neighbours_seed2", "development"), rate("grasp_neighbours_seed2", "held-out")
-    assert f"holds {second[0]} and {second[1]}, the held-out set's rate alone" in readme
-    assert rate("grasp_benchmark", "held-out") == second[1]  # alone
+    alone = rate("grasp_benchmark", "development"), rate("grasp_benchmark", "held-out")
+    assert f"holds {second[0]} and {second[1]}, where alone the sets hold {alone[0]} and {alone[1]}" in readme

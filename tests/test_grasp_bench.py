@@ -36,9 +36,9 @@ from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN, first_touches, gras
 from bhgrasp.bench.metrics import NO_HEIGHT, evaluate, failure_reason, held_forces, joint_load, least_grip
 from bhgrasp.bench.objects import OBJECT_SET, BenchObject
 from bhgrasp.bench.placement import closing_planes_meet, grasp_centre, touch_angles
-from bhgrasp.bench.trial import HeldReference
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.probes import HandClearance
+from bhgrasp.motion.held import HeldReference
 
 G = 9.81
 IPNM = FINGER_PUCK.IPNM
@@ -521,11 +521,15 @@ def test_mesh_objects_parse_plan_as_their_primitive_and_rest_as_it(tmp_path) -> 
 def test_the_meshed_development_set_ends_as_its_primitives_do() -> None:
     """The committed mesh report (regenerated and compared in CI) against the committed development trials: each
     object simulated as a mesh succeeds, grips, is placed and stays inside the envelope exactly when its primitive
-    does.  A meshed box bounds the same solid as its box, collided by coal's GJK and EPA where the box has closed
-    forms: its metrics agree within 1 % (measured: the held box to 1e-15, the flat box, whose fingers ride its top
-    edges, 0.2 %).  The 64-sided cylinders and the 642-vertex icospheres touch the fingers on flat facets where the
-    primitives curve (patches, not points): their peak contact forces differ by more (measured: 1.1 % for the can,
-    7 % for the large ball), bounded here at 10 %."""
+    does. A meshed box bounds the same solid as its box, collided by coal's GJK and EPA where the box has closed
+    forms: its metrics agree within 1 % (measured: the held box to 1e-15). The 64-sided cylinders and the 642-vertex
+    icospheres touch the fingers on flat facets where the primitives curve (patches, not points): their peak contact
+    forces differ by more (measured: 1.1 % for the can, 7 % for the large ball), bounded here at 10 %. The flat box
+    is pinched from the side (bench.side), its near face flat on both knuckle housings as well as between the
+    fingertips: face-on-face contacts whose patch points coal finds on the mesh's two triangles where the box has
+    its corners, in a grasp whose load split is statically indeterminate, so the split between fingertips and
+    housings differs (measured: peak 12.7 %, the fingers' total grip 5.8 %, both ending within 0.05 mm and 0.05
+    deg), bounded at 15 %."""
     from bhgrasp.thesis.results import REFERENCE
 
     primitive = {
@@ -540,4 +544,7 @@ def test_the_meshed_development_set_ends_as_its_primitives_do() -> None:
         for outcome in bench_report.OUTCOMES:
             assert trial[outcome] == twin[outcome], f"{trial['object']} {trial['grasp']}: {outcome} differs"
         bound = 0.01 if trial["spec"].startswith("box:") else 0.1
+        if trial["approach"] == "side":
+            bound = 0.15
+        assert trial["max_displacement"] == pytest.approx(twin["max_displacement"], abs=1e-4)  # both end as held
         assert trial["peak_contact_force"] == pytest.approx(twin["peak_contact_force"], rel=bound)

@@ -3,7 +3,8 @@
 :mod:`~bhgrasp.bench.protocol` fixes the protocol (phases, thresholds, contact law,
 :class:`~bhgrasp.bench.protocol.Trial`); :mod:`~bhgrasp.bench.objects` the object sets (development, two held-out);
 :mod:`~bhgrasp.bench.placement` where the hand goes over the object and :mod:`~bhgrasp.bench.height` how high, both
-from :mod:`~bhgrasp.bench.reach`'s touch angles; :mod:`~bhgrasp.bench.closing` when each finger starts to close;
+from :mod:`~bhgrasp.bench.reach`'s touch angles, or, where no height qualifies, :mod:`~bhgrasp.bench.side` a side
+pinch; :mod:`~bhgrasp.bench.closing` when each finger starts to close;
 :mod:`~bhgrasp.bench.trial` runs one trial, alone on its stand or, with :mod:`~bhgrasp.bench.neighbours`, among
 settled neighbours on the table around it (:mod:`~bhgrasp.bench.table`), the hand turned away from them
 (:mod:`~bhgrasp.bench.heading`);
@@ -47,6 +48,7 @@ from bhgrasp.bench.protocol import (
 from bhgrasp.bench.reach import hand_depth
 from bhgrasp.bench.report import compare, markdown, success_rates, write_json
 from bhgrasp.bench.runs import bench_rollout, run_bench
+from bhgrasp.bench.side import SIDE_SPREAD, approach_of, side_centre
 from bhgrasp.bench.table import Clutter, floor_below, stand_of, table_around
 from bhgrasp.bench.trial import (
     BenchController,
@@ -83,6 +85,7 @@ __all__ = [
     "RELEASE",
     "SETS",
     "SHAKE_TIME",
+    "SIDE_SPREAD",
     "STAND",
     "STAND_HEIGHT",
     "STAND_MARGIN",
@@ -94,6 +97,7 @@ __all__ = [
     "BenchObject",
     "Clutter",
     "Trial",
+    "approach_of",
     "bench_rollout",
     "clearest_heading",
     "closing_planes_meet",
@@ -121,6 +125,7 @@ __all__ = [
     "settle_neighbours",
     "setup",
     "shake_force",
+    "side_centre",
     "simulate_trial",
     "spread_of",
     "stand_clearance",

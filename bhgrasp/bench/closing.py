@@ -27,6 +27,7 @@ from bhgrasp.barrett.pucks import FINGER_PUCK
 from bhgrasp.bench.height import trial_clearance
 from bhgrasp.bench.placement import closing_planes_meet, touch_angles
 from bhgrasp.bench.protocol import DT, GRIP_MT, PRESHAPE, Trial
+from bhgrasp.bench.side import approach_of
 from bhgrasp.errors import ModelError
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
@@ -74,10 +75,12 @@ def finger_starts(trial: Trial) -> dict[str, float]:
 
     On the closing planes (a round object, :func:`~bhgrasp.bench.placement.closing_planes_meet`): the finger that
     needs the longest to reach its touch angle starts at 0, the others later by the difference, F2 with F1 (the
-    spread mirrors them about the object's plane of symmetry).  Otherwise, and for the idealised hand, all 0.
+    spread mirrors them about the object's plane of symmetry).  Otherwise (a box, a side pinch), and for the idealised
+    hand, all 0.
     """
     item, spread = trial.item, trial.preshape_spread
-    if trial.actuation != "barrett" or item.kind == "box" or closing_planes_meet(spread) is None:
+    side = approach_of(trial) == "side"  # F1 and F2 mirror each other across the object
+    if side or trial.actuation != "barrett" or item.kind == "box" or closing_planes_meet(spread) is None:
         return dict.fromkeys(("F1", "F2", "F3"), 0.0)
     clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)
     angles = touch_angles(item, spread, clearance, PRESHAPE)

@@ -29,9 +29,10 @@ import pinocchio as pin
 from bhgrasp._validation import as_real
 from bhgrasp.bench.height import SWEEP, trial_clearance
 from bhgrasp.bench.objects import MESHED
-from bhgrasp.bench.placement import grasp_centre, grasp_offset
+from bhgrasp.bench.placement import grasp_offset
 from bhgrasp.bench.protocol import APPROACH, PRESHAPE, Trial
-from bhgrasp.bench.reach import hand_depth, reach_of
+from bhgrasp.bench.reach import ORIENTATIONS, hand_depth
+from bhgrasp.bench.side import approach_of, closing_fingers, trial_reach, way_in
 from bhgrasp.grasp.probes import coal_transform
 from bhgrasp.model.objects import RigidObject
 
@@ -41,23 +42,32 @@ DESCENT_STEP = 0.005  # [m] the open hand's heights checked on its way down
 
 
 def hand_base(trial: Trial, approach: float = 0.0, heading: float = 0.0) -> pin.SE3:
-    """The hand base (world) ``approach`` [m] above the trial's grasp, turned ``heading`` [rad] about +z.
+    """The hand base (world) ``approach`` [m] back along its way in from the trial's grasp, turned ``heading`` [rad].
 
-    Palm down, the fingers together at the grasp's offset along F3's axis (:func:`~.placement.grasp_offset`), the
-    knuckles the height rule's clearance above the object's top (:func:`~.height.trial_clearance`); the object's
-    axis is the world z axis.  A heading other than 0 or a half turn assumes what the object stands on is symmetric
-    under it: a table, as among neighbours (a round object's square stand is not).
+    From above (:func:`~.side.approach_of`): palm down, the fingers together at the grasp's offset along F3's axis
+    (:func:`~.placement.grasp_offset`), the knuckles the height rule's clearance above the object's top
+    (:func:`~.height.trial_clearance`), ``approach`` above.  In a side pinch: palm sideways
+    (:data:`~.reach.SIDEWAYS`), the object where :func:`~.side.side_centre` puts it, ``approach`` back along the
+    palm's normal.  The object's axis is the world z axis, the heading a turn about it.  A heading other than 0 or a
+    half turn assumes what the object stands on is symmetric under it: a table, as among neighbours (a round
+    object's square stand is not).
 
     Raises:
         InputError: A non-finite ``approach`` or ``heading``.
     """
     approach, heading = as_real(approach, "approach", False), as_real(heading, "heading", False)
     item, spread = trial.item, trial.preshape_spread
-    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)  # one rule for both grasps
-    grasp_height = 2 * item.half_extents[2] + clearance + hand_depth(spread, PRESHAPE)
-    rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
-    offset = np.array([0.0, grasp_offset(item, spread, clearance, PRESHAPE), 0.0])
-    base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + approach]) - rotation @ offset)
+    if approach_of(trial) == "side":
+        _, centre = trial_reach(trial)
+        rotation = ORIENTATIONS["side"]
+        origin = np.array([0.0, 0.0, item.half_extents[2]]) - rotation @ centre - approach * way_in(trial)
+        base = pin.SE3(rotation, origin)
+    else:
+        clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)  # one rule for both grasps
+        grasp_height = 2 * item.half_extents[2] + clearance + hand_depth(spread, PRESHAPE)
+        rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
+        offset = np.array([0.0, grasp_offset(item, spread, clearance, PRESHAPE), 0.0])
+        base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + approach]) - rotation @ offset)
     if heading == 0.0:
         return base
     return pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, heading), np.zeros(3)) * base
@@ -102,19 +112,16 @@ def heading_clearance(trial: Trial, neighbours: Sequence[RigidObject], heading: 
 def hand_poses(trial: Trial) -> tuple[tuple[float, tuple[tuple[coal.CollisionGeometry, pin.SE3], ...]], ...]:
     """The hand poses :func:`heading_clearance` measures, whatever the heading, once per trial and process.
 
-    ``(height above the grasp [m], ((a hand shape, its placement in the hand base frame), ...))``: the open hand
-    every :data:`DESCENT_STEP` on its way down, all its shapes; each finger's links in
+    ``(distance back along the way in [m], ((a hand shape, its placement in the hand base frame), ...))``: the open
+    hand every :data:`DESCENT_STEP` on its way in, all its shapes; each finger's links in
     :data:`~bhgrasp.bench.height.SWEEP` steps of its close to its first touch of the object.
     """
-    item, spread = trial.item, trial.preshape_spread
-    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)
-    reach = reach_of(item, spread, PRESHAPE)
-    centre = grasp_centre(item, spread, clearance, PRESHAPE)
+    reach, centre = trial_reach(trial)
     every = list(range(len(reach.geometry.geometryObjects)))
-    poses: list[tuple[float, float, list[int]]] = []  # (height above the grasp, proximal angle, the shapes measured)
+    poses: list[tuple[float, float, list[int]]] = []  # (back along the way in, proximal angle, the shapes)
     for height in np.arange(0.0, APPROACH + 1e-9, DESCENT_STEP):
         poses.append((float(height), PRESHAPE, every))
-    for finger in reach.hand.fingers:
+    for finger in closing_fingers(trial):  # a side pinch's F3 stays open
         touch = reach.touch(finger, centre)
         for angle in [*np.arange(PRESHAPE + SWEEP, touch, SWEEP), touch]:
             poses.append((0.0, float(angle), reach.shapes[finger]))

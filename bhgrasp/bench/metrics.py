@@ -30,14 +30,16 @@ from bhgrasp.bench.protocol import (
     STRICT,
     Trial,
 )
+from bhgrasp.bench.side import PINCH, approach_of, closing_fingers, trial_spread
 from bhgrasp.bench.table import supports
 from bhgrasp.model.hand import STANDARD_GRAVITY
 
 GRAVITY = -STANDARD_GRAVITY[2]  # [m/s^2] the simulated hand's (bhgrasp.model.hand)
 NO_HEIGHT = (
     "no grasp height: from the knuckles on its top to 6 cm above, some finger first touches its top face (or, in a "
-    "precision grasp, not with its fingertip), meets the stand first, or misses it (bench.height.grasp_clearance); "
-    "run with the knuckles on its top"
+    "precision grasp, not with its fingertip), meets the stand first, or misses it (bench.height.grasp_clearance), "
+    "and no side pinch is taken (bench.side: none qualifies, or the trial fixes its spread); run with the knuckles "
+    "on its top"
 )
 STOP_MARGIN = 0.01  # [rad] a distal joint this close to its upper limit rests on its stop
 PLACED = 0.002  # [m] placed: back within this of its resting height, the stand carrying at least half its weight
@@ -67,12 +69,13 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand, heading: float = 0.0) -> d
         "spec": trial.item.spec,
         "grasp": trial.grasp,
         "actuation": trial.actuation,
-        "spread": trial.preshape_spread,
+        "approach": approach_of(trial),
+        "spread": trial_spread(trial),
         "lifted": lifted,
         "max_displacement": float(offsets.max()),
         "max_rotation": float(turns.max()),
-        "height_found": grasp_clearance(trial.item, trial.preshape_spread, trial.grasp, PRESHAPE, table=trial.table)
-        is not None,
+        "height_found": approach_of(trial) == "side"
+        or grasp_clearance(trial.item, trial.preshape_spread, trial.grasp, PRESHAPE, table=trial.table) is not None,
     }
     record.update(contact_summary(trajectory, hand, held, shaken, supports(trial)))
     record.update(joint_load(trajectory, hand))
@@ -82,7 +85,9 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand, heading: float = 0.0) -> d
     distal = [hand.joint_index(f"{finger}_distal") for finger in hand.fingers]
     stops = [f for f, j in zip(hand.fingers, distal) if trajectory.q[held, j] >= hand.upper[j] - STOP_MARGIN]
     record["on_stop"] = ", ".join(stops)
-    record["gripped"] = bool(forces.min() >= least_grip(trial.item.mass) and not stops)
+    closing = closing_fingers(trial)  # a side pinch's F3 stays open
+    gripping = min(f for finger, f in zip(hand.fingers, forces) if finger in closing)
+    record["gripped"] = bool(gripping >= least_grip(trial.item.mass, len(closing)) and not stops)
     record["inside_envelope"] = bool(
         max(record["peak_contact_force"], record["peak_stand_force"]) <= FORCE_LIMIT
         and record["torque_to_rating"] <= 1.0
@@ -97,13 +102,13 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand, heading: float = 0.0) -> d
     return record
 
 
-def least_grip(mass: float) -> float:
-    """The least normal force [N] each of three fingers must press with, m g / (3 mu).
+def least_grip(mass: float, fingers: int = 3) -> float:
+    """The least normal force [N] each of the ``fingers`` that grip must press with, m g / (fingers mu).
 
-    By friction alone (mu the protocol's :data:`~bhgrasp.bench.protocol.FRICTION`) three such presses carry the
-    object's weight.
+    By friction alone (mu the protocol's :data:`~bhgrasp.bench.protocol.FRICTION`) that many such presses carry the
+    object's weight (three, or a side pinch's two).
     """
-    return mass * GRAVITY / (3 * FRICTION)
+    return mass * GRAVITY / (fingers * FRICTION)
 
 
 def held_forces(trajectory, hand: bh.Hand, k: int) -> np.ndarray:
@@ -225,11 +230,13 @@ def _failure(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.nda
         return ""
     if record.get("on_stop"):
         return f"caged, not gripped: the distal joint of {record['on_stop']} rests on its stop"
-    weakest = min(("F1", "F2", "F3"), key=lambda f: record.get(f"held_force_{f}", np.inf))
-    if record.get(f"held_force_{weakest}", np.inf) < least_grip(mass):
+    closing = PINCH if record.get("approach") == "side" else ("F1", "F2", "F3")
+    weakest = min(closing, key=lambda f: record.get(f"held_force_{f}", np.inf))
+    least = least_grip(mass, len(closing))
+    if record.get(f"held_force_{weakest}", np.inf) < least:
         return (
             f"not gripped: {weakest} presses the object with {record[f'held_force_{weakest}']:.2f} N once lifted "
-            f"(each finger needs {least_grip(mass):.2f} N to carry its weight by friction)"
+            f"(each finger needs {least:.2f} N to carry its weight by friction)"
         )
     if not record["inside_envelope"]:
         force = max(record["peak_contact_force"], record["peak_stand_force"])

@@ -20,12 +20,23 @@ from bhgrasp.bench.objects import BenchObject
 from bhgrasp.grasp.probes import coal_transform
 
 FLIP = pin.rpy.rpyToMatrix(np.pi, 0.0, 0.0)  # world <- palm-down hand: an upright object's axes in the hand frame
+# world <- palm-sideways hand (bench.side): the palm's normal (hand z) along world +x, F3 (hand y) up, F1 -> F2
+# (hand x) along world +y
+SIDEWAYS = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+ORIENTATIONS = {"top": FLIP, "side": SIDEWAYS}  # a trial's approach -> world <- hand
+UPRIGHT = {"top": FLIP, "side": SIDEWAYS.T}  # a trial's approach -> hand <- upright object (FLIP is its own inverse)
 
 
 class Reach:
-    """The proximal angle at which each finger first touches an object placed in the hand frame."""
+    """The proximal angle at which each finger first touches an object placed in the hand frame.
 
-    def __init__(self, item: BenchObject, spread: float, opening: float, closed: float = 2.4) -> None:
+    ``approach``: ``"top"`` (the palm down, :data:`FLIP`) or ``"side"`` (:data:`SIDEWAYS`), the hand's orientation
+    in the world, which stands the object upright in the hand frame.
+    """
+
+    def __init__(
+        self, item: BenchObject, spread: float, opening: float, closed: float = 2.4, approach: str = "top"
+    ) -> None:
         self.hand = bh.BarrettHand()
         hand = self.hand
         self._spread = [hand.joint_index(f"{f}_spread") for f in ("F1", "F2")]
@@ -39,6 +50,7 @@ class Reach:
         self.model_data = self.hand.model.createData()
         self.shape = item.body(0.8).geometry()
         self.spread, self.opening, self.closed = spread, opening, closed
+        self.axes = UPRIGHT[approach]  # hand <- object
         self.shapes = {
             finger: [
                 i
@@ -64,7 +76,7 @@ class Reach:
         """
         q = self.configuration(angle)
         pin.updateGeometryPlacements(self.hand.model, self.model_data, self.geometry, self.data, q)
-        placement = coal.Transform3s(FLIP, centre)
+        placement = coal.Transform3s(self.axes, centre)
         shape = self.shape if shape is None else shape
         nearest = (np.inf, "", np.zeros(3))
         for i in self.shapes[finger]:
@@ -105,7 +117,7 @@ class Reach:
         if angle >= self.closed:
             return None
         _, link, point = self.nearest(finger, angle, centre)
-        return link, FLIP.T @ (point - centre)
+        return link, self.axes.T @ (point - centre)
 
     def touch(self, finger: str, centre: np.ndarray) -> float:
         """The first proximal angle [rad] at which ``finger`` touches (``closed`` if it never does), once per place."""
@@ -135,9 +147,9 @@ def _deepest_corner(shape: coal.CollisionGeometry, placement: pin.SE3) -> float:
 
 
 @functools.lru_cache(maxsize=64)
-def reach_of(item: BenchObject, spread: float, opening: float) -> Reach:
+def reach_of(item: BenchObject, spread: float, opening: float, approach: str = "top") -> Reach:
     """The :class:`Reach` of ``item`` at ``spread`` and ``opening``, built once per process (its touches kept)."""
-    return Reach(item, spread, opening)
+    return Reach(item, spread, opening, approach=approach)
 
 
 @functools.lru_cache(maxsize=64)
@@ -157,4 +169,4 @@ def hand_depth(spread: float, opening: float) -> float:
     )
 
 
-__all__ = ["FLIP", "Reach", "hand_depth", "reach_of"]
+__all__ = ["FLIP", "ORIENTATIONS", "SIDEWAYS", "UPRIGHT", "Reach", "hand_depth", "reach_of"]

@@ -20,7 +20,7 @@ from typing import Any
 
 from bhgrasp.bench.protocol import ACTUATIONS, DIRECTIONS, DISTURBED, FORCE_LIMIT, LOOSE, STRICT
 
-OUTCOMES = ("success", "strict_success", "placed", "inside_envelope", "gripped")
+OUTCOMES = ("success", "strict_success", "placed", "inside_envelope", "gripped", "approach")
 METRICS = (
     "lifted",
     "max_displacement",
@@ -124,8 +124,9 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
         "Protocol: approach, close, lift 10 cm, push 10 m N on the object along +x, -x, +y, -y, +z, -z (2 s "
         "each), place until the stand pushes up (on the object or a finger) with half the object's weight, "
         "open (`bhgrasp/bench/protocol.py`). Success: lifted; gripped once lifted (each finger pressing the "
-        "object with at least m g / (3 mu), no distal joint on its stop); within 5 cm and 15 deg of the "
-        "closed grasp's pose in the palm frame from before the lift through the pushes; inside the real "
+        "object with at least m g / (n mu), n the fingers that close, no distal joint on its stop); within 5 cm "
+        "and 15 deg of the closed grasp's pose in the palm frame from before the lift through the pushes; inside "
+        "the real "
         f"hand's envelope all along (no contact force above {FORCE_LIMIT:.0f} N, twice Barrett's stalled "
         "fingertip force; no finger joint torque above its rating, the pucks' MT through ideal gears); and "
         "placed back on its stand (within 2 mm of its resting height, the stand carrying half its weight). "
@@ -133,7 +134,9 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
         "rating: a lower bound of the least fraction of the inner and outer joints' ratings with which forces at the "
         "hand's contact points on the object, inside the friction cones, carry its weight and each push at rest, in "
         "the grasp held before the pushes (pyramids circumscribing the cones, `bhgrasp/bench/need.py`; - where the "
-        "hand did not touch it, no such forces carry a load, or the solver failed).",
+        "hand did not touch it, no such forces carry a load, or the solver failed). A grasp marked (side) is a side "
+        "pinch: where no top-down grasp height qualifies, the palm turns sideways and F1 and F2, spread to face "
+        "each other, close in one horizontal plane while F3 stays open (`bhgrasp/bench/side.py`).",
         "",
         *(
             [
@@ -144,8 +147,8 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
             if any(groups(trials))
             else []
         ),
-        "Distinct trials: where a power and a precision grasp of an object stand at one height (the height rule puts "
-        "both there), they are one simulation, run and listed twice; the last column counts it once.",
+        "Distinct trials: where a power and a precision grasp of an object stand at one height (the height or side "
+        "rule puts both there), they are one simulation, run and listed twice; the last column counts it once.",
         "",
         "| object set | actuation | success | strict | trials | distinct trials: success / trials |",
         "|---|---|---:|---:|---:|---:|",
@@ -167,7 +170,7 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
     for t in trials:
         number = functools.partial(_number, t)
         lines.append(
-            f"| {t['object']} (`{t['spec']}`) | {t.get('set', '') or 'given'} | {t['grasp']} | "
+            f"| {t['object']} (`{t['spec']}`) | {t.get('set', '') or 'given'} | {t['grasp']}{_side(t)} | "
             f"{number('spread', 180 / math.pi, '.0f')} | "
             f"{t['actuation']} | {_mark(t['success'])} | "
             f"{_mark(t['strict_success'])} | {_mark(t['placed'])} | {number('max_displacement', 1e3)} | "
@@ -253,6 +256,11 @@ def _number(trial: dict[str, Any], key: str, scale: float = 1.0, fmt: str = ".1f
     """``trial[key]`` scaled and formatted; "-" where it is None or absent (a report written before it existed)."""
     value = trial.get(key)
     return "-" if value is None else format(scale * value, fmt)
+
+
+def _side(trial: dict[str, Any]) -> str:
+    """The mark of a side pinch's grasp (:mod:`~bhgrasp.bench.side`), else nothing."""
+    return " (side)" if trial.get("approach") == "side" else ""
 
 
 def _mark(value: bool) -> str:

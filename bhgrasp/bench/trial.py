@@ -6,6 +6,7 @@ import math
 from collections.abc import Callable
 
 import numpy as np
+import pinocchio as pin
 
 import bhgrasp as bh
 from bhgrasp.barrett.commands import BarrettDriver
@@ -32,12 +33,13 @@ from bhgrasp.bench.protocol import (
     Trial,
     push_axes,
 )
+from bhgrasp.bench.side import closing_fingers, trial_spread, way_in
 from bhgrasp.bench.table import NEIGHBOUR_DRAG, Clutter, stand_of, supports
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.errors import InputError
 from bhgrasp.model.mount import mounted
+from bhgrasp.motion.held import HeldReference
 from bhgrasp.motion.pose_references import PosePath
-from bhgrasp.motion.trajectories import Reference, Sample
 from bhgrasp.motion.wrist import MountReference
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
@@ -86,9 +88,10 @@ def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None, start_ch
     if clutter is not None and not trial.table:
         raise InputError("a trial among neighbours stands flush with a table: give it as Trial(..., table=True)")
     item = trial.item
-    spread = trial.preshape_spread
+    spread = trial_spread(trial)
     approach = APPROACH if clutter is None else clutter.approach  # [m] the open hand starts this far above
-    base = hand_base(trial, approach, 0.0 if clutter is None else clutter.heading)  # fingers together
+    heading = 0.0 if clutter is None else clutter.heading
+    base = hand_base(trial, approach, heading)  # fingers together
     hand = mounted(bh.BarrettHand(base_placement=base))
     pedestal = stand_of(item)
     if clutter is None:
@@ -106,10 +109,11 @@ def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None, start_ch
     for finger in hand.fingers:
         q[hand.joint_index(f"{finger}_proximal")], q[hand.joint_index(f"{finger}_distal")] = PRESHAPE, PRESHAPE / 3
     q[[hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]] = spread
-    down, up = np.array([0, 0, -approach, 0, 0, 0]), np.array([0, 0, LIFT, 0, 0, 0])
+    turn = pin.rpy.rpyToMatrix(0.0, 0.0, heading)
+    inward, up = np.array([*(approach * turn @ way_in(trial)), 0, 0, 0]), np.array([0, 0, LIFT, 0, 0, 0])
     shake = 6 * SHAKE_TIME
     moves = [
-        (down, CLOSE_AT),
+        (inward, CLOSE_AT),
         (np.zeros(6), LIFT_AT - CLOSE_AT),
         (up, 1.0),
         (np.zeros(6), HELD_AT - LIFT_AT - 1.0),
@@ -118,33 +122,6 @@ def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None, start_ch
     ]
     path = MountReference(PosePath(base, moves), hand.base_placement)
     return simulator, simulator.initial_state(q), hand, path
-
-
-class HeldReference(Reference):
-    """A reference that can be stopped: from :meth:`hold` on, it stays where it was then, at rest."""
-
-    def __init__(self, reference: Reference) -> None:
-        self.reference, self.held = reference, None
-
-    @property
-    def size(self) -> int:
-        """The wrapped reference's size."""
-        return self.reference.size
-
-    def hold(self, t: float) -> None:
-        """Stop at ``t`` [s]."""
-        self.held = float(t)
-
-    def release(self) -> None:
-        """Follow the reference again."""
-        self.held = None
-
-    def __call__(self, t: float) -> Sample:
-        """The reference at ``t``, or where it stopped (zero rates)."""
-        if self.held is None or t < self.held:
-            return self.reference(t)
-        position, rate, _ = self.reference(self.held)
-        return position, np.zeros_like(rate), np.zeros_like(rate)
 
 
 class BenchController:
@@ -161,7 +138,11 @@ class BenchController:
         self.stand = supports(trial)  # the stand, and the table around it among neighbours
         self.log: dict = {}
         mt = GRIP_MT  # the force-limited close, in both grasps
-        self.starts = finger_starts(trial)  # [s] after CLOSE_AT: all 0 but on the closing planes (bench.closing)
+        closing = closing_fingers(trial)  # all three, or a side pinch's F1 and F2
+        starts = finger_starts(trial)  # [s] after CLOSE_AT: all 0 but on the closing planes (bench.closing)
+        self.starts = {finger: starts[finger] for finger in closing}
+        idle = [finger for finger in hand.fingers if finger not in closing]
+        self.idle = [hand.joint_index(f"{finger}_{link}") for finger in idle for link in ("proximal", "distal")]
         if trial.actuation == "barrett":
             self.driver = BarrettDriver(hand, finger=FINGER_PUCK.with_(MT=mt))
             self.driver.script([(0.0, "set_position_mode", "SPREAD"), *self._closes()])
@@ -170,8 +151,8 @@ class BenchController:
             self.close_torque = WORM_EFFICIENCY * PROXIMAL_RATIO * mt / FINGER_PUCK.IPNM  # the real close's stall
 
     def _closes(self) -> list[tuple[float, str, str | list[str]]]:
-        """The driver's close commands: ``close("GRASP")`` at CLOSE_AT, or each finger at its start."""
-        if not any(self.starts.values()):
+        """The driver's close commands: ``close("GRASP")`` at CLOSE_AT, or each closing finger at its start."""
+        if len(self.starts) == 3 and not any(self.starts.values()):
             return [(CLOSE_AT, "close", "GRASP")]
         starts = sorted(set(self.starts.values()))
         return [(CLOSE_AT + s, "close", [f for f, t in self.starts.items() if t == s]) for s in starts]
@@ -193,6 +174,7 @@ class BenchController:
             self.driver.reset(state)
         else:
             self.spread_hold = float(state.q[self.spread[0]])
+            self.open_hold = {j: float(state.q[j]) for j in self.idle}
 
     def __call__(self, t: float, state: bh.State) -> np.ndarray:
         """The inputs of the trial's actuation: puck torques (or joint torques), then the wrist's."""
@@ -209,11 +191,14 @@ class BenchController:
         tau = np.zeros(self.hand.nv)
         tau[:6] = mount
         for finger in self.hand.fingers:
-            sign = 0.0 if t < CLOSE_AT + self.starts[finger] else (1.0 if t < self.place_at else -1.0)
+            start = self.starts.get(finger)  # None: a side pinch's F3, left open
+            sign = 0.0 if start is None or t < CLOSE_AT + start else (1.0 if t < self.place_at else -1.0)
             tau[self.hand.joint_index(f"{finger}_proximal")] = sign * self.close_torque
             tau[self.hand.joint_index(f"{finger}_distal")] = sign * self.close_torque / 3.0
         error = self.spread_hold - state.q[self.spread[0]]  # a stiff PD [N m/rad, N m s/rad] holds the spread
         tau[self.spread] = 2.0 * error - 0.05 * state.v[self.spread[0]]
+        for j, hold in self.open_hold.items():  # and a side pinch's open F3, as its worm holds the real one
+            tau[j] = 2.0 * (hold - state.q[j]) - 0.05 * state.v[j]
         return tau
 
 
