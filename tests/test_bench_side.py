@@ -13,7 +13,7 @@ from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN
 from bhgrasp.bench.metrics import least_grip
 from bhgrasp.bench.objects import DEVELOPMENT_SET, HELD_OUT_SET, HELD_OUT_SET_2, BenchObject
 from bhgrasp.bench.protocol import CLOSE_AT, FRICTION, HELD_AT, LIFT_AT, PRESHAPE, Trial, spread_of
-from bhgrasp.bench.reach import SIDEWAYS
+from bhgrasp.bench.reach import SIDEWAYS, hand_depth
 from bhgrasp.bench.side import (
     PINCH,
     SIDE_SPREAD,
@@ -53,6 +53,37 @@ def test_a_side_pinch_is_taken_exactly_where_no_top_down_height_qualifies() -> N
                 assert side_centre(item, grasp, table=True) is None, item.name
                 assert approach_of(Trial(item, grasp, table=True)) == "top"
     assert approach_of(Trial(FLAT, "power", spread=0.0)) == "top"
+
+
+def test_the_rule_rests_a_box_on_the_knuckle_housings_and_a_round_object_just_off_them() -> None:
+    """For each of the seven, the rule's first grid point qualifies (the object's near side on the housings' plane):
+    a box's face touches the housings (coal: within 1e-6 m), a ball or the tuna can, tangent to the palm's axis
+    there, clears the housings, which stand to its sides, by 1.5-2.9 mm (coal)."""
+    for item in (*DEVELOPMENT_SET, *HELD_OUT_SET, *HELD_OUT_SET_2):
+        if item.name not in NO_HEIGHT_FROM_ABOVE:
+            continue
+        reach, centre = trial_reach(Trial(item, "power"))
+        assert centre[2] == pytest.approx(hand_depth(SIDE_SPREAD, PRESHAPE) + item.half_extents[0], abs=1e-12)
+        pin.updateGeometryPlacements(
+            reach.hand.model, reach.model_data, reach.geometry, reach.data, reach.configuration(PRESHAPE)
+        )
+        where = coal.Transform3s(reach.axes, centre)
+        gap = min(
+            coal.distance(
+                shape.geometry,
+                coal_transform(reach.data.oMg[i]),
+                reach.shape,
+                where,
+                coal.DistanceRequest(),
+                coal.DistanceResult(),
+            )
+            for i, shape in enumerate(reach.geometry.geometryObjects)
+            if "knuckle" in shape.name
+        )
+        if item.kind == "box":
+            assert abs(gap) < 1e-6, item.name
+        else:
+            assert 1.4e-3 < gap < 3.0e-3, (item.name, gap)
 
 
 def test_on_a_table_the_sideways_palm_would_be_inside_it() -> None:
@@ -106,9 +137,9 @@ def test_the_pinch_plane_and_the_fingers_stand_where_the_rule_says() -> None:
 
 
 def test_the_side_rule_keeps_the_hand_off_the_stand_and_touches_with_the_fingertips() -> None:
-    """A second method for the rule: at the planned grasp every hand shape is at least the margin from the stand
-    (coal, the stand placed in the world), and each pinching finger's first touch is on its distal link, inside
-    the object's height."""
+    """A second method for part of the rule: at the planned grasp every shape of the open hand is at least the
+    margin from the stand (coal, the hand and the stand placed in the world), and each pinching finger's first touch
+    is on its distal link, within a finger's half width of the pinch plane."""
     trial = Trial(TUNA, "precision")
     reach, centre = trial_reach(trial)
     base = hand_base(trial)

@@ -546,5 +546,6 @@ def test_the_meshed_development_set_ends_as_its_primitives_do() -> None:
         bound = 0.01 if trial["spec"].startswith("box:") else 0.1
         if trial["approach"] == "side":
             bound = 0.15
-        assert trial["max_displacement"] == pytest.approx(twin["max_displacement"], abs=1e-4)  # both end as held
+        # the peak displacement from the closed grasp: measured within 0.011 mm of the primitive's (the flat box)
+        assert trial["max_displacement"] == pytest.approx(twin["max_displacement"], abs=2e-5)
         assert trial["peak_contact_force"] == pytest.approx(twin["peak_contact_force"], rel=bound)

@@ -1,8 +1,9 @@
 """Where the open hand starts over a trial's object, and which way it faces among neighbours.
 
-:func:`hand_base`: the mounted hand's base, palm down, at the grasp height of the rules of
-:mod:`~bhgrasp.bench.height` and :mod:`~bhgrasp.bench.placement`, ``approach`` above it, turned by ``heading``
-about the object's vertical axis.  Turning about that axis leaves the grasp of an upright primitive as it is when the
+:func:`hand_base`: the mounted hand's base, palm down at the grasp height of the rules of
+:mod:`~bhgrasp.bench.height` and :mod:`~bhgrasp.bench.placement` (or, where they find none, palm sideways in a side
+pinch, :mod:`~bhgrasp.bench.side`), ``approach`` back along its way in, turned by ``heading`` about the object's
+vertical axis.  Turning about that axis leaves the grasp of an upright primitive as it is when the
 object is symmetric about it: any heading for a sphere or an upright cylinder, a half turn for a box or a box's mesh
 (:func:`headings`).  Any other mesh keeps heading 0: its facets (a meshed cylinder's 64 sides, an icosphere) or its
 shape need not share its plan's symmetry.  The trial's shake turns with the hand

@@ -56,16 +56,16 @@ fixed 18 s, or stops when its object falls below the stand. Contacts: :data:`STI
 comment gives the reasons).
 
 Constants chosen on the development set's trials (:data:`~bhgrasp.bench.objects.DEVELOPMENT_SET`): :data:`GRIP_MT`
-and :data:`PRESHAPE`.  The spread and the height are rules (above), which replaced two constants chosen there (a
-0.45 rad spread for round objects, the knuckles 0 or 2 cm above the object's top); success rates out of sample are
-the held-out set's (:data:`~bhgrasp.bench.objects.HELD_OUT_SET`, fixed before any of them was changed; its trials
-under the former protocol were run as a baseline, then once under the spread and height rules and once more with
-F3's later start, each run driven by the development set; nothing was chosen on them).  A second held-out set,
-:data:`~bhgrasp.bench.objects.HELD_OUT_SET_2`, was fixed before any of its trials ran.  The side pinch
-(:mod:`~bhgrasp.bench.side`) was tried by hand on three held-out objects (tuna can, pudding box, tennis ball) and the
-development set's flat box before it was written; its first form ran once on all three sets, and its mend was worked
-out on the flat box after those results were seen: its held-out rates are not out of sample (the README says what
-is).
+and :data:`PRESHAPE`. The spread and the height are rules (above), which replaced two constants chosen there (a 0.45
+rad spread for round objects, the knuckles 0 or 2 cm above the object's top); success rates out of sample are the
+held-out set's (:data:`~bhgrasp.bench.objects.HELD_OUT_SET`, fixed before any of them was changed; its trials under
+the former protocol were run as a baseline, then once under the spread and height rules and once more with F3's
+later start, each run driven by the development set; nothing of the top-down rules was chosen on them). A second
+held-out set, :data:`~bhgrasp.bench.objects.HELD_OUT_SET_2`, was fixed before any of its trials ran. The side pinch
+(:mod:`~bhgrasp.bench.side`) was tried by hand on three held-out objects (tuna can, pudding box, tennis ball) and
+the development set's flat box before it was written; its first form ran once on all three sets, and its mend was
+worked out on the flat box after those results were seen (that run's records are not in the repository: its code is
+superseded): the side pinch's held-out rates are not out of sample (the README says what is).
 """
 
 from __future__ import annotations

@@ -6,8 +6,8 @@ touch it.  Turned palm sideways (:data:`~bhgrasp.bench.reach.SIDEWAYS`: the palm
 F1 towards world -y) with F1 and F2 spread to face each other (:data:`SIDE_SPREAD`), the two fingers close in one
 horizontal plane, the pinch plane, and press the object between them across its y edges; F3 stays open above it.
 The stand has the object's footprint, so the palm passes beside it, below the object's top; on a table (a trial
-among neighbours) the palm, 44.5 mm in radius about the pinch plane, would be inside the table, and no pinch
-qualifies.
+among neighbours) the palm, 44.5 mm in radius about the pinch plane, would be inside the table wherever that plane is
+lower, as it is for every object that needs the pinch, and no pinch qualifies.
 
 The rule (:func:`side_centre`), the same for both grasps (how it came about: :mod:`~bhgrasp.bench.protocol`):
 
@@ -19,15 +19,15 @@ The rule (:func:`side_centre`), the same for both grasps (how it came about: :mo
   their fingertips; a finger moving in a horizontal plane that straddles the object's side cannot press it onto its
   stand, as a finger coming down on its top does), every hand shape stays ``STAND_MARGIN`` from the stand from the
   open hand to each finger's touch, and the open hand's way in (:data:`~bhgrasp.bench.protocol.APPROACH`, up to
-  the grasp) does not touch the object.  On every object of the benchmark's sets that is the first: a box's near
-  face on the knuckle housings; a round object tangent to the palm's axis there, 1.5-2.9 mm off the housings, which
-  stand to its sides, until the pinch, whose contacts beyond its centre push it inwards, presses it onto them (the
-  tuna can: tests/test_bench_side.py).  Two fingertip contacts hold no moment about the line through them but what
-  their patches twist; the housings, flat against the object's near side, do.  Measured on the development set's
-  3 cm flat box with the way in checked at the grasp itself and the pinch plane at the outer link's half width (its
-  housings then 2.2 mm from the stand), which put it 4 mm off the housings: the lift turned
-  it about the pinch's line, 15 deg (that gap over its half height) before its edge met them; with the fingertips'
-  touches moved onto its centre of mass instead (the object 40 mm further out), it turned over.
+  the grasp) does not touch the object.  On every object of the benchmark's sets that is the first grid point: a
+  box's near face on the knuckle housings; a round object tangent to the palm's axis there, 1.5-2.9 mm off the
+  housings, which stand to its sides (tests/test_bench_side.py), until the pinch, whose contacts beyond its centre
+  push it inwards, presses it onto them (the tuna can, tested).  Two fingertip contacts hold no moment about the
+  line through them but what their patches twist; the housings, flat against the object's near side, do.  Measured
+  once each on the development set's 3 cm flat box: with the way in checked at the grasp itself and the pinch plane
+  at the outer link's half width (its housings then 2.2 mm from the stand), which put it 4 mm off the housings, the
+  lift turned it over; so did moving the fingertips' touches onto its centre of mass (the
+  object 40 mm further out); on the housings it held within 0.05 mm.
 
 A trial takes the pinch only where the top-down rule finds no height (:func:`approach_of`).
 """

@@ -197,7 +197,7 @@ class BenchController:
             tau[self.hand.joint_index(f"{finger}_distal")] = sign * self.close_torque / 3.0
         error = self.spread_hold - state.q[self.spread[0]]  # a stiff PD [N m/rad, N m s/rad] holds the spread
         tau[self.spread] = 2.0 * error - 0.05 * state.v[self.spread[0]]
-        for j, hold in self.open_hold.items():  # and a side pinch's open F3, as its worm holds the real one
+        for j, hold in self.open_hold.items():  # a side pinch's open F3, as its worm holds the real one: the same PD
             tau[j] = 2.0 * (hold - state.q[j]) - 0.05 * state.v[j]
         return tau
 
