@@ -221,3 +221,37 @@ def test_the_tuna_can_pinched_from_the_side_hangs_from_two_fingers_by_friction()
     assert {"F1_knuckle_link", "F2_knuckle_link"} <= set(links)  # the rule's premise: the can on the housings
     start = int(np.searchsorted(trajectory.t, LIFT_AT - 1e-9))
     assert trajectory.object_position[k, 0, 2] - trajectory.object_position[start, 0, 2] == pytest.approx(0.1, abs=2e-3)
+
+
+def test_the_readme_states_the_committed_figures_of_the_held_grasps() -> None:
+    """The README's figures of the held-out sets' held grasps, from above and pinched from the side, are the committed
+    report's (regenerated and compared in CI): the worst displacement and turn, the fingers' held forces, the most
+    loaded joint's fraction of its rating, the peak contact."""
+    import json
+    import math
+
+    from bhgrasp.thesis.results import REFERENCE
+
+    readme = " ".join((REFERENCE.parents[1] / "README.md").read_text().split())
+    trials = json.loads((REFERENCE / "grasp_benchmark.json").read_text())["trials"]
+    held = [t for t in trials if t["set"] != "development" and t["success"]]
+    top = (
+        "From above: at most {} mm and {} deg under the pushes, each finger pressing {}-{} N, every joint at most {} "
+        "of its rating, no contact above {} N."
+    )
+    side = (
+        "at most {} mm and {} deg, each pinching finger pressing {}-{} N, every joint at most {} of its rating, no "
+        "contact above {} N."
+    )
+    for approach, fingers, text in (("top", ("F1", "F2", "F3"), top), ("side", PINCH, side)):
+        group = [t for t in held if t["approach"] == approach]
+        forces = [t[f"held_force_{finger}"] for t in group for finger in fingers]
+        figures = (
+            f"{1e3 * max(t['max_displacement'] for t in group):.1f}",
+            f"{math.degrees(max(t['max_rotation'] for t in group)):.1f}",
+            f"{min(forces):.0f}",
+            f"{max(forces):.0f}",
+            f"{max(t['torque_to_rating'] for t in group):.2f}",
+            f"{max(t['peak_contact_force'] for t in group):.0f}",
+        )
+        assert text.format(*figures) in readme, (approach, figures)
