@@ -29,6 +29,11 @@ STAND_MARGIN = 0.003  # [m] the fingers' least distance from the stand when they
 SWEEP = 0.01  # [rad] the close's proximal steps in :func:`stand_clearance`
 
 
+def support_box(item: BenchObject, table: bool = False) -> coal.Box:
+    """What the object stands on, as a coal box: its stand (its footprint), or the table :data:`TABLE_REACH` around."""
+    return coal.Box(*((2 * TABLE_REACH,) * 2 if table else 2 * item.half_extents[:2]), STAND_HEIGHT)
+
+
 def stand_clearance(item: BenchObject, spread: float, clearance: float, opening: float, table: bool = False) -> float:
     """The fingers' least distance [m] from the stand up to where each first touches the object (negative: apart).
 
@@ -42,7 +47,7 @@ def stand_clearance(item: BenchObject, spread: float, clearance: float, opening:
     """
     reach = reach_of(item, spread, opening)
     centre = grasp_centre(item, spread, clearance, opening)
-    stand = coal.Box(*((2 * TABLE_REACH,) * 2 if table else 2 * item.half_extents[:2]), STAND_HEIGHT)
+    stand = support_box(item, table)
     stand_centre = centre + np.array([0.0, 0.0, item.half_extents[2] + 0.5 * STAND_HEIGHT])  # below it: hand +z
     nearest = np.inf
     for finger in reach.hand.fingers:
@@ -146,5 +151,6 @@ __all__ = [
     "grasp_clearance",
     "grasp_ready",
     "stand_clearance",
+    "support_box",
     "trial_clearance",
 ]

@@ -88,6 +88,19 @@ class Reach:
                 nearest = (gap, link.name, np.asarray(result.getNearestPoint2()))
         return nearest
 
+    def open_distance(self, shape: coal.ShapeBase, where: coal.Transform3s) -> float:
+        """The least distance [m] from the open hand (every finger at ``opening``) to ``shape`` at ``where``.
+
+        Every collision shape of the hand; ``where`` in the hand frame.
+        """
+        q = self.configuration(self.opening)
+        pin.updateGeometryPlacements(self.hand.model, self.model_data, self.geometry, self.data, q)
+        return min(
+            coal.distance(link.geometry, coal_transform(self.data.oMg[i]), shape, where, self._request, result)
+            for i, link in enumerate(self.geometry.geometryObjects)
+            for result in [coal.DistanceResult()]
+        )
+
     def configuration(self, angle: float) -> np.ndarray:
         """Every finger at proximal ``angle`` [rad], the distal at a third, both spreads at ``spread``.
 
@@ -139,11 +152,11 @@ class Reach:
         return high
 
 
-def _deepest_corner(shape: coal.CollisionGeometry, placement: pin.SE3) -> float:
-    """The largest z [m] of a shape's local bounding-box corners placed by ``placement``."""
+def placed_corners(shape: coal.CollisionGeometry, placement: pin.SE3) -> np.ndarray:
+    """(8, 3) the corners [m] of a shape's local bounding box, placed by ``placement``."""
     shape.computeLocalAABB()
     box = shape.aabb_local
-    return max(placement.act(np.array(corner))[2] for corner in itertools.product(*zip(box.min_, box.max_)))
+    return np.array([placement.act(np.array(corner)) for corner in itertools.product(*zip(box.min_, box.max_))])
 
 
 @functools.lru_cache(maxsize=64)
@@ -163,10 +176,10 @@ def hand_depth(spread: float, opening: float) -> float:
     pin.updateGeometryPlacements(reach.hand.model, reach.model_data, reach.geometry, reach.data, q)
     shapes = reach.geometry.geometryObjects
     return max(
-        _deepest_corner(item.geometry, reach.data.oMg[i])
+        float(placed_corners(item.geometry, reach.data.oMg[i])[:, 2].max())
         for i, item in enumerate(shapes)
         if not any(part in item.name for part in ("proximal", "distal"))
     )
 
 
-__all__ = ["FLIP", "ORIENTATIONS", "SIDEWAYS", "UPRIGHT", "Reach", "hand_depth", "reach_of"]
+__all__ = ["FLIP", "ORIENTATIONS", "SIDEWAYS", "UPRIGHT", "Reach", "hand_depth", "placed_corners", "reach_of"]

@@ -41,12 +41,11 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN, TABLE_REACH, grasp_clearance, trial_clearance
+from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN, grasp_clearance, support_box, trial_clearance
 from bhgrasp.bench.objects import BenchObject
 from bhgrasp.bench.placement import grasp_centre
 from bhgrasp.bench.protocol import APPROACH, PRESHAPE, Trial, spread_of
-from bhgrasp.bench.reach import ORIENTATIONS, Reach, hand_depth, reach_of
-from bhgrasp.grasp.probes import coal_transform
+from bhgrasp.bench.reach import ORIENTATIONS, Reach, hand_depth, placed_corners, reach_of
 
 SIDE_SPREAD = math.pi / 2  # [rad] F1 and F2 face each other across the palm
 PINCH = ("F1", "F2")  # the fingers that close in a side pinch
@@ -66,16 +65,12 @@ def finger_half_width() -> float:
     pin.updateGeometryPlacements(
         reach.hand.model, reach.model_data, reach.geometry, reach.data, reach.configuration(PRESHAPE)
     )
-    widest = 0.0
-    for i, item in enumerate(reach.geometry.geometryObjects):
-        if not item.name.startswith("F1"):
-            continue
-        shape = item.geometry
-        shape.computeLocalAABB()
-        box, placement = shape.aabb_local, reach.data.oMg[i]
-        for corner in np.array(np.meshgrid(*zip(box.min_, box.max_))).T.reshape(-1, 3):
-            widest = max(widest, abs(float(placement.act(corner)[1])))  # hand y: across F1's closing plane
-    return widest
+    geometry, placements = reach.geometry.geometryObjects, reach.data.oMg
+    return max(  # hand y: across F1's closing plane
+        float(np.abs(placed_corners(item.geometry, placements[i])[:, 1]).max())
+        for i, item in enumerate(geometry)
+        if item.name.startswith("F1")
+    )
 
 
 def pinch_height(item: BenchObject) -> float:
@@ -85,17 +80,9 @@ def pinch_height(item: BenchObject) -> float:
 
 def _support_gap(reach: Reach, item: BenchObject, centre: np.ndarray, touches: dict[str, float], table: bool) -> float:
     """The hand's least distance [m] from the stand (or table): open, then each pinching finger up to its touch."""
-    size = (2 * TABLE_REACH,) * 2 if table else tuple(2 * item.half_extents[:2])
-    support = coal.Box(*size, STAND_HEIGHT)
+    support = support_box(item, table)
     below = centre + reach.axes @ np.array([0.0, 0.0, -(item.half_extents[2] + 0.5 * STAND_HEIGHT)])
-    where = coal.Transform3s(reach.axes, below)
-    pin.updateGeometryPlacements(
-        reach.hand.model, reach.model_data, reach.geometry, reach.data, reach.configuration(reach.opening)
-    )
-    request, nearest = coal.DistanceRequest(), math.inf
-    for i, shape in enumerate(reach.geometry.geometryObjects):
-        frame = coal_transform(reach.data.oMg[i])
-        nearest = min(nearest, coal.distance(shape.geometry, frame, support, where, request, coal.DistanceResult()))
+    nearest = reach.open_distance(support, coal.Transform3s(reach.axes, below))
     for finger, touch in touches.items():
         for angle in [*np.arange(reach.opening, touch, 0.01), touch]:
             nearest = min(nearest, reach.distance(finger, float(angle), below, support))
@@ -107,17 +94,9 @@ def _way_in_clear(reach: Reach, centre: np.ndarray) -> bool:
 
     Up to the grasp, not at it: there the object may rest against the knuckle housings (the module's rule).
     """
-    pin.updateGeometryPlacements(
-        reach.hand.model, reach.model_data, reach.geometry, reach.data, reach.configuration(reach.opening)
-    )
-    request = coal.DistanceRequest()
-    for back in [WAY_IN / 10, *np.arange(WAY_IN, APPROACH + 1e-9, WAY_IN)]:  # from half a millimetre off
-        where = coal.Transform3s(reach.axes, centre + np.array([0.0, 0.0, back]))  # the object, further off
-        for i, shape in enumerate(reach.geometry.geometryObjects):
-            frame = coal_transform(reach.data.oMg[i])
-            if coal.distance(shape.geometry, frame, reach.shape, where, request, coal.DistanceResult()) <= 0.0:
-                return False
-    return True
+    backs = [WAY_IN / 10, *np.arange(WAY_IN, APPROACH + 1e-9, WAY_IN)]  # from half a millimetre off
+    further = (coal.Transform3s(reach.axes, centre + np.array([0.0, 0.0, back])) for back in backs)  # the object
+    return all(reach.open_distance(reach.shape, where) > 0.0 for where in further)
 
 
 @functools.lru_cache(maxsize=256)
