@@ -17,7 +17,16 @@ from bhgrasp.bench.heading import clearest_heading, hand_base, heading_clearance
 from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN, TABLE_REACH, grasp_clearance, stand_clearance
 from bhgrasp.bench.metrics import contact_summary, evaluate, failure_reason, held_forces, least_grip, relative_poses
 from bhgrasp.bench.neighbours import neighbour_displacements, run_among_neighbours, settle_neighbours
-from bhgrasp.bench.objects import DEVELOPMENT_SET, HELD_OUT_SET, HELD_OUT_SET_2, KINDS, OBJECT_SET, SETS, BenchObject
+from bhgrasp.bench.objects import (
+    DEVELOPMENT_SET,
+    HELD_OUT_SET,
+    HELD_OUT_SET_2,
+    HELD_OUT_SET_3,
+    KINDS,
+    OBJECT_SET,
+    SETS,
+    BenchObject,
+)
 from bhgrasp.bench.placement import closing_planes_meet, grasp_offset
 from bhgrasp.bench.protocol import (
     ACTUATIONS,
@@ -76,6 +85,7 @@ __all__ = [
     "HELD_AT",
     "HELD_OUT_SET",
     "HELD_OUT_SET_2",
+    "HELD_OUT_SET_3",
     "KINDS",
     "LIFT",
     "LIFT_AT",
