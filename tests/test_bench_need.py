@@ -86,3 +86,27 @@ def test_the_readme_states_the_bleach_bottles_committed_need() -> None:
     (need,) = {round(t["need_to_rating"], 2) for t in trials if t["object"] == "bleach cleanser"}
     readme = " ".join((REFERENCE.parents[1] / "README.md").read_text().split())
     assert f"grasp needs at least {need:.2f} of the ratings to carry the pushes at rest" in readme
+
+
+def test_the_readme_states_held_out_3s_committed_failures() -> None:
+    """The README's figures for the third held-out set's two failures are the committed report's."""
+    import json
+    import math
+
+    from bhgrasp.thesis.results import REFERENCE
+
+    trials = json.loads((REFERENCE / "grasp_benchmark.json").read_text())["trials"]
+    readme = " ".join((REFERENCE.parents[1] / "README.md").read_text().split())
+    failed = {t["object"]: t for t in trials if t["set"] == "held-out-3" and not t["success"]}
+    assert sorted(failed) == ["mini soccer ball", "windex bottle"]
+    bottle, ball = failed["windex bottle"], failed["mini soccer ball"]
+    assert (
+        f"F3's proximal joint at {bottle['torque_to_rating']:.2f} times its rating, "
+        f"{bottle['peak_contact_force']:.0f} N at a contact; its grasp needs at least {bottle['need_to_rating']:.2f} "
+        "of the ratings" in readme
+    )
+    assert ball["approach"] == "side"
+    turn, shift = math.degrees(ball["max_rotation"]), 1e3 * ball["max_displacement"]
+    assert f"turns {turn:.0f} deg ({shift:.0f} mm) under the pushes" in readme
+    held = sum(t["success"] for t in trials if t["set"] == "held-out-3")
+    assert f"holds held-out-3's objects {held}/20 ({5 * held} %)" in readme
