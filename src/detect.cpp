@@ -38,7 +38,8 @@ bool converged(const coal::CollisionResult& result, double max_depth) {
 
 // ------------------------------------------------------------------ detection (sim/contact.py: ContactEngine.detect)
 Contacts Engine::detect(const Vector& q, const Memory& memory) {
-  pinocchio::updateGeometryPlacements(model_, data_, geometry_, geometry_data_, q);
+  parts_.forward_kinematics(q);
+  parts_.update_geometry_placements(geometry_, geometry_data_);
   // the candidate points, in work arrays (no allocation once they are large enough)
   std::vector<std::int64_t>& pairs = work_.pair;
   std::vector<Vector3> &points = work_.point, &normals = work_.normal;
@@ -110,7 +111,7 @@ Contacts Engine::detect(const Vector& q, const Memory& memory) {
     contacts.depth[i] = depths[j];
     contacts.friction[i] = pair.friction;
     contacts.weight[i] = weights[j];
-    const pinocchio::SE3& placement = data_.oMi[static_cast<std::size_t>(pair.joint_b)];
+    const pinocchio::SE3& placement = parts_.placement(static_cast<int>(pair.joint_b));
     contacts.local_b.row(i) = placement.actInv(points[j]);
     ++i;
   }
@@ -212,21 +213,18 @@ void Engine::jacobians(const Contacts& contacts, std::vector<Matrix>& result) {
   for (Eigen::Index i = 0; i < contacts.size(); ++i) {
     const Pair& pair = settings_.pairs[static_cast<std::size_t>(contacts.pair[i])];
     Matrix& jacobian = result[static_cast<std::size_t>(i)];
+    jacobian.setZero();
+    Eigen::Index first = 0;
     if (pair.joint_b) {
       const pinocchio::SE3 placement(Matrix3::Identity(), row(contacts.local_b, i));
-      frame_jacobian_.setZero();
-      pinocchio::getFrameJacobian(model_, data_, static_cast<pinocchio::JointIndex>(pair.joint_b), placement,
-                                  pinocchio::LOCAL_WORLD_ALIGNED, frame_jacobian_);
-      jacobian = frame_jacobian_.topRows<3>();
-    } else {
-      jacobian.setZero();
+      const SceneParts::Jacobian& part = parts_.frame_jacobian(static_cast<int>(pair.joint_b), placement, first);
+      jacobian.middleCols(first, part.cols()) = part.topRows<3>();
     }
     if (pair.joint_a) {
-      const auto joint = static_cast<pinocchio::JointIndex>(pair.joint_a);
-      const pinocchio::SE3 placement(Matrix3::Identity(), data_.oMi[joint].actInv(row(contacts.point, i)));
-      frame_jacobian_.setZero();
-      pinocchio::getFrameJacobian(model_, data_, joint, placement, pinocchio::LOCAL_WORLD_ALIGNED, frame_jacobian_);
-      jacobian -= frame_jacobian_.topRows<3>();
+      const auto joint = static_cast<int>(pair.joint_a);
+      const pinocchio::SE3 placement(Matrix3::Identity(), parts_.placement(joint).actInv(row(contacts.point, i)));
+      const SceneParts::Jacobian& part = parts_.frame_jacobian(joint, placement, first);
+      jacobian.middleCols(first, part.cols()) -= part.topRows<3>();
     }
   }
 }

@@ -46,7 +46,7 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
     : settings_(std::move(settings)) {
   model_ = model_from_text(model);
   geometry_ = geometry_from_text(geometry);
-  data_ = pinocchio::Data(model_);
+  parts_ = SceneParts(model_, settings_.nv_hand);
   geometry_data_ = pinocchio::GeometryData(geometry_);
   const auto pairs = settings_.pairs.size();
   if (settings_.queries.size() != pairs) throw std::invalid_argument("one query setting per collision pair is needed");
@@ -83,7 +83,6 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
     bound_radius_.push_back(bounded ? object.geometry->aabb_radius : std::numeric_limits<double>::infinity());
     bound_centre_.push_back(bounded ? Vector3(object.geometry->aabb_center) : Vector3::Zero());
   }
-  frame_jacobian_ = pinocchio::Data::Matrix6x::Zero(6, model_.nv);
 }
 
 // ------------------------------------------------------------------ joint space (sim/python_engine.py)
@@ -114,9 +113,7 @@ void Engine::passive(const Vector& q, const Vector& v, const Drive& drive, Passi
 }
 
 void Engine::mass_matrix(const Vector& q, Matrix& mass) {
-  pinocchio::crba(model_, data_, ConstRef(q));
-  mass = data_.M;
-  mass.triangularView<Eigen::StrictlyLower>() = mass.transpose();
+  parts_.mass_matrix(q, mass);
 }
 
 void Engine::transmission(const Drive& drive, Matrix& full) const {
@@ -153,19 +150,22 @@ void Engine::reduced_solve(const Matrix& transmission, const Matrix& matrix, con
 }
 
 Vector Engine::gravity(const Vector& q) {
-  return pinocchio::computeGeneralizedGravity(model_, data_, ConstRef(q)).head(settings_.nv_hand);
+  return parts_.hand_gravity(q);
 }
 
 Matrix Engine::frame_jacobians(const Vector& q, const std::vector<int>& frames) {
-  pinocchio::computeJointJacobians(model_, data_, ConstRef(q));
-  Matrix result(3 * static_cast<Eigen::Index>(frames.size()), settings_.nv_hand);
+  parts_.compute_joint_jacobians(q);
+  Matrix result = Matrix::Zero(3 * static_cast<Eigen::Index>(frames.size()), settings_.nv_hand);
   for (std::size_t f = 0; f < frames.size(); ++f) {
     if (frames[f] < 0 || frames[f] >= static_cast<int>(model_.nframes))
       throw std::invalid_argument("a frame index the model lacks");
-    frame_jacobian_.setZero();
-    pinocchio::getFrameJacobian(model_, data_, static_cast<pinocchio::FrameIndex>(frames[f]),
-                                pinocchio::LOCAL_WORLD_ALIGNED, frame_jacobian_);
-    result.middleRows(3 * static_cast<Eigen::Index>(f), 3) = frame_jacobian_.topLeftCorner(3, settings_.nv_hand);
+    const pinocchio::Frame& frame = model_.frames[static_cast<std::size_t>(frames[f])];
+    if (frame.parentJoint == 0) continue;  // fixed in the world
+    Eigen::Index first = 0;
+    const SceneParts::Jacobian& jacobian = parts_.frame_jacobian(static_cast<int>(frame.parentJoint), frame.placement,
+                                                                 first);
+    if (first >= settings_.nv_hand) throw std::invalid_argument("a frame on an object, not on the hand");
+    result.block(3 * static_cast<Eigen::Index>(f), first, 3, jacobian.cols()) = jacobian.topRows<3>();
   }
   return result;
 }
@@ -244,7 +244,7 @@ Engine::Acceleration Engine::acceleration(const Vector& q, const Vector& v, cons
                                           bool gyroscopic) {
   Acceleration result;
   result.contacts = detect(q, memory);
-  pinocchio::computeJointJacobians(model_, data_, ConstRef(q));
+  parts_.compute_joint_jacobians(q);
   passive(q, v, drive, work_.passive);
   const Passive& joint = work_.passive;
   const Vector total = tau + joint.torque - joint.damping.cwiseProduct(v);
@@ -263,7 +263,8 @@ Engine::Acceleration Engine::acceleration(const Vector& q, const Vector& v, cons
   }
   mass_matrix(q, work_.mass);
   const Matrix& mass = work_.mass;
-  Vector bias = pinocchio::nonLinearEffects(model_, data_, ConstRef(q), ConstRef(v));
+  Vector bias;
+  parts_.nonlinear_effects(q, v, bias);
   if (gyroscopic) implicit_gyroscopic(v, bias);
   reduced_solve(transmission, mass, total + generalized - bias, result.acceleration);
   const int nvh = settings_.nv_hand;

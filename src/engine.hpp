@@ -20,6 +20,7 @@
 
 #include "decompositions.hpp"
 #include "options.hpp"
+#include "scene_parts.hpp"
 
 namespace bhgrasp {
 
@@ -157,8 +158,8 @@ class Engine {
                             const Drive& drive, const Memory& memory, bool gyroscopic);
   Vector integrate(const Vector& q, const Vector& v) const;
 
-  pinocchio::Model model_;
-  pinocchio::Data data_;
+  pinocchio::Model model_;  // the whole scene's: its layout and integration; its dynamics run on parts_
+  SceneParts parts_;
   pinocchio::GeometryModel geometry_;
   pinocchio::GeometryData geometry_data_;
   Settings settings_;
@@ -171,7 +172,6 @@ class Engine {
   std::shared_ptr<coal::CollisionGeometry> probe_;
   std::vector<double> bound_radius_;  // per geometry: radius [m] of a sphere about bound_centre_ holding the shape
   std::vector<Vector3> bound_centre_; // in the geometry's frame; radius inf: unbounded (half-spaces)
-  pinocchio::Data::Matrix6x frame_jacobian_;
   Work work_;
 };
 

@@ -19,11 +19,11 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
   // product into a temporary, the product goes to a work array first, with the same arithmetic.
   Work& work = work_;
   Contacts contacts = detect(q, memory);
-  pinocchio::computeJointJacobians(model_, data_, ConstRef(q));
+  parts_.compute_joint_jacobians(q);
   mass_matrix(q, work.mass);
   const Matrix& mass = work.mass;
   Vector& bias = work.bias;
-  bias = pinocchio::nonLinearEffects(model_, data_, ConstRef(q), ConstRef(v));
+  parts_.nonlinear_effects(q, v, bias);
   implicit_gyroscopic(v, bias);
   passive(q, v, drive, work.passive);
   const Passive& joint = work.passive;

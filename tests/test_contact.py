@@ -65,7 +65,7 @@ def test_signed_distances_agree_with_coal(shape: str) -> None:
     }
     engine, scene = engine_for(items.get(shape, items["sphere"]))
     q = scene.initial_state()[0]
-    pin.updateGeometryPlacements(scene.model, engine.data, scene.geometry, engine.geometry_data, q)
+    pin.updateGeometryPlacements(scene.model, scene.data, scene.geometry, engine.geometry_data, q)
     geom = scene.environment_geometries[0] if shape == "halfspace" else scene.object_geometries[0]
     points = np.random.default_rng(1).uniform(-0.08, 0.2, size=(200, 3))
     placement = engine.geometry_data.oMg[geom]
@@ -102,7 +102,7 @@ def test_cylinder_signed_distances_meet_a_second_method() -> None:
     )
     engine, scene = engine_for(can)
     pin.updateGeometryPlacements(
-        scene.model, engine.data, scene.geometry, engine.geometry_data, scene.initial_state()[0]
+        scene.model, scene.data, scene.geometry, engine.geometry_data, scene.initial_state()[0]
     )
     geom = scene.object_geometries[0]
     placement = engine.geometry_data.oMg[geom]

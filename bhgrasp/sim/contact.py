@@ -19,6 +19,7 @@ from bhgrasp.data import ContactMemory, ContactSet, empty_contact_set
 from bhgrasp.sim.coal_queries import FALLBACK_TOLERANCE, converged, fresh_request, plausible_depth
 from bhgrasp.sim.contact_law import ContactForces, SpringDamper
 from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.scene_parts import SceneParts
 
 LOCAL_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _IDENTITY3 = np.eye(3)
@@ -34,15 +35,15 @@ class ContactEngine(ContactForces):
     """
 
     def __init__(
-        self, scene: Scene, law: SpringDamper, match_radius: float = 3e-3, data: pin.Data | None = None
+        self, scene: Scene, law: SpringDamper, match_radius: float = 3e-3, parts: SceneParts | None = None
     ) -> None:
         """Prepare detection for every collision pair of ``scene``.
 
-        ``data``: the Pinocchio data that detection runs forward kinematics in (and that :meth:`jacobians` reads);
-        default a new one, so that engines on one scene share no work space.
+        ``parts``: the scene's kinematics that detection runs in (and that :meth:`jacobians` reads); default new
+        ones, so that engines on one scene share no work space.
         """
         self.scene = scene
-        self.data = scene.model.createData() if data is None else data
+        self.parts = SceneParts(scene.hand_model, scene.model) if parts is None else parts
         self.geometry_data = pin.GeometryData(scene.geometry)
         super().__init__(law)
         self.match_radius = as_positive(match_radius, "match_radius")
@@ -84,7 +85,8 @@ class ContactEngine(ContactForces):
         damping among its points, so a body's contact stiffness does not depend on how many points coal reports.
         """
         scene = self.scene
-        pin.updateGeometryPlacements(scene.model, self.data, scene.geometry, self.geometry_data, q)
+        self.parts.forward_kinematics(q)
+        self.parts.update_geometry_placements(scene.geometry, self.geometry_data)
         placements = self.geometry_data.oMg
         pairs, points, normals, depths, weights = [], [], [], [], []
         for k in range(len(self._narrow)):
@@ -198,8 +200,8 @@ class ContactEngine(ContactForces):
 
     def _in_frame_b(self, pair: np.ndarray, point: np.ndarray) -> np.ndarray:
         """Contact points expressed in the joint frame of their body b."""
-        placements = self.data.oMi
-        return np.array([placements[int(j)].actInv(p) for j, p in zip(self._joint_b[pair], point)])
+        placement = self.parts.placement
+        return np.array([placement(int(j)).actInv(p) for j, p in zip(self._joint_b[pair], point)])
 
     def _recall(
         self, pair: np.ndarray, local: np.ndarray, normal: np.ndarray, memory: ContactMemory
@@ -239,19 +241,21 @@ class ContactEngine(ContactForces):
     def jacobians(self, contacts: ContactSet) -> np.ndarray:
         """Relative point Jacobians J_b(p) - J_a(p), shape (m, 3, nv), world-aligned.
 
-        Needs ``pin.computeJointJacobians`` at the current ``q`` in :attr:`data` (the engine calls it once per step).
+        Needs :meth:`SceneParts.compute_joint_jacobians` at the current ``q`` in :attr:`parts` (the engine calls it once
+        per step).
         """
-        model, data = self.scene.model, self.data
-        jacobians = np.zeros((len(contacts), 3, model.nv))
+        parts = self.parts
+        jacobians = np.zeros((len(contacts), 3, self.scene.nv))
         identity = _IDENTITY3
         for i, k in enumerate(contacts.pair):
             joint_b, joint_a = int(self._joint_b[k]), int(self._joint_a[k])
             if joint_b:  # a point fixed on body b: Pinocchio's frame Jacobian of that placement
-                placement = pin.SE3(identity, contacts.local_b[i])
-                jacobians[i] = pin.getFrameJacobian(model, data, joint_b, placement, LOCAL_WORLD_ALIGNED)[:3]
+                columns, jacobian = parts.point_jacobian(joint_b, pin.SE3(identity, contacts.local_b[i]))
+                jacobians[i, :, columns] = jacobian[:3]
             if joint_a:  # 0 = the environment or the fixed palm
-                placement = pin.SE3(identity, data.oMi[joint_a].actInv(contacts.point[i]))
-                jacobians[i] -= pin.getFrameJacobian(model, data, joint_a, placement, LOCAL_WORLD_ALIGNED)[:3]
+                placement = pin.SE3(identity, parts.placement(joint_a).actInv(contacts.point[i]))
+                columns, jacobian = parts.point_jacobian(joint_a, placement)
+                jacobians[i, :, columns] -= jacobian[:3]
         return jacobians
 
 

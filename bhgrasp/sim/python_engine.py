@@ -37,6 +37,7 @@ from bhgrasp.sim.engine import DriveTerms, StepResult, divergence
 from bhgrasp.sim.integrators import implicit_gyroscopic, increment_rate
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_layout import SceneLayout
+from bhgrasp.sim.scene_parts import SceneParts
 from bhgrasp.sim.settings import SimulatorSettings
 
 _FRICTION_VELOCITY = 1e-3  # [rad/s] regularisation of Coulomb joint friction
@@ -45,7 +46,8 @@ _FRICTION_VELOCITY = 1e-3  # [rad/s] regularisation of Coulomb joint friction
 class PythonEngine:
     """The physics step in Python on one scene, contact law and settings (the engine protocol).
 
-    Its Pinocchio and coal work space is its own: engines of one scene share nothing.
+    Its Pinocchio and coal work space is its own (the scene's parts, :mod:`~bhgrasp.sim.scene_parts`): engines of one
+    scene share nothing.
     """
 
     name = "python"
@@ -53,13 +55,12 @@ class PythonEngine:
     def __init__(
         self, scene: Scene, layout: SceneLayout, law: SpringDamper, settings: SimulatorSettings, match_radius: float
     ) -> None:
-        """Prepare the step: a Pinocchio data of its own, the contact engine, what the step reads every time."""
+        """Prepare the step: the scene's parts of its own, the contact engine, what the step reads every time."""
         self.scene, self.settings = scene, settings
-        self.data = scene.model.createData()
-        self.contacts = ContactEngine(scene, law, match_radius, data=self.data)
+        self.parts = SceneParts(scene.hand_model, scene.model)
+        self.contacts = ContactEngine(scene, law, match_radius, parts=self.parts)
         self._lower, self._upper = scene.hand.lower, scene.hand.upper
         self._object_identity = np.eye(scene.nv - scene.nv_hand)
-        self._lower_triangle = np.tril_indices(scene.nv, -1)
         self._spinning = layout.spinning_bodies
         self._spring_q, self._spring_v = layout.spring_q, layout.spring_v
 
@@ -98,11 +99,6 @@ class PythonEngine:
         return StepResult(q_next, v_next, contacts, torques, memory, checked, load)
 
     # ------------------------------------------------------------------ joint space
-    def _mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        mass = pin.crba(self.scene.model, self.data, q).copy()
-        mass[self._lower_triangle] = mass.T[self._lower_triangle]
-        return mass
-
     def _transmission(self, drive: DriveTerms) -> np.ndarray:
         hand = drive.transmission
         rows, cols = hand.shape
@@ -143,12 +139,12 @@ class PythonEngine:
 
     # ------------------------------------------------------------------ the implicit step
     def _implicit(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, drive: DriveTerms, memory: ContactMemory):
-        dt, model, data = self.settings.dt, self.scene.model, self.data
+        dt, model, parts = self.settings.dt, self.scene.model, self.parts
         engine, nv = self.contacts, self.scene.nv
         contacts = engine.detect(q, memory)
-        pin.computeJointJacobians(model, data, q)
-        mass = self._mass_matrix(q)
-        bias = pin.nonLinearEffects(model, data, q, v).copy()
+        parts.compute_joint_jacobians(q)
+        mass = parts.mass_matrix(q)
+        bias = parts.nonlinear_effects(q, v)
         implicit_gyroscopic(bias, v, self._spinning, self.settings.dt)
         passive, stiffness, damping = self._passive(q, v, drive)
         tau = np.zeros(nv)
@@ -253,9 +249,9 @@ class PythonEngine:
         memory: ContactMemory,
     ):
         """Explicit accelerations at (q, v) (contacts detected at q), with the step's contact bookkeeping."""
-        model, data, engine, nvh = self.scene.model, self.data, self.contacts, self.scene.nv_hand
+        parts, engine, nvh = self.parts, self.contacts, self.scene.nv_hand
         contacts = engine.detect(q, memory)
-        pin.computeJointJacobians(model, data, q)
+        parts.compute_joint_jacobians(q)
         passive, _, damping = self._passive(q, v, drive)
         total = tau + passive - damping * v
         forces, sticking, displacement = np.zeros((len(contacts), 3)), np.zeros(len(contacts), bool), None
@@ -265,8 +261,8 @@ class PythonEngine:
             relative = np.einsum("mij,j->mi", jacobians, v)
             forces, sticking, displacement = engine.forces(contacts, relative, self.settings.dt)
             generalized = np.einsum("mij,mi->j", jacobians, forces)
-        mass = self._mass_matrix(q)
-        bias = pin.nonLinearEffects(model, data, q, v).copy()
+        mass = parts.mass_matrix(q)
+        bias = parts.nonlinear_effects(q, v)
         if self.settings.integrator == "semi-implicit":  # RK4's explicit stages are accurate to O(dt^4) as they are
             implicit_gyroscopic(bias, v, self._spinning, self.settings.dt)
         reduced = transmission.T @ mass @ transmission

@@ -1,5 +1,8 @@
 """Scene: the hand, free rigid objects and a fixed environment as one Pinocchio model plus coal collision geometry.
 
+The model gives the state's layout and its integration; the dynamics run part by part (the hand's model, one per
+object: :mod:`~bhgrasp.sim.scene_parts`), as no joint links an object to the hand or to another object.
+
 Layout of the state: ``q = (q_hand, q_object_1, ...)``, ``v = (v_hand, v_object_1, ...)``.  A free object adds a
 translation joint and a spherical joint below it (7 coordinates: position [m] and quaternion (x, y, z, w), as a free
 flyer's; 6 velocities: the linear velocity [m/s] of its centre of mass in the *world* frame, then its angular velocity
@@ -24,6 +27,7 @@ from bhgrasp.model.hand import Hand
 from bhgrasp.model.objects import FixedBox, Plane, RigidObject
 from bhgrasp.model.spring_mounted import SpringMounted
 from bhgrasp.sim.collision_pair import CollisionPair
+from bhgrasp.sim.scene_parts import SceneParts
 
 Environment = Plane | FixedBox
 
@@ -68,12 +72,25 @@ class Scene:
         self.object_names = _unique_names([o.name for o in self.objects], "object")
         self.environment_names = _unique_names([e.name for e in self.environment], "environment")
 
-        self.model = _placed_copy(hand.model, hand.base_placement)
-        self.model.gravity.linear = hand.gravity
+        self.hand_model = _placed_copy(hand.model, hand.base_placement)  # the hand's part (sim.scene_parts)
+        self.hand_model.gravity.linear = hand.gravity
+        self.model = copy.deepcopy(self.hand_model)
         self.nq_hand, self.nv_hand = hand.nq, hand.nv
         self._add_objects()
-        self.data = self.model.createData()
+        self._data: pin.Data | None = None
+        self._parts: SceneParts | None = None  # energy()'s work space
         self._add_geometries()
+
+    @property
+    def data(self) -> pin.Data:
+        """A Pinocchio data of the whole :attr:`model`, made on first use.
+
+        Its size grows as nv^3 (3.7 GB for 64 free objects); the simulator works on
+        :class:`~bhgrasp.sim.scene_parts.SceneParts` instead.
+        """
+        if self._data is None:
+            self._data = self.model.createData()
+        return self._data
 
     def _add_objects(self) -> None:
         """Each object's joints in the model, their slices of q and v, and the springs of spring-mounted ones."""
@@ -179,12 +196,11 @@ class Scene:
 
     def energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """Kinetic + gravitational potential + object-spring energy [J] (contacts excluded)."""
-        if self.hand.couplings:  # Pinocchio's kinetic energy refuses mimic joints: 1/2 v^T M v (CRBA's upper half)
-            mass = pin.crba(self.model, self.data, q)
-            kinetic = 0.5 * v @ (np.triu(mass) + np.triu(mass, 1).T) @ v
-        else:
-            kinetic = pin.computeKineticEnergy(self.model, self.data, q, v)
-        potential = pin.computePotentialEnergy(self.model, self.data, q)  # moving bodies only
+        if self._parts is None:
+            self._parts = SceneParts(self.hand_model, self.model)
+        parts = self._parts
+        kinetic = 0.5 * v @ parts.mass_matrix(q) @ v
+        potential = parts.potential_energy(q)  # moving bodies only
         springs = 0.0
         for i, item in enumerate(self.objects):
             if isinstance(item, SpringMounted):

@@ -33,6 +33,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.model.objects import RigidObject
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.scene_parts import SceneParts
 
 START_DEPTH_SHARE = 0.25  # a start deeper than this share of max_penetration is named
 
@@ -138,9 +139,10 @@ def _interpenetrations(
     (Not the contacts' own depths: those measure a patch point's overlap to the nearest faces, which for a link
     sunk whole in a plane is a side face: a box 146 mm deep read 58 mm.)
     """
-    data = scene.model.createData()
+    parts = SceneParts(scene.hand_model, scene.model)
     geometry_data = pin.GeometryData(scene.geometry)
-    pin.updateGeometryPlacements(scene.model, data, scene.geometry, geometry_data, q)
+    parts.forward_kinematics(q)
+    parts.update_geometry_placements(scene.geometry, geometry_data)
     deepest: dict[tuple[str, str], float] = {}  # per pair of bodies (a body may have several geometries)
     for index in sorted({int(k) for k in contacts.pair}):
         pair = scene.pairs[index]

@@ -20,6 +20,7 @@ from bhgrasp.data import State, Trajectory
 from bhgrasp.errors import InputError
 from bhgrasp.model.mesh_object import Mesh
 from bhgrasp.sim.scene import Scene
+from bhgrasp.sim.scene_parts import SceneParts
 from bhgrasp.viz import drawing
 
 STICK, SLIP, CONE, GHOST, TIP = 0x22AA44, 0xDD2222, 0x3377FF, 0xFFAA33, 0xAA33FF
@@ -60,12 +61,14 @@ class SceneViewer:
         _draw_meshes_whole(scene, geometry)
         self._geometry = geometry
         self._geometry_data = pin.GeometryData(geometry)
-        self._data = scene.model.createData()
-        self.visualizer = MeshcatVisualizer(scene.model, geometry, geometry)
+        self._parts = SceneParts(scene.hand_model, scene.model)
+        # Placements are this class's (placements(), from the scene's parts): the visualizer draws and names the nodes
+        # only, so it gets a data of an empty model, not one of the whole scene, whose size grows as nv^3.
+        self._visualizer = MeshcatVisualizer(scene.model, geometry, geometry, data=pin.Model().createData())
         with contextlib.redirect_stdout(io.StringIO()) if quiet else contextlib.nullcontext():
-            self.visualizer.initViewer(viewer=viewer, open=open, zmq_url=zmq_url)  # meshcat prints its address
-        self.visualizer.loadViewerModel(rootNodeName=drawing.ROOT)
-        self.viewer: meshcat.Visualizer = self.visualizer.viewer
+            self._visualizer.initViewer(viewer=viewer, open=open, zmq_url=zmq_url)  # meshcat prints its address
+        self._visualizer.loadViewerModel(rootNodeName=drawing.ROOT)
+        self.viewer: meshcat.Visualizer = self._visualizer.viewer
         self._overlays_loaded = False
         self._overlay_visible: dict[str, bool] = {}  # what display() last set of each contact overlay
         self.viewer["/Grid"].set_property("visible", False)
@@ -107,15 +110,15 @@ class SceneViewer:
     def node(self, geometry_index: int) -> str:
         """MeshCat path of a geometry object of the scene."""
         geometry_object = self._geometry.geometryObjects[geometry_index]
-        return self.visualizer.getViewerNodeName(geometry_object, pin.GeometryType.VISUAL)
+        return self._visualizer.getViewerNodeName(geometry_object, pin.GeometryType.VISUAL)
 
     def placements(self, q_hand: Any, object_poses: Any = ()) -> list[np.ndarray]:
         """4 x 4 world placement of every geometry object for hand joints ``q_hand`` and object poses (SE3)."""
         scene = self.scene
         q = pin.neutral(scene.model)
         q[: scene.nq_hand] = np.asarray(q_hand, dtype=float)
-        pin.forwardKinematics(scene.model, self._data, q)
-        pin.updateGeometryPlacements(scene.model, self._data, self._geometry, self._geometry_data)
+        self._parts.forward_kinematics(q)
+        self._parts.update_geometry_placements(self._geometry, self._geometry_data)
         result = [placement.homogeneous for placement in self._geometry_data.oMg]
         for geometries, pose in zip(scene.object_geometry_sets, object_poses):
             for index in geometries:
