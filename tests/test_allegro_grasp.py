@@ -13,6 +13,7 @@ from bhgrasp.grasp.metrics import finger_normal_forces
 from bhgrasp.model.objects import Box
 from bhgrasp.scenarios.allegro_grasp import FINGERTIPS, GRASPING, allegro_box_grasp
 from bhgrasp.scenarios.grasp_demo import OFFSET, run_grasp_demo
+from bhgrasp.sim.start_check import pair_distances
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
 
@@ -30,13 +31,8 @@ def test_contact_configuration_touches_the_box_with_three_fingertips_only():
     distances = {}
     for q_hand in (setup.q_contact, setup.q_close):
         q, _ = scene.initial_state(q_hand)
-        pin.framesForwardKinematics(scene.model, scene.data, q)
-        pin.updateGeometryPlacements(scene.model, scene.data, scene.geometry, scene.geometry_data)
-        distances[id(q_hand)] = {
-            pair.body_a: pin.computeDistance(scene.geometry, scene.geometry_data, pair.index).min_distance
-            for pair in scene.pairs
-            if pair.body_b == scene.object_names[0] and pair.joint_a != 0
-        }
+        pairs = [p for p in scene.pairs if p.body_b == scene.object_names[0] and p.joint_a != 0]
+        distances[id(q_hand)] = dict(zip((p.body_a for p in pairs), pair_distances(scene, q, [p.index for p in pairs])))
     at_contact, closed = distances[id(setup.q_contact)], distances[id(setup.q_close)]
     tips = {FINGERTIPS[f] for f in GRASPING}
     for tip in tips:

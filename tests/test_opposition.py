@@ -21,6 +21,7 @@ from bhgrasp.grasp.opposition import opposed_grasp, opposed_grasps
 from bhgrasp.grasp.pad_placement import pad_radii
 from bhgrasp.grasp.probes import TRACE_TOLERANCE, ObjectProbe, first_hit
 from bhgrasp.scenarios.object_grasp import object_grasp, run_object_grasp
+from bhgrasp.sim.start_check import pair_distances
 
 KNUCKLES = {  # finger -> knuckle x, y [m] on the palm, and the sign of its joint axes along y (-1 closes toward -x)
     "F1": (0.06, 0.025, -1.0),
@@ -112,13 +113,8 @@ def test_the_grasp_touches_with_its_pads_only(setup) -> None:
 
     def distances(q_hand: np.ndarray) -> dict[str, float]:
         q, _ = scene.initial_state(q_hand)
-        pin.framesForwardKinematics(scene.model, scene.data, q)
-        pin.updateGeometryPlacements(scene.model, scene.data, scene.geometry, scene.geometry_data)
-        return {
-            pair.body_a: pin.computeDistance(scene.geometry, scene.geometry_data, pair.index).min_distance
-            for pair in scene.pairs
-            if pair.body_b == scene.object_names[0] and pair.joint_a != 0
-        }
+        pairs = [p for p in scene.pairs if p.body_b == scene.object_names[0] and p.joint_a != 0]
+        return dict(zip((p.body_a for p in pairs), pair_distances(scene, q, [p.index for p in pairs])))
 
     pads = set(KNUCKLES)  # the tip links, whose one shape is the pad
     at_contact, pregrasp, closed = distances(c.q_contact), distances(c.q_pregrasp), distances(c.q_close)

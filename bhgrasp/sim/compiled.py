@@ -112,7 +112,7 @@ def engine_settings(
         ],
         pairs=[native_pair(pair, law) for pair in scene.pairs],
         law=native_law(law, match_radius),
-        queries=[native_query(scene, pair.index) for pair in scene.pairs],
+        queries=[native_query(scene)] * len(scene.pairs),
     )
 
 
@@ -144,10 +144,9 @@ def native_pair(pair, law: SpringDamper):
     )
 
 
-def native_query(scene: Scene, index: int):
-    """Collision pair ``index``'s coal requests in ``scene`` (and both GJK/EPA tolerances) as the C++ ``Query``."""
-    request = scene.geometry_data.collisionRequests[index]
-    patch = scene.geometry_data.contactPatchRequests[index]
+def native_query(scene: Scene):
+    """The coal requests of ``scene``'s pairs (and both GJK/EPA tolerances) as the C++ ``Query``."""
+    request, patch = scene.collision_request, scene.patch_request
     return filled(
         core_module().Query,
         num_max_contacts=request.num_max_contacts,

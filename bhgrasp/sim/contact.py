@@ -55,15 +55,15 @@ class ContactEngine(ContactForces):
         # it the patch depended on the configurations queried before: a box resting flat on its pedestal gave a
         # 4-point patch or a 1-point patch), and their default GJK tolerance (1e-6) decided near the threshold
         # whether a pair touched at all.  The free functions start afresh every time, as the compiled engine does.
-        geometry, data = scene.geometry, scene.geometry_data
+        geometry = scene.geometry
         self._narrow = [
             (
                 geometry.geometryObjects[pair.geom_a].geometry,
                 geometry.geometryObjects[pair.geom_b].geometry,
                 pair.geom_a,
                 pair.geom_b,
-                fresh_request(data.collisionRequests[pair.index]),
-                data.contactPatchRequests[pair.index],
+                fresh_request(scene.collision_request),
+                scene.patch_request,
                 coal.CollisionResult(),
                 coal.ContactPatchResult(),
             )

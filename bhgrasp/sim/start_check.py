@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import coal
@@ -131,6 +132,26 @@ def summary(problems: list[StartProblem], shown: int = 3) -> str:
     return "the scene starts wrong: " + "; ".join(parts)
 
 
+def pair_distances(scene: Scene, q: np.ndarray, indices: Sequence[int]) -> np.ndarray:
+    """Coal's signed distance [m] between the two shapes of each collision pair ``indices`` at configuration ``q``.
+
+    Negative: the shapes overlap by that much.
+    """
+    parts = SceneParts(scene.hand_model, scene.model)
+    geometry_data = pin.GeometryData(scene.geometry)
+    parts.forward_kinematics(q)
+    parts.update_geometry_placements(scene.geometry, geometry_data)
+    distances = []
+    for index in indices:
+        pair = scene.pairs[index]
+        shapes = [scene.geometry.geometryObjects[g].geometry for g in (pair.geom_a, pair.geom_b)]
+        a, b = (geometry_data.oMg[g] for g in (pair.geom_a, pair.geom_b))
+        where_a, where_b = coal.Transform3s(a.rotation, a.translation), coal.Transform3s(b.rotation, b.translation)
+        result = coal.DistanceResult()
+        distances.append(coal.distance(shapes[0], where_a, shapes[1], where_b, coal.DistanceRequest(), result))
+    return np.array(distances, dtype=float)
+
+
 def _interpenetrations(
     scene: Scene, q: np.ndarray, contacts: ContactSet, law: SpringDamper, limit: float
 ) -> list[StartProblem]:
@@ -139,24 +160,10 @@ def _interpenetrations(
     (Not the contacts' own depths: those measure a patch point's overlap to the nearest faces, which for a link
     sunk whole in a plane is a side face: a box 146 mm deep read 58 mm.)
     """
-    parts = SceneParts(scene.hand_model, scene.model)
-    geometry_data = pin.GeometryData(scene.geometry)
-    parts.forward_kinematics(q)
-    parts.update_geometry_placements(scene.geometry, geometry_data)
     deepest: dict[tuple[str, str], float] = {}  # per pair of bodies (a body may have several geometries)
-    for index in sorted({int(k) for k in contacts.pair}):
-        pair = scene.pairs[index]
-        shapes = [scene.geometry.geometryObjects[g].geometry for g in (pair.geom_a, pair.geom_b)]
-        a, b = (geometry_data.oMg[g] for g in (pair.geom_a, pair.geom_b))
-        distance = coal.distance(
-            shapes[0],
-            coal.Transform3s(a.rotation, a.translation),
-            shapes[1],
-            coal.Transform3s(b.rotation, b.translation),
-            coal.DistanceRequest(),
-            coal.DistanceResult(),
-        )
-        bodies = (pair.body_a, pair.body_b)
+    indices = sorted({int(k) for k in contacts.pair})
+    for index, distance in zip(indices, pair_distances(scene, q, indices)):
+        bodies = (scene.pairs[index].body_a, scene.pairs[index].body_b)
         deepest[bodies] = max(deepest.get(bodies, 0.0), -float(distance))
     problems = []
     for (body_a, body_b), depth in deepest.items():
@@ -269,4 +276,4 @@ def _gap(scene: Scene, shape: coal.CollisionGeometry, pose) -> tuple[float, str 
     return nearest, name
 
 
-__all__ = ["START_DEPTH_SHARE", "StartProblem", "StartWarning", "report", "start_problems", "summary"]
+__all__ = ["START_DEPTH_SHARE", "StartProblem", "StartWarning", "pair_distances", "report", "start_problems", "summary"]

@@ -13,7 +13,6 @@ import meshcat.geometry as mg
 import numpy as np
 import pinocchio as pin
 from meshcat.animation import Animation
-from pinocchio.visualize import MeshcatVisualizer
 
 from bhgrasp._validation import as_positive
 from bhgrasp.data import State, Trajectory
@@ -22,6 +21,7 @@ from bhgrasp.model.mesh_object import Mesh
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_parts import SceneParts
 from bhgrasp.viz import drawing
+from bhgrasp.viz.node_loader import NodeLoader
 
 STICK, SLIP, CONE, GHOST, TIP = 0x22AA44, 0xDD2222, 0x3377FF, 0xFFAA33, 0xAA33FF
 GROUND, GROUND_SIZE = 0xD8D8D0, 0.4  # colour, edge [m] of the ground plate
@@ -62,9 +62,7 @@ class SceneViewer:
         self._geometry = geometry
         self._geometry_data = pin.GeometryData(geometry)
         self._parts = SceneParts(scene.hand_model, scene.model)
-        # Placements are this class's (placements(), from the scene's parts): the visualizer draws and names the nodes
-        # only, so it gets a data of an empty model, not one of the whole scene, whose size grows as nv^3.
-        self._visualizer = MeshcatVisualizer(scene.model, geometry, geometry, data=pin.Model().createData())
+        self._visualizer = NodeLoader(scene.model, geometry)  # loads and names the nodes; placements are ours
         with contextlib.redirect_stdout(io.StringIO()) if quiet else contextlib.nullcontext():
             self._visualizer.initViewer(viewer=viewer, open=open, zmq_url=zmq_url)  # meshcat prints its address
         self._visualizer.loadViewerModel(rootNodeName=drawing.ROOT)
