@@ -24,6 +24,7 @@ QUICK = {  # script -> its arguments for a smoke run
     "bench_instructions.py": ["--cases", "free", "--engine", "compiled", "--short", "2", "--long", "12"],
     "bench_meshes.py": ["--steps", "20", "--repeat", "1"],
     "bench_clutter.py": ["--sizes", "4", "--steps", "20"],
+    "bench_build.py": ["--sizes", "16", "--steps", "2"],
 }
 
 

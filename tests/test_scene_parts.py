@@ -112,3 +112,25 @@ def test_an_object_joint_on_the_hand_is_refused() -> None:
     model.addJoint(1, pin.JointModelRX(), pin.SE3.Identity(), "on the hand")
     with pytest.raises(ValueError, match="hangs from joint 1 of the hand"):
         object_parts(model, hand_model.njoints)
+
+
+def test_the_pairs_are_the_scenes_and_queried_as_pinocchio_would_with_the_scenes_settings() -> None:
+    """No pair is Pinocchio's (a registered pair holds query state in every GeometryData); the one request every pair
+    is queried with has the values Pinocchio's own per-pair request had once the scene set contacts on, 4 of them."""
+    import coal
+
+    scene = mixed_scene(bh.BarrettHand())
+    assert len(scene.pairs) > 0 and len(scene.geometry.collisionPairs) == 0
+    assert len(scene.geometry_data.collisionRequests) == 0
+    geometry = pin.GeometryModel()
+    for name in ("a", "b"):
+        geometry.addGeometryObject(pin.GeometryObject(name, 0, pin.SE3.Identity(), coal.Sphere(0.1)))
+    geometry.addCollisionPair(pin.CollisionPair(0, 1))
+    data = pin.GeometryData(geometry)
+    pinocchios, patch = data.collisionRequests[0], data.contactPatchRequests[0]
+    pinocchios.enable_contact, pinocchios.num_max_contacts = True, 4
+    for field in ("enable_contact", "num_max_contacts", "security_margin", "break_distance"):
+        assert getattr(scene.collision_request, field) == getattr(pinocchios, field), field
+    assert scene.patch_request.max_num_patch == patch.max_num_patch
+    assert scene.patch_request.getNumSamplesCurvedShapes() == patch.getNumSamplesCurvedShapes()
+    assert scene.patch_request.getPatchTolerance() == patch.getPatchTolerance()
