@@ -8,8 +8,6 @@
 #include <coal/contact_patch.h>
 #include <coal/distance.h>
 #include <coal/shape/geometric_shapes.h>
-#include <pinocchio/algorithm/frames.hpp>
-#include <pinocchio/algorithm/geometry.hpp>
 #include <pinocchio/collision/coal-pinocchio-conversions.hpp>
 
 #include "engine.hpp"
@@ -206,7 +204,7 @@ void Engine::recall(Contacts& contacts, const Memory& memory) const {
 }
 
 // Relative point Jacobians J_b(p) - J_a(p), world-aligned, (3, nv) each, in the first m entries of result (a work
-// array that only grows); needs computeJointJacobians at q.
+// array that only grows); needs parts_.compute_joint_jacobians at q.
 void Engine::jacobians(const Contacts& contacts, std::vector<Matrix>& result) {
   if (result.size() < static_cast<std::size_t>(contacts.size()))
     result.resize(static_cast<std::size_t>(contacts.size()), Matrix(3, model_.nv));
@@ -217,13 +215,13 @@ void Engine::jacobians(const Contacts& contacts, std::vector<Matrix>& result) {
     Eigen::Index first = 0;
     if (pair.joint_b) {
       const pinocchio::SE3 placement(Matrix3::Identity(), row(contacts.local_b, i));
-      const SceneParts::Jacobian& part = parts_.frame_jacobian(static_cast<int>(pair.joint_b), placement, first);
+      const SceneParts::Jacobian& part = parts_.point_jacobian(static_cast<int>(pair.joint_b), placement, first);
       jacobian.middleCols(first, part.cols()) = part.topRows<3>();
     }
     if (pair.joint_a) {
       const auto joint = static_cast<int>(pair.joint_a);
       const pinocchio::SE3 placement(Matrix3::Identity(), parts_.placement(joint).actInv(row(contacts.point, i)));
-      const SceneParts::Jacobian& part = parts_.frame_jacobian(joint, placement, first);
+      const SceneParts::Jacobian& part = parts_.point_jacobian(joint, placement, first);
       jacobian.middleCols(first, part.cols()) -= part.topRows<3>();
     }
   }

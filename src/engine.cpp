@@ -14,10 +14,6 @@
 #include <coal/collision.h>
 #include <coal/contact_patch.h>
 #include <coal/shape/geometric_shapes.h>
-#include <pinocchio/algorithm/crba.hpp>
-#include <pinocchio/algorithm/frames.hpp>
-#include <pinocchio/algorithm/jacobian.hpp>
-#include <pinocchio/algorithm/rnea.hpp>
 
 #include "kernels.hpp"
 
@@ -160,11 +156,11 @@ Matrix Engine::frame_jacobians(const Vector& q, const std::vector<int>& frames) 
     if (frames[f] < 0 || frames[f] >= static_cast<int>(model_.nframes))
       throw std::invalid_argument("a frame index the model lacks");
     const pinocchio::Frame& frame = model_.frames[static_cast<std::size_t>(frames[f])];
-    if (frame.parentJoint == 0) continue;  // fixed in the world
+    if (frame.parentJoint == 0) continue;  // fixed in the world: zero rows
     Eigen::Index first = 0;
-    const SceneParts::Jacobian& jacobian = parts_.frame_jacobian(static_cast<int>(frame.parentJoint), frame.placement,
+    const SceneParts::Jacobian& jacobian = parts_.point_jacobian(static_cast<int>(frame.parentJoint), frame.placement,
                                                                  first);
-    if (first >= settings_.nv_hand) throw std::invalid_argument("a frame on an object, not on the hand");
+    if (first >= settings_.nv_hand) continue;  // on an object: zero on the hand's columns
     result.block(3 * static_cast<Eigen::Index>(f), first, 3, jacobian.cols()) = jacobian.topRows<3>();
   }
   return result;

@@ -3,9 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include <pinocchio/algorithm/jacobian.hpp>
-#include <pinocchio/algorithm/rnea.hpp>
-
 #include "engine.hpp"
 #include "kernels.hpp"
 

@@ -1,5 +1,6 @@
 // The scene's parts: see scene_parts.hpp.  Each function mirrors the method of the same name in
-// bhgrasp/sim/scene_parts.py (SceneParts).
+// bhgrasp/sim/scene_parts.py (SceneParts); hand_gravity serves the engine's gravity() and has no twin there, and the
+// Python twin's potential_energy (for Scene.energy) none here.
 #include "scene_parts.hpp"
 
 #include <stdexcept>
@@ -75,7 +76,7 @@ void SceneParts::update_geometry_placements(const pinocchio::GeometryModel& geom
   }
 }
 
-const SceneParts::Jacobian& SceneParts::frame_jacobian(int joint, const pinocchio::SE3& placement,
+const SceneParts::Jacobian& SceneParts::point_jacobian(int joint, const pinocchio::SE3& placement,
                                                        Eigen::Index& first) {
   const auto& [index, local] = where_[static_cast<std::size_t>(joint)];
   Part& part = parts_[static_cast<std::size_t>(index)];

@@ -35,11 +35,11 @@ class SceneParts {
   // The LOCAL_WORLD_ALIGNED Jacobian (6, the part's nv) of the frame at `placement` on `joint`, the part's first
   // velocity column in `first` (the scene Jacobian's other columns are zero); after compute_joint_jacobians.  It
   // lives here until the next call for the same part.
-  const Jacobian& frame_jacobian(int joint, const pinocchio::SE3& placement, Eigen::Index& first);
+  const Jacobian& point_jacobian(int joint, const pinocchio::SE3& placement, Eigen::Index& first);
 
   void mass_matrix(const Vector& q, Matrix& mass);                     // M(q), (nv, nv), both triangles
   void nonlinear_effects(const Vector& q, const Vector& v, Vector& bias);  // h(q, v), (nv,)
-  Vector hand_gravity(const Vector& q);                                // G(q) of the hand's joints, (nv_hand,)
+  Vector hand_gravity(const Vector& q);  // G(q) of the hand's joints, (nv_hand,) (the engine's gravity())
 
  private:
   struct Part {

@@ -388,3 +388,16 @@ def test_a_negative_multiplier_and_the_finger_maps(tmp_path, hand):
     ]
     with pytest.raises(bh.ModelError, match="opposition search .* does not support mimic joints"):
         knuckles(hand, np.array([0.3]))
+
+
+def test_a_coupled_scenes_energy_is_its_free_twins(hand, free) -> None:
+    """Scene.energy of a hand with mimic joints (Pinocchio's potential energy refuses them) equals that of the free
+    hand at q_free = G q + c, v_free = G v, with a free box in both."""
+    g, c = coupling_matrix(free)
+    box = bh.Box(size=(0.02, 0.03, 0.04), mass=0.2, pose=pin.SE3(pin.rpy.rpyToMatrix(0.3, 0.2, 0.1), np.ones(3)))
+    coupled, twin = bh.Scene(hand, [box]), bh.Scene(free, [box])
+    q, v = coupled.initial_state(np.array([0.7]))
+    v[:] = np.random.default_rng(5).normal(size=coupled.nv)
+    q_free, v_free = twin.initial_state(g @ q[:1] + c)
+    q_free[twin.nq_hand :], v_free[:] = q[coupled.nq_hand :], np.concatenate((g @ v[:1], v[coupled.nv_hand :]))
+    assert coupled.energy(q, v) == pytest.approx(twin.energy(q_free, v_free), rel=1e-12)

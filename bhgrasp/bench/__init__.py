@@ -1,7 +1,8 @@
 """The grasp benchmark: a wrist-mounted BH8-280 approaches, closes on, lifts, shakes and places household objects.
 
 :mod:`~bhgrasp.bench.protocol` fixes the protocol (phases, thresholds, contact law,
-:class:`~bhgrasp.bench.protocol.Trial`); :mod:`~bhgrasp.bench.objects` the object sets (development, two held-out);
+:class:`~bhgrasp.bench.protocol.Trial`); :mod:`~bhgrasp.bench.objects` the object sets (development, three
+held-out, meshes);
 :mod:`~bhgrasp.bench.placement` where the hand goes over the object and :mod:`~bhgrasp.bench.height` how high, both
 from :mod:`~bhgrasp.bench.reach`'s touch angles, or, where no height qualifies, :mod:`~bhgrasp.bench.side` a side
 pinch; :mod:`~bhgrasp.bench.closing` when each finger starts to close;

@@ -1,13 +1,14 @@
 """The side pinch: how the grasp benchmark takes an object that it cannot grasp from above.
 
-A low object (a 28-35 mm box, a 33 mm can) or a small ball leaves no top-down grasp height
+A low object (a 15-35 mm box, a 33 mm can) or a small ball leaves no top-down grasp height
 (:mod:`~bhgrasp.bench.height`): the fingers, 126 mm long, sweep past the object's side onto its stand before they
-touch it.  Turned palm sideways (:data:`~bhgrasp.bench.reach.SIDEWAYS`: the palm's normal along world +x, F3 up,
+touch it; a large ball (70 mm in radius) leaves none either: where the fingers touch it below its equator they meet
+its stand first.  Turned palm sideways (:data:`~bhgrasp.bench.reach.SIDEWAYS`: the palm's normal along world +x, F3 up,
 F1 towards world -y) with F1 and F2 spread to face each other (:data:`SIDE_SPREAD`), the two fingers close in one
 horizontal plane, the pinch plane, and press the object between them across its y edges; F3 stays open above it.
 The stand has the object's footprint, so the palm passes beside it, below the object's top; on a table (a trial
 among neighbours) the palm, 44.5 mm in radius about the pinch plane, would be inside the table wherever that plane is
-lower, as it is for every object that needs the pinch, and no pinch qualifies.
+lower, as it is for every low or small object, and no pinch qualifies (the large ball's plane is higher).
 
 The rule (:func:`side_centre`), the same for both grasps (how it came about: :mod:`~bhgrasp.bench.protocol`):
 
@@ -20,7 +21,7 @@ The rule (:func:`side_centre`), the same for both grasps (how it came about: :mo
   stand, as a finger coming down on its top does), every hand shape stays ``STAND_MARGIN`` from the stand from the
   open hand to each finger's touch, and the open hand's way in (:data:`~bhgrasp.bench.protocol.APPROACH`, up to
   the grasp) does not touch the object.  On every object of the benchmark's sets that is the first grid point: a
-  box's near face on the knuckle housings; a round object tangent to the palm's axis there, 1.5-2.9 mm off the
+  box's near face on the knuckle housings; a round object tangent to the palm's axis there, 0.9-2.9 mm off the
   housings, which stand to its sides (tests/test_bench_side.py), until the pinch, whose contacts beyond its centre
   push it inwards, presses it onto them (the tuna can, tested).  Two fingertip contacts hold no moment about the
   line through them but what their patches twist; the housings, flat against the object's near side, do.  Measured

@@ -8,8 +8,9 @@ stayed at rest for ``rest_time`` (its fastest point, |v| + |w| r, under ``rest_s
 objects (:attr:`Pile.objects`) start another scene, e.g. a grasp among them
 (:mod:`bhgrasp.bench.neighbours`).  Same objects, seed and settings, same bits.
 
-The objects live in the hand's one Pinocchio model (:class:`~bhgrasp.sim.scene.Scene`), so a step costs more than
-linearly in their number (4 objects 0.1 ms, 16 objects 0.9 ms, 36 objects 10 ms a step on the test machine).
+A scene's dynamics run part by part (:mod:`~bhgrasp.sim.scene_parts`), so it builds in time and memory linear in its
+objects, but a step still solves the whole scene's velocities densely and costs more than linearly in their number
+(BENCHMARKS.md: 27 us for 4 settled objects, 1.7 ms for 32, 10 ms for 64 on the test machine).
 """
 
 from __future__ import annotations

@@ -3,6 +3,7 @@
 Modules, one concept each:
 
 - the scene: :mod:`~bhgrasp.sim.scene` (hand, objects and environment as one Pinocchio model and coal geometry),
+  :mod:`~bhgrasp.sim.scene_parts` (its dynamics part by part: the hand's model and one per object),
   :mod:`~bhgrasp.sim.scene_layout` (what a step reads of it: free bodies' spin, springs, quaternions, its signature);
 - contacts: :mod:`~bhgrasp.sim.contact` (detection), :mod:`~bhgrasp.sim.contact_law` (the spring-damper + Coulomb
   law);

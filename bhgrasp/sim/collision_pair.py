@@ -10,7 +10,7 @@ class CollisionPair:
     """Two geometries that may touch: forces act on ``b`` along the contact normal (from ``a`` to ``b``).
 
     Attributes:
-        index: Index in the geometry model's collision pairs.
+        index: Index in the scene's pairs (:attr:`Scene.pairs <bhgrasp.sim.scene.Scene.pairs>`).
         geom_a: Geometry index of body a (a hand link, the environment, or the first object).
         geom_b: Geometry index of body b (an object, or a hand link that the environment stops).
         joint_a: Pinocchio joint carrying body a (0 = fixed: environment or palm).

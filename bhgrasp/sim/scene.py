@@ -86,7 +86,7 @@ class Scene:
     def data(self) -> pin.Data:
         """A Pinocchio data of the whole :attr:`model`, made on first use.
 
-        Its size grows as nv^3 (3.7 GB for 64 free objects); the simulator works on
+        Its size grows as nv^3 (1.9 GB for 64 free objects, 3.7 GB at its peak while made); the simulator works on
         :class:`~bhgrasp.sim.scene_parts.SceneParts` instead.
         """
         if self._data is None:

@@ -1,7 +1,8 @@
 """The scene's rigid-body terms part by part: the hand's joints in one Pinocchio model, each object's in one of its own.
 
 Pinocchio's ``Data`` for a model of nv velocities holds arrays of nv^3 numbers (the second-order derivatives), built
-whatever algorithm runs: 3.7 GB and 2.6 s for 64 free objects alone (nv = 384).  Nothing joins the hand and the objects
+whatever algorithm runs: for 64 free objects alone (nv = 384) it takes 2.6 s to make, peaks at 3.7 GB while made and
+holds about 1.9 GB.  Nothing joins the hand and the objects
 but contacts, which the engines apply as external forces, so the scene's mass matrix is block diagonal, and each
 part's bias, Jacobians and placements depend on that part's coordinates alone.  :class:`SceneParts` runs Pinocchio's
 algorithms on each part (the hand's model as placed in the scene; per object its translation and spherical joints, or
@@ -19,16 +20,17 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp.errors import ModelError
+
 _IDENTITY = pin.SE3.Identity()
 
 
 @dataclass(frozen=True)
 class Part:
-    """One part: its model and work space, its first joint in the scene's numbering, its slices of q and v."""
+    """One part: its model and work space, its slices of the scene's q and v."""
 
     model: pin.Model
     data: pin.Data
-    first_joint: int
     q: slice
     v: slice
 
@@ -36,23 +38,28 @@ class Part:
 def object_parts(scene_model: pin.Model, first_joint: int) -> list[pin.Model]:
     """The subtrees of ``scene_model`` from joint ``first_joint`` on, one model each.
 
-    A joint whose parent is the world starts one; each has the scene's gravity, and its joints, placements, names and
-    inertias as they are.
+    A joint whose parent is the world starts one; each has the scene's gravity, and its joints, placements, names,
+    inertias and armature as they are.  A joint hanging from the hand's or an earlier object's joints is refused.
     """
     models: list[pin.Model] = []
-    local: dict[int, int] = {0: 0}
+    starts: list[int] = []  # each part's first velocity in the scene's v
+    local: dict[int, int] = {0: 0}  # scene joint -> its joint in the current part
     for joint in range(first_joint, scene_model.njoints):
         parent = scene_model.parents[joint]
         if parent == 0:
             models.append(pin.Model())
             models[-1].gravity = scene_model.gravity
-        elif parent < first_joint:
-            raise ValueError(f"joint {joint} of an object hangs from joint {parent} of the hand")
+            starts.append(scene_model.joints[joint].idx_v)
+            local = {0: 0}
+        elif parent not in local:
+            raise ModelError(f"joint {joint} of an object hangs from joint {parent}, not of its own object")
         model = models[-1]
         local[joint] = model.addJoint(
             local[parent], scene_model.joints[joint], scene_model.jointPlacements[joint], scene_model.names[joint]
         )
         model.inertias[local[joint]] = scene_model.inertias[joint]
+    for model, start in zip(models, starts):
+        model.armature = scene_model.armature[start : start + model.nv].copy()
     return models
 
 
@@ -64,14 +71,14 @@ class SceneParts:
         self.nq, self.nv = scene_model.nq, scene_model.nv
         models = [hand_model, *object_parts(scene_model, hand_model.njoints)]
         self.parts: list[Part] = []
-        first, q, v = 1, 0, 0
+        q, v = 0, 0
         for model in models:
-            self.parts.append(Part(model, model.createData(), first, slice(q, q + model.nq), slice(v, v + model.nv)))
-            first, q, v = first + model.njoints - 1, q + model.nq, v + model.nv
+            self.parts.append(Part(model, model.createData(), slice(q, q + model.nq), slice(v, v + model.nv)))
+            q, v = q + model.nq, v + model.nv
         self._where = [(0, 0)]  # scene joint -> (part, its joint in the part)
         for index, part in enumerate(self.parts):
             self._where += [(index, j) for j in range(1, part.model.njoints)]
-        self._lower = np.tril_indices(self.nv, -1)
+        self._lower = {n: np.tril_indices(n, -1) for n in {part.model.nv for part in self.parts}}
 
     # ------------------------------------------------------------------ kinematics
     def forward_kinematics(self, q: np.ndarray) -> None:
@@ -111,8 +118,10 @@ class SceneParts:
         """M(q), (nv, nv), both triangles: the parts' CRBA on the diagonal blocks, zero between parts."""
         mass = np.zeros((self.nv, self.nv))
         for part in self.parts:
-            mass[part.v, part.v] = pin.crba(part.model, part.data, q[part.q]).reshape(part.model.nv, part.model.nv)
-        mass[self._lower] = mass.T[self._lower]
+            n = part.model.nv
+            block = pin.crba(part.model, part.data, q[part.q]).reshape(n, n).copy()
+            block[self._lower[n]] = block.T[self._lower[n]]  # CRBA fills the upper triangle
+            mass[part.v, part.v] = block
         return mass
 
     def nonlinear_effects(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -123,8 +132,15 @@ class SceneParts:
         return bias
 
     def potential_energy(self, q: np.ndarray) -> float:
-        """Gravitational potential energy [J] of the moving bodies."""
-        return float(sum(pin.computePotentialEnergy(part.model, part.data, q[part.q]) for part in self.parts))
+        """Gravitational potential energy [J] of the moving bodies, -sum m g . c (mimic joints too)."""
+        energy = 0.0
+        for part in self.parts:
+            pin.forwardKinematics(part.model, part.data, q[part.q])
+            for joint in range(1, part.model.njoints):
+                inertia = part.model.inertias[joint]
+                centre = part.data.oMi[joint].act(inertia.lever)
+                energy -= inertia.mass * float(part.model.gravity.linear @ centre)
+        return energy
 
 
 __all__ = ["Part", "SceneParts", "object_parts"]

@@ -15,7 +15,8 @@ first object.  Overlays:
 decimated to at most 60 frames per second that loops endlessly (in the live viewer and in the exported page alike);
 :meth:`SceneViewer.save_html` writes the scene and its animation as one HTML file that works offline (meshcat's
 ``static_html``: the JavaScript is inlined).  ``bhgrasp.viz`` is not imported by ``import bhgrasp``.  Modules:
-:mod:`~bhgrasp.viz.scene_viewer`, :mod:`~bhgrasp.viz.live_view`, :mod:`~bhgrasp.viz.drawing`.
+:mod:`~bhgrasp.viz.scene_viewer`, :mod:`~bhgrasp.viz.live_view`, :mod:`~bhgrasp.viz.drawing`,
+:mod:`~bhgrasp.viz.node_loader`.
 """
 
 from bhgrasp.viz.drawing import MAX_FPS

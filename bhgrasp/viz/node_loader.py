@@ -2,7 +2,7 @@
 
 :class:`~bhgrasp.viz.scene_viewer.SceneViewer` sets every node's placement from the scene's parts
 (:mod:`~bhgrasp.sim.scene_parts`); Pinocchio's visualizer would keep a data of the whole scene model for its own
-placements, whose size grows as nv^3 (3.7 GB for 64 free objects).  :class:`NodeLoader` gives it a data of an empty
+placements, whose size grows as nv^3 (1.9 GB for 64 free objects).  :class:`NodeLoader` gives it a data of an empty
 model and loads the nodes where a fresh data would put them: each geometry at its placement on its joint (a plane
 moved along its normal by its offset, a mesh scaled by its scale, as Pinocchio's visualizer does).
 """
