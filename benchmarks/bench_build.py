@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 import pinocchio as pin
+from bench_clutter import median_step, resident_mb  # this folder's (a script's own folder is on its path)
 
 import bhgrasp as bh
 from bhgrasp.model.objects import Box, table
@@ -28,25 +29,10 @@ from bhgrasp.sim.scene import Scene
 EDGE, MASS, PITCH = 0.03, 0.1, 0.05  # [m], [kg], [m]
 
 
-def resident_mb() -> float:
-    """This process's resident memory [MB] (Linux /proc)."""
-    with open("/proc/self/statm") as statm:
-        return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
-
-
 def grid(n: int) -> list[np.ndarray]:
     """Centres of n boxes resting on z = 0 in a square grid beside the hand."""
     side = int(np.ceil(np.sqrt(n)))
     return [np.array([0.4 + PITCH * (i % side), PITCH * (i // side) - 0.5, 0.5 * EDGE]) for i in range(n)]
-
-
-def median_us(step, steps: int) -> float:
-    times = []
-    for _ in range(steps):
-        start = time.perf_counter()
-        step()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times) * 1e6)
 
 
 def ours(n: int, steps: int) -> dict:
@@ -63,7 +49,7 @@ def ours(n: int, steps: int) -> dict:
     def step() -> None:
         box["state"], box["info"] = simulator.step(box["state"], u)
 
-    step_us = median_us(step, steps)
+    step_us = median_step(step, steps)
     return {
         "nv": scene.nv,
         "pairs": len(scene.pairs),
@@ -91,7 +77,7 @@ def mujoco_side(n: int, steps: int) -> dict:
     mujoco.mj_step(model, data)
     return {
         "build_s": build_s,
-        "step_us": median_us(lambda: mujoco.mj_step(model, data), max(steps, 20)),
+        "step_us": median_step(lambda: mujoco.mj_step(model, data), max(steps, 20)),
         "contacts": int(data.ncon),
     }
 

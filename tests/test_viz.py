@@ -45,6 +45,19 @@ def test_placements_match_the_scene_collision_geometry(held):
         np.testing.assert_allclose(shown, truth.homogeneous, atol=1e-12)
 
 
+def test_the_parts_visualizer_displays_where_pinocchio_places_the_whole_model(held):
+    """PartsVisualizer.display(q) places every geometry as Pinocchio does with a data of the whole scene model."""
+    hold, traj, viewer = held
+    scene = hold.simulator.scene
+    k = len(traj) // 2
+    q = np.concatenate((traj.q[k], traj.object_position[k, 0], traj.object_quaternion[k, 0]))
+    viewer._visualizer.display(q)
+    data, geometry_data = scene.model.createData(), pin.GeometryData(scene.geometry)
+    pin.updateGeometryPlacements(scene.model, data, scene.geometry, geometry_data, q)
+    for shown, truth in zip(viewer._visualizer.visual_data.oMg, geometry_data.oMg):
+        np.testing.assert_array_equal(shown.homogeneous, truth.homogeneous)
+
+
 def test_contact_overlays_draw_the_force_and_the_friction_cone():
     point, normal, force = np.array([0.1, 0.0, 0.2]), np.array([0.0, 1.0, 0.0]), np.array([0.3, 4.0, 0.0])
     overlays = contact_overlays(point, normal, force, True, force_scale=0.01, mu=0.5)

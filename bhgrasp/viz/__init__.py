@@ -16,7 +16,7 @@ decimated to at most 60 frames per second that loops endlessly (in the live view
 :meth:`SceneViewer.save_html` writes the scene and its animation as one HTML file that works offline (meshcat's
 ``static_html``: the JavaScript is inlined).  ``bhgrasp.viz`` is not imported by ``import bhgrasp``.  Modules:
 :mod:`~bhgrasp.viz.scene_viewer`, :mod:`~bhgrasp.viz.live_view`, :mod:`~bhgrasp.viz.drawing`,
-:mod:`~bhgrasp.viz.node_loader`.
+:mod:`~bhgrasp.viz.parts_visualizer`.
 """
 
 from bhgrasp.viz.drawing import MAX_FPS

@@ -21,7 +21,7 @@ from bhgrasp.model.mesh_object import Mesh
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_parts import SceneParts
 from bhgrasp.viz import drawing
-from bhgrasp.viz.node_loader import NodeLoader
+from bhgrasp.viz.parts_visualizer import PartsVisualizer
 
 STICK, SLIP, CONE, GHOST, TIP = 0x22AA44, 0xDD2222, 0x3377FF, 0xFFAA33, 0xAA33FF
 GROUND, GROUND_SIZE = 0xD8D8D0, 0.4  # colour, edge [m] of the ground plate
@@ -62,7 +62,7 @@ class SceneViewer:
         self._geometry = geometry
         self._geometry_data = pin.GeometryData(geometry)
         self._parts = SceneParts(scene.hand_model, scene.model)
-        self._visualizer = NodeLoader(scene.model, geometry)  # loads and names the nodes; placements are ours
+        self._visualizer = PartsVisualizer(scene.model, geometry, self._parts)  # loads and names the nodes
         with contextlib.redirect_stdout(io.StringIO()) if quiet else contextlib.nullcontext():
             self._visualizer.initViewer(viewer=viewer, open=open, zmq_url=zmq_url)  # meshcat prints its address
         self._visualizer.loadViewerModel(rootNodeName=drawing.ROOT)
