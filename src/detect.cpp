@@ -47,7 +47,9 @@ Contacts Engine::detect(const Vector& q, const Memory& memory) {
   normals.clear();
   depths.clear();
   weights.clear();
-  for (std::size_t k = 0; k < settings_.pairs.size(); ++k) {
+  broad_phase(work_.candidate);
+  for (const int candidate : work_.candidate) {
+    const auto k = static_cast<std::size_t>(candidate);
     const Pair& pair = settings_.pairs[k];
     const auto& shape_a = geometry_.geometryObjects[pair.geom_a].geometry;
     const auto& shape_b = geometry_.geometryObjects[pair.geom_b].geometry;
@@ -117,6 +119,55 @@ Contacts Engine::detect(const Vector& q, const Memory& memory) {
   return contacts;
 }
 
+// The pairs the narrow phase may find touching, in pair order: every pair of a scene of few pairs; else a sweep over
+// the geometries' bounding spheres (each widened by the largest security margin and a hair) along the world axis their
+// centres spread most on, keeping the pairs whose widened spheres meet, and the pairs of an unbounded shape.  Every
+// pair that passes the narrow phase's own bounding-sphere test (detect) is kept, and kept pairs are tested in pair
+// order: the contacts do not depend on the sweep.
+void Engine::broad_phase(std::vector<int>& result) {
+  result.clear();
+  const auto pairs = static_cast<int>(settings_.pairs.size());
+  if (pairs < kSweepFrom) {
+    for (int k = 0; k < pairs; ++k) result.push_back(k);
+    return;
+  }
+  std::vector<int>& order = work_.order;
+  std::vector<double>& low = work_.low;
+  std::vector<Vector3>& centre = work_.centre;
+  const std::size_t geoms = geometry_.ngeoms;
+  low.resize(geoms);
+  centre.resize(geoms);
+  order.clear();
+  Vector3 sum = Vector3::Zero(), squares = Vector3::Zero();
+  for (std::size_t g = 0; g < geoms; ++g) {
+    if (!std::isfinite(bound_radius_[g])) continue;
+    centre[g] = geometry_data_.oMg[g].act(bound_centre_[g]);
+    sum += centre[g];
+    squares += centre[g].cwiseProduct(centre[g]);
+    order.push_back(static_cast<int>(g));
+  }
+  Eigen::Index axis = 0;  // the axis of the largest spread (sum of squared deviations)
+  (squares - sum.cwiseProduct(sum) / std::max<double>(1.0, static_cast<double>(order.size()))).maxCoeff(&axis);
+  for (const int g : order) low[static_cast<std::size_t>(g)] = centre[static_cast<std::size_t>(g)][axis] - bound_radius_[static_cast<std::size_t>(g)];
+  std::sort(order.begin(), order.end(), [&low](int a, int b) { return low[a] < low[b] || (low[a] == low[b] && a < b); });
+  result = always_;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const auto a = static_cast<std::size_t>(order[i]);
+    const double reach_a = bound_radius_[a] + sweep_margin_, high = centre[a][axis] + reach_a;
+    for (std::size_t j = i + 1; j < order.size() && low[static_cast<std::size_t>(order[j])] <= high; ++j) {
+      const auto b = static_cast<std::size_t>(order[j]);
+      const double reach = reach_a + bound_radius_[b];
+      if ((centre[a] - centre[b]).squaredNorm() > reach * reach) continue;
+      const auto first = std::min(a, b);
+      const int second = static_cast<int>(std::max(a, b));
+      const std::vector<std::pair<int, int>>& partners = partners_[first];
+      const auto found = std::lower_bound(partners.begin(), partners.end(), std::make_pair(second, -1));
+      if (found != partners.end() && found->first == second) result.push_back(found->second);
+    }
+  }
+  std::sort(result.begin(), result.end());
+}
+
 void Engine::point_depths(int k, const Points& points, const Vector3& normal, std::vector<double>& depths) {
   const Pair& pair = settings_.pairs[static_cast<std::size_t>(k)];
   const Eigen::Index n = points.rows();
@@ -168,11 +219,20 @@ void Engine::recall(Contacts& contacts, const Memory& memory) const {
   contacts.was_sliding.setZero(m);
   if (old == 0) return;
   const double radius2 = settings_.law.match_radius * settings_.law.match_radius;
+  // A step's memory lists its contacts in pair order: each contact's pair is then one run of it, found by bisection
+  // (the same entries in the same order as a scan of the whole memory, which an unsorted memory gets).
+  const std::int64_t* pairs = memory.pair.data();
+  const bool sorted = std::is_sorted(pairs, pairs + old);
   for (Eigen::Index i = 0; i < m; ++i) {
-    Eigen::Index nearest = 0;
+    Eigen::Index nearest = 0, begin = 0, end = old;
+    if (sorted) {
+      const auto run = std::equal_range(pairs, pairs + old, contacts.pair[i]);
+      begin = run.first - pairs;
+      end = run.second - pairs;
+    }
     double best = std::numeric_limits<double>::infinity();
     bool any_same = false;
-    for (Eigen::Index j = 0; j < old; ++j) {
+    for (Eigen::Index j = begin; j < end; ++j) {
       if (memory.pair[j] != contacts.pair[i]) continue;
       any_same = true;
       const double distance = (contacts.local_b.row(i) - memory.local_b.row(j)).squaredNorm();
@@ -185,7 +245,7 @@ void Engine::recall(Contacts& contacts, const Memory& memory) const {
     } else if (any_same) {  // a point not reported last step inherits its pair's mean displacement
       Vector3 sum = Vector3::Zero();
       int count = 0;
-      for (Eigen::Index j = 0; j < old; ++j) {
+      for (Eigen::Index j = begin; j < end; ++j) {
         if (memory.pair[j] != contacts.pair[i]) continue;
         sum += row(memory.displacement, j);
         sliding = sliding || memory.sliding[j];
@@ -223,6 +283,27 @@ void Engine::jacobians(const Contacts& contacts, std::vector<Matrix>& result) {
       const pinocchio::SE3 placement(Matrix3::Identity(), parts_.placement(joint).actInv(row(contacts.point, i)));
       const SceneParts::Jacobian& part = parts_.point_jacobian(joint, placement, first);
       jacobian.middleCols(first, part.cols()) -= part.topRows<3>();
+    }
+  }
+}
+
+void Engine::part_jacobians(const Contacts& contacts, std::vector<PartJacobian>& result) {
+  if (result.size() < static_cast<std::size_t>(contacts.size())) result.resize(static_cast<std::size_t>(contacts.size()));
+  for (Eigen::Index i = 0; i < contacts.size(); ++i) {
+    const Pair& pair = settings_.pairs[static_cast<std::size_t>(contacts.pair[i])];
+    PartJacobian& jacobian = result[static_cast<std::size_t>(i)];
+    jacobian.count = 0;
+    Eigen::Index first = 0;
+    if (pair.joint_b) {
+      const pinocchio::SE3 placement(Matrix3::Identity(), row(contacts.local_b, i));
+      const SceneParts::Jacobian& part = parts_.point_jacobian(static_cast<int>(pair.joint_b), placement, first);
+      jacobian.add(first, part.topRows<3>(), 1.0);
+    }
+    if (pair.joint_a) {
+      const auto joint = static_cast<int>(pair.joint_a);
+      const pinocchio::SE3 placement(Matrix3::Identity(), parts_.placement(joint).actInv(row(contacts.point, i)));
+      const SceneParts::Jacobian& part = parts_.point_jacobian(joint, placement, first);
+      jacobian.add(first, part.topRows<3>(), -1.0);
     }
   }
 }

@@ -5,6 +5,7 @@
 // integrators.cpp.
 #include "engine.hpp"
 #include "model_io.hpp"
+#include "part_system.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -40,6 +41,9 @@ void Contacts::resize(Eigen::Index m) {
 
 Engine::Engine(const std::string& model, const std::string& geometry, Settings settings)
     : settings_(std::move(settings)) {
+  if (settings_.sparse && settings_.integrator != 0)
+    throw std::invalid_argument("the velocity system by parts (sparse) serves the implicit integrator only");
+  if (settings_.sparse) system_ = std::make_unique<PartSystem>();
   model_ = model_from_text(model);
   geometry_ = geometry_from_text(geometry);
   parts_ = SceneParts(model_, settings_.nv_hand);
@@ -56,7 +60,6 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
   if (settings_.lower.size() != settings_.nv_hand || settings_.upper.size() != settings_.nv_hand ||
       settings_.joint_stiffness.size() != model_.nv || settings_.joint_damping.size() != model_.nv)
     throw std::invalid_argument("joint limits, stiffness or damping of the wrong size");
-  identity_objects_ = Matrix::Identity(model_.nv - settings_.nv_hand, model_.nv - settings_.nv_hand);
   for (const Query& query : settings_.queries) {
     coal::CollisionRequest request;
     request.enable_contact = true;
@@ -79,7 +82,26 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
     bound_radius_.push_back(bounded ? object.geometry->aabb_radius : std::numeric_limits<double>::infinity());
     bound_centre_.push_back(bounded ? Vector3(object.geometry->aabb_center) : Vector3::Zero());
   }
+  partners_.resize(geometry_.ngeoms);
+  for (std::size_t k = 0; k < settings_.pairs.size(); ++k) {  // the broad phase's sweep (detect.cpp: broad_phase)
+    const Pair& pair = settings_.pairs[k];
+    const auto a = static_cast<std::size_t>(pair.geom_a), b = static_cast<std::size_t>(pair.geom_b);
+    sweep_margin_ = std::max(sweep_margin_, requests_[k].security_margin + 1e-6);  // 1e-6: above the test's 1e-9
+    if (!std::isfinite(bound_radius_[a]) || !std::isfinite(bound_radius_[b])) {
+      always_.push_back(static_cast<int>(k));
+    } else {
+      partners_[std::min(a, b)].emplace_back(static_cast<int>(std::max(a, b)), static_cast<int>(k));
+    }
+  }
+  for (auto& partners : partners_) {
+    std::sort(partners.begin(), partners.end());
+    for (std::size_t i = 1; i < partners.size(); ++i)
+      if (partners[i].first == partners[i - 1].first)
+        throw std::invalid_argument("two collision pairs join the same two geometries");
+  }
 }
+
+Engine::~Engine() = default;
 
 // ------------------------------------------------------------------ joint space (sim/python_engine.py)
 void Engine::passive(const Vector& q, const Vector& v, const Drive& drive, Passive& result) const {
@@ -112,12 +134,24 @@ void Engine::mass_matrix(const Vector& q, Matrix& mass) {
   parts_.mass_matrix(q, mass);
 }
 
+void Engine::mass_times(const Vector& x, Vector& result) const {
+  if (!settings_.sparse) {
+    result.noalias() = work_.mass * x;
+    return;
+  }
+  result.resize(x.size());
+  for (int p = 0; p < parts_.count(); ++p) {
+    const Eigen::Index first = parts_.first(p), n = parts_.size(p);
+    result.segment(first, n).noalias() = work_.mass_blocks[static_cast<std::size_t>(p)] * x.segment(first, n);
+  }
+}
+
 void Engine::transmission(const Drive& drive, Matrix& full) const {
   const Eigen::Index rows = drive.transmission.rows(), cols = drive.transmission.cols();
-  const Eigen::Index objects = identity_objects_.rows();
+  const Eigen::Index objects = model_.nv - settings_.nv_hand;
   full.setZero(model_.nv, cols + objects);
   full.topLeftCorner(rows, cols) = drive.transmission;
-  full.bottomRightCorner(objects, objects) = identity_objects_;
+  full.bottomRightCorner(objects, objects).setIdentity();
 }
 
 // Solve (T^T A T) w = T^T b and set solution = T w (A symmetric positive definite, T of full column rank).  The

@@ -10,6 +10,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -20,6 +21,7 @@
 
 #include "decompositions.hpp"
 #include "options.hpp"
+#include "part_jacobian.hpp"
 #include "scene_parts.hpp"
 
 namespace bhgrasp {
@@ -68,10 +70,13 @@ struct StepResult {
   Divergence divergence;
 };
 
+class PartSystem;
+
 class Engine {
  public:
   // `model` and `geometry`: Pinocchio's text serialisations (Model.saveToString, GeometryModel.saveToString).
   Engine(const std::string& model, const std::string& geometry, Settings settings);
+  ~Engine();
 
   // Advance dt from (q, v) with hand joint torques tau_hand [N m] (or nv generalized forces: hand torques, then
   // external forces on the objects' coordinates); max_speed/max_penetration bound divergence.
@@ -115,6 +120,11 @@ class Engine {
     std::vector<Vector3> point, normal;
     std::vector<double> depth, weight, patch_depths;
     std::vector<Points> patch_points;
+    // broad_phase: the candidate pairs; the sweep's geometries in order, their bounding spheres' world centres and
+    // lowest points along the sweep's axis
+    std::vector<int> candidate, order;
+    std::vector<double> low;
+    std::vector<Vector3> centre;
     // joint space (implicit_step, step)
     Vector tau, bias, implicit_damping, rhs, rhs_c, v_next, contact_torque, product, acceleration, delivered;
     Vector increment;
@@ -129,16 +139,24 @@ class Engine {
     std::vector<Matrix3> gains;
     std::vector<int> status, new_status;
     Flags may_stick;
+    // the implicit step by parts (settings_.sparse): the parts' blocks of M and of A = M + dt (dt K + C), their first
+    // velocities, the contacts' Jacobians by parts
+    std::vector<Matrix> mass_blocks, system_blocks;
+    std::vector<Eigen::Index> part_first;
+    std::vector<PartJacobian> part_jacobian;
     // reduced_solve
     Eigen::LLT<Matrix> cholesky;
     Matrix half, reduced;
     Vector right, reduced_solution;
   };
 
+  void broad_phase(std::vector<int>& result);
   void point_depths(int pair, const Points& points, const Vector3& normal, std::vector<double>& depths);
   double signed_distance(int geom, const Vector3& point);
   void recall(Contacts& contacts, const Memory& memory) const;
   void jacobians(const Contacts& contacts, std::vector<Matrix>& result);
+  void part_jacobians(const Contacts& contacts, std::vector<PartJacobian>& result);
+  void mass_times(const Vector& x, Vector& result) const;  // M x, dense or by parts as the step runs
   void linear_parts(const Contacts& contacts, Parts& parts) const;
   void start_status(const Contacts& contacts, const Parts& parts, const Points& start_velocity,
                     std::vector<int>& status, Points& slide) const;
@@ -160,10 +178,10 @@ class Engine {
 
   pinocchio::Model model_;  // the whole scene's: its layout and integration; its dynamics run on parts_
   SceneParts parts_;
+  std::unique_ptr<PartSystem> system_;  // the velocity system by parts (settings_.sparse)
   pinocchio::GeometryModel geometry_;
   pinocchio::GeometryData geometry_data_;
   Settings settings_;
-  Matrix identity_objects_;
   std::vector<coal::CollisionRequest> requests_;
   std::vector<coal::CollisionRequest> fallback_requests_;  // coal's default tolerance, for an EPA that stopped short
   std::vector<coal::ContactPatchRequest> patch_requests_;
@@ -172,6 +190,11 @@ class Engine {
   std::shared_ptr<coal::CollisionGeometry> probe_;
   std::vector<double> bound_radius_;  // per geometry: radius [m] of a sphere about bound_centre_ holding the shape
   std::vector<Vector3> bound_centre_; // in the geometry's frame; radius inf: unbounded (half-spaces)
+  static constexpr int kSweepFrom = 128;  // pairs from which the broad phase sweeps (fewer: every pair is tested)
+  // per geometry g: (geometry h > g, pair index) of its pairs with bounded geometries after it, sorted
+  std::vector<std::vector<std::pair<int, int>>> partners_;
+  std::vector<int> always_;                         // the pairs of an unbounded shape
+  double sweep_margin_ = 0.0;                       // [m] the largest security margin, and a hair
   Work work_;
 };
 

@@ -5,6 +5,7 @@
 
 #include "engine.hpp"
 #include "kernels.hpp"
+#include "part_system.hpp"
 
 namespace bhgrasp {
 
@@ -15,10 +16,15 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
   // Every array but the result's lives in work_ (no allocation once sized); where an expression would evaluate a
   // product into a temporary, the product goes to a work array first, with the same arithmetic.
   Work& work = work_;
+  const bool sparse = settings_.sparse;  // the velocity system by parts (part_system.hpp), or one dense matrix
   Contacts contacts = detect(q, memory);
   parts_.compute_joint_jacobians(q);
-  mass_matrix(q, work.mass);
   const Matrix& mass = work.mass;
+  if (sparse) {
+    parts_.mass_blocks(q, work.mass_blocks);
+  } else {
+    mass_matrix(q, work.mass);
+  }
   Vector& bias = work.bias;
   parts_.nonlinear_effects(q, v, bias);
   implicit_gyroscopic(v, bias);
@@ -27,12 +33,25 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
   Vector& implicit_damping = work.implicit_damping;
   implicit_damping = dt * joint.stiffness + joint.damping;
   Matrix& matrix = work.matrix;
-  matrix = mass;
-  matrix.diagonal() += dt * implicit_damping;
-  work.product.noalias() = mass * v;
+  if (sparse) {
+    const int count = parts_.count();
+    work.system_blocks.resize(static_cast<std::size_t>(count));
+    work.part_first.resize(static_cast<std::size_t>(count));
+    for (int p = 0; p < count; ++p) {
+      const auto s = static_cast<std::size_t>(p);
+      work.part_first[s] = parts_.first(p);
+      work.system_blocks[s] = work.mass_blocks[s];
+      work.system_blocks[s].diagonal() += dt * implicit_damping.segment(parts_.first(p), parts_.size(p));
+    }
+    system_->begin(drive.transmission, work.system_blocks, work.part_first, nv);
+  } else {
+    matrix = mass;
+    matrix.diagonal() += dt * implicit_damping;
+  }
+  mass_times(v, work.product);
   Vector& rhs = work.rhs;
   rhs = work.product + dt * (tau - bias + joint.torque);
-  transmission(drive, work.transmission);
+  if (!sparse) transmission(drive, work.transmission);
   const Matrix& full = work.transmission;
   const Eigen::Index m = contacts.size();
   Vector& v_next = work.v_next;
@@ -41,16 +60,30 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
   Points& displacement = result.memory.displacement;
   displacement.setZero(m, 3);
   std::vector<int>& status = work.status;  // its first m entries
+  std::vector<Matrix>& jacobian = work.jacobian;
+  std::vector<PartJacobian>& part_jacobian = work.part_jacobian;
+  std::vector<Matrix3>& gains = work.gains;
   if (m == 0) {
-    reduced_solve(full, matrix, rhs, v_next);
+    if (sparse) {
+      system_->solve(part_jacobian, 0, gains, dt, rhs, v_next);
+    } else {
+      reduced_solve(full, matrix, rhs, v_next);
+    }
   } else {
-    std::vector<Matrix>& jacobian = work.jacobian;
-    jacobians(contacts, jacobian);
+    if (sparse) {
+      part_jacobians(contacts, part_jacobian);
+    } else {
+      jacobians(contacts, jacobian);
+    }
     Points &start_velocity = work.start_velocity, &relative = work.relative, &forces = work.forces;
     Points &slide = work.slide, &new_slide = work.new_slide, &f0 = work.f0;
     for (Points* array : {&start_velocity, &relative, &forces, &slide, &new_slide, &f0}) reserve_rows(*array, m);
     for (Eigen::Index i = 0; i < m; ++i) {
-      work.velocity.noalias() = jacobian[static_cast<std::size_t>(i)] * v;
+      if (sparse) {
+        work.velocity = part_jacobian[static_cast<std::size_t>(i)].times(v);
+      } else {
+        work.velocity.noalias() = jacobian[static_cast<std::size_t>(i)] * v;
+      }
       start_velocity.row(i) = work.velocity;
     }
     linear_parts(contacts, work.parts);
@@ -60,12 +93,11 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
     reserve_rows(may_stick, m);
     for (Eigen::Index i = 0; i < m; ++i) may_stick[i] = status[static_cast<std::size_t>(i)] == 2;
     std::vector<int>& new_status = work.new_status;
-    std::vector<Matrix3>& gains = work.gains;
     gains.resize(static_cast<std::size_t>(m));
     for (int pass = 0; pass < 8; ++pass) {
       // linearise: f(v+) = f0 - D J v+ in each contact's status
       Matrix& matrix_c = work.matrix_c;
-      matrix_c = matrix;
+      if (!sparse) matrix_c = matrix;
       Vector& rhs_c = work.rhs_c;
       rhs_c = rhs;
       for (Eigen::Index i = 0; i < m; ++i) {
@@ -80,15 +112,27 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
           f0.row(i).setZero();
           gains[s].setZero();
         }
+        if (sparse) {
+          part_jacobian[s].add_transpose_times(dt * row(f0, i), rhs_c);
+          continue;
+        }
         const Matrix& jac = jacobian[s];
         work.gain_jacobian.noalias() = gains[s] * jac;
         matrix_c.noalias() += dt * (jac.transpose() * work.gain_jacobian);
         rhs_c.noalias() += dt * (jac.transpose() * row(f0, i));
       }
-      reduced_solve(full, matrix_c, rhs_c, v_next);
+      if (sparse) {
+        system_->solve(part_jacobian, m, gains, dt, rhs_c, v_next);
+      } else {
+        reduced_solve(full, matrix_c, rhs_c, v_next);
+      }
       for (Eigen::Index i = 0; i < m; ++i) {
         const auto s = static_cast<std::size_t>(i);
-        work.velocity.noalias() = jacobian[s] * v_next;
+        if (sparse) {
+          work.velocity = part_jacobian[s].times(v_next);
+        } else {
+          work.velocity.noalias() = jacobian[s] * v_next;
+        }
         relative.row(i) = work.velocity;
         forces.row(i) = row(f0, i) - gains[s] * row(relative, i);
       }
@@ -124,7 +168,11 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
     contacts.force = forces.topRows(m);
     for (Eigen::Index i = 0; i < m; ++i) {
       contacts.sticking[i] = status[static_cast<std::size_t>(i)] == 1;
-      contact_torque.noalias() += jacobian[static_cast<std::size_t>(i)].transpose() * row(forces, i);
+      if (sparse) {
+        part_jacobian[static_cast<std::size_t>(i)].add_transpose_times(row(forces, i), contact_torque);
+      } else {
+        contact_torque.noalias() += jacobian[static_cast<std::size_t>(i)].transpose() * row(forces, i);
+      }
     }
   }
   Flags& sliding = result.memory.sliding;
@@ -132,7 +180,7 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
   for (Eigen::Index i = 0; i < m; ++i) sliding[i] = status[static_cast<std::size_t>(i)] == 2;
   // drive: M a + bias - contact - passive + implicit terms, less the motor's own damping (python_engine.py: _drive)
   work.acceleration = (v_next - v) / dt;
-  work.product.noalias() = mass * work.acceleration;
+  mass_times(work.acceleration, work.product);
   Vector& delivered = work.delivered;
   delivered = (work.product + (bias - contact_torque - joint.torque) + implicit_damping.cwiseProduct(v_next)).head(nvh);
   result.drive = delivered - drive.motor_damping.cwiseProduct(v_next.head(nvh));

@@ -97,6 +97,16 @@ void SceneParts::mass_matrix(const Vector& q, Matrix& mass) {
   mass.triangularView<Eigen::StrictlyLower>() = mass.transpose();
 }
 
+void SceneParts::mass_blocks(const Vector& q, std::vector<Matrix>& blocks) {
+  blocks.resize(parts_.size());
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    Part& part = parts_[p];
+    pinocchio::crba(part.model, part.data, q.segment(part.q0, part.model.nq));
+    blocks[p] = part.data.M;
+    blocks[p].triangularView<Eigen::StrictlyLower>() = blocks[p].transpose();
+  }
+}
+
 void SceneParts::nonlinear_effects(const Vector& q, const Vector& v, Vector& bias) {
   bias.resize(nv_);
   for (Part& part : parts_) {

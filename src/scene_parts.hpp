@@ -38,6 +38,11 @@ class SceneParts {
   const Jacobian& point_jacobian(int joint, const pinocchio::SE3& placement, Eigen::Index& first);
 
   void mass_matrix(const Vector& q, Matrix& mass);                     // M(q), (nv, nv), both triangles
+  // M(q) part by part: blocks[p] is part p's (n, n) diagonal block, both triangles (the same values as mass_matrix's)
+  void mass_blocks(const Vector& q, std::vector<Matrix>& blocks);
+  int count() const { return static_cast<int>(parts_.size()); }            // parts, the hand's first
+  Eigen::Index first(int part) const { return parts_[static_cast<std::size_t>(part)].v0; }  // its first velocity
+  Eigen::Index size(int part) const { return parts_[static_cast<std::size_t>(part)].model.nv; }  // its velocities
   void nonlinear_effects(const Vector& q, const Vector& v, Vector& bias);  // h(q, v), (nv,)
   Vector hand_gravity(const Vector& q);  // G(q) of the hand's joints, (nv_hand,) (the engine's gravity())
 

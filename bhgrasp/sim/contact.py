@@ -13,6 +13,7 @@ from __future__ import annotations
 import coal
 import numpy as np
 import pinocchio as pin
+import scipy.sparse as sparse
 
 from bhgrasp._validation import as_positive
 from bhgrasp.data import ContactMemory, ContactSet, empty_contact_set
@@ -25,6 +26,19 @@ LOCAL_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _IDENTITY3 = np.eye(3)
 
 _NO_MEMORY = ContactMemory.empty()
+
+
+def bounding_sphere(shape: coal.CollisionGeometry) -> tuple[np.ndarray, float]:
+    """A sphere holding ``shape``: its centre in the shape's frame [m] and radius [m] (inf, centre 0: unbounded).
+
+    Measured on a copy: the scene's shapes stay as they are (its signature hashes them).
+    """
+    shape = shape.clone()
+    shape.computeLocalAABB()
+    radius, centre = float(shape.aabb_radius), np.array(shape.aabb_center)
+    if not (np.isfinite(radius) and np.isfinite(centre).all()):
+        return np.zeros(3), np.inf
+    return centre, radius
 
 
 class ContactEngine(ContactForces):
@@ -71,6 +85,13 @@ class ContactEngine(ContactForces):
         ]
         self._fallback = [fresh_request(request, FALLBACK_TOLERANCE) for _, _, _, _, request, *_ in self._narrow]
         self._max_depth = [plausible_depth(shape_a, shape_b) for shape_a, shape_b, *_ in self._narrow]
+        self._bounds = [bounding_sphere(item.geometry) for item in geometry.geometryObjects]
+        self._geom_a = np.array([pair.geom_a for pair in scene.pairs], dtype=int)
+        self._geom_b = np.array([pair.geom_b for pair in scene.pairs], dtype=int)
+        radius = np.array([r for _, r in self._bounds])
+        self._reach = radius[self._geom_a] + radius[self._geom_b]  # inf: a pair of an unbounded shape
+        margin = np.array([request.security_margin for _, _, _, _, request, *_ in self._narrow])
+        self._near = self._reach + margin + 1e-9
         self._probe = coal.Sphere(1e-12)  # a point, for signed-distance queries
         self._probe_placement = coal.Transform3s()
         self._distance_request, self._distance_result = coal.DistanceRequest(), coal.DistanceResult()
@@ -89,7 +110,7 @@ class ContactEngine(ContactForces):
         self.parts.update_geometry_placements(scene.geometry, self.geometry_data)
         placements = self.geometry_data.oMg
         pairs, points, normals, depths, weights = [], [], [], [], []
-        for k in range(len(self._narrow)):
+        for k in self.broad_phase():
             shape_a, shape_b, geom_a, geom_b, request, patch_request, result, patches = self._narrow[k]
             placement_a, placement_b = placements[geom_a], placements[geom_b]
             transform_a = coal.Transform3s(placement_a.rotation, placement_a.translation)
@@ -257,6 +278,46 @@ class ContactEngine(ContactForces):
                 columns, jacobian = parts.point_jacobian(joint_a, placement)
                 jacobians[i, :, columns] -= jacobian[:3]
         return jacobians
+
+    def broad_phase(self) -> np.ndarray:
+        """The pairs whose bounding spheres come within reach, and those of an unbounded shape, in pair order.
+
+        At the last placements (``detect`` runs them).  Pairs apart get no contact from the narrow phase either: the
+        compiled engine skips them the same way (``src/detect.cpp``).
+        """
+        placements = self.geometry_data.oMg
+        centres = np.array([placement.act(centre) for placement, (centre, _) in zip(placements, self._bounds)])
+        if not len(self._reach):
+            return np.zeros(0, dtype=int)
+        apart = np.linalg.norm(centres[self._geom_a] - centres[self._geom_b], axis=1) > self._near
+        return np.flatnonzero(~(np.isfinite(self._reach) & apart))
+
+    def part_jacobians(self, contacts: ContactSet) -> sparse.csr_array:
+        """The relative point Jacobians of :meth:`jacobians` stacked, (3m, nv), sparse.
+
+        Each contact's rows hold only the columns of the one or two parts it touches (:mod:`~bhgrasp.sim.part_system`).
+        """
+        parts, nv = self.parts, self.scene.nv
+        rows, columns, values = [], [], []
+        identity = _IDENTITY3
+        for i, k in enumerate(contacts.pair):
+            joint_b, joint_a = int(self._joint_b[k]), int(self._joint_a[k])
+            sides = []
+            if joint_b:
+                sides.append((parts.point_jacobian(joint_b, pin.SE3(identity, contacts.local_b[i])), 1.0))
+            if joint_a:
+                placement = pin.SE3(identity, parts.placement(joint_a).actInv(contacts.point[i]))
+                sides.append((parts.point_jacobian(joint_a, placement), -1.0))
+            for (part_columns, jacobian), sign in sides:
+                block = sign * jacobian[:3]
+                index = np.arange(part_columns.start, part_columns.stop)
+                rows.append(np.repeat(3 * i + np.arange(3), len(index)))
+                columns.append(np.tile(index, 3))
+                values.append(block.ravel())
+        if not rows:
+            return sparse.csr_array((3 * len(contacts), nv))
+        triplets = (np.concatenate(values), (np.concatenate(rows), np.concatenate(columns)))
+        return sparse.csr_array(sparse.coo_array(triplets, shape=(3 * len(contacts), nv)))  # duplicates summed
 
 
 __all__ = ["ContactEngine"]

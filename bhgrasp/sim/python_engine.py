@@ -29,12 +29,14 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+import scipy.sparse as sparse
 
 from bhgrasp.data import ContactMemory, ContactSet
 from bhgrasp.sim.contact import ContactEngine
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.engine import DriveTerms, StepResult, divergence
 from bhgrasp.sim.integrators import implicit_gyroscopic, increment_rate
+from bhgrasp.sim.part_system import PartSystem, block_diagonal
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_layout import SceneLayout
 from bhgrasp.sim.scene_parts import SceneParts
@@ -60,7 +62,9 @@ class PythonEngine:
         self.parts = SceneParts(scene.hand_model, scene.model)
         self.contacts = ContactEngine(scene, law, match_radius, parts=self.parts)
         self._lower, self._upper = scene.hand.lower, scene.hand.upper
-        self._object_identity = np.eye(scene.nv - scene.nv_hand)
+        self._sparse = settings.sparse(scene.nv)  # the implicit step's velocity system by parts (part_system)
+        self._system = PartSystem()
+        self._object_identity = None if self._sparse else np.eye(scene.nv - scene.nv_hand)
         self._spinning = layout.spinning_bodies
         self._spring_q, self._spring_v = layout.spring_q, layout.spring_v
 
@@ -143,7 +147,8 @@ class PythonEngine:
         engine, nv = self.contacts, self.scene.nv
         contacts = engine.detect(q, memory)
         parts.compute_joint_jacobians(q)
-        mass = parts.mass_matrix(q)
+        by_parts, system = self._sparse, self._system
+        mass = block_diagonal(parts.mass_blocks(q)) if by_parts else parts.mass_matrix(q)
         bias = parts.nonlinear_effects(q, v)
         implicit_gyroscopic(bias, v, self._spinning, self.settings.dt)
         passive, stiffness, damping = self._passive(q, v, drive)
@@ -151,30 +156,44 @@ class PythonEngine:
         tau[: len(tau_hand)] = tau_hand  # hand joint torques, or with external forces on the objects' coordinates
         # Springs acting on joint coordinates (limits, object springs): the explicit torque is in `passive`;
         # their stiffness acts on the displacement dt v+ of this step.
-        matrix = mass + dt * np.diag(dt * stiffness + damping)
         rhs = mass @ v + dt * (tau - bias + passive)
-        transmission = self._transmission(drive)
+        if by_parts:
+            system.begin(drive.transmission, sparse.csr_array(mass + sparse.diags(dt * (dt * stiffness + damping))))
+        else:
+            matrix = mass + dt * np.diag(dt * stiffness + damping)
+            transmission = self._transmission(drive)
         m = len(contacts)
         if m == 0:  # free motion: one linear solve, no contact bookkeeping
-            reduced = transmission.T @ matrix @ transmission
-            v_next = transmission @ np.linalg.solve(reduced, transmission.T @ rhs)
+            if by_parts:
+                v_next = system.solve(None, np.zeros((0, 3, 3)), dt, rhs)
+            else:
+                reduced = transmission.T @ matrix @ transmission
+                v_next = transmission @ np.linalg.solve(reduced, transmission.T @ rhs)
             contacts.force, contacts.sticking = np.zeros((0, 3)), np.zeros(0, dtype=bool)
             memory = engine.remember(contacts, np.zeros((0, 3)), np.zeros(0, dtype=bool))
             torques = self._drive(mass, v, v_next, bias - passive, dt * stiffness + damping, drive)
             return pin.integrate(model, q, v_next * dt), v_next, contacts, torques, memory
-        jacobians = engine.jacobians(contacts)
-        start_velocity = jacobians @ v
-        stacked = jacobians.reshape(-1, nv)  # (3m, nv)
+        if by_parts:
+            stacked = engine.part_jacobians(contacts)  # (3m, nv), sparse
+            start_velocity = (stacked @ v).reshape(m, 3)
+        else:
+            jacobians = engine.jacobians(contacts)
+            start_velocity = jacobians @ v
+            stacked = jacobians.reshape(-1, nv)  # (3m, nv)
         parts = engine.linear_parts(contacts, dt)
         status, slide_force = engine.start_status(contacts, parts, start_velocity)  # 0 off, 1 stick, 2 slide
         may_stick = status == 2  # a contact that starts sliding may stick once, if its friction would overshoot
         for _ in range(8):
             f0, gains = engine.linearise(parts, status, slide_force)
-            matrix_c = matrix + dt * stacked.T @ (gains @ jacobians).reshape(-1, nv)
             rhs_c = rhs + dt * stacked.T @ f0.ravel()
-            reduced = transmission.T @ matrix_c @ transmission
-            v_next = transmission @ np.linalg.solve(reduced, transmission.T @ rhs_c)
-            relative = jacobians @ v_next
+            if by_parts:
+                v_next = system.solve(stacked, gains, dt, rhs_c)
+                relative = (stacked @ v_next).reshape(m, 3)
+            else:
+                matrix_c = matrix + dt * stacked.T @ (gains @ jacobians).reshape(-1, nv)
+                reduced = transmission.T @ matrix_c @ transmission
+                v_next = transmission @ np.linalg.solve(reduced, transmission.T @ rhs_c)
+                relative = jacobians @ v_next
             forces = f0 - (gains @ relative[:, :, None])[:, :, 0]
             new_status, new_slide = engine.classify(contacts, forces, status, start_velocity, relative, may_stick)
             if (new_status == status).all() and (

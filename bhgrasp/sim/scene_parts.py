@@ -117,12 +117,19 @@ class SceneParts:
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """M(q), (nv, nv), both triangles: the parts' CRBA on the diagonal blocks, zero between parts."""
         mass = np.zeros((self.nv, self.nv))
+        for part, block in zip(self.parts, self.mass_blocks(q)):
+            mass[part.v, part.v] = block
+        return mass
+
+    def mass_blocks(self, q: np.ndarray) -> list[np.ndarray]:
+        """M(q) part by part: each part's (n, n) diagonal block, both triangles (:meth:`mass_matrix`'s values)."""
+        blocks = []
         for part in self.parts:
             n = part.model.nv
             block = pin.crba(part.model, part.data, q[part.q]).reshape(n, n).copy()
             block[self._lower[n]] = block.T[self._lower[n]]  # CRBA fills the upper triangle
-            mass[part.v, part.v] = block
-        return mass
+            blocks.append(block)
+        return blocks
 
     def nonlinear_effects(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Coriolis, centrifugal and gravity terms h(q, v), (nv,)."""

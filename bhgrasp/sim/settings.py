@@ -15,6 +15,8 @@ from bhgrasp.errors import InputError
 
 INTEGRATORS = ("implicit", "semi-implicit", "rk4")
 START_CHECKS = ("warn", "error", "off")  # what an initial state that starts wrong does
+LINEAR_SOLVERS = ("auto", "dense", "sparse")  # how the implicit step solves for the velocities
+SPARSE_FROM = 32  # [velocities] "auto" goes sparse from here up, where it measured faster (bench_linear_solver)
 
 
 @dataclass(frozen=True)
@@ -36,6 +38,10 @@ class SimulatorSettings:
         start_check: What an initial state that starts wrong (:mod:`~bhgrasp.sim.start_check`: bodies
             interpenetrating, objects the step cannot resolve) does: ``"warn"`` (a ``StartWarning``), ``"error"``
             (an ``InputError``) or ``"off"``.
+        linear_solver: How the implicit step solves for the velocities: ``"dense"`` (one matrix of the whole scene, a
+            Cholesky factorisation), ``"sparse"`` (by parts, :mod:`~bhgrasp.sim.part_system`: cost linear in objects
+            and contacts; the implicit integrator only) or ``"auto"`` (sparse for scenes of :data:`SPARSE_FROM`
+            velocities or more under the implicit integrator, dense otherwise).  The two agree to round-off.
     """
 
     dt: float = 1e-3
@@ -47,6 +53,7 @@ class SimulatorSettings:
     max_coordinate: float = 1e4
     engine: str | None = None
     start_check: str = "warn"
+    linear_solver: str = "auto"
 
     def __post_init__(self) -> None:
         """Check every setting and store it as a float (or one of the allowed names)."""
@@ -55,9 +62,22 @@ class SimulatorSettings:
         object.__setattr__(self, "engine", engine_name(self.engine))
         if self.start_check not in START_CHECKS:
             raise InputError(f"`start_check` must be one of {START_CHECKS}, got {self.start_check!r}")
+        if self.linear_solver not in LINEAR_SOLVERS:
+            raise InputError(f"`linear_solver` must be one of {LINEAR_SOLVERS}, got {self.linear_solver!r}")
+        if self.linear_solver == "sparse" and self.integrator != "implicit":
+            raise InputError(
+                f"`linear_solver` 'sparse' serves the implicit integrator only, got integrator {self.integrator!r}: "
+                "use linear_solver='dense' (or 'auto') with it"
+            )
         for name in ("dt", "joint_limit_stiffness", "max_penetration", "max_speed", "max_coordinate"):
             object.__setattr__(self, name, as_positive(getattr(self, name), name))
         object.__setattr__(self, "joint_limit_damping", as_real(self.joint_limit_damping, "joint_limit_damping"))
 
+    def sparse(self, nv: int) -> bool:
+        """Whether a scene of ``nv`` velocities is solved sparse (:attr:`linear_solver`)."""
+        if self.linear_solver == "auto":
+            return self.integrator == "implicit" and nv >= SPARSE_FROM
+        return self.linear_solver == "sparse"
 
-__all__ = ["ENGINES", "INTEGRATORS", "START_CHECKS", "SimulatorSettings"]
+
+__all__ = ["ENGINES", "INTEGRATORS", "LINEAR_SOLVERS", "SPARSE_FROM", "START_CHECKS", "SimulatorSettings"]

@@ -70,6 +70,7 @@ class Simulator:
         engine: str | None = None,
         max_coordinate: float = 1e4,
         start_check: str = "warn",
+        linear_solver: str = "auto",
     ) -> None:
         """Set up the simulation.
 
@@ -90,6 +91,9 @@ class Simulator:
                 has diverged.
             start_check: ``"warn"``, ``"error"`` or ``"off"``: what :meth:`initial_state` does with a scene that
                 starts wrong (bodies interpenetrating, an object its step cannot resolve; :meth:`check_start`).
+            linear_solver: ``"auto"``, ``"dense"`` or ``"sparse"``: how the implicit step solves for the velocities
+                (:attr:`~bhgrasp.sim.settings.SimulatorSettings.linear_solver`; auto: sparse for scenes of 32
+                velocities or more).
 
         Raises:
             InputError: A setting out of range, or an actuation built for another hand.
@@ -105,6 +109,7 @@ class Simulator:
             max_coordinate=max_coordinate,
             engine=engine,
             start_check=start_check,
+            linear_solver=linear_solver,
         )
         self._build(scene, contact, actuation, settings)
 
