@@ -25,6 +25,7 @@ QUICK = {  # script -> its arguments for a smoke run
     "bench_meshes.py": ["--steps", "20", "--repeat", "1"],
     "bench_clutter.py": ["--sizes", "4", "--steps", "20"],
     "bench_build.py": ["--sizes", "16", "--steps", "2"],
+    "bench_linear_solver.py": ["--small", "2", "8", "--large", "3", "10", "--steps", "3"],
 }
 
 
