@@ -100,7 +100,7 @@ def main() -> None:
             f"| {n} | {r['nv']} | {r['pairs']} | {r['scene'][0]:.2f} / {r['scene'][1]:.0f} | "
             f"{r['simulator'][0]:.2f} / {r['simulator'][1]:.0f} | {m['build_s']:.3f} | {build / m['build_s']:.0f} | "
             f"{r['step_us']:.0f} ({r['contacts']}) | {m['step_us']:.0f} ({m['contacts']}) | "
-            f"{r['step_us'] / m['step_us']:.0f} |",
+            f"{r['step_us'] / m['step_us']:.1f} |",
             flush=True,
         )
 

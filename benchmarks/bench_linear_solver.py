@@ -1,12 +1,11 @@
 """The implicit step's linear solvers, dense and sparse, as a scene grows; the sparse step against MuJoCo's.
 
-The sparse step's cost per contact from 10 to 2,000 contacts, against MuJoCo on the same boxes.
-
 Scenes as ``bench_build.py``'s: n 3 cm boxes of 0.1 kg resting on a table in a grid, the Barrett hand beside them,
 the compiled engine at dt 0.5 ms; each box rests on 4 contact points.  First table: the median step with
 ``linear_solver="dense"`` and ``"sparse"`` for small n, where the two cross (``SimulatorSettings``' ``SPARSE_FROM``,
 the size from which ``"auto"`` goes sparse, was set from it).  Second table: the sparse step and ``mj_step`` for n up
-to 500 boxes (2,000 contacts), the line a + b contacts fitted to the sparse step and its largest deviation.
+to 500 boxes (10 to 2,000 contacts); the line a + b contacts fitted to the sparse step (least relative residuals), its
+largest deviation, and the exponent p of cost ~ contacts^p.
 
 Usage: ``python benchmarks/bench_linear_solver.py [--small 1 2 4 ...] [--large 3 25 ...] [--steps 20]``.
 """
@@ -75,9 +74,14 @@ def main() -> None:
         )
     if len(counts) >= 2:
         contacts, cost = np.array(counts, float), np.array(costs)
-        slope, intercept = np.polyfit(contacts, cost, 1)
+        slope, intercept = np.polyfit(contacts, cost, 1, w=1.0 / cost)  # least relative residuals
         deviation = np.max(np.abs(cost - (intercept + slope * contacts)) / cost)
-        print(f"\nline: {intercept:.0f} us + {slope:.2f} us per contact (largest deviation {100 * deviation:.1f} %)")
+        exponent = np.polyfit(np.log(contacts), np.log(cost), 1)[0]
+        print(
+            f"\nline (least relative residuals): {intercept:.0f} us + {slope:.2f} us per contact, largest deviation "
+            f"{100 * deviation:.0f} %; cost ~ contacts^{exponent:.2f}; {(cost / contacts).min():.2f}-"
+            f"{(cost / contacts).max():.2f} us per contact"
+        )
 
 
 if __name__ == "__main__":

@@ -57,23 +57,23 @@ Contacts Engine::detect(const Vector& q, const Memory& memory) {
     const double reach = bound_radius_[pair.geom_a] + bound_radius_[pair.geom_b];
     if (std::isfinite(reach) &&  // broad phase: bounding spheres apart, no contact (the narrow phase would agree)
         (placement_a.act(bound_centre_[pair.geom_a]) - placement_b.act(bound_centre_[pair.geom_b])).norm() >
-            reach + requests_[k].security_margin + 1e-9)
+            reach + request_.security_margin + 1e-9)
       continue;
     const coal::Transform3s transform_a = pinocchio::toCoalTransform3s(placement_a);
     const coal::Transform3s transform_b = pinocchio::toCoalTransform3s(placement_b);
-    coal::CollisionResult& result = results_[k];
+    coal::CollisionResult& result = result_;
     result.clear();
-    if (!coal::collide(shape_a.get(), transform_a, shape_b.get(), transform_b, requests_[k], result))
+    if (!coal::collide(shape_a.get(), transform_a, shape_b.get(), transform_b, request_, result))
       continue;
     // EPA stopped short at the tight tolerance, or at a depth no contact has: ask again at coal's default
     if (!converged(result, std::min(2.0 * std::min(bound_radius_[pair.geom_a], bound_radius_[pair.geom_b]), 1.0))) {
       result.clear();
-      if (!coal::collide(shape_a.get(), transform_a, shape_b.get(), transform_b, fallback_requests_[k], result))
+      if (!coal::collide(shape_a.get(), transform_a, shape_b.get(), transform_b, fallback_request_, result))
         continue;
     }
-    coal::ContactPatchResult& patches = patch_results_[k];
+    coal::ContactPatchResult& patches = patch_result_;
     coal::computeContactPatch(shape_a.get(), transform_a, shape_b.get(), transform_b, result,
-                              patch_requests_[k], patches);
+                              patch_request_, patches);
     for (std::size_t p = 0; p < patches.numContactPatches(); ++p) {
       const coal::ContactPatch& patch = patches.getContactPatch(p);
       const auto size = static_cast<Eigen::Index>(patch.size());

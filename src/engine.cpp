@@ -48,8 +48,6 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
   geometry_ = geometry_from_text(geometry);
   parts_ = SceneParts(model_, settings_.nv_hand);
   geometry_data_ = pinocchio::GeometryData(geometry_);
-  const auto pairs = settings_.pairs.size();
-  if (settings_.queries.size() != pairs) throw std::invalid_argument("one query setting per collision pair is needed");
   for (const Pair& pair : settings_.pairs) {
     const int n = static_cast<int>(geometry_.ngeoms);
     if (pair.geom_a < 0 || pair.geom_a >= n || pair.geom_b < 0 || pair.geom_b >= n)
@@ -60,21 +58,20 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
   if (settings_.lower.size() != settings_.nv_hand || settings_.upper.size() != settings_.nv_hand ||
       settings_.joint_stiffness.size() != model_.nv || settings_.joint_damping.size() != model_.nv)
     throw std::invalid_argument("joint limits, stiffness or damping of the wrong size");
-  for (const Query& query : settings_.queries) {
-    coal::CollisionRequest request;
-    request.enable_contact = true;
-    request.num_max_contacts = static_cast<std::size_t>(query.num_max_contacts);
-    request.security_margin = query.security_margin;
-    request.break_distance = query.break_distance;
-    request.gjk_tolerance = request.epa_tolerance = query.tolerance;
-    requests_.push_back(request);
-    request.gjk_tolerance = request.epa_tolerance = query.fallback_tolerance;
-    fallback_requests_.push_back(request);
-    patch_requests_.emplace_back(static_cast<std::size_t>(query.max_num_patch),
-                                 static_cast<std::size_t>(query.num_samples_curved_shapes), query.patch_tolerance);
-    patch_results_.emplace_back(patch_requests_.back());
-  }
-  results_.resize(pairs);
+  // every pair is asked with the same requests, one pair at a time into the same results
+  const Query& query = settings_.query;
+  request_.enable_contact = true;
+  request_.num_max_contacts = static_cast<std::size_t>(query.num_max_contacts);
+  request_.security_margin = query.security_margin;
+  request_.break_distance = query.break_distance;
+  request_.gjk_tolerance = request_.epa_tolerance = query.tolerance;
+  fallback_request_ = request_;
+  fallback_request_.gjk_tolerance = fallback_request_.epa_tolerance = query.fallback_tolerance;
+  patch_request_ = coal::ContactPatchRequest(static_cast<std::size_t>(query.max_num_patch),
+                                             static_cast<std::size_t>(query.num_samples_curved_shapes),
+                                             query.patch_tolerance);
+  patch_result_ = coal::ContactPatchResult(patch_request_);
+  sweep_margin_ = request_.security_margin + 1e-6;  // the broad phase's (detect.cpp): 1e-6 above the test's 1e-9
   probe_ = std::make_shared<coal::Sphere>(1e-12);
   for (const auto& object : geometry_.geometryObjects) {  // bounding spheres for the broad phase
     object.geometry->computeLocalAABB();
@@ -86,7 +83,6 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
   for (std::size_t k = 0; k < settings_.pairs.size(); ++k) {  // the broad phase's sweep (detect.cpp: broad_phase)
     const Pair& pair = settings_.pairs[k];
     const auto a = static_cast<std::size_t>(pair.geom_a), b = static_cast<std::size_t>(pair.geom_b);
-    sweep_margin_ = std::max(sweep_margin_, requests_[k].security_margin + 1e-6);  // 1e-6: above the test's 1e-9
     if (!std::isfinite(bound_radius_[a]) || !std::isfinite(bound_radius_[b])) {
       always_.push_back(static_cast<int>(k));
     } else {

@@ -182,11 +182,11 @@ class Engine {
   pinocchio::GeometryModel geometry_;
   pinocchio::GeometryData geometry_data_;
   Settings settings_;
-  std::vector<coal::CollisionRequest> requests_;
-  std::vector<coal::CollisionRequest> fallback_requests_;  // coal's default tolerance, for an EPA that stopped short
-  std::vector<coal::ContactPatchRequest> patch_requests_;
-  std::vector<coal::CollisionResult> results_;
-  std::vector<coal::ContactPatchResult> patch_results_;
+  coal::CollisionRequest request_;
+  coal::CollisionRequest fallback_request_;  // coal's default tolerance, for an EPA that stopped short
+  coal::ContactPatchRequest patch_request_;
+  coal::CollisionResult result_;  // one pair's, cleared before each query
+  coal::ContactPatchResult patch_result_;
   std::shared_ptr<coal::CollisionGeometry> probe_;
   std::vector<double> bound_radius_;  // per geometry: radius [m] of a sphere about bound_centre_ holding the shape
   std::vector<Vector3> bound_centre_; // in the geometry's frame; radius inf: unbounded (half-spaces)
@@ -194,7 +194,7 @@ class Engine {
   // per geometry g: (geometry h > g, pair index) of its pairs with bounded geometries after it, sorted
   std::vector<std::vector<std::pair<int, int>>> partners_;
   std::vector<int> always_;                         // the pairs of an unbounded shape
-  double sweep_margin_ = 0.0;                       // [m] the largest security margin, and a hair
+  double sweep_margin_ = 0.0;                       // [m] the security margin, and a hair
   Work work_;
 };
 

@@ -56,7 +56,7 @@ struct Spinning {
   BHGRASP_SPINNING(BHGRASP_DECLARE)
 };
 
-// One pair's collision and contact-patch queries (coal's CollisionRequest and ContactPatchRequest of the scene's
+// Every pair's collision and contact-patch queries (coal's CollisionRequest and ContactPatchRequest of the scene's
 // geometry data; bhgrasp.sim.contact): GJK/EPA tolerance, and the looser one of the retry (contact.py's
 // _NARROW_TOLERANCE and _FALLBACK_TOLERANCE).
 #define BHGRASP_QUERY(X)                                                                                        \
@@ -69,13 +69,13 @@ struct Query {
 // Everything fixed for a simulator (bhgrasp.sim.settings.SimulatorSettings and the scene's layout): dt [s], the
 // integrator (0 implicit, 1 semi-implicit, 2 RK4), the hand's sizes and joint limits [rad], its stops [N m/rad,
 // N m s/rad], the largest |q_i| [m or rad], the springs of spring-mounted objects [N/m, N s/m] and their
-// coordinates, the free bodies, the pairs, the contact law, one query per pair, and whether the implicit step solves
+// coordinates, the free bodies, the pairs, the contact law, the pairs' query, and whether the implicit step solves
 // its velocity system by parts (part_system.hpp) or as one dense matrix.
 #define BHGRASP_SETTINGS(X)                                                                                     \
   X(double, dt) X(int, integrator) X(int, nq_hand) X(int, nv_hand) X(Vector, lower) X(Vector, upper)            \
   X(double, limit_stiffness) X(double, limit_damping) X(double, max_coordinate) X(Vector, joint_stiffness)      \
   X(Vector, joint_damping) X(IntList, spring_q) X(IntList, spring_v) X(std::vector<Spinning>, spinning)         \
-  X(std::vector<Pair>, pairs) X(ContactLaw, law) X(std::vector<Query>, queries) X(bool, sparse)
+  X(std::vector<Pair>, pairs) X(ContactLaw, law) X(Query, query) X(bool, sparse)
 struct Settings {
   BHGRASP_SETTINGS(BHGRASP_DECLARE)
 };

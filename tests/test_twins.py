@@ -89,6 +89,4 @@ def test_the_engine_settings_carry_pythons_values() -> None:
     native = engine_settings(simulator.scene, simulator.layout, simulator.law, simulator.settings, 3e-3)
     assert native.dt == simulator.dt and native.limit_damping == simulator.settings.joint_limit_damping
     assert native.law.stiffness == simulator.law.stiffness and native.law.match_radius == 3e-3
-    assert {(query.tolerance, query.fallback_tolerance) for query in native.queries} == {
-        (NARROW_TOLERANCE, FALLBACK_TOLERANCE)
-    }
+    assert (native.query.tolerance, native.query.fallback_tolerance) == (NARROW_TOLERANCE, FALLBACK_TOLERANCE)

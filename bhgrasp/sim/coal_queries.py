@@ -29,17 +29,27 @@ def converged(result: coal.CollisionResult, max_depth: float = MAX_DEPTH) -> boo
     return True
 
 
-def plausible_depth(shape_a: coal.CollisionGeometry, shape_b: coal.CollisionGeometry) -> float:
+def bounding_sphere(shape: coal.CollisionGeometry) -> tuple[np.ndarray, float]:
+    """A sphere holding ``shape``: its centre in the shape's frame [m] and radius [m] (inf, centre 0: unbounded).
+
+    coal's ``aabb_center`` and ``aabb_radius``, measured on a copy (the scene's shapes untouched: its signature reads
+    them).
+    """
+    shape = shape.clone()
+    shape.computeLocalAABB()
+    radius, centre = float(shape.aabb_radius), np.array(shape.aabb_center)
+    if not (np.isfinite(radius) and np.isfinite(centre).all()):
+        return np.zeros(3), np.inf
+    return centre, radius
+
+
+def plausible_depth(radius_a: float, radius_b: float) -> float:
     """The deepest penetration [m] a query of two shapes may report: the smaller one's bounding diameter.
 
-    From coal's ``aabb_radius``; at most :data:`MAX_DEPTH` (a half-space has no bound).
+    From their bounding spheres' radii [m] (:func:`bounding_sphere`); at most :data:`MAX_DEPTH` (a half-space has no
+    bound).
     """
-    radii = []
-    for shape in (shape_a.clone(), shape_b.clone()):  # (the scene's own shapes untouched: its signature reads them)
-        shape.computeLocalAABB()
-        bounded = np.isfinite(shape.aabb_radius) and np.all(np.isfinite(shape.aabb_center))
-        radii.append(shape.aabb_radius if bounded else np.inf)
-    return min(2.0 * min(radii), MAX_DEPTH)
+    return min(2.0 * min(radius_a, radius_b), MAX_DEPTH)
 
 
 def fresh_request(template: coal.CollisionRequest, tolerance: float = NARROW_TOLERANCE) -> coal.CollisionRequest:
@@ -57,4 +67,12 @@ def fresh_request(template: coal.CollisionRequest, tolerance: float = NARROW_TOL
     return request
 
 
-__all__ = ["FALLBACK_TOLERANCE", "MAX_DEPTH", "NARROW_TOLERANCE", "converged", "fresh_request", "plausible_depth"]
+__all__ = [
+    "FALLBACK_TOLERANCE",
+    "MAX_DEPTH",
+    "NARROW_TOLERANCE",
+    "bounding_sphere",
+    "converged",
+    "fresh_request",
+    "plausible_depth",
+]

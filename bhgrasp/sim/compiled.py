@@ -112,7 +112,7 @@ def engine_settings(
         ],
         pairs=[native_pair(pair, law) for pair in scene.pairs],
         law=native_law(law, match_radius),
-        queries=[native_query(scene)] * len(scene.pairs),
+        query=native_query(scene),
         sparse=settings.sparse(scene.nv),
     )
 

@@ -17,7 +17,7 @@ import scipy.sparse as sparse
 
 from bhgrasp._validation import as_positive
 from bhgrasp.data import ContactMemory, ContactSet, empty_contact_set
-from bhgrasp.sim.coal_queries import FALLBACK_TOLERANCE, converged, fresh_request, plausible_depth
+from bhgrasp.sim.coal_queries import FALLBACK_TOLERANCE, bounding_sphere, converged, fresh_request, plausible_depth
 from bhgrasp.sim.contact_law import ContactForces, SpringDamper
 from bhgrasp.sim.scene import Scene
 from bhgrasp.sim.scene_parts import SceneParts
@@ -26,19 +26,6 @@ LOCAL_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _IDENTITY3 = np.eye(3)
 
 _NO_MEMORY = ContactMemory.empty()
-
-
-def bounding_sphere(shape: coal.CollisionGeometry) -> tuple[np.ndarray, float]:
-    """A sphere holding ``shape``: its centre in the shape's frame [m] and radius [m] (inf, centre 0: unbounded).
-
-    Measured on a copy: the scene's shapes stay as they are (its signature hashes them).
-    """
-    shape = shape.clone()
-    shape.computeLocalAABB()
-    radius, centre = float(shape.aabb_radius), np.array(shape.aabb_center)
-    if not (np.isfinite(radius) and np.isfinite(centre).all()):
-        return np.zeros(3), np.inf
-    return centre, radius
 
 
 class ContactEngine(ContactForces):
@@ -68,30 +55,21 @@ class ContactEngine(ContactForces):
         # functors keep GJK state from call to call (at a degenerate contact, two faces flush, the witness and with
         # it the patch depended on the configurations queried before: a box resting flat on its pedestal gave a
         # 4-point patch or a 1-point patch), and their default GJK tolerance (1e-6) decided near the threshold
-        # whether a pair touched at all.  The free functions start afresh every time, as the compiled engine does.
-        geometry = scene.geometry
-        self._narrow = [
-            (
-                geometry.geometryObjects[pair.geom_a].geometry,
-                geometry.geometryObjects[pair.geom_b].geometry,
-                pair.geom_a,
-                pair.geom_b,
-                fresh_request(scene.collision_request),
-                scene.patch_request,
-                coal.CollisionResult(),
-                coal.ContactPatchResult(),
-            )
-            for pair in scene.pairs
-        ]
-        self._fallback = [fresh_request(request, FALLBACK_TOLERANCE) for _, _, _, _, request, *_ in self._narrow]
-        self._max_depth = [plausible_depth(shape_a, shape_b) for shape_a, shape_b, *_ in self._narrow]
-        self._bounds = [bounding_sphere(item.geometry) for item in geometry.geometryObjects]
+        # whether a pair touched at all.  The free functions start afresh every time, as the compiled engine does;
+        # every pair is asked with the same requests, one pair at a time into the same results.
+        self._shapes = [item.geometry for item in scene.geometry.geometryObjects]
+        self._request = fresh_request(scene.collision_request)
+        self._fallback = fresh_request(scene.collision_request, FALLBACK_TOLERANCE)
+        self._patch_request = scene.patch_request
+        self._result, self._patches = coal.CollisionResult(), coal.ContactPatchResult()
+        self._bounds = [bounding_sphere(shape) for shape in self._shapes]
         self._geom_a = np.array([pair.geom_a for pair in scene.pairs], dtype=int)
         self._geom_b = np.array([pair.geom_b for pair in scene.pairs], dtype=int)
         radius = np.array([r for _, r in self._bounds])
-        self._reach = radius[self._geom_a] + radius[self._geom_b]  # inf: a pair of an unbounded shape
-        margin = np.array([request.security_margin for _, _, _, _, request, *_ in self._narrow])
-        self._near = self._reach + margin + 1e-9
+        radius_a, radius_b = radius[self._geom_a], radius[self._geom_b]
+        self._max_depth = [plausible_depth(a, b) for a, b in zip(radius_a, radius_b)]
+        self._reach = radius_a + radius_b  # inf: a pair of an unbounded shape
+        self._near = self._reach + self._request.security_margin + 1e-9
         self._probe = coal.Sphere(1e-12)  # a point, for signed-distance queries
         self._probe_placement = coal.Transform3s()
         self._distance_request, self._distance_result = coal.DistanceRequest(), coal.DistanceResult()
@@ -110,8 +88,10 @@ class ContactEngine(ContactForces):
         self.parts.update_geometry_placements(scene.geometry, self.geometry_data)
         placements = self.geometry_data.oMg
         pairs, points, normals, depths, weights = [], [], [], [], []
+        shapes, request, result, patches = self._shapes, self._request, self._result, self._patches
         for k in self.broad_phase():
-            shape_a, shape_b, geom_a, geom_b, request, patch_request, result, patches = self._narrow[k]
+            geom_a, geom_b = int(self._geom_a[k]), int(self._geom_b[k])
+            shape_a, shape_b = shapes[geom_a], shapes[geom_b]
             placement_a, placement_b = placements[geom_a], placements[geom_b]
             transform_a = coal.Transform3s(placement_a.rotation, placement_a.translation)
             transform_b = coal.Transform3s(placement_b.rotation, placement_b.translation)
@@ -120,9 +100,9 @@ class ContactEngine(ContactForces):
                 continue
             if not converged(result, self._max_depth[k]):
                 result.clear()
-                if not coal.collide(shape_a, transform_a, shape_b, transform_b, self._fallback[k], result):
+                if not coal.collide(shape_a, transform_a, shape_b, transform_b, self._fallback, result):
                     continue
-            coal.computeContactPatch(shape_a, transform_a, shape_b, transform_b, result, patch_request, patches)
+            coal.computeContactPatch(shape_a, transform_a, shape_b, transform_b, result, self._patch_request, patches)
             for p in range(patches.numContactPatches()):
                 patch = patches.getContactPatch(p)
                 size = patch.size()
