@@ -4,7 +4,7 @@ Scenes as ``bench_build.py``'s: n 3 cm boxes of 0.1 kg resting on a table in a g
 the compiled engine at dt 0.5 ms; each box rests on 4 contact points.  First table: the median step with
 ``linear_solver="dense"`` and ``"sparse"`` for small n, where the two cross (``SimulatorSettings``' ``SPARSE_FROM``,
 the size from which ``"auto"`` goes sparse, was set from it).  Second table: the sparse step and ``mj_step`` for n up
-to 500 boxes (10 to 2,000 contacts); the line a + b contacts fitted to the sparse step (least relative residuals), its
+to 500 boxes (12 to 2,000 contacts); the line a + b contacts fitted to the sparse step (least relative residuals), its
 largest deviation, and the exponent p of cost ~ contacts^p.
 
 Usage: ``python benchmarks/bench_linear_solver.py [--small 1 2 4 ...] [--large 3 25 ...] [--steps 20]``.

@@ -120,10 +120,10 @@ Contacts Engine::detect(const Vector& q, const Memory& memory) {
 }
 
 // The pairs the narrow phase may find touching, in pair order: every pair of a scene of few pairs; else a sweep over
-// the geometries' bounding spheres (each widened by the largest security margin and a hair) along the world axis their
-// centres spread most on, keeping the pairs whose widened spheres meet, and the pairs of an unbounded shape.  Every
-// pair that passes the narrow phase's own bounding-sphere test (detect) is kept, and kept pairs are tested in pair
-// order: the contacts do not depend on the sweep.
+// the geometries' bounding spheres (each widened by the security margin and a hair) along the world axis their centres
+// spread most on, keeping the pairs whose widened spheres meet, and the pairs of an unbounded shape.  Every pair that
+// passes the narrow phase's own bounding-sphere test (detect) is kept, and kept pairs are tested in pair order: the
+// contacts do not depend on the sweep.  A placement that is not finite (a diverging stage) gets every pair, as before.
 void Engine::broad_phase(std::vector<int>& result) {
   result.clear();
   const auto pairs = static_cast<int>(settings_.pairs.size());
@@ -145,6 +145,10 @@ void Engine::broad_phase(std::vector<int>& result) {
     sum += centre[g];
     squares += centre[g].cwiseProduct(centre[g]);
     order.push_back(static_cast<int>(g));
+  }
+  if (!sum.allFinite() || !squares.allFinite()) {  // no order to sweep in: every pair, as the narrow phase tests them
+    for (int k = 0; k < pairs; ++k) result.push_back(k);
+    return;
   }
   Eigen::Index axis = 0;  // the axis of the largest spread (sum of squared deviations)
   (squares - sum.cwiseProduct(sum) / std::max<double>(1.0, static_cast<double>(order.size()))).maxCoeff(&axis);

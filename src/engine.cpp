@@ -52,6 +52,7 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
     const int n = static_cast<int>(geometry_.ngeoms);
     if (pair.geom_a < 0 || pair.geom_a >= n || pair.geom_b < 0 || pair.geom_b >= n)
       throw std::invalid_argument("a collision pair names a geometry the geometry model lacks");
+    if (pair.geom_a == pair.geom_b) throw std::invalid_argument("a collision pair joins a geometry to itself");
     if (pair.joint_a < 0 || pair.joint_a >= model_.njoints || pair.joint_b < 0 || pair.joint_b >= model_.njoints)
       throw std::invalid_argument("a collision pair names a joint the model lacks");
   }

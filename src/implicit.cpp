@@ -13,7 +13,8 @@ void Engine::implicit_step(const Vector& q, const Vector& v, const Vector& tau, 
                            const Memory& memory, StepResult& result) {
   const double dt = settings_.dt;
   const int nv = model_.nv, nvh = settings_.nv_hand;
-  // Every array but the result's lives in work_ (no allocation once sized); where an expression would evaluate a
+  // Every array but the result's lives in work_ (no allocation once sized, but for the sparse factorisation of the solve
+  // by parts, made again each step); where an expression would evaluate a
   // product into a temporary, the product goes to a work array first, with the same arithmetic.
   Work& work = work_;
   const bool sparse = settings_.sparse;  // the velocity system by parts (part_system.hpp), or one dense matrix

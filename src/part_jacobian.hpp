@@ -35,4 +35,20 @@ struct PartJacobian {
   void add_transpose_times(const Vector3& f, Vector& out) const;  // out += J^T f
 };
 
+inline Vector3 PartJacobian::times(const Vector& v) const {
+  Vector3 result = Vector3::Zero();
+  for (int k = 0; k < count; ++k) {
+    const Block& rows = block[static_cast<std::size_t>(k)];
+    result.noalias() += rows * v.segment(first[static_cast<std::size_t>(k)], rows.cols());
+  }
+  return result;
+}
+
+inline void PartJacobian::add_transpose_times(const Vector3& f, Vector& out) const {
+  for (int k = 0; k < count; ++k) {
+    const Block& rows = block[static_cast<std::size_t>(k)];
+    out.segment(first[static_cast<std::size_t>(k)], rows.cols()).noalias() += rows.transpose() * f;
+  }
+}
+
 }  // namespace bhgrasp

@@ -1,23 +1,9 @@
 // The velocity system by parts: see part_system.hpp.  Each function mirrors bhgrasp/sim/part_system.py (PartSystem).
 #include "part_system.hpp"
 
+#include <limits>
+
 namespace bhgrasp {
-
-Vector3 PartJacobian::times(const Vector& v) const {
-  Vector3 result = Vector3::Zero();
-  for (int k = 0; k < count; ++k) {
-    const Block& rows = block[static_cast<std::size_t>(k)];
-    result.noalias() += rows * v.segment(first[static_cast<std::size_t>(k)], rows.cols());
-  }
-  return result;
-}
-
-void PartJacobian::add_transpose_times(const Vector3& f, Vector& out) const {
-  for (int k = 0; k < count; ++k) {
-    const Block& rows = block[static_cast<std::size_t>(k)];
-    out.segment(first[static_cast<std::size_t>(k)], rows.cols()).noalias() += rows.transpose() * f;
-  }
-}
 
 void PartSystem::begin(const Matrix& hand_transmission, const std::vector<Matrix>& blocks,
                        const std::vector<Eigen::Index>& first, Eigen::Index nv) {
@@ -27,10 +13,11 @@ void PartSystem::begin(const Matrix& hand_transmission, const std::vector<Matrix
   size_ = driven_ + nv - nv_hand_;
   base_.clear();
   for (std::size_t p = 0; p < blocks.size(); ++p) {
-    const Matrix reduced = p == 0 ? Matrix(transmission_.transpose() * blocks[p] * transmission_) : blocks[p];
+    if (p == 0) hand_block_ = transmission_.transpose() * blocks[p] * transmission_;
+    const Matrix& block = p == 0 ? hand_block_ : blocks[p];
     const Eigen::Index at = p == 0 ? 0 : reduced_index(first[p]);
-    for (Eigen::Index c = 0; c < reduced.cols(); ++c)
-      for (Eigen::Index r = 0; r < reduced.rows(); ++r) base_.emplace_back(at + r, at + c, reduced(r, c));
+    for (Eigen::Index c = 0; c < block.cols(); ++c)
+      for (Eigen::Index r = 0; r < block.rows(); ++r) base_.emplace_back(at + r, at + c, block(r, c));
   }
   analysed_ = false;
 }
@@ -39,14 +26,13 @@ Eigen::Index PartSystem::reduced_index(Eigen::Index scene) const {
   return scene < nv_hand_ ? scene : scene - nv_hand_ + driven_;
 }
 
-const PartJacobian::Block& PartSystem::reduced_block(const PartJacobian& jacobian, int k) {
+void PartSystem::reduce_block(const PartJacobian& jacobian, int k) {
   const auto s = static_cast<std::size_t>(k);
   if (jacobian.first[s] < nv_hand_) {  // the hand's part: its columns start at 0
     reduced_[s].noalias() = jacobian.block[s] * transmission_;
   } else {
     reduced_[s] = jacobian.block[s];
   }
-  return reduced_[s];
 }
 
 void PartSystem::solve(const std::vector<PartJacobian>& jacobians, Eigen::Index contacts,
@@ -54,7 +40,7 @@ void PartSystem::solve(const std::vector<PartJacobian>& jacobians, Eigen::Index 
   triplets_ = base_;
   for (Eigen::Index i = 0; i < contacts; ++i) {
     const PartJacobian& jacobian = jacobians[static_cast<std::size_t>(i)];
-    for (int a = 0; a < jacobian.count; ++a) reduced_block(jacobian, a);
+    for (int a = 0; a < jacobian.count; ++a) reduce_block(jacobian, a);
     for (int b = 0; b < jacobian.count; ++b) {
       const auto sb = static_cast<std::size_t>(b);
       gain_block_.noalias() = scale * (gains[static_cast<std::size_t>(i)] * reduced_[sb]);
@@ -82,7 +68,11 @@ void PartSystem::solve(const std::vector<PartJacobian>& jacobians, Eigen::Index 
     reduced_solution_ = cholesky_.solve(right_);
   } else {
     lu_.compute(matrix_);
-    reduced_solution_ = lu_.solve(right_);
+    if (lu_.info() == Eigen::Success) {
+      reduced_solution_ = lu_.solve(right_);
+    } else {  // singular: a non-finite step, which the divergence check reports
+      reduced_solution_.setConstant(size_, std::numeric_limits<double>::quiet_NaN());
+    }
   }
   solution.resize(rhs.size());
   solution.head(nv_hand_).noalias() = transmission_ * reduced_solution_.head(driven_);

@@ -36,7 +36,7 @@ class PartSystem {
  private:
   Eigen::Index reduced_index(Eigen::Index scene) const;  // a scene velocity's column in the driven coordinates
   // Block k of a contact in the driven coordinates (the hand's J T, an object's as it is), into reduced_[k].
-  const PartJacobian::Block& reduced_block(const PartJacobian& jacobian, int k);
+  void reduce_block(const PartJacobian& jacobian, int k);
 
   Matrix transmission_;          // the hand's T
   Eigen::Index nv_hand_ = 0, driven_ = 0, size_ = 0;  // hand velocities, its driven coordinates, the reduced system
@@ -47,7 +47,7 @@ class PartSystem {
   bool analysed_ = false;
   std::array<PartJacobian::Block, 2> reduced_;
   PartJacobian::Block gain_block_;
-  Matrix coupling_;
+  Matrix coupling_, hand_block_;  // a contact's coupling block; T^T A_0 T
   Vector right_, reduced_solution_;
 };
 

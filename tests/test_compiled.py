@@ -44,6 +44,7 @@ def twin(simulator: Simulator, engine: str) -> Simulator:
         max_penetration=simulator.max_penetration,
         max_speed=simulator.max_speed,
         engine=engine,
+        linear_solver=simulator.settings.linear_solver,
     )
 
 
@@ -147,15 +148,19 @@ def test_barrett_closing_on_a_box_breaks_away_and_reopens() -> None:
     assert (opened.modes[:, :3] == 2).any() and (opened.modes[-1, :3] == 0).all()  # re-opened and re-armed
 
 
-def test_fingers_against_their_joint_stops_and_a_spring_mounted_object() -> None:
-    """Joint stops (a finger driven past its limit), a spring-mounted object, Hunt-Crossley normal law."""
+@pytest.mark.parametrize("linear_solver", ["dense", "sparse"])
+def test_fingers_against_their_joint_stops_and_a_spring_mounted_object(linear_solver: str) -> None:
+    """Joint stops (a finger driven past its limit), a spring-mounted object, Hunt-Crossley normal law; the velocity
+    solve dense and by parts (a part of one velocity, bhgrasp.sim.part_system)."""
     hand = bh.BarrettHand()
     tip = hand.fingertip_positions(hand.configuration(F3_proximal=1.0))[hand.fingers.index("F3")]
     body = Box(size=(0.04, 0.04, 0.01), mass=0.1, pose=pin.SE3(np.eye(3), tip + np.array([0.0, 0.0, 0.006])))
     plate = SpringMounted(body=body, direction=np.array([0.0, 0.0, 1.0]), stiffness=200.0, damping=2.0)
     law = SpringDamper(stiffness=2e4, damping=50.0, normal_law="hunt-crossley", exponent=1.5)
     drive = FullyActuated(hand, damping=0.02)  # the finger starts 5.6 mm into the plate on purpose: no warning
-    simulator = Simulator(Scene(hand, [plate]), contact=law, actuation=drive, start_check="off")
+    simulator = Simulator(
+        Scene(hand, [plate]), contact=law, actuation=drive, start_check="off", linear_solver=linear_solver
+    )
     torque = np.zeros(8)
     torque[hand.joint_index("F3_proximal")] = 0.3
     torque[hand.joint_index("F1_distal")] = 0.3  # against its upper stop
@@ -171,10 +176,12 @@ def test_tanh_friction_law() -> None:
     assert_agree(lockstep(simulator, hold.controller, 500, hold.state), 3)
 
 
-def test_allegro_hand_closing_on_a_box() -> None:
-    """The 16-DOF Allegro hand of example-robot-data (mesh-free primitives of its own URDF) closing on a box."""
+@pytest.mark.parametrize("linear_solver", ["dense", "sparse"])
+def test_allegro_hand_closing_on_a_box(linear_solver: str) -> None:
+    """The 16-DOF Allegro hand of example-robot-data (mesh-free primitives of its own URDF) closing on a box; the
+    velocity solve dense and by parts (every joint driven: the identity transmission)."""
     setup = allegro_box_grasp()
-    simulator, hand = setup.simulator, setup.hand
+    simulator, hand = setup.simulator.with_settings(linear_solver=linear_solver), setup.hand
     target = setup.q_close
 
     def close(t, state):

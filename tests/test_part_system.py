@@ -45,7 +45,7 @@ def test_the_system_by_parts_solves_as_the_dense_system() -> None:
         if a is not None:
             jacobians[i, :, starts[a] : starts[a + 1]] -= rng.normal(size=(3, sizes[a]))
     gains = np.array([g @ g.T for g in rng.normal(size=(len(touching), 3, 3))])
-    gains[3] = 0.0  # a contact that is off keeps its place in the pattern
+    gains[3] = 0.0  # a contact that is off (the compiled twin keeps its entries in the pattern)
     rhs, scale = rng.normal(size=nv), 0.01
     system = PartSystem()
     system.begin(transmission, block_diagonal(blocks))
@@ -62,17 +62,17 @@ def test_the_system_by_parts_solves_as_the_dense_system() -> None:
 
 
 def grasp_beside_a_pile(engine: str, linear_solver: str) -> tuple[Simulator, np.ndarray]:
-    """The Barrett hand closing on a box on its pedestal (scenarios.box_grasp) beside eleven boxes and spheres dropped
-    onto a table; its start configuration."""
+    """The Barrett hand closing on a box on its pedestal (scenarios.box_grasp) beside eight boxes dropped onto a table
+    and three spheres dropped onto three of them; its start configuration."""
     setup = box_grasp(mass=0.3, actuation="barrett")
     scene = setup.simulator.scene
     objects = list(scene.objects)
-    for i in range(11):
-        centre = np.array([0.25 + 0.05 * (i % 4), 0.05 * (i // 4) - 0.05, 0.016])
-        if i % 3 == 2:
-            objects.append(Sphere(radius=0.015, mass=0.05, pose=pin.SE3(np.eye(3), centre)))
-        else:
-            objects.append(Box(size=(0.03,) * 3, mass=0.1, pose=pin.SE3(np.eye(3), centre)))
+    for i in range(8):
+        centre = np.array([0.25 + 0.05 * (i % 4), 0.05 * (i // 4) - 0.05, 0.016])  # 1 mm above the table
+        objects.append(Box(size=(0.03,) * 3, mass=0.1, pose=pin.SE3(np.eye(3), centre)))
+        if i % 3 == 1:  # 0.5 mm above the box's top
+            on_top = centre + np.array([0.0, 0.0, 0.0305])
+            objects.append(Sphere(radius=0.015, mass=0.05, pose=pin.SE3(np.eye(3), on_top)))
     pile = Scene(setup.hand, objects, [*scene.environment, table()])
     simulator = Simulator(
         pile,
@@ -116,9 +116,26 @@ def test_a_grasp_beside_a_pile_steps_sparse_as_it_steps_dense(engine: str) -> No
 
 
 def test_the_compiled_sparse_step_is_its_python_twin() -> None:
-    """The lockstep of tests/test_compiled.py on the grasp beside a pile, both engines solving sparse."""
+    """The lockstep of tests/test_compiled.py on the grasp beside a pile, both engines solving sparse; the compiled
+    engine's broad phase sweeps (128 pairs or more, src/engine.hpp), the Python one tests every pair's spheres."""
     simulator, q_start = grasp_beside_a_pile("python", "sparse")
+    assert simulator.settings.solves_sparse(simulator.scene.nv) and len(simulator.scene.pairs) >= 128
     assert_agree(lockstep(simulator, lambda t, s: CLOSE, 400, simulator.initial_state(q_start)), 40)
+
+
+def test_the_jacobians_by_parts_are_the_dense_ones() -> None:
+    """The stacked sparse Jacobians of the contacts (fingers on the box, the box on its pedestal, boxes on the table,
+    spheres on boxes) hold the dense Jacobians' values, column for column."""
+    simulator, q_start = grasp_beside_a_pile("python", "sparse")
+    state = simulator.initial_state(q_start)
+    for _ in range(300):
+        state, _ = simulator.step(state, CLOSE)
+    engine = simulator.engine.contacts
+    contacts = engine.detect(state.scene_q, state.contact_memory)
+    simulator.engine.parts.compute_joint_jacobians(state.scene_q)
+    dense = engine.jacobians(contacts).reshape(-1, simulator.scene.nv)
+    assert len(contacts) >= 40 and (contacts.pair < len(simulator.scene.pairs)).all()
+    np.testing.assert_array_equal(engine.part_jacobians(contacts).toarray(), dense)
 
 
 def test_the_linear_solver_option_is_checked_and_auto_follows_the_scene_size() -> None:
@@ -127,7 +144,7 @@ def test_the_linear_solver_option_is_checked_and_auto_follows_the_scene_size() -
     with pytest.raises(InputError, match="implicit integrator only"):
         SimulatorSettings(linear_solver="sparse", integrator="rk4")
     auto = SimulatorSettings()
-    assert not auto.sparse(SPARSE_FROM - 1) and auto.sparse(SPARSE_FROM)
-    assert not SimulatorSettings(integrator="rk4").sparse(10 * SPARSE_FROM)
-    assert SimulatorSettings(linear_solver="sparse").sparse(1)
-    assert not SimulatorSettings(linear_solver="dense").sparse(10 * SPARSE_FROM)
+    assert not auto.solves_sparse(SPARSE_FROM - 1) and auto.solves_sparse(SPARSE_FROM)
+    assert not SimulatorSettings(integrator="rk4").solves_sparse(10 * SPARSE_FROM)
+    assert SimulatorSettings(linear_solver="sparse").solves_sparse(1)
+    assert not SimulatorSettings(linear_solver="dense").solves_sparse(10 * SPARSE_FROM)

@@ -113,7 +113,7 @@ def engine_settings(
         pairs=[native_pair(pair, law) for pair in scene.pairs],
         law=native_law(law, match_radius),
         query=native_query(scene),
-        sparse=settings.sparse(scene.nv),
+        sparse=settings.solves_sparse(scene.nv),
     )
 
 

@@ -265,10 +265,10 @@ class ContactEngine(ContactForces):
         At the last placements (``detect`` runs them).  Pairs apart get no contact from the narrow phase either: the
         compiled engine skips them the same way (``src/detect.cpp``).
         """
-        placements = self.geometry_data.oMg
-        centres = np.array([placement.act(centre) for placement, (centre, _) in zip(placements, self._bounds)])
         if not len(self._reach):
             return np.zeros(0, dtype=int)
+        placements = self.geometry_data.oMg
+        centres = np.array([placement.act(centre) for placement, (centre, _) in zip(placements, self._bounds)])
         apart = np.linalg.norm(centres[self._geom_a] - centres[self._geom_b], axis=1) > self._near
         return np.flatnonzero(~(np.isfinite(self._reach) & apart))
 

@@ -38,6 +38,11 @@ def gain_blocks(gains: np.ndarray) -> sparse.bsr_array:
 class PartSystem:
     """One step's velocity system by parts: :meth:`begin` with the parts' blocks, then a :meth:`solve` per pass."""
 
+    def __init__(self) -> None:
+        """An empty system (:meth:`begin` sets it up)."""
+        self.transmission: sparse.csr_array | None = None  # T: the hand's transmission beside an identity
+        self.system: sparse.sparray | None = None  # A
+
     def begin(self, hand_transmission: np.ndarray, system: sparse.sparray) -> None:
         """The step's hand transmission ``T`` (nv_hand, n_driven) and ``A`` (nv, nv, sparse, block diagonal)."""
         objects = system.shape[0] - hand_transmission.shape[0]

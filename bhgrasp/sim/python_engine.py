@@ -62,7 +62,7 @@ class PythonEngine:
         self.parts = SceneParts(scene.hand_model, scene.model)
         self.contacts = ContactEngine(scene, law, match_radius, parts=self.parts)
         self._lower, self._upper = scene.hand.lower, scene.hand.upper
-        self._sparse = settings.sparse(scene.nv)  # the implicit step's velocity system by parts (part_system)
+        self._sparse = settings.solves_sparse(scene.nv)  # the implicit step's velocity system by parts (part_system)
         self._system = PartSystem()
         self._object_identity = None if self._sparse else np.eye(scene.nv - scene.nv_hand)
         self._spinning = layout.spinning_bodies

@@ -16,7 +16,7 @@ from bhgrasp.errors import InputError
 INTEGRATORS = ("implicit", "semi-implicit", "rk4")
 START_CHECKS = ("warn", "error", "off")  # what an initial state that starts wrong does
 LINEAR_SOLVERS = ("auto", "dense", "sparse")  # how the implicit step solves for the velocities
-SPARSE_FROM = 32  # [velocities] "auto" goes sparse from here up, where it measured faster (bench_linear_solver)
+SPARSE_FROM = 32  # [velocities] "auto" goes sparse from here: the compiled step measured faster (bench_linear_solver)
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,8 @@ class SimulatorSettings:
         linear_solver: How the implicit step solves for the velocities: ``"dense"`` (one matrix of the whole scene, a
             Cholesky factorisation), ``"sparse"`` (by parts, :mod:`~bhgrasp.sim.part_system`: cost linear in objects
             and contacts; the implicit integrator only) or ``"auto"`` (sparse for scenes of :data:`SPARSE_FROM`
-            velocities or more under the implicit integrator, dense otherwise).  The two agree to round-off.
+            velocities or more under the implicit integrator, dense otherwise; the threshold was measured on the
+            compiled engine and the Python one follows it).  The two agree to round-off.
     """
 
     dt: float = 1e-3
@@ -73,7 +74,7 @@ class SimulatorSettings:
             object.__setattr__(self, name, as_positive(getattr(self, name), name))
         object.__setattr__(self, "joint_limit_damping", as_real(self.joint_limit_damping, "joint_limit_damping"))
 
-    def sparse(self, nv: int) -> bool:
+    def solves_sparse(self, nv: int) -> bool:
         """Whether a scene of ``nv`` velocities is solved sparse (:attr:`linear_solver`)."""
         if self.linear_solver == "auto":
             return self.integrator == "implicit" and nv >= SPARSE_FROM

@@ -92,8 +92,8 @@ class Simulator:
             start_check: ``"warn"``, ``"error"`` or ``"off"``: what :meth:`initial_state` does with a scene that
                 starts wrong (bodies interpenetrating, an object its step cannot resolve; :meth:`check_start`).
             linear_solver: ``"auto"``, ``"dense"`` or ``"sparse"``: how the implicit step solves for the velocities
-                (:attr:`~bhgrasp.sim.settings.SimulatorSettings.linear_solver`; auto: sparse for scenes of 32
-                velocities or more).
+                (:attr:`~bhgrasp.sim.settings.SimulatorSettings.linear_solver`; auto: sparse under the implicit
+                integrator for scenes of :data:`~bhgrasp.sim.settings.SPARSE_FROM` velocities or more).
 
         Raises:
             InputError: A setting out of range, or an actuation built for another hand.
