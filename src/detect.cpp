@@ -269,46 +269,49 @@ void Engine::recall(Contacts& contacts, const Memory& memory) const {
 
 // Relative point Jacobians J_b(p) - J_a(p), world-aligned, (3, nv) each, in the first m entries of result (a work
 // array that only grows); needs parts_.compute_joint_jacobians at q.
+// Contact i's point Jacobians on its bodies' parts, each given to add(first velocity, its 3 rows, sign): body b's (+1,
+// a point fixed on it), then body a's (-1), each where its joint is not 0 (the environment or the fixed palm).
+template <class Add>
+void Engine::point_jacobians(const Contacts& contacts, Eigen::Index i, Add add) {
+  const Pair& pair = settings_.pairs[static_cast<std::size_t>(contacts.pair[i])];
+  Eigen::Index first = 0;
+  if (pair.joint_b) {
+    const pinocchio::SE3 placement(Matrix3::Identity(), row(contacts.local_b, i));
+    const SceneParts::Jacobian& part = parts_.point_jacobian(static_cast<int>(pair.joint_b), placement, first);
+    add(first, part.topRows<3>(), 1.0);
+  }
+  if (pair.joint_a) {
+    const auto joint = static_cast<int>(pair.joint_a);
+    const pinocchio::SE3 placement(Matrix3::Identity(), parts_.placement(joint).actInv(row(contacts.point, i)));
+    const SceneParts::Jacobian& part = parts_.point_jacobian(joint, placement, first);
+    add(first, part.topRows<3>(), -1.0);
+  }
+}
+
 void Engine::jacobians(const Contacts& contacts, std::vector<Matrix>& result) {
   if (result.size() < static_cast<std::size_t>(contacts.size()))
     result.resize(static_cast<std::size_t>(contacts.size()), Matrix(3, model_.nv));
   for (Eigen::Index i = 0; i < contacts.size(); ++i) {
-    const Pair& pair = settings_.pairs[static_cast<std::size_t>(contacts.pair[i])];
     Matrix& jacobian = result[static_cast<std::size_t>(i)];
     jacobian.setZero();
-    Eigen::Index first = 0;
-    if (pair.joint_b) {
-      const pinocchio::SE3 placement(Matrix3::Identity(), row(contacts.local_b, i));
-      const SceneParts::Jacobian& part = parts_.point_jacobian(static_cast<int>(pair.joint_b), placement, first);
-      jacobian.middleCols(first, part.cols()) = part.topRows<3>();
-    }
-    if (pair.joint_a) {
-      const auto joint = static_cast<int>(pair.joint_a);
-      const pinocchio::SE3 placement(Matrix3::Identity(), parts_.placement(joint).actInv(row(contacts.point, i)));
-      const SceneParts::Jacobian& part = parts_.point_jacobian(joint, placement, first);
-      jacobian.middleCols(first, part.cols()) -= part.topRows<3>();
-    }
+    point_jacobians(contacts, i, [&jacobian](Eigen::Index first, const auto& rows, double sign) {
+      if (sign > 0) {
+        jacobian.middleCols(first, rows.cols()) = rows;
+      } else {
+        jacobian.middleCols(first, rows.cols()) -= rows;
+      }
+    });
   }
 }
 
 void Engine::part_jacobians(const Contacts& contacts, std::vector<PartJacobian>& result) {
   if (result.size() < static_cast<std::size_t>(contacts.size())) result.resize(static_cast<std::size_t>(contacts.size()));
   for (Eigen::Index i = 0; i < contacts.size(); ++i) {
-    const Pair& pair = settings_.pairs[static_cast<std::size_t>(contacts.pair[i])];
     PartJacobian& jacobian = result[static_cast<std::size_t>(i)];
     jacobian.count = 0;
-    Eigen::Index first = 0;
-    if (pair.joint_b) {
-      const pinocchio::SE3 placement(Matrix3::Identity(), row(contacts.local_b, i));
-      const SceneParts::Jacobian& part = parts_.point_jacobian(static_cast<int>(pair.joint_b), placement, first);
-      jacobian.add(first, part.topRows<3>(), 1.0);
-    }
-    if (pair.joint_a) {
-      const auto joint = static_cast<int>(pair.joint_a);
-      const pinocchio::SE3 placement(Matrix3::Identity(), parts_.placement(joint).actInv(row(contacts.point, i)));
-      const SceneParts::Jacobian& part = parts_.point_jacobian(joint, placement, first);
-      jacobian.add(first, part.topRows<3>(), -1.0);
-    }
+    point_jacobians(contacts, i, [&jacobian](Eigen::Index first, const auto& rows, double sign) {
+      jacobian.add(first, rows, sign);
+    });
   }
 }
 

@@ -156,6 +156,8 @@ class Engine {
   void recall(Contacts& contacts, const Memory& memory) const;
   void jacobians(const Contacts& contacts, std::vector<Matrix>& result);
   void part_jacobians(const Contacts& contacts, std::vector<PartJacobian>& result);
+  template <class Add>
+  void point_jacobians(const Contacts& contacts, Eigen::Index i, Add add);  // detect.cpp
   void mass_times(const Vector& x, Vector& result) const;  // M x, dense or by parts as the step runs
   void linear_parts(const Contacts& contacts, Parts& parts) const;
   void start_status(const Contacts& contacts, const Parts& parts, const Points& start_velocity,

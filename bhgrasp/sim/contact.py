@@ -69,6 +69,7 @@ class ContactEngine(ContactForces):
         radius_a, radius_b = radius[self._geom_a], radius[self._geom_b]
         self._max_depth = [plausible_depth(a, b) for a, b in zip(radius_a, radius_b)]
         self._reach = radius_a + radius_b  # inf: a pair of an unbounded shape
+        self._bounded = np.isfinite(self._reach)
         self._near = self._reach + self._request.security_margin + 1e-9
         self._probe = coal.Sphere(1e-12)  # a point, for signed-distance queries
         self._probe_placement = coal.Transform3s()
@@ -245,19 +246,30 @@ class ContactEngine(ContactForces):
         Needs :meth:`SceneParts.compute_joint_jacobians` at the current ``q`` in :attr:`parts` (the engine calls it once
         per step).
         """
-        parts = self.parts
         jacobians = np.zeros((len(contacts), 3, self.scene.nv))
-        identity = _IDENTITY3
+        for i, columns, rows, sign in self._point_jacobians(contacts):
+            if sign > 0:
+                jacobians[i, :, columns] = rows
+            else:
+                jacobians[i, :, columns] -= rows
+        return jacobians
+
+    def _point_jacobians(self, contacts: ContactSet):
+        """Each contact's point Jacobians on its bodies' parts: (contact, the part's slice of v, its 3 rows, sign).
+
+        Body b's (sign +1: a point fixed on it, Pinocchio's frame Jacobian of that placement), then body a's (sign
+        -1), each where its joint is not 0 (the environment or the fixed palm).
+        """
+        parts, identity = self.parts, _IDENTITY3
         for i, k in enumerate(contacts.pair):
             joint_b, joint_a = int(self._joint_b[k]), int(self._joint_a[k])
-            if joint_b:  # a point fixed on body b: Pinocchio's frame Jacobian of that placement
+            if joint_b:
                 columns, jacobian = parts.point_jacobian(joint_b, pin.SE3(identity, contacts.local_b[i]))
-                jacobians[i, :, columns] = jacobian[:3]
-            if joint_a:  # 0 = the environment or the fixed palm
+                yield i, columns, jacobian[:3], 1.0
+            if joint_a:
                 placement = pin.SE3(identity, parts.placement(joint_a).actInv(contacts.point[i]))
                 columns, jacobian = parts.point_jacobian(joint_a, placement)
-                jacobians[i, :, columns] -= jacobian[:3]
-        return jacobians
+                yield i, columns, jacobian[:3], -1.0
 
     def broad_phase(self) -> np.ndarray:
         """The pairs whose bounding spheres come within reach, and those of an unbounded shape, in pair order.
@@ -270,30 +282,20 @@ class ContactEngine(ContactForces):
         placements = self.geometry_data.oMg
         centres = np.array([placement.act(centre) for placement, (centre, _) in zip(placements, self._bounds)])
         apart = np.linalg.norm(centres[self._geom_a] - centres[self._geom_b], axis=1) > self._near
-        return np.flatnonzero(~(np.isfinite(self._reach) & apart))
+        return np.flatnonzero(~(self._bounded & apart))
 
     def part_jacobians(self, contacts: ContactSet) -> sparse.csr_array:
         """The relative point Jacobians of :meth:`jacobians` stacked, (3m, nv), sparse.
 
         Each contact's rows hold only the columns of the one or two parts it touches (:mod:`~bhgrasp.sim.part_system`).
         """
-        parts, nv = self.parts, self.scene.nv
+        nv = self.scene.nv
         rows, columns, values = [], [], []
-        identity = _IDENTITY3
-        for i, k in enumerate(contacts.pair):
-            joint_b, joint_a = int(self._joint_b[k]), int(self._joint_a[k])
-            sides = []
-            if joint_b:
-                sides.append((parts.point_jacobian(joint_b, pin.SE3(identity, contacts.local_b[i])), 1.0))
-            if joint_a:
-                placement = pin.SE3(identity, parts.placement(joint_a).actInv(contacts.point[i]))
-                sides.append((parts.point_jacobian(joint_a, placement), -1.0))
-            for (part_columns, jacobian), sign in sides:
-                block = sign * jacobian[:3]
-                index = np.arange(part_columns.start, part_columns.stop)
-                rows.append(np.repeat(3 * i + np.arange(3), len(index)))
-                columns.append(np.tile(index, 3))
-                values.append(block.ravel())
+        for i, part_columns, block, sign in self._point_jacobians(contacts):
+            index = np.arange(part_columns.start, part_columns.stop)
+            rows.append(np.repeat(3 * i + np.arange(3), len(index)))
+            columns.append(np.tile(index, 3))
+            values.append((sign * block).ravel())
         if not rows:
             return sparse.csr_array((3 * len(contacts), nv))
         triplets = (np.concatenate(values), (np.concatenate(rows), np.concatenate(columns)))
