@@ -21,7 +21,7 @@ from bhgrasp.model.mount import (
     mounted,
 )
 from bhgrasp.model.objects import Box
-from bhgrasp.motion.pose_references import PoseMotion
+from bhgrasp.motion.pose_references import PoseMotion, PosePath
 from bhgrasp.motion.trajectories import Quintic
 from bhgrasp.motion.wrist import MountReference
 from bhgrasp.sim import Simulator
@@ -108,6 +108,25 @@ def test_mount_reference_follows_a_world_pose_motion(tilted) -> None:
         np.testing.assert_allclose((rates_plus - rates_minus) / 2e-6, accelerations, atol=1e-6)
     with pytest.raises(InputError, match="`pose` must be a Reference of size 6"):
         MountReference(Quintic(0.0, 1.0, 1.0), ORIGIN)
+
+
+def test_a_repeated_wrist_sample_is_the_computed_one_in_fresh_arrays() -> None:
+    """Before, after and between moves the pose and mount samples repeat the last call's: the same bits as a new
+    reference computes them (-0.0 kept apart from 0.0), and arrays the caller may change without changing the next."""
+    start = ORIGIN * mount_pose(COORDINATES)
+    moves = [([0.0, 0.0, -0.05, 0.0, 0.0, 0.3], 0.5), (np.zeros(6), 0.5), ([0.02, 0.0, 0.1, 0.0, 0.2, 0.0], 0.5)]
+    path = MountReference(PosePath(start, moves, delay=0.1), ORIGIN)
+    times = (0.0, 0.05, 0.3, 0.6, 0.7, 0.9, 0.9, 1.3, 1.7, 2.0, 0.05, 0.3)  # back in time too
+    for t in times:
+        kept = path(t)
+        fresh = MountReference(PosePath(start, moves, delay=0.1), ORIGIN)(t)
+        for a, b in zip(kept, fresh):
+            assert a.tobytes() == b.tobytes()
+            a[:] = np.nan  # the caller's copy
+    motion = PoseMotion(start, [0.1, 0.0, 0.0, 0.0, 0.0, 0.0], 1.0, delay=0.0)
+    minus, plus = motion(-0.0)[1], PoseMotion(start, [0.1, 0.0, 0.0, 0.0, 0.0, 0.0], 1.0)(0.0)[1]
+    assert minus.tobytes() == PoseMotion(start, [0.1, 0.0, 0.0, 0.0, 0.0, 0.0], 1.0)(-0.0)[1].tobytes()
+    assert motion(0.0)[1].tobytes() == plus.tobytes()
 
 
 @pytest.fixture(scope="module")

@@ -28,6 +28,8 @@ class MountReference(Reference):
         if not isinstance(origin, pin.SE3):
             raise InputError(f"`origin` must be a pinocchio.SE3, got {type(origin).__name__}")
         self.pose, self.origin = pose, pin.SE3(origin)
+        self._pose_sample = b""  # the last pose sample's bytes and its coordinates, kept: a wrist at rest repeats it
+        self._coordinates: Sample = ()
 
     @property
     def size(self) -> int:
@@ -35,8 +37,16 @@ class MountReference(Reference):
         return 6
 
     def __call__(self, t: float) -> Sample:
-        """Coordinates, their rates and accelerations at ``t`` [s]."""
+        """Coordinates, their rates and accelerations at ``t`` [s] (for a repeated pose sample: the last, copied)."""
         sample, twist, derivative = self.pose(t)
+        key = sample.tobytes() + twist.tobytes() + derivative.tobytes()
+        if key != self._pose_sample:
+            self._coordinates, self._pose_sample = self._convert(sample, twist, derivative), key
+        c, c_dot, c_dd = self._coordinates
+        return c.copy(), c_dot.copy(), c_dd.copy()
+
+    def _convert(self, sample: np.ndarray, twist: np.ndarray, derivative: np.ndarray) -> Sample:
+        """The mount coordinates, rates and accelerations of a pose sample (class docstring)."""
         rotation_t = self.origin.rotation.T
         local = self.origin.actInv(pin.SE3(pin.exp3(sample[3:]), sample[:3]))
         c = mount_coordinates(local)
