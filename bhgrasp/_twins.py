@@ -49,6 +49,11 @@ KERNELS = (
         "tests/test_batch.py::test_a_batch_reproduces_separate_runs_bit_for_bit",
     ),
     Twin(
+        "BarrettDrive",
+        "bhgrasp.sim.actuation.BarrettActuation",
+        "tests/test_compiled_drive.py::test_the_mounted_hand_closes_is_pushed_and_opens_as_the_python_rules_step_it",
+    ),
+    Twin(
         "HandDynamics",
         "bhgrasp.model.hand_dynamics._slotine_li_torque_python",
         "tests/test_hand_kernels.py::test_slotine_li_torque_is_the_python_twin_to_the_bit",

@@ -78,15 +78,9 @@ void Batch::step(const Rows& tau_hand, const Drive& drive, double max_speed, dou
 }
 
 void Batch::set_barrett(const Barrett& barrett) {
-  if (barrett.nv_hand != nv_hand_ || barrett.damping.size() != nv_hand_ || barrett.friction.size() != nv_hand_ ||
-      barrett.lower.size() != nv_hand_)
-    throw std::invalid_argument("the Barrett model does not fit the scene's hand");
-  barrett_ = barrett;
-  barrett_drives_.clear();
-  for (int code = 0; code < 27 * 8; ++code) {  // TorqueSwitch code 9 m0 + 3 m1 + m2, then 27 x the lock bits
-    const int s = code % 27, l = code / 27;
-    barrett_drives_.push_back(barrett_drive(barrett_, {{s / 9, s / 3 % 3, s % 3, l / 4, l / 2 % 2, l % 2}}));
-  }
+  if (barrett.nv_hand != nv_hand_) throw std::invalid_argument("the Barrett model does not fit the scene's hand");
+  if (!barrett.direct.empty()) throw std::invalid_argument("a batch runs the Barrett hand's four motors alone");
+  barrett_ = std::make_unique<BarrettDrive>(barrett);
 }
 
 void Batch::set_modes(int env, const Modes& modes) {
@@ -98,24 +92,16 @@ void Batch::set_modes(int env, const Modes& modes) {
 }
 
 void Batch::step_barrett(const Rows& u, double max_speed, double max_penetration, int threads) {
-  if (barrett_drives_.empty()) throw std::logic_error("no Barrett model: call set_barrett first");
+  if (!barrett_) throw std::logic_error("no Barrett model: call set_barrett first");
   if (u.rows() != size() || u.cols() != 4) throw std::invalid_argument("u must be (environments, 4) motor torques");
+  const Vector none;
   parallel_for(size(), threads, [&](int i) {
     const auto e = static_cast<std::size_t>(i);
     if (divergences_[e].kind) return;  // frozen where it diverged
-    Modes& modes = modes_[e];
-    const MotorInputs inputs = u.row(i).transpose();
-    if (barrett_.self_locking)  // an idle motor's worm holds for the step (BarrettActuation.begin)
-      for (int finger = 0; finger < 3; ++finger)
-        if (inputs[finger + 1] == 0.0) modes[static_cast<std::size_t>(finger + 3)] = 1;
-    const int code = 9 * modes[0] + 3 * modes[1] + modes[2] + 27 * (4 * modes[3] + 2 * modes[4] + modes[5]);
-    const Drive& drive = barrett_drives_[static_cast<std::size_t>(code)];
-    StepResult result = engines_[e]->step(q_.row(i).transpose(), v_.row(i).transpose(),
-                                          barrett_torques(barrett_, modes, inputs), drive, memories_[e], max_speed,
-                                          max_penetration);
+    StepResult result = barrett_->step(*engines_[e], q_.row(i).transpose(), v_.row(i).transpose(),
+                                       u.row(i).transpose(), none, modes_[e], memories_[e], max_speed, max_penetration);
     divergences_[e] = result.divergence;
     if (result.divergence.kind) return;
-    barrett_update(barrett_, modes, result.q.head(nv_hand_), result.v.head(nv_hand_), inputs, result.drive, result.load);
     q_.row(i) = result.q.transpose();
     v_.row(i) = result.v.transpose();
     memories_[e] = std::move(result.memory);

@@ -57,8 +57,7 @@ class Batch {
   std::vector<Divergence> divergences_;
   Rows q_, v_;
   int nv_hand_ = 0;
-  Barrett barrett_;
-  std::vector<Drive> barrett_drives_;  // by code 9 m0 + 3 m1 + m2 + 27 (4 l0 + 2 l1 + l2) (empty: no Barrett model)
+  std::unique_ptr<BarrettDrive> barrett_;  // (null: no Barrett model)
   std::vector<Modes> modes_;
 };
 

@@ -87,6 +87,20 @@ void bind_simulation(nb::module_& m) {
       .def_prop_ro("nq", &Engine::nq)
       .def_prop_ro("nv", &Engine::nv);
 
+  nb::class_<BarrettDrive>(m, "BarrettDrive")
+      .def(nb::init<const Barrett&>(), "barrett"_a)
+      .def_prop_ro("inputs", &BarrettDrive::inputs)
+      .def(
+          "step",
+          [](const BarrettDrive& drive, Engine& engine, const Vector& q, const Vector& v, const Vector& u,
+             const Vector& extra, Modes modes, const Memory& memory, double max_speed, double max_penetration) {
+            StepResult result = drive.step(engine, q, v, u, extra, modes, memory, max_speed, max_penetration);
+            return std::make_pair(std::move(result), modes);
+          },
+          "engine"_a, "q"_a, "v"_a, "u"_a, "extra"_a, "modes"_a, "memory"_a, "max_speed"_a, "max_penetration"_a,
+          nb::call_guard<nb::gil_scoped_release>(),
+          "One step of `engine` under motor inputs u and extra torques in `modes`: (StepResult, the modes after).");
+
   nb::class_<Batch>(m, "Batch")
       .def(nb::init<const std::string&, const std::string&, const Settings&, int>(), "model"_a, "geometry"_a,
            "settings"_a, "size"_a)

@@ -87,15 +87,17 @@ struct Drive {
   BHGRASP_DRIVE(BHGRASP_DECLARE)
 };
 
-// The BH8-280's drive for the batch (bhgrasp.sim.actuation.BarrettActuation): hand joint indices of the spreads and
-// of each finger's proximal and distal joints, the motor : joint ratios, the motor torque clip [N m] (when
-// `saturate`), the TorqueSwitch's breakaway torque [N m], the motor damping [N m s/rad], the worms' forward
-// efficiency and self-locking, and per hand joint the passive damping, Coulomb friction and lower limit.
+// The BH8-280's drive (bhgrasp.sim.actuation.BarrettActuation): hand joint indices of the spreads and of each
+// finger's proximal and distal joints, the motor : joint ratios, the motor torque clip [N m] (when `saturate`), the
+// TorqueSwitch's breakaway torque [N m], the motor damping [N m s/rad], the worms' forward efficiency and
+// self-locking, per hand joint the passive damping, Coulomb friction and lower limit, and the joints driven directly
+// by inputs 4, 5, ... (e.g. a wrist mount's; none on a bare hand).
 #define BHGRASP_BARRETT(X)                                                                                      \
   X(int, nv_hand) X(int, spread_first) X(int, spread_second) X(FingerJoints, proximal) X(FingerJoints, distal)  \
   X(double, spread_ratio) X(double, proximal_ratio) X(double, distal_ratio) X(double, distal_alone_ratio)       \
   X(double, max_motor_torque) X(double, breakaway_torque) X(double, motor_damping) X(double, efficiency)         \
-  X(bool, saturate) X(bool, self_locking) X(Vector, damping) X(Vector, friction) X(Vector, lower)
+  X(bool, saturate) X(bool, self_locking) X(Vector, damping) X(Vector, friction) X(Vector, lower)        \
+  X(IntList, direct)
 struct Barrett {
   BHGRASP_BARRETT(BHGRASP_DECLARE)
 };

@@ -1,4 +1,5 @@
-"""Scenes several test modules share: the hand parked far away, two boxes meeting off centre, a box on an incline."""
+"""Scenes several test modules share: the hand parked far away, two boxes meeting off centre, a box on an incline;
+the Barrett drive under its Python rules."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import pinocchio as pin
 
 import bhgrasp as bh
 from bhgrasp.model.objects import Box, Plane
+from bhgrasp.sim.actuation import BarrettActuation
 from bhgrasp.sim.contact_law import SpringDamper
 
 G = 9.81  # [m/s^2]
@@ -46,3 +48,11 @@ def incline(mu: float = 0.3, theta: float = np.radians(30.0)) -> tuple[Box, Plan
     box = Box(size=(0.06, 0.05, 0.05), mass=0.2, friction=mu, pose=pin.SE3(pin.rpy.rpyToMatrix(0, theta, 0), rest))
     plane = Plane(normal=normal, offset=float(normal[0]), friction=mu, name="incline")
     return box, plane, SpringDamper(stiffness=1e4, damping=20.0, friction=mu)
+
+
+class PythonBarrettRules(BarrettActuation):
+    """The BH8-280's drive stepped by its Python rules on any engine: a subclass of BarrettActuation runs its hooks.
+
+    (The compiled Simulator runs ``BarrettActuation`` itself in C++, ``src/barrett.cpp``; this is its independent
+    truth.)
+    """

@@ -201,6 +201,24 @@ class BarrettActuation(Actuation):
         """Whether the finger worm drives self-lock."""
         return self.drive.self_locking
 
+    def parameters(self) -> tuple:
+        """What the drive's rules and terms depend on besides the modes (a key: its compiled copy follows a change)."""
+        drive = self.drive
+        return (
+            drive.breakaway_torque,
+            drive.motor_damping,
+            drive.efficiency,
+            drive.self_locking,
+            self.saturate,
+            self.damping.tobytes(),
+            self.friction.tobytes(),
+        )
+
+    def take(self, modes: tuple[int, ...]) -> None:
+        """Set the TorqueSwitch modes and worm locks from 6 integers (a compiled step's)."""
+        self.mode[:] = modes[:3]
+        self.locked[:] = modes[3:]
+
     def reset(self, q_hand: np.ndarray) -> None:
         """Re-arm every TorqueSwitch; every worm drive starts unlocked."""
         self.mode[:] = 0

@@ -3,9 +3,13 @@
 The C++ step (``src/engine.cpp``) mirrors the Python one line for line: contact detection with coal on every
 collision pair, contact patches and per-point depths, matching to the last step's contacts, the stick-slip
 linearisation with its active set, joint stops, springs, damping and friction, the implicit-midpoint gyroscopic
-torque, and the implicit, semi-implicit and RK4 integrators.  The actuation model stays in Python: each step
-passes its current transmission and damping (:class:`~bhgrasp.sim.engine.DriveTerms`, built once per mode).
-``tests/test_compiled.py`` steps both engines in lockstep.
+torque, and the implicit, semi-implicit and RK4 integrators.  An actuation model stays in Python (each step passes
+its current transmission and damping, :class:`~bhgrasp.sim.engine.DriveTerms`, built once per mode), but for the
+BH8-280's (:class:`~bhgrasp.sim.actuation.BarrettActuation` itself; a subclass may change its rules and runs them in
+Python) the drive runs in the same C++ call as the step
+(:meth:`CompiledEngine.step_barrett`, ``src/barrett.cpp``: its worm locks, gears, TorqueSwitch and the drive of each
+mode).  ``tests/test_compiled.py`` steps both engines in lockstep; ``tests/test_compiled_drive.py`` holds the
+compiled drive to the Python actuation's rules bit for bit.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ if TYPE_CHECKING:
     from bhgrasp.sim.actuation import Actuation, BarrettActuation
 
 _INTEGRATORS = {"implicit": 0, "semi-implicit": 1, "rk4": 2}
+_NONE = np.zeros(0)  # no extra torques
 
 
 def core_module():
@@ -80,6 +85,36 @@ class CompiledEngine:
         return StepResult(
             result.q, result.v, result.contacts, result.drive, result.memory, result.divergence, result.load
         )
+
+    def barrett(self, actuation: BarrettActuation):
+        """A Barrett actuation's drive as C++ builds and steps it (its parameters now; its modes are a step's)."""
+        return core_module().BarrettDrive(barrett_of(actuation))
+
+    def step_barrett(
+        self,
+        drive: Any,
+        q: np.ndarray,
+        v: np.ndarray,
+        u: np.ndarray,
+        extra: np.ndarray | None,
+        modes: tuple[int, ...],
+        memory: Any,
+    ) -> tuple[StepResult, tuple[int, ...]]:
+        """One step under a Barrett drive of :meth:`barrett` in ``modes`` (6: TorqueSwitch, then worm locks).
+
+        ``u``: the motor torques, then one per directly driven joint; ``extra``: joint torques (nv_hand) or
+        generalized forces (nv) added to the drive's, or ``None``.  The C++ call locks an idle motor's worm for the
+        step, applies the gears (clipped inputs if ``saturate``), steps in that mode's drive and applies the
+        TorqueSwitch and lock rules (:class:`~bhgrasp.sim.actuation.BarrettActuation`'s ``begin``,
+        ``joint_torques`` and ``update``).  Returns the step and the modes after it (before it: if it diverged).
+        """
+        result, after = drive.step(
+            self._engine, q, v, u, _NONE if extra is None else extra, modes, memory, *self._limits
+        )
+        step = StepResult(
+            result.q, result.v, result.contacts, result.drive, result.memory, result.divergence, result.load
+        )
+        return step, after
 
     def detect(self, q: np.ndarray, memory: ContactMemory) -> ContactSet:
         """The contacts at ``q`` matched to ``memory`` (no forces)."""
@@ -178,7 +213,7 @@ def drive_of(actuation: Actuation):
 
 
 def barrett_of(actuation: BarrettActuation):
-    """A Barrett actuation's parameters as the C++ ``Barrett`` of the batch (its modes are per environment)."""
+    """A Barrett actuation's parameters as the C++ ``Barrett`` (a Simulator's step and the batch's; modes apart)."""
     from bhgrasp.barrett import transmission as model
 
     drive = actuation.drive
@@ -202,6 +237,7 @@ def barrett_of(actuation: BarrettActuation):
         damping=actuation.damping,
         friction=actuation.friction,
         lower=actuation.hand.lower,
+        direct=list(drive.direct),
     )
 
 

@@ -37,7 +37,7 @@ import numpy as np
 from bhgrasp.data import ContactMemory, ContactSet, SimulatedState, State
 from bhgrasp.errors import FrozenSettingError, InputError
 from bhgrasp.sim import run_loop
-from bhgrasp.sim.actuation import Actuation, FullyActuated
+from bhgrasp.sim.actuation import Actuation, BarrettActuation, FullyActuated
 from bhgrasp.sim.compiled import CompiledEngine
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.engine import DriveTerms, drive_key
@@ -142,6 +142,7 @@ class Simulator:
         engine = kind(scene, layout, law, settings, MATCH_RADIUS)
         values = {"scene": scene, "law": law, "actuation": actuation, "settings": settings, "layout": layout}
         values |= {"engine": engine, "_drives": {}, "_lock": threading.Lock(), "_modal": _modal(actuation)}
+        values["_barrett"] = {} if kind is CompiledEngine and type(actuation) is BarrettActuation else None
         for name, value in values.items():
             object.__setattr__(self, name, value)
 
@@ -255,6 +256,25 @@ class Simulator:
         self, state: State, u: np.ndarray, disturbance: np.ndarray | None, memory: Any
     ) -> tuple[State, StepInfo]:
         """:meth:`step` with the input, disturbance and state checked (under the lock)."""
+        if self._barrett is not None:  # the BH8-280's drive in the compiled step's call
+            result = self._step_barrett(state, u, disturbance, memory)
+        else:
+            result = self._step_actuated(state, u, disturbance, memory)
+        t = round(state.t / self.settings.dt + 1) * self.settings.dt  # k dt exactly: no accumulated rounding
+        source = getattr(state, "_source", None)
+        start = source.start if isinstance(source, StepOutput) and source.simulator is self else ()
+        if result.divergence.kind:
+            contacts = self.engine.contact_set(result.contacts) if result.divergence.kind == 4 else None
+            raise describe_divergence(t, result.divergence, self.settings, self.scene, start, contacts)
+        if self._modal and self._barrett is None:
+            nqh, nvh = self.scene.nq_hand, self.scene.nv_hand
+            self.actuation.update(result.q[:nqh], result.v[:nvh], u, result.drive, result.load)
+        return self._state(t, result.q, result.v, result.contacts, result.memory, start), StepInfo(
+            result.contacts, result.drive, self.engine
+        )
+
+    def _step_actuated(self, state: State, u: np.ndarray, disturbance: np.ndarray | None, memory: Any) -> Any:
+        """The engine's step under the actuation's joint torques and drive in the state's modes."""
         q, v = state.scene_q, state.scene_v
         actuation, nqh, nvh = self.actuation, self.scene.nq_hand, self.scene.nv_hand
         if self._modal:  # the step depends only on the state's actuation modes, not the last run's
@@ -267,18 +287,24 @@ class Simulator:
             tau_hand = disturbance
         elif disturbance is not None:
             tau_hand = tau_hand + disturbance
-        result = self.engine.step(q, v, tau_hand, self._drive(), memory)
-        t = round(state.t / self.settings.dt + 1) * self.settings.dt  # k dt exactly: no accumulated rounding
-        source = getattr(state, "_source", None)
-        start = source.start if isinstance(source, StepOutput) and source.simulator is self else ()
-        if result.divergence.kind:
-            contacts = self.engine.contact_set(result.contacts) if result.divergence.kind == 4 else None
-            raise describe_divergence(t, result.divergence, self.settings, self.scene, start, contacts)
-        if self._modal:
-            actuation.update(result.q[:nqh], result.v[:nvh], u, result.drive, result.load)
-        return self._state(t, result.q, result.v, result.contacts, result.memory, start), StepInfo(
-            result.contacts, result.drive, self.engine
+        return self.engine.step(q, v, tau_hand, self._drive(), memory)
+
+    def _step_barrett(self, state: State, u: np.ndarray, disturbance: np.ndarray | None, memory: Any) -> Any:
+        """The compiled step with the Barrett drive in the same call, from the state's modes.
+
+        The actuation takes the modes after it, as :meth:`~bhgrasp.sim.actuation.BarrettActuation.update` leaves them.
+        """
+        actuation = self.actuation
+        key = actuation.parameters()
+        drive = self._barrett.get(key)
+        if drive is None:
+            self._barrett.clear()
+            drive = self._barrett[key] = self.engine.barrett(actuation)
+        result, modes = self.engine.step_barrett(
+            drive, state.scene_q, state.scene_v, u, disturbance, barrett_modes(state.actuation_modes), memory
         )
+        actuation.take(modes)
+        return result
 
     def _drive(self) -> Any:
         """The actuation's terms in its current mode, as the engine takes them (built once for each mode)."""
@@ -290,6 +316,20 @@ class Simulator:
 
     # ------------------------------------------------------------------ runs
     run = run_loop.run
+
+
+def barrett_modes(flags: np.ndarray | None) -> tuple[int, ...]:
+    """A state's Barrett flags as the compiled drive takes them: 6 integers.
+
+    As ``BarrettActuation.restore`` reads them: none, re-armed and unlocked; 3 values, unlocked.
+    """
+    if flags is None or len(flags) == 0:
+        return (0, 0, 0, 0, 0, 0)
+    values = flags.tolist()
+    if len(values) not in (3, 6) or any(value not in (0, 1, 2) for value in values[:3]):
+        raise InputError(f"Barrett modes must be 3 TorqueSwitch values in (0, 1, 2) and 3 worm locks, got {values}")
+    locks = [1 if lock else 0 for lock in values[3:6]] if len(values) == 6 else [0, 0, 0]
+    return (int(values[0]), int(values[1]), int(values[2]), *locks)
 
 
 def _modal(actuation: Actuation) -> bool:
