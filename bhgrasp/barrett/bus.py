@@ -10,6 +10,7 @@ mount's joints).  :class:`~bhgrasp.barrett.commands.BarrettDriver` adds libbarre
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -141,30 +142,46 @@ class PuckBus(Controller):
 
     # --- the controller ---
     def __call__(self, t: float, state: State) -> np.ndarray:
-        """Motor torques [N m] (SPREAD, F1, F2, F3, then zeros) for the sensed ``state`` at ``t`` [s]."""
-        self._read(state)
+        """Motor torques [N m] (SPREAD, F1, F2, F3, then zeros) for the sensed ``state`` at ``t`` [s].
+
+        The encoders are read (from ``state``) when a puck ticks or a command or a homing takes them; between the
+        pucks' ticks the output holds.
+        """
+        self.readout.sensed = state
+        fresh = False  # whether self._counts and self._speeds are this state's
         self._run_script(t)
-        for name, args, kwargs in self._pending:
-            self._apply(name, args, kwargs["digits"])
-        self._pending = []
+        changed = bool(self._pending) or "puck_modes" not in self.log  # the log: each run's first call, then changes
+        if self._pending:
+            self._read(state)
+            fresh = True
+            for name, args, kwargs in self._pending:
+                self._apply(name, args, kwargs["digits"])
+            self._pending = []
         spread = DIGITS.index("SPREAD")
         if self._home_spread and all(self.pucks[i].done() for i in range(spread)):
+            if not fresh:
+                self._read(state)
+                fresh = True
             self.pucks[spread].home(self._counts[spread])  # libbarrett: the spread homes once the fingers are done
-            self._home_spread = False
-        ticks = 1.0 if self._last_tick is None else np.floor((t - self._last_tick) / fw.PERIOD + 1e-9)
+            self._home_spread, changed = False, True
+        ticks = 1.0 if self._last_tick is None else float(math.floor((t - self._last_tick) / fw.PERIOD + 1e-9))
         if ticks >= 1.0:
+            if not fresh:
+                self._read(state)
             self._last_tick = t if self._last_tick is None else self._last_tick + ticks * fw.PERIOD
             torques = [p.update(c, s, ticks) for p, c, s in zip(self.pucks, self._counts, self._speeds)]
             self._u[INPUT] = torques
             self._rezero()
-        self.log["puck_modes"] = np.array([float(p.mode) for p in self.pucks])
-        self.log["motor_torques"] = self._u[INPUT].copy()
+            changed = True
+        if changed:
+            self.log["puck_modes"] = np.array([float(p.mode) for p in self.pucks])
+            self.log["motor_torques"] = self._u[INPUT].copy()
         return self._u.copy()
 
     def _read(self, state: State) -> None:
+        """The motor encoders [counts] and speeds [counts/ms] at ``state``."""
         v = np.asarray(state.v, dtype=float)
         d = self.drive
-        self.readout.sensed = state
         self._counts = self.readout.motor_counts(state.q)
         self._speeds = fw.COUNTS_PER_RAD * motor_angles(v[d.proximal], v[d.distal], v[d.spread[0]]) * 1e-3  # /ms
 
