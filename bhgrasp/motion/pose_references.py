@@ -38,7 +38,8 @@ class PoseMotion(Reference):
         self.start = pin.SE3(start)
         self.offset = as_vector(offset, "offset", 6)
         self.duration, self.delay = as_positive(duration, "duration"), as_real(delay, "delay")
-        self._blend: tuple[float, float] | None = None  # the blend s (and its sign) of the last sample, kept in:
+        self._pause = not self.offset.any()
+        self._blend: tuple[float, ...] | None = None  # what the last sample is a function of, and the sample
         self._sample: Sample = ()
 
     @property
@@ -49,14 +50,18 @@ class PoseMotion(Reference):
     def __call__(self, t: float) -> Sample:
         """Pose (x, log R), twist (v, omega) and its derivative at time ``t`` [s].
 
-        The sample is a function of the blend s alone: before and after the move (s = 0 or 1) it is the last one's
-        values, copied, not computed again.
+        The sample is a function of the blend s alone (before and after the move s is 0 or 1), and a pause's (a zero
+        offset) of the signs of the blend and its rates alone (its products are signed zeros): a repeated one is the
+        last call's, copied, not computed again.
         """
         s = min(max((time_of(t) - self.delay) / self.duration, 0.0), 1.0)  # the blend of Quintic(0, 1, ...), in floats
-        key = (s, math.copysign(1.0, s))  # -0.0 and 0.0 differ in the sample's bits
+        blend, rate, curvature = minimum_jerk(s)
+        rate, curvature = rate / self.duration, curvature / (self.duration * self.duration)
+        if self._pause:
+            key = (math.copysign(1.0, blend), math.copysign(1.0, rate), math.copysign(1.0, curvature))
+        else:
+            key = (s, math.copysign(1.0, s))  # -0.0 and 0.0 differ in the sample's bits
         if key != self._blend:
-            blend, rate, curvature = minimum_jerk(s)
-            rate, curvature = rate / self.duration, curvature / (self.duration * self.duration)
             rotation = pin.exp3(blend * self.offset[3:]) @ self.start.rotation
             position = np.concatenate((self.start.translation + blend * self.offset[:3], pin.log3(rotation)))
             self._sample, self._blend = (position, rate * self.offset, curvature * self.offset), key
