@@ -59,13 +59,31 @@ class Reach:
             ]
             for finger in self.hand.fingers
         }
+        objects = self.geometry.geometryObjects
+        self._links = {
+            f: [(i, objects[i].geometry, objects[i].name) for i in found] for f, found in self.shapes.items()
+        }
+        # configuration(): every joint but the fingers' at its place, and the angles that keep the fingers' in range
+        self._template = hand.neutral()
+        self._template[self._spread] = spread
+        fingers = self._proximal + self._distal
+        rest = np.setdiff1d(np.arange(hand.nq), fingers)
+        self._template_in_range = bool(
+            (self._template[rest] >= self._lower[rest]).all() and (self._template[rest] <= self._upper[rest]).all()
+        )
+        self._range = (
+            float(self._lower[self._proximal].max()),
+            float(self._upper[self._proximal].min()),
+            float(self._lower[self._distal].max()),
+            float(self._upper[self._distal].min()),
+        )
 
     def distance(self, finger: str, angle: float, centre: np.ndarray, shape: coal.ShapeBase | None = None) -> float:
         """Distance [m] from the finger's links to the object at ``centre`` with every finger at ``angle``.
 
         ``shape``: another shape placed at ``centre`` (axes as the object's) instead of the object.
         """
-        return self.nearest(finger, angle, centre, shape)[0]
+        return self._gaps(finger, angle, centre, shape, point=False)[0]
 
     def nearest(
         self, finger: str, angle: float, centre: np.ndarray, shape: coal.ShapeBase | None = None
@@ -74,19 +92,28 @@ class Reach:
 
         (distance [m], the link's shape name, the nearest point on the object [m], hand frame).
         """
+        return self._gaps(finger, angle, centre, shape, point=True)
+
+    def _gaps(
+        self, finger: str, angle: float, centre: np.ndarray, shape: coal.ShapeBase | None, point: bool
+    ) -> tuple[float, str, np.ndarray]:
+        """:meth:`nearest`; the point on the object is read only if ``point`` (else zeros)."""
         q = self.configuration(angle)
         pin.updateGeometryPlacements(self.hand.model, self.model_data, self.geometry, self.data, q)
         placement = coal.Transform3s(self.axes, centre)
         shape = self.shape if shape is None else shape
-        nearest = (np.inf, "", np.zeros(3))
-        for i in self.shapes[finger]:
+        least, nearest, where = np.inf, "", None
+        placements = self.data.oMg
+        for i, link, name in self._links[finger]:
             result = coal.DistanceResult()
-            link = self.geometry.geometryObjects[i]
-            frame = coal_transform(self.data.oMg[i])
-            gap = coal.distance(link.geometry, frame, shape, placement, self._request, result)
-            if gap < nearest[0]:
-                nearest = (gap, link.name, np.asarray(result.getNearestPoint2()))
-        return nearest
+            frame = placements[i]
+            gap = coal.distance(
+                link, coal.Transform3s(frame.rotation, frame.translation), shape, placement, self._request, result
+            )
+            if gap < least:
+                least, nearest = gap, name
+                where = np.asarray(result.getNearestPoint2()) if point else None
+        return least, nearest, np.zeros(3) if where is None else where
 
     def open_distance(self, shape: coal.ShapeBase, where: coal.Transform3s) -> float:
         """The least distance [m] from the open hand (every finger at ``opening``) to ``shape`` at ``where``.
@@ -107,18 +134,18 @@ class Reach:
         As ``hand.configuration(...)`` builds it, without its per-joint checks (the search calls it ~10^5 times a
         trial); outside the joint limits it raises as that does.
         """
-        q = self.hand.neutral()
-        q[self._spread] = self.spread
-        q[self._proximal] = angle
-        q[self._distal] = angle / 3
-        if not ((q >= self._lower).all() and (q <= self._upper).all()):  # the checked call names the joint, raises
-            fingers = self.hand.fingers
+        low, high, distal_low, distal_high = self._range
+        if not (self._template_in_range and low <= angle <= high and distal_low <= angle / 3 <= distal_high):
+            fingers = self.hand.fingers  # the checked call names the joint, raises
             return self.hand.configuration(
                 F1_spread=self.spread,
                 F2_spread=self.spread,
                 **{f"{f}_proximal": angle for f in fingers},
                 **{f"{f}_distal": angle / 3 for f in fingers},
             )
+        q = self._template.copy()
+        q[self._proximal] = angle
+        q[self._distal] = angle / 3
         return q
 
     def first_touch(self, finger: str, centre: np.ndarray) -> tuple[str, np.ndarray] | None:

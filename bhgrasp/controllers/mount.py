@@ -37,6 +37,7 @@ from bhgrasp.motion.trajectories import Reference
 
 SERVO_KP = (2e4, 2e4, 2e4, 100.0, 100.0, 100.0)  # [N/m, N m/rad]: stiff, inside the 1 kHz loop's stability
 SERVO_KD = (300.0, 300.0, 300.0, 1.0, 1.0, 1.0)  # [N s/m, N m s/rad]
+_MOUNT_ROWS = np.zeros(6)  # the finger hold's torques on the mount rows
 
 
 class MountServo(Controller):
@@ -101,7 +102,8 @@ class MountServo(Controller):
         else:  # hold the fingers where they were, against gravity, their loads and the mount's acceleration
             if self._hold is None:
                 self._hold = q[6:].copy()
-            tau = model - np.r_[np.zeros(6), self.finger_kp * (q[6:] - self._hold) + self.finger_kd * v[6:]]
+            hold = self.finger_kp * (q[6:] - self._hold) + self.finger_kd * v[6:]
+            tau = model - np.concatenate((_MOUNT_ROWS, hold))
         load = self.sensing.reaction_torques(state)[:6] if self.compensate_load else 0.0
         tau[:6] = model[:6] - load - self.kp * (q[:6] - c_d) - self.kd * (v[:6] - c_dot_d)
         self.log["mount_error"], self.log["mount_reference"] = q[:6] - c_d, c_d
