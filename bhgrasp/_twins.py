@@ -54,6 +54,11 @@ KERNELS = (
         "tests/test_compiled_drive.py::test_the_mounted_hand_closes_is_pushed_and_opens_as_the_python_rules_step_it",
     ),
     Twin(
+        "WristServo",
+        "bhgrasp.controllers.mount.MountServo",
+        "tests/test_wrist_servo.py::test_the_compiled_servo_is_its_python_twin_to_round_off",
+    ),
+    Twin(
         "HandDynamics",
         "bhgrasp.model.hand_dynamics._slotine_li_torque_python",
         "tests/test_hand_kernels.py::test_slotine_li_torque_is_the_python_twin_to_the_bit",

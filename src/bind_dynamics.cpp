@@ -1,5 +1,5 @@
 // Bindings of the dynamics family: the hand's Slotine-Li and contact torques, a finger's workspace terms, the
-// object regressor.
+// object regressor, the wrist servo of a mounted hand.
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/array.h>
@@ -11,6 +11,7 @@
 #include "dynamics.hpp"
 #include "smc_law.hpp"
 #include "workspace.hpp"
+#include "wrist_servo.hpp"
 
 #include "bindings.hpp"
 
@@ -39,6 +40,47 @@ void bind_dynamics(nb::module_& m) {
           },
           "base_rotation"_a, "base_translation"_a, "q"_a, "joints"_a, "points"_a, "forces"_a)
       .def_prop_ro("nv", &HandDynamics::nv);
+
+  using Rows6 = Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>;
+  nb::class_<WristServo>(m, "WristServo")
+      .def(
+          "__init__",
+          [](WristServo* servo, const std::string& model, const Eigen::Vector3d& gravity,
+             const std::vector<Eigen::Matrix3d>& rotations, const std::vector<Eigen::Vector3d>& translations,
+             const Rows6& offsets, const std::vector<double>& durations, const std::vector<double>& delays,
+             const Eigen::Matrix3d& origin_rotation, const Eigen::Vector3d& origin_translation, const Vector6& kp,
+             const Vector6& kd, bool hold_fingers, double finger_kp, double finger_kd) {
+            const std::size_t n = rotations.size();
+            if (translations.size() != n || static_cast<std::size_t>(offsets.rows()) != n || durations.size() != n ||
+                delays.size() != n)
+              throw std::invalid_argument("one rotation, translation, offset, duration and delay per move");
+            std::vector<PoseMove> moves;
+            for (std::size_t i = 0; i < n; ++i)
+              moves.push_back({rotations[i], translations[i], offsets.row(static_cast<Eigen::Index>(i)).transpose(),
+                               durations[i], delays[i]});
+            new (servo) WristServo(model, gravity, std::move(moves), origin_rotation, origin_translation, kp, kd,
+                                   hold_fingers, finger_kp, finger_kd);
+          },
+          "model"_a, "gravity"_a, "rotations"_a, "translations"_a, "offsets"_a, "durations"_a, "delays"_a,
+          "origin_rotation"_a, "origin_translation"_a, "kp"_a, "kd"_a, "hold_fingers"_a, "finger_kp"_a, "finger_kd"_a)
+      .def(
+          "torques",
+          [](WristServo& servo, double t, double held, const Eigen::Ref<const Eigen::VectorXd>& q,
+             const Eigen::Ref<const Eigen::VectorXd>& v) {
+            const Eigen::VectorXd& tau = servo.torques(t, held, q, v);
+            return std::make_tuple(Eigen::VectorXd(tau), Vector6(servo.mount_reference()), Vector6(servo.mount_error()));
+          },
+          "t"_a, "held"_a, "q"_a, "v"_a,
+          "(joint torques, the reference c_d, the error c - c_d) at t [s]; held: where the path stopped (NaN: never)")
+      .def(
+          "reference",
+          [](const WristServo& servo, double t, double held) {
+            Vector6 c, c_dot, c_dd;
+            servo.reference(t, held, c, c_dot, c_dd);
+            return std::make_tuple(c, c_dot, c_dd);
+          },
+          "t"_a, "held"_a)
+      .def("reset", &WristServo::reset);
 
   nb::class_<WorkspaceTerms>(m, "WorkspaceTerms")  // the fields of bhgrasp.controllers._workspace_terms._Workspace
       .def_ro("singular", &WorkspaceTerms::singular).def_ro("position", &WorkspaceTerms::position)

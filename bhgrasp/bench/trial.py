@@ -130,7 +130,7 @@ class BenchController:
     def __init__(self, trial: Trial, hand: bh.Hand, path: MountReference) -> None:
         self.trial, self.hand = trial, hand
         self.path = HeldReference(path)
-        self.servo = MountServo(hand, self.path, fingers=lambda t, s: np.zeros(hand.nv), compensate_load=False)
+        self.servo = MountServo(hand, self.path, fingers="zero", compensate_load=False)
         self.spread = [hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]
         self.place_from = HELD_AT + 6 * SHAKE_TIME  # the place's descent starts
         self.place_at = self.place_from + 1.0  # open here, or where the stand takes the object's weight first

@@ -15,7 +15,15 @@ against: a gain-one loop that oscillates): ``compensate_load=False`` leaves the 
 a support (:mod:`~bhgrasp.bench`).  The finger rows are the finger controller's, or by default
 the fingers' rows of the same
 inverse dynamics plus a joint PD that holds them still (a finger under gravity compensation alone swings when the
-wrist brakes: 0.8 rad on a 10 cm lift in 0.5 s).
+wrist brakes: 0.8 rad on a 10 cm lift in 0.5 s), or ``"zero"``: zero on the finger rows, for a hand whose fingers
+another input drives (e.g. the BH8-280's pucks, :class:`~bhgrasp.barrett.commands.BarrettDriver`).
+
+Two engines: ``"compiled"`` runs a call in one call of ``bhgrasp._core.WristServo`` (``src/wrist_servo.cpp``,
+:mod:`bhgrasp.controllers._wrist_kernel`) for a servo on a pose path (a
+:class:`~bhgrasp.motion.wrist.MountReference` of a :class:`~bhgrasp.motion.pose_references.PosePath` or
+:class:`~bhgrasp.motion.pose_references.PoseMotion`, possibly in a :class:`~bhgrasp.motion.held.HeldReference`)
+without load feedforward, the fingers held or zero; ``"python"`` is the readable twin (``tests/test_wrist_servo.py``
+holds them together to round-off).
 """
 
 from __future__ import annotations
@@ -26,14 +34,16 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp._native import engine_name, required_core
 from bhgrasp._validation import as_vector
+from bhgrasp.controllers._wrist_kernel import CompiledWristServo, covers
 from bhgrasp.controllers.base import Controller, gain_vector
 from bhgrasp.data import State
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
 from bhgrasp.model.mount import MOUNT_JOINTS
-from bhgrasp.motion.trajectories import Reference
+from bhgrasp.motion.trajectories import Reference, time_of
 
 SERVO_KP = (2e4, 2e4, 2e4, 100.0, 100.0, 100.0)  # [N/m, N m/rad]: stiff, inside the 1 kHz loop's stability
 SERVO_KD = (300.0, 300.0, 300.0, 1.0, 1.0, 1.0)  # [N s/m, N m s/rad]
@@ -50,11 +60,12 @@ class MountServo(Controller):
         self,
         nominal: Hand,
         reference: Reference,
-        fingers: Callable[[float, State], Any] | None = None,
+        fingers: Callable[[float, State], Any] | str | None = None,
         kp: Any = SERVO_KP,
         kd: Any = SERVO_KD,
         finger_gains: tuple[float, float] = (1.0, 0.01),
         compensate_load: bool = True,
+        engine: str | None = None,
     ) -> None:
         """Set up the servo.
 
@@ -63,16 +74,26 @@ class MountServo(Controller):
             reference: Mount coordinates c_d(t) (size 6: x, y, z [m], yaw, pitch, roll [rad]).
             fingers: The finger controller, ``(t, state) -> tau`` (nv joint torques of the mounted hand; its mount
                 rows are replaced), or ``None``: the fingers hold the configuration of the first call (the finger
-                rows of the same inverse dynamics, plus a joint PD of ``finger_gains``; the PD takes their loads).
+                rows of the same inverse dynamics, plus a joint PD of ``finger_gains``; the PD takes their loads),
+                or ``"zero"``: zero torques on the finger rows.
             kp, kd: Servo gains per mount coordinate (scalar or six values) [N/m, N m/rad], [N s/m, N m s/rad].
             finger_gains: (kp [N m/rad], kd [N m s/rad]) of the finger hold when ``fingers`` is ``None``.
             compensate_load: Feed the sensed contact load forward on the mount rows (module docstring).
+            engine: ``None`` (default): the default engine (:func:`~bhgrasp._native.default_engine`) where the
+                compiled servo covers the set-up (module docstring), else the Python one; ``"compiled"`` (raises if
+                the core does not load or the set-up is not covered) or ``"python"``.
+
+        Raises:
+            InputError: A bad argument, or ``engine="compiled"`` with a set-up it does not cover.
+            CompiledEngineUnavailable: ``engine="compiled"`` but ``bhgrasp._core`` does not load.
         """
         super().__init__()
         if not isinstance(nominal, Hand) or nominal.joint_names[:6] != MOUNT_JOINTS:
             raise InputError(f"`nominal` must be a mounted hand (bhgrasp.model.mount.mounted(hand)), got {nominal!r}")
         if not isinstance(reference, Reference) or reference.size != 6:
             raise InputError(f"`reference` must be a Reference of size 6 (mount coordinates), got {reference!r}")
+        if not (fingers is None or fingers == "zero" or callable(fingers)):
+            raise InputError(f"`fingers` must be a controller (t, state) -> tau, None or 'zero', got {fingers!r}")
         self.nominal, self.reference, self.fingers = nominal, reference, fingers
         self.kp, self.kd = gain_vector(kp, 6, "kp"), gain_vector(kd, 6, "kd")
         self.finger_kp, self.finger_kd = finger_gains
@@ -80,10 +101,30 @@ class MountServo(Controller):
         self.compensate_load = bool(compensate_load)
         self._acceleration = np.zeros(nominal.nv)
         self._hold: np.ndarray | None = None
+        chosen, uncovered = engine_name(engine), covers(self)
+        if engine == "compiled" and uncovered:
+            raise InputError(f"engine='compiled' does not cover {uncovered}; pass engine='python' (or None)")
+        self._compiled = None
+        if chosen == "compiled" and not uncovered:
+            self._compiled = CompiledWristServo(self, required_core("the compiled wrist servo"))
+        self.engine = "python" if self._compiled is None else "compiled"
+
+    def __getstate__(self) -> dict:
+        """Copies and pickles rebuild the compiled servo (its finger hold is taken again at the next call)."""
+        return {**self.__dict__, "_compiled": None, "_rebuild": self._compiled is not None}
+
+    def __setstate__(self, state: dict) -> None:
+        """Restore a copy, building its own compiled servo if the original had one."""
+        rebuild = state.pop("_rebuild", False)
+        self.__dict__.update(state)
+        if rebuild:
+            self._compiled = CompiledWristServo(self, required_core("the compiled wrist servo"))
 
     def reset(self, state: State) -> None:
         """Reset the finger controller (or hold the fingers at ``state``'s configuration)."""
         self._hold = None
+        if self._compiled is not None:
+            self._compiled.reset()
         if hasattr(self.fingers, "reset"):
             self.fingers.reset(state)
 
@@ -91,10 +132,16 @@ class MountServo(Controller):
         """Joint torques [N m, N] of the mounted hand."""
         hand = self.nominal
         q, v = as_vector(state.q, "state.q", hand.nq), as_vector(state.v, "state.v", hand.nv)
+        if self._compiled is not None:
+            tau, c_d, error = self._compiled.torques(time_of(t), q, v)
+            self.log["mount_error"], self.log["mount_reference"] = error, c_d
+            return tau
         c_d, c_dot_d, c_dd_d = self.reference(t)
         self._acceleration[:6] = c_dd_d
         model = pin.rnea(hand.model, hand.data, q, v, self._acceleration)
-        if self.fingers is not None:
+        if self.fingers == "zero":
+            tau = np.zeros(hand.nv)
+        elif self.fingers is not None:
             tau = as_vector(self.fingers(t, state), "finger torques", hand.nv).copy()
             log = getattr(self.fingers, "log", None)
             if isinstance(log, dict):
