@@ -79,6 +79,8 @@ def test_the_mounted_hand_closes_is_pushed_and_opens_as_the_python_rules_step_it
         seen.update(enumerate(states[0].actuation_modes.tolist()))
     assert {mode for k, mode in seen if k < 3} == {0.0, 1.0, 2.0}  # armed, broken away, re-opening ...
     assert {mode for k, mode in seen if k >= 3} == {0.0, 1.0}  # ... the worms locked and unlocked
+    assert not states[0].actuation_modes.flags.writeable  # one read-only array per combination, shared by states
+    np.testing.assert_array_equal(states[0].actuation_modes, simulator.actuation.modes())
 
 
 @pytest.mark.parametrize("self_locking", [True, False])

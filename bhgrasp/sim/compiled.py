@@ -114,7 +114,7 @@ class CompiledEngine:
         step = StepResult(
             result.q, result.v, result.contacts, result.drive, result.memory, result.divergence, result.load
         )
-        return step, after
+        return step, tuple(after)
 
     def detect(self, q: np.ndarray, memory: ContactMemory) -> ContactSet:
         """The contacts at ``q`` matched to ``memory`` (no forces)."""

@@ -143,6 +143,7 @@ class Simulator:
         values = {"scene": scene, "law": law, "actuation": actuation, "settings": settings, "layout": layout}
         values |= {"engine": engine, "_drives": {}, "_lock": threading.Lock(), "_modal": _modal(actuation)}
         values["_barrett"] = {} if kind is CompiledEngine and type(actuation) is BarrettActuation else None
+        values |= {"_barrett_modes": {}, "_barrett_flags": {}}  # modes -> flags array, id(array) -> (array, modes)
         for name, value in values.items():
             object.__setattr__(self, name, value)
 
@@ -203,15 +204,19 @@ class Simulator:
         settings = self.settings
         return start_problems(self.scene, q, v, contacts, self.law, self.dt, self.max_penetration, settings.integrator)
 
-    def _state(self, t: float, q: Any, v: Any, contacts: Any, memory: Any, start: tuple = ()) -> SimulatedState:
+    def _state(
+        self, t: float, q: Any, v: Any, contacts: Any, memory: Any, start: tuple = (), modes: Any = None
+    ) -> SimulatedState:
         """The state at ``t`` with the engine's ``contacts`` and ``memory`` (converted when first read).
 
-        ``start``: the problems of the initial state its run began from (named if the run diverges).
+        ``start``: the problems of the initial state its run began from (named if the run diverges); ``modes``: its
+        actuation modes (default: the actuation's now).
         """
         scene = self.scene
         source = StepOutput(self, contacts, memory, start)
         sizes = (scene.nq_hand, scene.nv_hand)
-        return SimulatedState.lazy(t, q, v, self.actuation.modes(), source, sizes, self.layout.signature)
+        modes = self.actuation.modes() if modes is None else modes
+        return SimulatedState.lazy(t, q, v, modes, source, sizes, self.layout.signature)
 
     def check_state(self, state: State) -> State:
         """``state`` if this simulator can step it (see :func:`~bhgrasp.sim.state_check.check_state`).
@@ -257,9 +262,9 @@ class Simulator:
     ) -> tuple[State, StepInfo]:
         """:meth:`step` with the input, disturbance and state checked (under the lock)."""
         if self._barrett is not None:  # the BH8-280's drive in the compiled step's call
-            result = self._step_barrett(state, u, disturbance, memory)
+            result, modes = self._step_barrett(state, u, disturbance, memory)
         else:
-            result = self._step_actuated(state, u, disturbance, memory)
+            result, modes = self._step_actuated(state, u, disturbance, memory), None
         t = round(state.t / self.settings.dt + 1) * self.settings.dt  # k dt exactly: no accumulated rounding
         source = getattr(state, "_source", None)
         start = source.start if isinstance(source, StepOutput) and source.simulator is self else ()
@@ -269,7 +274,7 @@ class Simulator:
         if self._modal and self._barrett is None:
             nqh, nvh = self.scene.nq_hand, self.scene.nv_hand
             self.actuation.update(result.q[:nqh], result.v[:nvh], u, result.drive, result.load)
-        return self._state(t, result.q, result.v, result.contacts, result.memory, start), StepInfo(
+        return self._state(t, result.q, result.v, result.contacts, result.memory, start, modes), StepInfo(
             result.contacts, result.drive, self.engine
         )
 
@@ -289,10 +294,13 @@ class Simulator:
             tau_hand = tau_hand + disturbance
         return self.engine.step(q, v, tau_hand, self._drive(), memory)
 
-    def _step_barrett(self, state: State, u: np.ndarray, disturbance: np.ndarray | None, memory: Any) -> Any:
-        """The compiled step with the Barrett drive in the same call, from the state's modes.
+    def _step_barrett(
+        self, state: State, u: np.ndarray, disturbance: np.ndarray | None, memory: Any
+    ) -> tuple[Any, np.ndarray]:
+        """The compiled step with the Barrett drive in the same call, from the state's modes; and the modes after it.
 
         The actuation takes the modes after it, as :meth:`~bhgrasp.sim.actuation.BarrettActuation.update` leaves them.
+        Each combination of modes a step meets gets one read-only flags array, which the states share.
         """
         actuation = self.actuation
         key = actuation.parameters()
@@ -300,11 +308,18 @@ class Simulator:
         if drive is None:
             self._barrett.clear()
             drive = self._barrett[key] = self.engine.barrett(actuation)
-        result, modes = self.engine.step_barrett(
-            drive, state.scene_q, state.scene_v, u, disturbance, barrett_modes(state.actuation_modes), memory
-        )
-        actuation.take(modes)
-        return result
+        flags = state.actuation_modes
+        known = self._barrett_flags.get(id(flags))
+        modes = known[1] if known is not None and known[0] is flags else barrett_modes(flags)
+        result, after = self.engine.step_barrett(drive, state.scene_q, state.scene_v, u, disturbance, modes, memory)
+        actuation.take(after)
+        shared = self._barrett_modes.get(after)
+        if shared is None:
+            shared = actuation.modes()
+            shared.flags.writeable = False
+            self._barrett_modes[after] = shared
+            self._barrett_flags[id(shared)] = (shared, after)
+        return result, shared
 
     def _drive(self) -> Any:
         """The actuation's terms in its current mode, as the engine takes them (built once for each mode)."""
