@@ -59,6 +59,11 @@ KERNELS = (
         "tests/test_wrist_servo.py::test_the_compiled_servo_is_its_python_twin_to_round_off",
     ),
     Twin(
+        "TouchSearch",
+        "bhgrasp.bench.reach.Reach._touch",
+        "tests/test_touch_search.py::test_every_touch_angle_is_the_twins_to_the_bit",
+    ),
+    Twin(
         "HandDynamics",
         "bhgrasp.model.hand_dynamics._slotine_li_torque_python",
         "tests/test_hand_kernels.py::test_slotine_li_torque_is_the_python_twin_to_the_bit",

@@ -1,5 +1,5 @@
-// Bindings of the grasp family: sensed contacts per finger, contact frames, the grasp maps, the internal-force QP and
-// the compiled SMC-adaptive grasp law.
+// Bindings of the grasp family: sensed contacts per finger, contact frames, the grasp maps, the internal-force QP,
+// the compiled SMC-adaptive grasp law and the benchmark's touch search.
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/array.h>
@@ -12,6 +12,7 @@
 #include "grasp.hpp"
 #include "sensing.hpp"
 #include "smc_law.hpp"
+#include "touch_search.hpp"
 
 #include "bindings.hpp"
 
@@ -21,6 +22,13 @@ using namespace nb::literals;
 namespace bhgrasp {
 
 void bind_grasp(nb::module_& m) {
+  nb::class_<TouchSearch>(m, "TouchSearch")
+      .def(nb::init<const std::string&, const std::string&, int, std::vector<std::vector<int>>, const Eigen::VectorXd&,
+                    std::vector<int>, std::vector<int>, const Eigen::Matrix3d&>(),
+           "model"_a, "geometry"_a, "object"_a, "links"_a, "configuration"_a, "proximal"_a, "distal"_a, "axes"_a)
+      .def("apart", &TouchSearch::apart, "finger"_a, "angle"_a, "centre"_a)
+      .def("touch", &TouchSearch::touch, "finger"_a, "centre"_a, "opening"_a, "closed"_a,
+           nb::call_guard<nb::gil_scoped_release>());
   nb::class_<FingerSums>(m, "FingerSums")
       .def_ro("force", &FingerSums::force).def_ro("normal_force", &FingerSums::normal_force)
       .def_ro("normal", &FingerSums::normal).def_ro("count", &FingerSums::count)

@@ -16,8 +16,10 @@ import numpy as np
 import pinocchio as pin
 
 import bhgrasp as bh
+from bhgrasp._native import default_core
 from bhgrasp.bench.objects import BenchObject
 from bhgrasp.grasp.probes import coal_transform
+from bhgrasp.sim.geometry_text import geometry_text
 
 FLIP = pin.rpy.rpyToMatrix(np.pi, 0.0, 0.0)  # world <- palm-down hand: an upright object's axes in the hand frame
 # world <- palm-sideways hand (bench.side): the palm's normal (hand z) along world +x, F3 (hand y) up, F1 -> F2
@@ -71,6 +73,7 @@ class Reach:
         self._template_in_range = bool(
             (self._template[rest] >= self._lower[rest]).all() and (self._template[rest] <= self._upper[rest]).all()
         )
+        self._compiled = None  # the compiled touch search (False: none)
         self._range = (
             float(self._lower[self._proximal].max()),
             float(self._upper[self._proximal].min()),
@@ -160,12 +163,51 @@ class Reach:
         return link, self.axes.T @ (point - centre)
 
     def touch(self, finger: str, centre: np.ndarray) -> float:
-        """The first proximal angle [rad] at which ``finger`` touches (``closed`` if it never does), once per place."""
+        """The first proximal angle [rad] at which ``finger`` touches (``closed`` if it never does), once per place.
+
+        On the default engine the search runs in one compiled call (``src/touch_search.cpp``: the same Pinocchio and
+        coal calls as :meth:`_touch`, its twin, so the same angle to the bit).
+        """
         key = (finger, *map(float, centre))
         found = self._touches.get(key)
         if found is None:
-            found = self._touches[key] = self._touch(finger, centre)
+            search = self._search()
+            if search is None:
+                found = self._touch(finger, centre)
+            else:
+                point = np.array([float(x) for x in centre])
+                found = search.touch(self.hand.fingers.index(finger), point, self.opening, self.closed)
+            self._touches[key] = found
         return found
+
+    def _search(self):
+        """The compiled touch search (built at the first touch), or ``None``.
+
+        ``None``: the default engine is Python's, or an angle of the search is outside the joints' range (the twin
+        raises there, naming the joint).
+        """
+        if self._compiled is None:
+            core = default_core()
+            low, high, distal_low, distal_high = self._range
+            inside = all(
+                low <= angle <= high and distal_low <= angle / 3 <= distal_high for angle in (self.opening, self.closed)
+            )
+            if core is None or not (self._template_in_range and inside):
+                self._compiled = False
+            else:
+                scene = self.geometry.copy()  # the hand's shapes and the object's, on the universe
+                index = scene.addGeometryObject(pin.GeometryObject("reach_object", 0, pin.SE3.Identity(), self.shape))
+                self._compiled = core.TouchSearch(
+                    model=self.hand.model.saveToString(),
+                    geometry=geometry_text(scene),
+                    object=index,
+                    links=[self.shapes[finger] for finger in self.hand.fingers],
+                    configuration=self._template,
+                    proximal=self._proximal,
+                    distal=self._distal,
+                    axes=np.array(self.axes, dtype=float),
+                )
+        return self._compiled or None
 
     def _touch(self, finger: str, centre: np.ndarray) -> float:
         low, high = self.opening, self.closed
