@@ -21,8 +21,8 @@ and simulated as itself (its hull, or convex pieces if the hull exceeds it by mo
 - :data:`HELD_OUT_SET_3`, fixed before any of its trials ran, once the side pinch had been mended on the development set
   after the first two held-out sets were seen: a cube, a sponge 15 mm thick, a 1 kg spray bottle, three cans (one a
   mug's body), four balls of 26-70 mm;
-- :data:`MESH_SET`: the development set's objects simulated as meshes (each must end as its primitive does), and the
-  household mug and bottle that fit the hand's span.
+- :data:`MESH_SET` (:func:`mesh_set`, read at its first use): the development set's objects simulated as meshes
+  (each must end as its primitive does), and the household mug and bottle that fit the hand's span.
 
 Each is well under the hand's 2 kg per finger load limit (Barrett wiki, safety page).  A top-down grasp spans an
 object's width, not its height: widths up to 0.15 m and heights up to 0.30 m are accepted.
@@ -34,10 +34,13 @@ stand upright, box edges along the world axes.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import re
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, ClassVar
 
 import numpy as np
 import pinocchio as pin
@@ -244,20 +247,52 @@ HELD_OUT_SET_3 = (
     BenchObject("sphere", (0.027,), 0.03, "lemon"),
     BenchObject("sphere", (0.07,), 0.123, "mini soccer ball"),
 )
-# The development set simulated as meshes (each must end as its primitive does), and the household objects that fit
-# the hand's span (the bowl, banana and drill are wider than 0.15 m).
-MESH_SET = (
-    *(dataclasses.replace(item, name=f"{item.name} (mesh)", mesh=MESHED) for item in DEVELOPMENT_SET),
-    dataclasses.replace(BenchObject.parse("household:mug:0.118"), name="mug"),
-    dataclasses.replace(BenchObject.parse("household:bottle:0.3"), name="household bottle"),
-)
-SETS = {
-    "development": DEVELOPMENT_SET,
-    "held-out": HELD_OUT_SET,
-    "held-out-2": HELD_OUT_SET_2,
-    "held-out-3": HELD_OUT_SET_3,
-    "meshes": MESH_SET,
-}
+
+
+@functools.lru_cache(maxsize=1)
+def mesh_set() -> tuple[BenchObject, ...]:
+    """The mesh set: the development set simulated as meshes, and the household objects that fit the hand's span.
+
+    Each mesh of the development set must end as its primitive does; the bowl, banana and drill are wider than the
+    hand's 0.15 m.  Built at its first use (``MESH_SET``, ``SETS["meshes"]``): it reads the household meshes, and
+    importing trimesh to do so costs 0.4 s that a run of primitives need not pay.
+    """
+    return (
+        *(dataclasses.replace(item, name=f"{item.name} (mesh)", mesh=MESHED) for item in DEVELOPMENT_SET),
+        dataclasses.replace(BenchObject.parse("household:mug:0.118"), name="mug"),
+        dataclasses.replace(BenchObject.parse("household:bottle:0.3"), name="household bottle"),
+    )
+
+
+class _Sets(Mapping):
+    """The object sets by name; the mesh set built at its first use (:func:`mesh_set`)."""
+
+    _FIXED: ClassVar[dict[str, tuple[BenchObject, ...]]] = {
+        "development": DEVELOPMENT_SET,
+        "held-out": HELD_OUT_SET,
+        "held-out-2": HELD_OUT_SET_2,
+        "held-out-3": HELD_OUT_SET_3,
+    }
+
+    def __getitem__(self, name: str) -> tuple[BenchObject, ...]:
+        return mesh_set() if name == "meshes" else self._FIXED[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter((*self._FIXED, "meshes"))
+
+    def __len__(self) -> int:
+        return len(self._FIXED) + 1
+
+
+SETS: Mapping[str, tuple[BenchObject, ...]] = _Sets()
+
+
+def __getattr__(name: str) -> Any:
+    """``MESH_SET``: :func:`mesh_set`, built at its first use."""
+    if name == "MESH_SET":
+        return mesh_set()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "DEVELOPMENT_SET",
@@ -265,10 +300,10 @@ __all__ = [
     "HELD_OUT_SET_2",
     "HELD_OUT_SET_3",
     "KINDS",
-    "MESH_SET",
     "OBJECT_SET",
     "SETS",
     "BenchObject",
     "mesh_of",
+    "mesh_set",
     "planned_as",
 ]
