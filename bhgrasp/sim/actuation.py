@@ -144,6 +144,8 @@ class BarrettActuation(Actuation):
     """The BH8-280's 4 motors with spread coupling and TorqueSwitch breakaway (inputs: motor torques [N m]).
 
     On a mounted hand (:func:`~bhgrasp.model.mount.mounted`) the mount's joint torques follow the four motor torques.
+    On the compiled engine a Simulator steps this model's rules in C++ (``src/barrett.cpp``, in the step's own call;
+    ``tests/test_compiled_drive.py`` holds them to these hooks bit for bit); a subclass runs its hooks in Python.
     """
 
     FINGERS = ("F1", "F2", "F3")
