@@ -81,7 +81,10 @@ void barrett_update(const Barrett& barrett, Modes& modes, const Vector& q_hand, 
       mode = 0;
     }
   }
-  if (!barrett.self_locking) return;
+  if (!barrett.self_locking) {  // no worm holds after a step (BarrettTransmission.locks), whatever a state brought
+    modes[3] = modes[4] = modes[5] = 0;
+    return;
+  }
   const Vector torques = barrett_torques(barrett, modes, u);  // the pucks' torques through the gears
   for (int finger = 0; finger < 3; ++finger) {
     const auto f = static_cast<std::size_t>(finger);
@@ -129,9 +132,12 @@ StepResult BarrettDrive::step(Engine& engine, const Vector& q, const Vector& v, 
   for (std::size_t k = 0; k < 6; ++k)
     if (modes[k] < 0 || modes[k] > (k < 3 ? 2 : 1))
       throw std::invalid_argument("a TorqueSwitch mode is 0, 1 or 2 and a worm lock 0 or 1");
-  if (barrett_.self_locking)  // an idle motor's worm holds for the step (BarrettActuation.begin)
+  if (barrett_.self_locking) {  // an idle motor's worm holds for the step (BarrettActuation.begin)
     for (std::size_t finger = 0; finger < 3; ++finger)
       if (u[static_cast<Eigen::Index>(finger) + 1] == 0.0) modes[finger + 3] = 1;
+  } else {  // no worm holds: a state's locks mean nothing here (BarrettActuation.restore)
+    modes[3] = modes[4] = modes[5] = 0;
+  }
   const int code = 9 * modes[0] + 3 * modes[1] + modes[2] + 27 * (4 * modes[3] + 2 * modes[4] + modes[5]);
   Vector tau = barrett_torques(barrett_, modes, u);
   if (extra.size() > tau.size()) {  // generalized forces on the objects too: the hand's torques added to theirs

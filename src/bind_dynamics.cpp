@@ -80,7 +80,8 @@ void bind_dynamics(nb::module_& m) {
             return std::make_tuple(c, c_dot, c_dd);
           },
           "t"_a, "held"_a)
-      .def("reset", &WristServo::reset);
+      .def("reset", &WristServo::reset)
+      .def("hold", &WristServo::hold, "fingers"_a);
 
   nb::class_<WorkspaceTerms>(m, "WorkspaceTerms")  // the fields of bhgrasp.controllers._workspace_terms._Workspace
       .def_ro("singular", &WorkspaceTerms::singular).def_ro("position", &WorkspaceTerms::position)

@@ -103,6 +103,12 @@ void WristServo::reference(double t, double held, Vector6& c, Vector6& c_dot, Ve
   c_dd.tail<3>() = lu.solve(spin);
 }
 
+void WristServo::hold(const Eigen::VectorXd& fingers) {
+  if (fingers.size() != hold_.size()) throw std::invalid_argument("the hold needs one value per finger joint");
+  hold_ = fingers;
+  holding_ = true;
+}
+
 const Eigen::VectorXd& WristServo::torques(double t, double held, const Eigen::Ref<const Eigen::VectorXd>& q,
                                            const Eigen::Ref<const Eigen::VectorXd>& v) {
   if (q.size() != model_.nq || v.size() != model_.nv) throw std::invalid_argument("q or v of the wrong size");

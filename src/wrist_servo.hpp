@@ -46,6 +46,7 @@ class WristServo {
   void reference(double t, double held, Vector6& c, Vector6& c_dot, Vector6& c_dd) const;
 
   void reset() { holding_ = false; }  // the next call takes the fingers' hold
+  void hold(const Eigen::VectorXd& fingers);  // hold the fingers there (a copy's hold); std::invalid_argument on size
   const Vector6& mount_reference() const { return c_; }
   const Vector6& mount_error() const { return error_; }
   int nq() const { return model_.nq; }

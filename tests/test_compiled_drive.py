@@ -99,19 +99,44 @@ def test_a_bare_hand_follows_the_python_rules_and_their_parameters_as_they_chang
         if k == 300:  # a weaker clutch on both, and the pucks' clip
             for model in (actuation, truth.actuation):
                 model.drive.breakaway_torque, model.saturate = 0.2, True
+        if k == 1800:  # the worms' self-locking switched (the modes then have the other length)
+            for model in (actuation, truth.actuation):
+                model.drive.self_locking = not self_locking
         u = 1.3 * (close if k < 1400 else opening)
         steps = [sim.step(state, u) for sim, state in zip((simulator, truth), states)]
         assert_same_step(*steps)
         states = [step[0] for step in steps]
-    assert len(states[0].actuation_modes) == (6 if self_locking else 3)
+    assert len(states[0].actuation_modes) == (3 if self_locking else 6)
 
 
-def test_a_state_with_impossible_modes_is_refused_by_name() -> None:
+@pytest.mark.parametrize("self_locking", [True, False])
+@pytest.mark.parametrize("flags", [[1, 0, 0, 1, 0, 1], (2.0, 0.0, 1.0), np.array([0.0, 1.0, 0.0, 0.0, 1.0, 0.0])])
+def test_a_state_brings_its_modes_as_the_python_rules_take_them(self_locking: bool, flags) -> None:
+    """Any switch and lock a state carries, as a list, tuple or array (a hand without self-locking ignores the locks:
+    its worms hold nothing), as the Python rules take them."""
+    scenario = box_grasp(mass=0.3, actuation="barrett")
+    actuation = BarrettActuation(scenario.hand, self_locking=self_locking)
+    simulator = Simulator(
+        scenario.simulator.scene, dt=scenario.simulator.dt, contact=scenario.simulator.law, actuation=actuation
+    )
+    truth = twin(simulator, actuation)
+    start = dataclasses.replace(simulator.initial_state(scenario.q_start), actuation_modes=flags)
+    states = [start, start]
+    for _ in range(300):
+        steps = [sim.step(state, np.array([0.01, 0.02, 0.02, 0.02])) for sim, state in zip((simulator, truth), states)]
+        assert_same_step(*steps)
+        states = [step[0] for step in steps]
+
+
+def test_a_state_with_impossible_modes_is_refused_by_name_on_either_drive() -> None:
     scenario = box_grasp(mass=0.3, actuation="barrett")
     simulator = scenario.simulator
     assert type(simulator.actuation) is BarrettActuation
     state = simulator.initial_state(scenario.q_start)
-    for modes in ([3.0, 0.0, 0.0], [0.0, np.nan, 0.0, 0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]):
-        bad = dataclasses.replace(state, actuation_modes=np.array(modes))
-        with pytest.raises(InputError, match="Barrett modes must be 3 TorqueSwitch values"):
-            simulator.step(bad, np.zeros(4))
+    for stepper in (simulator, twin(simulator, simulator.actuation)):
+        for modes in ([3.0, 0.0, 0.0], [0.0, np.nan, 0.0, 0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0], [1]):
+            bad = dataclasses.replace(state, actuation_modes=np.array(modes))
+            with pytest.raises(InputError, match="Barrett modes must be 3 TorqueSwitch values"):
+                stepper.step(bad, np.zeros(4))
+        with pytest.raises(InputError, match="Barrett modes must be numbers"):
+            stepper.step(dataclasses.replace(state, actuation_modes=["armed", 0, 0]), np.zeros(4))

@@ -21,7 +21,7 @@ from bhgrasp.bench.reach import FLIP
 from bhgrasp.bench.trial import setup
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.data import State
-from bhgrasp.errors import InputError
+from bhgrasp.errors import FrozenSettingError, InputError
 from bhgrasp.model.mount import mounted
 from bhgrasp.motion.held import HeldReference
 from bhgrasp.motion.pose_references import PoseMotion, PosePath
@@ -151,12 +151,31 @@ def test_the_engines_cover_what_they_say_and_copies_keep_theirs() -> None:
         MountServo(hand, path, fingers=lambda t, s: np.zeros(hand.nv), compensate_load=False, engine="compiled")
     with pytest.raises(InputError, match="`fingers` must be a controller"):
         MountServo(hand, path, fingers="free")
-    servo = MountServo(hand, HeldReference(path), compensate_load=False)
-    state = random_state(hand, np.random.default_rng(6))
-    first = servo(0.4, state)
-    for twin in (copy.deepcopy(servo), pickle.loads(pickle.dumps(servo))):
-        assert twin.engine == "compiled"
-        twin.reset(state)
-        np.testing.assert_array_equal(twin(0.4, state), first)
+    rng = np.random.default_rng(6)
+    for engine in ("compiled", "python"):  # a copy made mid-run holds the fingers where the original holds them
+        servo = MountServo(hand, HeldReference(path), compensate_load=False, engine=engine)
+        servo(0.4, random_state(hand, rng))
+        later = random_state(hand, rng)
+        for twin in (copy.deepcopy(servo), pickle.loads(pickle.dumps(servo))):
+            assert twin.engine == engine
+            np.testing.assert_array_equal(twin(0.5, later), servo(0.5, later))
     with pytest.raises(InputError, match="`t` must be a finite"):
-        servo(float("nan"), state)
+        servo(float("nan"), later)
+
+
+def test_a_servo_and_its_path_are_fixed_once_built() -> None:
+    """Both engines read the set-up given when built (the compiled one copied it; the path keeps its last sample)."""
+    hand, path = random_path(np.random.default_rng(8))
+    servo = MountServo(hand, path, compensate_load=False)
+    with pytest.raises(FrozenSettingError, match="MountServo.kp cannot change"):
+        servo.kp = np.ones(6)
+    with pytest.raises(ValueError, match="read-only"):
+        servo.kd[0] = 1.0
+    motion = path.pose.segments[0]
+    with pytest.raises(ValueError, match="read-only"):
+        motion.offset[0] = 1.0
+    with pytest.raises(AttributeError):
+        path.origin = pin.SE3.Identity()
+    moved = motion.start
+    moved.translation[:] = 9.0  # a copy
+    assert not np.allclose(motion.start.translation, 9.0)

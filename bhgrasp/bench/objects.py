@@ -280,6 +280,9 @@ class _Sets(Mapping):
     def __iter__(self) -> Iterator[str]:
         return iter((*self._FIXED, "meshes"))
 
+    def __contains__(self, name: object) -> bool:
+        return name == "meshes" or name in self._FIXED
+
     def __len__(self) -> int:
         return len(self._FIXED) + 1
 

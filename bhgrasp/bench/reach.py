@@ -74,6 +74,7 @@ class Reach:
             (self._template[rest] >= self._lower[rest]).all() and (self._template[rest] <= self._upper[rest]).all()
         )
         self._compiled = None  # the compiled touch search (False: none)
+        self._finger_index = {finger: i for i, finger in enumerate(self.hand.fingers)}  # (an unknown one: KeyError)
         self._range = (
             float(self._lower[self._proximal].max()),
             float(self._upper[self._proximal].min()),
@@ -176,7 +177,7 @@ class Reach:
                 found = self._touch(finger, centre)
             else:
                 point = np.array([float(x) for x in centre])
-                found = search.touch(self.hand.fingers.index(finger), point, self.opening, self.closed)
+                found = search.touch(self._finger_index[finger], point, self.opening, self.closed)
             self._touches[key] = found
         return found
 

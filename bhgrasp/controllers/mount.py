@@ -39,7 +39,7 @@ from bhgrasp._validation import as_vector
 from bhgrasp.controllers._wrist_kernel import CompiledWristServo, covers
 from bhgrasp.controllers.base import Controller, gain_vector
 from bhgrasp.data import State
-from bhgrasp.errors import InputError
+from bhgrasp.errors import FrozenSettingError, InputError
 from bhgrasp.grasp.sensing import ContactSensing
 from bhgrasp.model.hand import Hand
 from bhgrasp.model.mount import MOUNT_JOINTS
@@ -48,6 +48,7 @@ from bhgrasp.motion.trajectories import Reference, time_of
 SERVO_KP = (2e4, 2e4, 2e4, 100.0, 100.0, 100.0)  # [N/m, N m/rad]: stiff, inside the 1 kHz loop's stability
 SERVO_KD = (300.0, 300.0, 300.0, 1.0, 1.0, 1.0)  # [N s/m, N m s/rad]
 _MOUNT_ROWS = np.zeros(6)  # the finger hold's torques on the mount rows
+SETUP = ("nominal", "reference", "fingers", "kp", "kd", "finger_kp", "finger_kd", "compensate_load", "engine")
 
 
 class MountServo(Controller):
@@ -96,6 +97,7 @@ class MountServo(Controller):
             raise InputError(f"`fingers` must be a controller (t, state) -> tau, None or 'zero', got {fingers!r}")
         self.nominal, self.reference, self.fingers = nominal, reference, fingers
         self.kp, self.kd = gain_vector(kp, 6, "kp"), gain_vector(kd, 6, "kd")
+        self.kp.flags.writeable = self.kd.flags.writeable = False
         self.finger_kp, self.finger_kd = finger_gains
         self.sensing = ContactSensing(nominal)
         self.compensate_load = bool(compensate_load)
@@ -109,8 +111,17 @@ class MountServo(Controller):
             self._compiled = CompiledWristServo(self, required_core("the compiled wrist servo"))
         self.engine = "python" if self._compiled is None else "compiled"
 
+    def __setattr__(self, name: str, value: Any) -> None:
+        """The set-up (:data:`SETUP`) is fixed once built: both engines read it from then on."""
+        if name in SETUP and "engine" in self.__dict__:
+            raise FrozenSettingError(
+                f"MountServo.{name} cannot change after the servo is built (its compiled engine copied it); build a "
+                f"new MountServo"
+            )
+        object.__setattr__(self, name, value)
+
     def __getstate__(self) -> dict:
-        """Copies and pickles rebuild the compiled servo (its finger hold is taken again at the next call)."""
+        """Copies and pickles rebuild the compiled servo, holding the fingers where the original holds them."""
         return {**self.__dict__, "_compiled": None, "_rebuild": self._compiled is not None}
 
     def __setstate__(self, state: dict) -> None:
@@ -119,6 +130,8 @@ class MountServo(Controller):
         self.__dict__.update(state)
         if rebuild:
             self._compiled = CompiledWristServo(self, required_core("the compiled wrist servo"))
+            if self._hold is not None:
+                self._compiled.kernel.hold(self._hold)
 
     def reset(self, state: State) -> None:
         """Reset the finger controller (or hold the fingers at ``state``'s configuration)."""
@@ -133,6 +146,8 @@ class MountServo(Controller):
         hand = self.nominal
         q, v = as_vector(state.q, "state.q", hand.nq), as_vector(state.v, "state.v", hand.nv)
         if self._compiled is not None:
+            if self.fingers is None and self._hold is None:
+                self._hold = q[6:].copy()  # as the kernel takes it (a copy carries it: __setstate__)
             tau, c_d, error = self._compiled.torques(time_of(t), q, v)
             self.log["mount_error"], self.log["mount_reference"] = error, c_d
             return tau
@@ -157,4 +172,4 @@ class MountServo(Controller):
         return tau
 
 
-__all__ = ["SERVO_KD", "SERVO_KP", "MountServo"]
+__all__ = ["SERVO_KD", "SERVO_KP", "SETUP", "MountServo"]

@@ -35,10 +35,11 @@ class PoseMotion(Reference):
         """
         if not isinstance(start, pin.SE3):
             raise InputError(f"`start` must be a pinocchio.SE3, got {type(start).__name__}")
-        self.start = pin.SE3(start)
-        self.offset = as_vector(offset, "offset", 6)
-        self.duration, self.delay = as_positive(duration, "duration"), as_real(delay, "delay")
-        self._pause = not self.offset.any()
+        self._start = pin.SE3(start)
+        self._offset = as_vector(offset, "offset", 6).copy()
+        self._offset.flags.writeable = False
+        self._duration, self._delay = as_positive(duration, "duration"), as_real(delay, "delay")
+        self._pause = not self._offset.any()
         self._blend: tuple[float, ...] | None = None  # what the last sample is a function of, and the sample
         self._sample: Sample = ()
 
@@ -47,6 +48,12 @@ class PoseMotion(Reference):
         """Six: position and rotation vector."""
         return 6
 
+    # a motion is fixed once built (its last sample is kept): read-only views of what it was built from
+    start = property(lambda self: pin.SE3(self._start), doc="Initial pose (a copy), world <- body.")
+    offset = property(lambda self: self._offset, doc="(dx [m], dtheta [rad]), world (read-only).")
+    duration = property(lambda self: self._duration, doc="Time of the motion [s].")
+    delay = property(lambda self: self._delay, doc="Start time [s].")
+
     def __call__(self, t: float) -> Sample:
         """Pose (x, log R), twist (v, omega) and its derivative at time ``t`` [s].
 
@@ -54,17 +61,19 @@ class PoseMotion(Reference):
         offset) of the signs of the blend and its rates alone (its products are signed zeros): a repeated one is the
         last call's, copied, not computed again.
         """
-        s = min(max((time_of(t) - self.delay) / self.duration, 0.0), 1.0)  # the blend of Quintic(0, 1, ...), in floats
+        duration = self._duration
+        s = min(max((time_of(t) - self._delay) / duration, 0.0), 1.0)  # the blend of Quintic(0, 1, ...), in floats
         blend, rate, curvature = minimum_jerk(s)
-        rate, curvature = rate / self.duration, curvature / (self.duration * self.duration)
+        rate, curvature = rate / duration, curvature / (duration * duration)
         if self._pause:
             key = (math.copysign(1.0, blend), math.copysign(1.0, rate), math.copysign(1.0, curvature))
         else:
             key = (s, math.copysign(1.0, s))  # -0.0 and 0.0 differ in the sample's bits
         if key != self._blend:
-            rotation = pin.exp3(blend * self.offset[3:]) @ self.start.rotation
-            position = np.concatenate((self.start.translation + blend * self.offset[:3], pin.log3(rotation)))
-            self._sample, self._blend = (position, rate * self.offset, curvature * self.offset), key
+            offset, start = self._offset, self._start
+            rotation = pin.exp3(blend * offset[3:]) @ start.rotation
+            position = np.concatenate((start.translation + blend * offset[:3], pin.log3(rotation)))
+            self._sample, self._blend = (position, rate * offset, curvature * offset), key
         position, velocity, acceleration = self._sample
         return position.copy(), velocity.copy(), acceleration.copy()
 
@@ -92,16 +101,19 @@ class PosePath(Reference):
         moves = list(moves)
         if not moves:
             raise InputError("`moves` must hold at least one (offset, duration) pair")
-        self.segments: list[PoseMotion] = []
+        segments: list[PoseMotion] = []
         pose, begin = pin.SE3(start), as_real(delay, "delay")
         for i, move in enumerate(moves):
             if len(move) != 2:
                 raise InputError(f"`moves[{i}]` must be an (offset (6,), duration [s]) pair, got {move!r}")
             offset, duration = as_vector(move[0], f"moves[{i}] offset", 6), as_positive(move[1], f"moves[{i}] duration")
-            self.segments.append(PoseMotion(pose, offset, duration, begin))
+            segments.append(PoseMotion(pose, offset, duration, begin))
             pose = pin.SE3(pin.exp3(offset[3:]) @ pose.rotation, pose.translation + offset[:3])
             begin += duration
-        self.end_time, self.end = begin, pose
+        self.segments: tuple[PoseMotion, ...] = tuple(segments)  # each fixed once built
+        self.end_time, self._end = begin, pose
+
+    end = property(lambda self: pin.SE3(self._end), doc="The pose the last move reaches (a copy).")
 
     @property
     def size(self) -> int:

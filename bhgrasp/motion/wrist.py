@@ -27,7 +27,7 @@ class MountReference(Reference):
             raise InputError(f"`pose` must be a Reference of size 6 (position, rotation vector), got {pose!r}")
         if not isinstance(origin, pin.SE3):
             raise InputError(f"`origin` must be a pinocchio.SE3, got {type(origin).__name__}")
-        self.pose, self.origin = pose, pin.SE3(origin)
+        self._pose, self._origin = pose, pin.SE3(origin)
         self._pose_sample = b""  # the last pose sample's bytes and its coordinates, kept: a wrist at rest repeats it
         self._coordinates: Sample = ()
 
@@ -36,9 +36,13 @@ class MountReference(Reference):
         """Six mount coordinates."""
         return 6
 
+    # fixed once built (the coordinates of the last pose sample are kept)
+    pose = property(lambda self: self._pose, doc="The pose reference (size 6).")
+    origin = property(lambda self: pin.SE3(self._origin), doc="The mount's origin (a copy), world <- mount.")
+
     def __call__(self, t: float) -> Sample:
         """Coordinates, their rates and accelerations at ``t`` [s] (for a repeated pose sample: the last, copied)."""
-        sample, twist, derivative = self.pose(t)
+        sample, twist, derivative = self._pose(t)
         key = sample.tobytes() + twist.tobytes() + derivative.tobytes()
         if key != self._pose_sample:
             self._coordinates, self._pose_sample = self._convert(sample, twist, derivative), key
@@ -47,8 +51,8 @@ class MountReference(Reference):
 
     def _convert(self, sample: np.ndarray, twist: np.ndarray, derivative: np.ndarray) -> Sample:
         """The mount coordinates, rates and accelerations of a pose sample (class docstring)."""
-        rotation_t = self.origin.rotation.T
-        local = self.origin.actInv(pin.SE3(pin.exp3(sample[3:]), sample[:3]))
+        rotation_t = self._origin.rotation.T
+        local = self._origin.actInv(pin.SE3(pin.exp3(sample[3:]), sample[:3]))
         c = mount_coordinates(local)
         angular = angular_map(c)
         c_dot = np.concatenate((rotation_t @ twist[:3], np.linalg.solve(angular, rotation_t @ twist[3:])))

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -227,12 +228,14 @@ class BarrettActuation(Actuation):
         self.locked[:] = False
 
     def restore(self, modes: np.ndarray | None, q_hand: np.ndarray) -> None:
-        """Take the modes a state carries (``None``: every switch re-armed, every drive unlocked)."""
-        if modes is None or len(modes) == 0:
-            self.reset(q_hand)
-        else:
-            self.mode[:] = np.asarray(modes[:3], dtype=int)
-            self.locked[:] = np.asarray(modes[3:6], dtype=bool) if len(modes) == 6 else False
+        """Take the modes a state carries (:func:`barrett_modes`; ``None``: re-armed; no lock without self-locking).
+
+        Raises:
+            InputError: Modes that are not 3 TorqueSwitch values in (0, 1, 2), possibly with 3 worm locks.
+        """
+        values = barrett_modes(modes)
+        self.mode[:] = values[:3]
+        self.locked[:] = values[3:] if self.drive.self_locking else (0, 0, 0)  # no worm holds: its locks mean nothing
 
     def _modes(self) -> np.ndarray:
         return self.mode
@@ -284,8 +287,31 @@ class BarrettActuation(Actuation):
         return np.concatenate((self.mode, self.locked)).astype(float)
 
 
+def barrett_modes(flags: Any) -> tuple[int, ...]:
+    """A state's Barrett flags as 6 integers: the TorqueSwitch of F1, F2, F3 (0, 1, 2), then their worm locks (0, 1).
+
+    ``None`` or empty: re-armed and unlocked; 3 values: unlocked; a lock is any non-zero value.
+
+    Raises:
+        InputError: Not 3 or 6 numbers, or a TorqueSwitch value other than 0, 1 or 2.
+    """
+    if flags is None:
+        return (0, 0, 0, 0, 0, 0)
+    try:
+        values = np.asarray(flags, dtype=float).reshape(-1).tolist()
+    except (TypeError, ValueError) as error:
+        raise InputError(f"Barrett modes must be numbers, got {flags!r}") from error
+    if not values:
+        return (0, 0, 0, 0, 0, 0)
+    if len(values) not in (3, 6) or any(value not in (0, 1, 2) for value in values[:3]):
+        raise InputError(f"Barrett modes must be 3 TorqueSwitch values in (0, 1, 2) and 3 worm locks, got {values}")
+    locks = [1 if lock else 0 for lock in values[3:6]] if len(values) == 6 else [0, 0, 0]
+    return (int(values[0]), int(values[1]), int(values[2]), *locks)
+
+
 __all__ = [
     "Actuation",
     "BarrettActuation",
     "FullyActuated",
+    "barrett_modes",
 ]

@@ -25,7 +25,7 @@ import numpy as np
 from bhgrasp._validation import as_positive
 from bhgrasp.data import ContactSet, SimulatedState, State
 from bhgrasp.errors import InputError
-from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
+from bhgrasp.sim.actuation import BarrettActuation, FullyActuated, barrett_modes
 from bhgrasp.sim.compiled import (
     barrett_of,
     contact_set,
@@ -96,9 +96,7 @@ class BatchSimulator:
         if self._barrett:
             self._batch.set_barrett(barrett_of(simulator.actuation))
             for i, state in enumerate(states):
-                modes = state.actuation_modes
-                modes = [0] * 6 if modes is None or len(modes) == 0 else [int(mode) for mode in modes]
-                self._batch.set_modes(i, [*modes, 0, 0, 0][:6])
+                self._batch.set_modes(i, list(barrett_modes(state.actuation_modes)))
         self._drive = drive_of(simulator.actuation)
         tips = simulator.scene.hand.fingertip_frames
         self._tip_frames = {finger: scene.model.getFrameId(frame) for finger, frame in tips.items()}

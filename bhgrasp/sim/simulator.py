@@ -37,7 +37,7 @@ import numpy as np
 from bhgrasp.data import ContactMemory, ContactSet, SimulatedState, State
 from bhgrasp.errors import FrozenSettingError, InputError
 from bhgrasp.sim import run_loop
-from bhgrasp.sim.actuation import Actuation, BarrettActuation, FullyActuated
+from bhgrasp.sim.actuation import Actuation, BarrettActuation, FullyActuated, barrett_modes
 from bhgrasp.sim.compiled import CompiledEngine
 from bhgrasp.sim.contact_law import SpringDamper
 from bhgrasp.sim.engine import DriveTerms, drive_key
@@ -305,8 +305,10 @@ class Simulator:
         actuation = self.actuation
         key = actuation.parameters()
         drive = self._barrett.get(key)
-        if drive is None:
+        if drive is None:  # new parameters (self-locking among them): new drive, new modes arrays
             self._barrett.clear()
+            self._barrett_modes.clear()
+            self._barrett_flags.clear()
             drive = self._barrett[key] = self.engine.barrett(actuation)
         flags = state.actuation_modes
         known = self._barrett_flags.get(id(flags))
@@ -331,20 +333,6 @@ class Simulator:
 
     # ------------------------------------------------------------------ runs
     run = run_loop.run
-
-
-def barrett_modes(flags: np.ndarray | None) -> tuple[int, ...]:
-    """A state's Barrett flags as the compiled drive takes them: 6 integers.
-
-    As ``BarrettActuation.restore`` reads them: none, re-armed and unlocked; 3 values, unlocked.
-    """
-    if flags is None or len(flags) == 0:
-        return (0, 0, 0, 0, 0, 0)
-    values = flags.tolist()
-    if len(values) not in (3, 6) or any(value not in (0, 1, 2) for value in values[:3]):
-        raise InputError(f"Barrett modes must be 3 TorqueSwitch values in (0, 1, 2) and 3 worm locks, got {values}")
-    locks = [1 if lock else 0 for lock in values[3:6]] if len(values) == 6 else [0, 0, 0]
-    return (int(values[0]), int(values[1]), int(values[2]), *locks)
 
 
 def _modal(actuation: Actuation) -> bool:
