@@ -92,6 +92,7 @@ class Sensors:
         if model.noisy and seed is None:
             raise InputError("sensor noise needs a `seed` (runs are deterministic)")
         self.model = model
+        self._exact = model.exact  # (a SensorModel is frozen: asked once, not at every reading)
         self.rng = np.random.default_rng(seed)
         self._past: deque[State] = deque()
         self._frames: deque[State] = deque()  # the bus's readings a tracker frame may still be taken from
@@ -100,9 +101,9 @@ class Sensors:
 
     def read(self, state: State) -> State:
         """The state the controller sees at ``state.t``: the delayed true state, with noise."""
-        model = self.model
-        if model.exact:
+        if self._exact:
             return state
+        model = self.model
         seen = self._delayed(state) if model.delay > 0.0 else state
         seen = self._noisy(seen) if model.noisy else seen
         return self._tracked(seen) if model.tracked else seen
