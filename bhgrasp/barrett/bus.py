@@ -148,26 +148,19 @@ class PuckBus(Controller):
         pucks' ticks the output holds.
         """
         self.readout.sensed = state
-        fresh = False  # whether self._counts and self._speeds are this state's
         self._run_script(t)
-        changed = bool(self._pending) or "puck_modes" not in self.log  # the log: each run's first call, then changes
-        if self._pending:
+        ticks = 1.0 if self._last_tick is None else float(math.floor((t - self._last_tick) / fw.PERIOD + 1e-9))
+        if self._pending or self._home_spread or ticks >= 1.0:  # what reads the encoders
             self._read(state)
-            fresh = True
-            for name, args, kwargs in self._pending:
-                self._apply(name, args, kwargs["digits"])
-            self._pending = []
+        changed = bool(self._pending) or "puck_modes" not in self.log  # the log: each run's first call, then changes
+        for name, args, kwargs in self._pending:
+            self._apply(name, args, kwargs["digits"])
+        self._pending = []
         spread = DIGITS.index("SPREAD")
         if self._home_spread and all(self.pucks[i].done() for i in range(spread)):
-            if not fresh:
-                self._read(state)
-                fresh = True
             self.pucks[spread].home(self._counts[spread])  # libbarrett: the spread homes once the fingers are done
             self._home_spread, changed = False, True
-        ticks = 1.0 if self._last_tick is None else float(math.floor((t - self._last_tick) / fw.PERIOD + 1e-9))
         if ticks >= 1.0:
-            if not fresh:
-                self._read(state)
             self._last_tick = t if self._last_tick is None else self._last_tick + ticks * fw.PERIOD
             torques = [p.update(c, s, ticks) for p, c, s in zip(self.pucks, self._counts, self._speeds)]
             self._u[INPUT] = torques

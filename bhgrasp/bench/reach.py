@@ -110,10 +110,7 @@ class Reach:
         placements = self.data.oMg
         for i, link, name in self._links[finger]:
             result = coal.DistanceResult()
-            frame = placements[i]
-            gap = coal.distance(
-                link, coal.Transform3s(frame.rotation, frame.translation), shape, placement, self._request, result
-            )
+            gap = coal.distance(link, coal_transform(placements[i]), shape, placement, self._request, result)
             if gap < least:
                 least, nearest = gap, name
                 where = np.asarray(result.getNearestPoint2()) if point else None
@@ -138,8 +135,7 @@ class Reach:
         As ``hand.configuration(...)`` builds it, without its per-joint checks (the search calls it ~10^5 times a
         trial); outside the joint limits it raises as that does.
         """
-        low, high, distal_low, distal_high = self._range
-        if not (self._template_in_range and low <= angle <= high and distal_low <= angle / 3 <= distal_high):
+        if not (self._template_in_range and self._in_range(angle)):
             fingers = self.hand.fingers  # the checked call names the joint, raises
             return self.hand.configuration(
                 F1_spread=self.spread,
@@ -151,6 +147,11 @@ class Reach:
         q[self._proximal] = angle
         q[self._distal] = angle / 3
         return q
+
+    def _in_range(self, angle: float) -> bool:
+        """Whether every finger at proximal ``angle`` [rad] (the distal at a third) is within its joints' limits."""
+        low, high, distal_low, distal_high = self._range
+        return low <= angle <= high and distal_low <= angle / 3 <= distal_high
 
     def first_touch(self, finger: str, centre: np.ndarray) -> tuple[str, np.ndarray] | None:
         """The link of ``finger`` that touches the object first, and where on the object (its frame [m]).
@@ -189,11 +190,8 @@ class Reach:
         """
         if self._compiled is None:
             core = default_core()
-            low, high, distal_low, distal_high = self._range
-            inside = all(
-                low <= angle <= high and distal_low <= angle / 3 <= distal_high for angle in (self.opening, self.closed)
-            )
-            if core is None or not (self._template_in_range and inside):
+            inside = self._template_in_range and self._in_range(self.opening) and self._in_range(self.closed)
+            if core is None or not inside:
                 self._compiled = False
             else:
                 scene = self.geometry.copy()  # the hand's shapes and the object's, on the universe
