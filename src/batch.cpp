@@ -2,39 +2,9 @@
 #include "batch.hpp"
 
 #include <algorithm>
-#include <exception>
 #include <stdexcept>
-#include <thread>
 
 namespace bhgrasp {
-namespace {
-
-// Run body(i) for i in [0, n) on up to `threads` threads, environments split in contiguous blocks; rethrows the
-// first exception a thread raised.
-template <typename Body>
-void parallel_for(int n, int threads, Body body) {
-  threads = std::max(1, std::min(threads, n));
-  if (threads == 1) {
-    for (int i = 0; i < n; ++i) body(i);
-    return;
-  }
-  std::vector<std::thread> pool;
-  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(threads));
-  for (int t = 0; t < threads; ++t) {
-    pool.emplace_back([&, t] {
-      try {
-        for (int i = t * n / threads; i < (t + 1) * n / threads; ++i) body(i);
-      } catch (...) {
-        errors[static_cast<std::size_t>(t)] = std::current_exception();
-      }
-    });
-  }
-  for (auto& thread : pool) thread.join();
-  for (auto& error : errors)
-    if (error) std::rethrow_exception(error);
-}
-
-}  // namespace
 
 Batch::Batch(const std::string& model, const std::string& geometry, const Settings& settings, int size)
     : nv_hand_(settings.nv_hand) {
@@ -60,20 +30,71 @@ void Batch::set_state(int env, const Vector& q, const Vector& v, const Memory& m
   divergences_[static_cast<std::size_t>(env)] = Divergence{};
 }
 
+void Batch::parallel_for(int n, int threads, const std::function<void(int)>& body) {
+  threads = std::max(1, std::min(threads, n));
+  if (threads == 1) {
+    for (int i = 0; i < n; ++i) body(i);
+    return;
+  }
+  if (!pool_ || pool_->threads() != threads) {
+    pool_.reset();
+    pool_ = std::make_unique<WorkerPool>(threads);
+  }
+  pool_->run(n, body);
+}
+
+void Batch::advance(int env, const Vector& input, bool barrett, const Drive& drive, double max_speed,
+                    double max_penetration) {
+  const auto e = static_cast<std::size_t>(env);
+  if (divergences_[e].kind) return;  // frozen where it diverged
+  static const Vector none;
+  StepResult result =
+      barrett ? barrett_->step(*engines_[e], q_.row(env).transpose(), v_.row(env).transpose(), input, none, modes_[e],
+                               memories_[e], max_speed, max_penetration)
+              : engines_[e]->step(q_.row(env).transpose(), v_.row(env).transpose(), input, drive, memories_[e],
+                                  max_speed, max_penetration);
+  divergences_[e] = result.divergence;
+  if (result.divergence.kind) return;
+  q_.row(env) = result.q.transpose();
+  v_.row(env) = result.v.transpose();
+  memories_[e] = std::move(result.memory);
+  contacts_[e] = std::move(result.contacts);
+}
+
 void Batch::step(const Rows& tau_hand, const Drive& drive, double max_speed, double max_penetration, int threads) {
   if (tau_hand.rows() != size() || tau_hand.cols() != nv_hand_)
     throw std::invalid_argument("tau_hand must be (environments, nv_hand)");
   parallel_for(size(), threads, [&](int i) {
-    const auto e = static_cast<std::size_t>(i);
-    if (divergences_[e].kind) return;  // frozen where it diverged
-    StepResult result = engines_[e]->step(q_.row(i).transpose(), v_.row(i).transpose(), tau_hand.row(i).transpose(),
-                                          drive, memories_[e], max_speed, max_penetration);
-    divergences_[e] = result.divergence;
-    if (result.divergence.kind) return;
-    q_.row(i) = result.q.transpose();
-    v_.row(i) = result.v.transpose();
-    memories_[e] = std::move(result.memory);
-    contacts_[e] = std::move(result.contacts);
+    advance(i, tau_hand.row(i).transpose(), false, drive, max_speed, max_penetration);
+  });
+}
+
+void Batch::rollout(const Rows& inputs, int steps, bool barrett, const Drive& drive, double max_speed,
+                    double max_penetration, int threads, bool record, Rows& q_record, Rows& v_record) {
+  if (barrett && !barrett_) throw std::logic_error("no Barrett model: call set_barrett first");
+  if (steps < 1) throw std::invalid_argument("a rollout needs at least one step");
+  const Eigen::Index n = barrett ? 4 : nv_hand_;
+  if (inputs.rows() != size() || (inputs.cols() != n && inputs.cols() != steps * n))
+    throw std::invalid_argument("inputs must be (environments, inputs) or (environments, steps * inputs)");
+  const bool held = inputs.cols() == n && steps > 1;
+  const Eigen::Index nq = q_.cols(), nv = v_.cols();
+  if (record) {
+    q_record.resize(size(), steps * nq);
+    v_record.resize(size(), steps * nv);
+  } else {
+    q_record.resize(0, 0);
+    v_record.resize(0, 0);
+  }
+  parallel_for(size(), threads, [&](int i) {
+    Vector input(n);
+    for (int k = 0; k < steps; ++k) {
+      input = inputs.row(i).segment(held ? 0 : k * n, n).transpose();
+      advance(i, input, barrett, drive, max_speed, max_penetration);
+      if (record) {
+        q_record.row(i).segment(k * nq, nq) = q_.row(i);
+        v_record.row(i).segment(k * nv, nv) = v_.row(i);
+      }
+    }
   });
 }
 
@@ -94,19 +115,9 @@ void Batch::set_modes(int env, const Modes& modes) {
 void Batch::step_barrett(const Rows& u, double max_speed, double max_penetration, int threads) {
   if (!barrett_) throw std::logic_error("no Barrett model: call set_barrett first");
   if (u.rows() != size() || u.cols() != 4) throw std::invalid_argument("u must be (environments, 4) motor torques");
-  const Vector none;
-  parallel_for(size(), threads, [&](int i) {
-    const auto e = static_cast<std::size_t>(i);
-    if (divergences_[e].kind) return;  // frozen where it diverged
-    StepResult result = barrett_->step(*engines_[e], q_.row(i).transpose(), v_.row(i).transpose(),
-                                       u.row(i).transpose(), none, modes_[e], memories_[e], max_speed, max_penetration);
-    divergences_[e] = result.divergence;
-    if (result.divergence.kind) return;
-    q_.row(i) = result.q.transpose();
-    v_.row(i) = result.v.transpose();
-    memories_[e] = std::move(result.memory);
-    contacts_[e] = std::move(result.contacts);
-  });
+  const Drive unused;
+  parallel_for(size(), threads,
+               [&](int i) { advance(i, u.row(i).transpose(), true, unused, max_speed, max_penetration); });
 }
 
 Rows Batch::gravity(int threads) {

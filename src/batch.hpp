@@ -2,8 +2,9 @@
 //
 // Each environment owns an Engine (its own Pinocchio and coal data) and its contact memory, so environments never
 // share state; a step runs them on a few threads, each environment on one thread, with the same arithmetic as a
-// single Engine::step (results do not depend on the thread count).  Environments whose step diverges are frozen and
-// reported; the others go on.
+// single Engine::step (results do not depend on the thread count).  The threads are kept between calls.  A rollout
+// steps every environment through a sequence of inputs in one call, each environment's steps on one thread with no
+// meeting between steps.  Environments whose step diverges are frozen and reported; the others go on.
 #pragma once
 
 #include <memory>
@@ -12,6 +13,7 @@
 
 #include "barrett.hpp"
 #include "engine.hpp"
+#include "worker_pool.hpp"
 
 namespace bhgrasp {
 
@@ -39,6 +41,14 @@ class Batch {
   const Modes& modes(int env) const { return modes_.at(static_cast<std::size_t>(env)); }
   void step_barrett(const Rows& u, double max_speed, double max_penetration, int threads);
 
+  // Open-loop rollouts: `steps` steps of every environment that has not diverged, environment i's inputs of step k
+  // in inputs.row(i).segment(k * n, n) (inputs (N, steps * n)) or held (inputs (N, n)); n = nv_hand torques (step's
+  // drive) or 4 motor torques (Barrett, when barrett is true).  When record is true, q_record and v_record hold the
+  // state after every step, (N, steps * nq) and (N, steps * nv); an environment that diverges repeats its last good
+  // state.  The same arithmetic as `steps` calls of step or step_barrett.
+  void rollout(const Rows& inputs, int steps, bool barrett, const Drive& drive, double max_speed,
+               double max_penetration, int threads, bool record, Rows& q_record, Rows& v_record);
+
   const Rows& q() const { return q_; }  // (N, nq)
   const Rows& v() const { return v_; }  // (N, nv)
   const Memory& memory(int env) const { return memories_.at(static_cast<std::size_t>(env)); }
@@ -51,6 +61,12 @@ class Batch {
   Rows frame_jacobians(const std::vector<int>& frames, int threads);
 
  private:
+  // One step of environment env from its inputs: joint torques through drive, or the Barrett motors' when barrett.
+  void advance(int env, const Vector& input, bool barrett, const Drive& drive, double max_speed,
+               double max_penetration);
+  void parallel_for(int n, int threads, const std::function<void(int)>& body);  // on the kept threads
+
+
   std::vector<std::unique_ptr<Engine>> engines_;
   std::vector<Memory> memories_;
   std::vector<Contacts> contacts_;
@@ -59,6 +75,7 @@ class Batch {
   int nv_hand_ = 0;
   std::unique_ptr<BarrettDrive> barrett_;  // (null: no Barrett model)
   std::vector<Modes> modes_;
+  std::unique_ptr<WorkerPool> pool_;  // (null until a call asks for more than one thread)
 };
 
 }  // namespace bhgrasp

@@ -118,6 +118,19 @@ void bind_simulation(nb::module_& m) {
       .def("modes", &Batch::modes, "env"_a)
       .def("step_barrett", &Batch::step_barrett, "u"_a, "max_speed"_a, "max_penetration"_a, "threads"_a,
            nb::call_guard<nb::gil_scoped_release>())
+      .def(
+          "rollout",
+          [](Batch& batch, const Rows& inputs, int steps, bool barrett, const Drive& drive, double max_speed,
+             double max_penetration, int threads, bool record) {
+            Rows q_record, v_record;
+            {
+              nb::gil_scoped_release release;
+              batch.rollout(inputs, steps, barrett, drive, max_speed, max_penetration, threads, record, q_record,
+                            v_record);
+            }
+            return std::make_pair(std::move(q_record), std::move(v_record));
+          },
+          "inputs"_a, "steps"_a, "barrett"_a, "drive"_a, "max_speed"_a, "max_penetration"_a, "threads"_a, "record"_a)
       .def("gravity", &Batch::gravity, "threads"_a, nb::call_guard<nb::gil_scoped_release>())
       .def("frame_jacobians", &Batch::frame_jacobians, "frames"_a, "threads"_a,
            nb::call_guard<nb::gil_scoped_release>());

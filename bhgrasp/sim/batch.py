@@ -6,7 +6,9 @@ on one thread, with the arithmetic of a single :meth:`~bhgrasp.sim.Simulator.ste
 separate runs, whatever the thread count).  A controller for a batch is vectorised: it reads the batch's arrays
 (hand ``q``, ``v`` of shape (N, nv_hand), object positions, and the compiled kernels :meth:`gravity_torques` and
 :meth:`fingertip_jacobians`) and returns inputs of shape (N, n_inputs).  An environment whose step diverges is
-frozen and reported in :attr:`diverged` / :meth:`divergence`; the others go on.
+frozen and reported in :attr:`diverged` / :meth:`divergence`; the others go on.  :meth:`BatchSimulator.rollout`
+runs open-loop inputs through many steps in one call, each environment's steps on one thread (the threads are kept
+between calls and meet once per call, where a step meets them once per step).
 
 Both actuation models run in the batch: :class:`~bhgrasp.sim.actuation.FullyActuated` (one torque per joint) and
 :class:`~bhgrasp.sim.actuation.BarrettActuation` (four motor torques per environment; each environment's
@@ -18,6 +20,7 @@ pool already has its core.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -39,6 +42,29 @@ from bhgrasp.sim.geometry_text import geometry_text
 from bhgrasp.sim.simulator import MATCH_RADIUS, Simulator
 from bhgrasp.sim.state_check import check_state, divergence_text
 from bhgrasp.sim.step_output import StepOutput
+
+
+@dataclass(frozen=True)
+class BatchRollout:
+    """The states of a batch after every step of :meth:`BatchSimulator.rollout`.
+
+    An environment that diverged repeats its last good state from its divergence on
+    (:attr:`BatchSimulator.diverged` says which).
+    """
+
+    t: np.ndarray  # (steps,) time after each step [s]
+    scene_q: np.ndarray  # (N, steps, nq) scene configurations
+    scene_v: np.ndarray  # (N, steps, nv) scene velocities
+    nq_hand: int  # the hand's share of a configuration (its first entries)
+
+    @property
+    def q(self) -> np.ndarray:
+        """(N, steps, nq_hand) hand joint positions [rad]."""
+        return self.scene_q[:, :, : self.nq_hand]
+
+    def __repr__(self) -> str:
+        size, steps = self.scene_q.shape[:2]
+        return f"BatchRollout({size} environments, {len(self.t)} steps, recorded: {steps > 0})"
 
 
 class BatchSimulator:
@@ -185,6 +211,64 @@ class BatchSimulator:
             self._batch.step(torques, self._drive, simulator.max_speed, simulator.max_penetration, self.threads)
         self.t = round(self.t / self.simulator.dt + 1) * self.simulator.dt
 
+    def rollout(self, u: Any, steps: int | None = None, record: bool = True) -> BatchRollout:
+        """Open-loop rollouts: every environment steps through its own inputs in one compiled call.
+
+        No Python runs between steps, and each environment's steps run on one thread: the threads meet once, at the
+        end, where :meth:`step` meets them at every step.  The result is the same, bit for bit, as calling
+        :meth:`step` with the same inputs, step after step.
+
+        Args:
+            u: Inputs [N m], (N, steps, n_inputs) one row per step, or (N, n_inputs) held for ``steps`` steps.
+            steps: Number of steps; needed for held inputs, else taken from ``u`` (and checked against it).
+            record: Keep the state after every step (``False``: only the final states, in the batch).
+
+        Returns:
+            The states after every step (empty arrays when ``record`` is false); the batch holds the last ones.
+
+        Raises:
+            InputError: ``u`` of another shape or not finite, ``steps`` not a positive integer.
+        """
+        u = np.asarray(u, dtype=float)
+        n_inputs = self.simulator.actuation.n_inputs
+        if steps is not None and (isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 1):
+            raise InputError(f"`steps` must be a positive integer, got {steps!r}")
+        if u.ndim == 3 and u.shape[0] == self.size and u.shape[2] == n_inputs:
+            if steps is not None and steps != u.shape[1]:
+                raise InputError(f"`steps` is {steps} but `u` holds {u.shape[1]} steps of inputs")
+            steps = u.shape[1]
+        elif u.shape != (self.size, n_inputs) or steps is None:
+            raise InputError(
+                f"`u` must have shape ({self.size}, steps, {n_inputs}) (environments, steps, inputs), or "
+                f"({self.size}, {n_inputs}) held with `steps` given; got {u.shape} and steps={steps!r}"
+            )
+        if steps == 0:
+            raise InputError("`u` must hold at least one step of inputs")
+        bad = ~np.isfinite(u.reshape(self.size, -1)).all(axis=1)
+        if bad.any():
+            raise InputError(f"`u` must be finite; NaN/inf in environments {np.flatnonzero(bad).tolist()[:10]}")
+        simulator = self.simulator
+        if not self._barrett and simulator.actuation.saturate:
+            limit = simulator.actuation.hand.effort_limit
+            u = np.clip(u, -limit, limit)
+        inputs = u.reshape(self.size, -1)
+        limits = (simulator.max_speed, simulator.max_penetration)
+        q_record, v_record = self._batch.rollout(
+            inputs, int(steps), self._barrett, self._drive, *limits, self.threads, bool(record)
+        )
+        times = []
+        for _ in range(int(steps)):
+            self.t = round(self.t / simulator.dt + 1) * simulator.dt
+            times.append(self.t)
+        if not record:
+            return BatchRollout(np.array(times), np.zeros((self.size, 0, 0)), np.zeros((self.size, 0, 0)), self._nqh)
+        return BatchRollout(
+            np.array(times),
+            q_record.reshape(self.size, int(steps), -1),
+            v_record.reshape(self.size, int(steps), -1),
+            self._nqh,
+        )
+
     def run(self, controller: Callable[[float, BatchSimulator], Any], duration: float) -> BatchSimulator:
         """Step ``duration`` [s] with ``u = controller(t, batch)`` (shape (N, n_inputs)) at every step."""
         steps = round(as_positive(duration, "duration") / self.simulator.dt)
@@ -211,4 +295,4 @@ class BatchSimulator:
         return int(env)
 
 
-__all__ = ["BatchSimulator"]
+__all__ = ["BatchRollout", "BatchSimulator"]
