@@ -2,12 +2,12 @@
 
 The reference hold (``bhgrasp.scenarios.hold``) stepped as N environments of a ``BatchSimulator`` with its law
 written for the batch (compiled gravity and fingertip-Jacobian kernels, NumPy for the rest), at 1 and 2 threads,
-against one environment stepped by ``Simulator.step`` with the scalar law, measured in the same run.  Issue 15's
+against one environment stepped by ``Simulator.step`` with the scalar law, measured in the same run.  The
 target: >= 100 000 environment-steps per second on 2 cores.  Then Barrett hands (four motor torques each) closing
 on a box, whose TorqueSwitches break away in the batch's C++, against one hand stepped by ``Simulator.step``.  Last,
 the settled hold with its inputs held, N environments on 2 threads, as open-loop rollouts in one call
 (``BatchSimulator.rollout``) and as one ``BatchSimulator.step`` call per step, against MuJoCo's ``rollout`` of the same
-scene (``bench_sim.mujoco_hold``) on 2 threads with its persistent pool, in the same run.  Issue 33's target: >= 3x
+scene (``bench_sim.mujoco_hold``) on 2 threads with its persistent pool, in the same run.  The target: >= 3x
 MuJoCo's environment-steps per second at 64 environments.
 
 Usage: ``python benchmarks/bench_batch.py [--steps 200] [--sizes 16 64 256] [--repeat 5]``.

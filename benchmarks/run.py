@@ -14,7 +14,7 @@ from pathlib import Path
 
 FOLDER = Path(__file__).resolve().parent
 QUICK = {  # script -> its arguments for a smoke run
-    "bench_batch.py": ["--steps", "10", "--sizes", "8"],
+    "bench_batch.py": ["--steps", "10", "--sizes", "8", "--repeat", "1"],
     "bench_hand.py": ["--repeat", "200"],
     "bench_sim.py": ["--duration", "0.05"],
     "bench_control.py": ["--repeat", "50"],

@@ -30,12 +30,18 @@ void Batch::set_state(int env, const Vector& q, const Vector& v, const Memory& m
   divergences_[static_cast<std::size_t>(env)] = Divergence{};
 }
 
+Batch::~Batch() {
+  if (pool_ && !pool_->owned_here()) static_cast<void>(pool_.release());  // a fork's copy: its threads are not here
+}
+
 void Batch::parallel_for(int n, int threads, const std::function<void(int)>& body) {
+  std::lock_guard<std::mutex> lock(calls_);
   threads = std::max(1, std::min(threads, n));
   if (threads == 1) {
     for (int i = 0; i < n; ++i) body(i);
     return;
   }
+  if (pool_ && !pool_->owned_here()) static_cast<void>(pool_.release());  // a fork's copy: let it go, make ours
   if (!pool_ || pool_->threads() != threads) {
     pool_.reset();
     pool_ = std::make_unique<WorkerPool>(threads);

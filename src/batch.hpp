@@ -2,12 +2,15 @@
 //
 // Each environment owns an Engine (its own Pinocchio and coal data) and its contact memory, so environments never
 // share state; a step runs them on a few threads, each environment on one thread, with the same arithmetic as a
-// single Engine::step (results do not depend on the thread count).  The threads are kept between calls.  A rollout
-// steps every environment through a sequence of inputs in one call, each environment's steps on one thread with no
-// meeting between steps.  Environments whose step diverges are frozen and reported; the others go on.
+// single Engine::step (results do not depend on the thread count).  The threads are kept between calls (a fork()ed
+// copy of a batch makes its own).  A rollout steps every environment through a sequence of inputs in one call, each
+// environment's steps on one thread with no meeting between steps.  Environments whose step diverges are frozen and
+// reported; the others go on.  Calls that step or evaluate run one at a time (a second thread's call waits).
 #pragma once
 
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -22,6 +25,7 @@ using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMaj
 class Batch {
  public:
   Batch(const std::string& model, const std::string& geometry, const Settings& settings, int size);
+  ~Batch();
   Batch(const Batch&) = delete;
   Batch& operator=(const Batch&) = delete;
 
@@ -45,7 +49,8 @@ class Batch {
   // in inputs.row(i).segment(k * n, n) (inputs (N, steps * n)) or held (inputs (N, n)); n = nv_hand torques (step's
   // drive) or 4 motor torques (Barrett, when barrett is true).  When record is true, q_record and v_record hold the
   // state after every step, (N, steps * nq) and (N, steps * nv); an environment that diverges repeats its last good
-  // state.  The same arithmetic as `steps` calls of step or step_barrett.
+  // state.  The same arithmetic as `steps` calls of step or step_barrett.  An engine that throws (a drive of the wrong
+  // size) leaves the environments at different steps.
   void rollout(const Rows& inputs, int steps, bool barrett, const Drive& drive, double max_speed,
                double max_penetration, int threads, bool record, Rows& q_record, Rows& v_record);
 
@@ -66,7 +71,6 @@ class Batch {
                double max_penetration);
   void parallel_for(int n, int threads, const std::function<void(int)>& body);  // on the kept threads
 
-
   std::vector<std::unique_ptr<Engine>> engines_;
   std::vector<Memory> memories_;
   std::vector<Contacts> contacts_;
@@ -76,6 +80,7 @@ class Batch {
   std::unique_ptr<BarrettDrive> barrett_;  // (null: no Barrett model)
   std::vector<Modes> modes_;
   std::unique_ptr<WorkerPool> pool_;  // (null until a call asks for more than one thread)
+  std::mutex calls_;                  // one parallel_for at a time
 };
 
 }  // namespace bhgrasp

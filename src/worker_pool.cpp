@@ -4,22 +4,34 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include <unistd.h>
+
 namespace bhgrasp {
 
-WorkerPool::WorkerPool(int threads) {
+WorkerPool::WorkerPool(int threads) : process_(getpid()) {
   if (threads < 1) throw std::invalid_argument("a worker pool needs at least one thread");
   errors_.resize(static_cast<std::size_t>(threads));
   workers_.reserve(static_cast<std::size_t>(threads - 1));
-  for (int block = 1; block < threads; ++block) workers_.emplace_back([this, block] { serve(block); });
+  try {
+    for (int block = 1; block < threads; ++block) workers_.emplace_back([this, block] { serve(block); });
+  } catch (...) {  // a thread could not be made: end those that were
+    stop();
+    throw;
+  }
 }
 
-WorkerPool::~WorkerPool() {
+WorkerPool::~WorkerPool() { stop(); }
+
+bool WorkerPool::owned_here() const { return getpid() == process_; }
+
+void WorkerPool::stop() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stop_ = true;
   }
   wake_.notify_all();
   for (auto& worker : workers_) worker.join();
+  workers_.clear();
 }
 
 void WorkerPool::run_block(int block, int blocks, int n, const std::function<void(int)>& body) {

@@ -8,6 +8,11 @@ environments diverging on the way.
 
 from __future__ import annotations
 
+import os
+import select
+import signal
+import time
+
 import numpy as np
 import pytest
 from test_batch import inputs, start_states
@@ -16,7 +21,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.scenarios.box_grasp import box_grasp
 from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import Simulator
-from bhgrasp.sim.actuation import BarrettActuation
+from bhgrasp.sim.actuation import BarrettActuation, FullyActuated
 from bhgrasp.sim.batch import BatchRollout, BatchSimulator
 
 
@@ -146,3 +151,59 @@ def test_the_kept_threads_survive_a_failing_step_and_a_change_of_count() -> None
         batch.step(u)
         expected.step(u)
         np.testing.assert_array_equal(batch.scene_q, expected.scene_q)
+
+
+def test_a_saturating_hand_clips_at_its_own_limit_in_steps_and_rollouts() -> None:
+    """A fully actuated hand with its own torque limit: batch steps and rollouts clip where separate runs clip."""
+    hold = reference_hold()
+    actuation = FullyActuated(hold.hand, damping=0.02, limit=0.1)  # [N m], below the hold's torques
+    simulator = Simulator.from_settings(hold.simulator.scene, hold.simulator.settings, hold.simulator.law, actuation)
+    states = start_states(hold, 2)
+    u = np.repeat(inputs(hold, states)[:, None, :], 40, axis=1)
+    assert np.abs(u).max() > 0.1
+    batch = BatchSimulator(simulator, states, threads=2)
+    result = batch.rollout(u)
+    for i, state in enumerate(states):
+        for k in range(40):
+            state, _ = simulator.step(state, u[i, k])
+            np.testing.assert_array_equal(result.scene_q[i, k], state.scene_q)
+    stepped = BatchSimulator(simulator, states, threads=2)
+    for k in range(40):
+        stepped.step(u[:, k])
+    np.testing.assert_array_equal(stepped.scene_v, batch.scene_v)
+
+
+def test_a_forked_child_steps_a_batch_its_parent_threaded() -> None:
+    """The kept threads are not in a fork()ed child: its copy of the batch makes its own, and ends without waiting."""
+    hold = reference_hold()
+    states = start_states(hold, 4)
+    u = inputs(hold, states)
+    batch = BatchSimulator(hold.simulator, states, threads=2)
+    batch.step(u)  # the parent's threads are made
+    read, write = os.pipe()
+    child = os.fork()
+    if child == 0:  # the child: step on its copy, report, drop the batch, leave
+        try:
+            batch.step(u)
+            os.write(write, batch.scene_q.tobytes())
+            del batch
+        finally:
+            os._exit(0)
+    os.close(write)
+    data, deadline, status = b"", time.monotonic() + 60.0, None
+    try:
+        while status is None and time.monotonic() < deadline:  # read until the child has ended, for at most 60 s
+            if select.select([read], [], [], 0.05)[0]:
+                data += os.read(read, 1 << 16)
+            finished, code = os.waitpid(child, os.WNOHANG)
+            status = code if finished else None
+        data += os.read(read, 1 << 16) if status is not None else b""
+    finally:
+        os.close(read)
+        if status is None:
+            os.kill(child, signal.SIGKILL)
+            os.waitpid(child, 0)
+    assert status is not None, "the forked child did not step and end within 60 s"
+    assert os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0
+    batch.step(u)
+    np.testing.assert_array_equal(np.frombuffer(data).reshape(batch.scene_q.shape), batch.scene_q)

@@ -44,7 +44,7 @@ from bhgrasp.sim.state_check import check_state, divergence_text
 from bhgrasp.sim.step_output import StepOutput
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class BatchRollout:
     """The states of a batch after every step of :meth:`BatchSimulator.rollout`.
 
@@ -56,11 +56,17 @@ class BatchRollout:
     scene_q: np.ndarray  # (N, steps, nq) scene configurations
     scene_v: np.ndarray  # (N, steps, nv) scene velocities
     nq_hand: int  # the hand's share of a configuration (its first entries)
+    nv_hand: int  # the hand's share of a velocity (its first entries)
 
     @property
     def q(self) -> np.ndarray:
         """(N, steps, nq_hand) hand joint positions [rad]."""
         return self.scene_q[:, :, : self.nq_hand]
+
+    @property
+    def v(self) -> np.ndarray:
+        """(N, steps, nv_hand) hand joint velocities [rad/s]."""
+        return self.scene_v[:, :, : self.nv_hand]
 
     def __repr__(self) -> str:
         size, steps = self.scene_q.shape[:2]
@@ -206,8 +212,7 @@ class BatchSimulator:
         if self._barrett:
             self._batch.step_barrett(u, simulator.max_speed, simulator.max_penetration, self.threads)
         else:
-            limit = simulator.actuation.hand.effort_limit
-            torques = np.clip(u, -limit, limit) if simulator.actuation.saturate else u
+            torques = self._saturated(u)
             self._batch.step(torques, self._drive, simulator.max_speed, simulator.max_penetration, self.threads)
         self.t = round(self.t / self.simulator.dt + 1) * self.simulator.dt
 
@@ -248,10 +253,7 @@ class BatchSimulator:
         if bad.any():
             raise InputError(f"`u` must be finite; NaN/inf in environments {np.flatnonzero(bad).tolist()[:10]}")
         simulator = self.simulator
-        if not self._barrett and simulator.actuation.saturate:
-            limit = simulator.actuation.hand.effort_limit
-            u = np.clip(u, -limit, limit)
-        inputs = u.reshape(self.size, -1)
+        inputs = (u if self._barrett else self._saturated(u)).reshape(self.size, -1)
         limits = (simulator.max_speed, simulator.max_penetration)
         q_record, v_record = self._batch.rollout(
             inputs, int(steps), self._barrett, self._drive, *limits, self.threads, bool(record)
@@ -260,14 +262,8 @@ class BatchSimulator:
         for _ in range(int(steps)):
             self.t = round(self.t / simulator.dt + 1) * simulator.dt
             times.append(self.t)
-        if not record:
-            return BatchRollout(np.array(times), np.zeros((self.size, 0, 0)), np.zeros((self.size, 0, 0)), self._nqh)
-        return BatchRollout(
-            np.array(times),
-            q_record.reshape(self.size, int(steps), -1),
-            v_record.reshape(self.size, int(steps), -1),
-            self._nqh,
-        )
+        shape = (self.size, int(steps), -1) if record else (self.size, 0, 0)
+        return BatchRollout(np.array(times), q_record.reshape(shape), v_record.reshape(shape), self._nqh, self._nvh)
 
     def run(self, controller: Callable[[float, BatchSimulator], Any], duration: float) -> BatchSimulator:
         """Step ``duration`` [s] with ``u = controller(t, batch)`` (shape (N, n_inputs)) at every step."""
@@ -288,6 +284,14 @@ class BatchSimulator:
         source = StepOutput(self.simulator, self.contacts(env), memory)
         scene_q, scene_v = self._batch.q[env].copy(), self._batch.v[env].copy()
         return SimulatedState.lazy(self.t, scene_q, scene_v, modes, source, None, self.simulator.layout.signature)
+
+    def _saturated(self, torques: np.ndarray) -> np.ndarray:
+        """Joint torques [N m] (..., nv_hand) as the fully actuated hand applies them (clipped if it saturates).
+
+        As :meth:`~bhgrasp.sim.actuation.FullyActuated.joint_torques`, for any leading axes.
+        """
+        actuation = self.simulator.actuation
+        return np.clip(torques, -actuation.limit, actuation.limit) if actuation.saturate else torques
 
     def _env(self, env: int) -> int:
         if isinstance(env, bool) or not isinstance(env, int | np.integer) or not 0 <= env < self.size:
