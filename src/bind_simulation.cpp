@@ -84,6 +84,7 @@ void bind_simulation(nb::module_& m) {
       .def("step", &Engine::step, "q"_a, "v"_a, "tau_hand"_a, "drive"_a, "memory"_a, "max_speed"_a,
            "max_penetration"_a, nb::call_guard<nb::gil_scoped_release>())
       .def("detect", &Engine::detect, "q"_a, "memory"_a)
+      .def_prop_rw("kept_solver", &Engine::kept_solver, &Engine::set_kept_solver)
       .def_prop_ro("nq", &Engine::nq)
       .def_prop_ro("nv", &Engine::nv);
 

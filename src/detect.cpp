@@ -12,6 +12,7 @@
 
 #include "engine.hpp"
 #include "kernels.hpp"
+#include "narrowphase.hpp"
 
 namespace bhgrasp {
 namespace {
@@ -63,12 +64,12 @@ Contacts Engine::detect(const Vector& q, const Memory& memory) {
     const coal::Transform3s transform_b = pinocchio::toCoalTransform3s(placement_b);
     coal::CollisionResult& result = result_;
     result.clear();
-    if (!coal::collide(shape_a.get(), transform_a, shape_b.get(), transform_b, request_, result))
+    if (!narrowphase_->collide(shape_a.get(), transform_a, shape_b.get(), transform_b, request_, result))
       continue;
     // EPA stopped short at the tight tolerance, or at a depth no contact has: ask again at coal's default
     if (!converged(result, std::min(2.0 * std::min(bound_radius_[pair.geom_a], bound_radius_[pair.geom_b]), 1.0))) {
       result.clear();
-      if (!coal::collide(shape_a.get(), transform_a, shape_b.get(), transform_b, fallback_request_, result))
+      if (!narrowphase_->collide(shape_a.get(), transform_a, shape_b.get(), transform_b, fallback_request_, result))
         continue;
     }
     coal::ContactPatchResult& patches = patch_result_;

@@ -5,6 +5,7 @@
 // integrators.cpp.
 #include "engine.hpp"
 #include "model_io.hpp"
+#include "narrowphase.hpp"
 #include "part_system.hpp"
 
 #include <algorithm>
@@ -44,6 +45,7 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
   if (settings_.sparse && settings_.integrator != 0)
     throw std::invalid_argument("the velocity system by parts (sparse) serves the implicit integrator only");
   if (settings_.sparse) system_ = std::make_unique<PartSystem>();
+  narrowphase_ = std::make_unique<Narrowphase>();
   model_ = model_from_text(model);
   geometry_ = geometry_from_text(geometry);
   parts_ = SceneParts(model_, settings_.nv_hand);
@@ -99,6 +101,9 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
 }
 
 Engine::~Engine() = default;
+
+bool Engine::kept_solver() const { return narrowphase_->kept; }
+void Engine::set_kept_solver(bool kept) { narrowphase_->kept = kept; }
 
 // ------------------------------------------------------------------ joint space (sim/python_engine.py)
 void Engine::passive(const Vector& q, const Vector& v, const Drive& drive, Passive& result) const {

@@ -71,6 +71,7 @@ struct StepResult {
 };
 
 class PartSystem;
+class Narrowphase;
 
 class Engine {
  public:
@@ -91,6 +92,11 @@ class Engine {
 
   // Translational world-aligned Jacobians of frames at q, rows 3 f .. 3 f + 2 for frame f: (3 n, nv_hand).
   Matrix frame_jacobians(const Vector& q, const std::vector<int>& frames);
+
+  // Whether contact detection keeps one coal solver between queries (the default) or, as the reference it is tested
+  // against, lets coal::collide make one per query; the contacts are the same to the bit.
+  bool kept_solver() const;
+  void set_kept_solver(bool kept);
 
   int nq() const { return model_.nq; }
   int nv() const { return model_.nv; }
@@ -189,6 +195,7 @@ class Engine {
   coal::ContactPatchRequest patch_request_;
   coal::CollisionResult result_;  // one pair's, cleared before each query
   coal::ContactPatchResult patch_result_;
+  std::unique_ptr<Narrowphase> narrowphase_;  // coal::collide on a kept solver (narrowphase.hpp)
   std::shared_ptr<coal::CollisionGeometry> probe_;
   std::vector<double> bound_radius_;  // per geometry: radius [m] of a sphere about bound_centre_ holding the shape
   std::vector<Vector3> bound_centre_; // in the geometry's frame; radius inf: unbounded (half-spaces)
