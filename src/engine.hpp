@@ -93,8 +93,9 @@ class Engine {
   // Translational world-aligned Jacobians of frames at q, rows 3 f .. 3 f + 2 for frame f: (3 n, nv_hand).
   Matrix frame_jacobians(const Vector& q, const std::vector<int>& frames);
 
-  // Whether contact detection keeps one coal solver between queries (the default) or, as the reference it is tested
-  // against, lets coal::collide make one per query; the contacts are the same to the bit.
+  // Whether contact detection keeps one coal solver between queries (the default with the coal it was checked
+  // against) or, as the reference it is tested against, lets coal::collide make one per query; the contacts are the
+  // same to the bit.  Not to be changed while another thread steps this engine.
   bool kept_solver() const;
   void set_kept_solver(bool kept);
 

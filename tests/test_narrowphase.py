@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import coal
 import numpy as np
 import pinocchio as pin
 import trimesh
@@ -26,11 +27,13 @@ from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
 from bhgrasp.sim.scene import Scene
 
+CHECKED = "3.0.3"  # the coal whose collide() src/narrowphase.cpp mirrors (another one runs coal::collide itself)
+
 
 def coal_collide(simulator: Simulator) -> Simulator:
     """``simulator``'s engine set to let coal::collide make a solver per query (the reference)."""
     native = simulator.engine._engine
-    assert native.kept_solver
+    assert native.kept_solver == (coal.__version__ == CHECKED), f"coal {coal.__version__}: re-check the kept solver"
     native.kept_solver = False
     return simulator
 
