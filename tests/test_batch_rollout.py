@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import select
 import signal
+import threading
 import time
 
 import numpy as np
@@ -207,3 +208,28 @@ def test_a_forked_child_steps_a_batch_its_parent_threaded() -> None:
     assert os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0
     batch.step(u)
     np.testing.assert_array_equal(np.frombuffer(data).reshape(batch.scene_q.shape), batch.scene_q)
+
+
+def test_two_python_threads_calling_one_batch_take_turns() -> None:
+    """Calls from two Python threads (the GIL released in C++), each with its own thread count, run one at a time."""
+    hold = reference_hold()
+    states = start_states(hold, 4)
+    batch = BatchSimulator(hold.simulator, states)
+    expected = batch.gravity_torques()
+    native, results, errors = batch._batch, [], []
+
+    def call(threads: int) -> None:
+        try:
+            for _ in range(200):
+                results.append(native.gravity(threads))
+        except Exception as error:  # reported below
+            errors.append(error)
+
+    workers = [threading.Thread(target=call, args=(count,)) for count in (2, 3)]
+    for worker in workers:
+        worker.start()
+    for worker in workers:
+        worker.join(timeout=60.0)
+    assert not any(worker.is_alive() for worker in workers), "the calls did not finish within 60 s"
+    assert not errors and len(results) == 400
+    assert all(np.array_equal(result, expected) for result in results)
