@@ -1,15 +1,20 @@
-"""Scenes several test modules share: the hand parked far away, two boxes meeting off centre, a box on an incline;
-the Barrett drive under its Python rules."""
+"""Scenes several test modules share: the hand parked far away, two boxes meeting off centre, a box on an incline, a
+prism tipping onto the decomposed banana; the Barrett drive under its Python rules."""
 
 from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+import trimesh
 
 import bhgrasp as bh
-from bhgrasp.model.objects import Box, Plane
+from bhgrasp.model.household_objects import household
+from bhgrasp.model.mesh_object import Mesh
+from bhgrasp.model.objects import Box, Plane, table
+from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
 from bhgrasp.sim.contact_law import SpringDamper
+from bhgrasp.sim.scene import Scene
 
 G = 9.81  # [m/s^2]
 FAR = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.3]))  # the hand's base, 5 m from the objects near the origin
@@ -56,3 +61,16 @@ class PythonBarrettRules(BarrettActuation):
     (The compiled Simulator runs ``BarrettActuation`` itself in C++, ``src/barrett.cpp``; this is its independent
     truth.)
     """
+
+
+def prism_onto_banana() -> Simulator:
+    """A heptagonal prism (one hull) tipping onto the banana (four convex pieces) on a table, the hand far away."""
+    prism = Mesh(
+        trimesh.creation.cylinder(radius=0.02, height=0.06, sections=7),
+        mass=0.2,
+        pose=pin.SE3(pin.rpy.rpyToMatrix(0.4, 0.0, 0.0), np.array([0.0, -0.03, 0.05])),
+        velocity=[0.0, 0.3, 0.0, 0.0, 0.0, 0.0],
+        name="prism",
+    )
+    banana = household("banana", position=(0.0, 0.02, 0.0))
+    return Simulator(Scene(far_hand((0.0, 0.0, -G)), [prism, banana], [table()]))

@@ -15,7 +15,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import trimesh
-from scenes import G, far_hand
+from scenes import G, far_hand, prism_onto_banana
 from test_compiled import assert_agree, lockstep, zero
 
 import bhgrasp as bh
@@ -159,16 +159,8 @@ def test_a_meshed_box_rests_on_a_table_as_the_box(engine: str) -> None:
 
 def test_a_prism_rolling_into_a_decomposed_banana_in_lockstep() -> None:
     """A heptagonal prism (one hull) tipping onto the banana (four pieces) on a table: both engines, 1e-12."""
-    prism = Mesh(
-        trimesh.creation.cylinder(radius=0.02, height=0.06, sections=7),
-        mass=0.2,
-        pose=pin.SE3(pin.rpy.rpyToMatrix(0.4, 0.0, 0.0), np.array([0.0, -0.03, 0.05])),
-        velocity=[0.0, 0.3, 0.0, 0.0, 0.0, 0.0],
-        name="prism",
-    )
-    banana = household("banana", position=(0.0, 0.02, 0.0))
-    assert len(banana.pieces) > 1
-    simulator = Simulator(Scene(far_hand((0.0, 0.0, -G)), [prism, banana], [table()]))
+    simulator = prism_onto_banana()
+    assert len(simulator.scene.objects[1].pieces) > 1
     assert_agree(lockstep(simulator, zero(8), 400), 4)
 
 

@@ -13,19 +13,13 @@ from collections.abc import Callable
 
 import coal
 import numpy as np
-import pinocchio as pin
-import trimesh
-from scenes import G, far_hand
+from scenes import prism_onto_banana
 
-from bhgrasp.model.household_objects import household
-from bhgrasp.model.mesh_object import Mesh
-from bhgrasp.model.objects import table
 from bhgrasp.scenarios.box_grasp import box_grasp
 from bhgrasp.scenarios.clutter import bin_walls, drop_pile, mixed_objects
 from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
-from bhgrasp.sim.scene import Scene
 
 CHECKED = "3.0.3"  # the coal whose collide() src/narrowphase.cpp mirrors (another one runs coal::collide itself)
 
@@ -81,19 +75,7 @@ def test_the_barrett_hand_closing_on_a_box_sees_the_same_contacts() -> None:
 
 
 def test_convex_mesh_pieces_rolling_on_a_table_see_the_same_contacts() -> None:
-    prism = Mesh(
-        trimesh.creation.cylinder(radius=0.02, height=0.06, sections=7),
-        mass=0.2,
-        pose=pin.SE3(pin.rpy.rpyToMatrix(0.4, 0.0, 0.0), np.array([0.0, -0.03, 0.05])),
-        velocity=[0.0, 0.3, 0.0, 0.0, 0.0, 0.0],
-        name="prism",
-    )
-    banana = household("banana", position=(0.0, 0.02, 0.0))
-
-    def simulator() -> Simulator:
-        return Simulator(Scene(far_hand((0.0, 0.0, -G)), [prism, banana], [table()]))
-
-    kept, reference = simulator(), coal_collide(simulator())
+    kept, reference = prism_onto_banana(), coal_collide(prism_onto_banana())
     state = kept.initial_state()
     assert assert_same_bits(kept, reference, lambda k, s: (np.zeros(8), None), 400, state) >= 4
 
