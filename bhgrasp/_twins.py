@@ -109,6 +109,13 @@ KERNELS = (
         "tests/test_compiled.py::test_the_recorders_join_is_its_numpy_twin",
     ),
     Twin(
+        "box_separation",
+        "",
+        "tests/test_narrowphase.py::test_the_box_separation_is_a_lower_bound_of_coals_distance",
+        reason="a shortcut of the compiled contact detection (pairs of boxes it need not ask coal about); held to "
+        "coal's distance, and the step with it to the step without it bit for bit",
+    ),
+    Twin(
         "independent_model_text",
         "",
         "tests/test_couplings.py::test_the_twin_is_pinocchios_independent_model_and_pickles_rebuild_the_coupled_hand",

@@ -64,6 +64,16 @@ void bind_simulation(nb::module_& m) {
       .def_ro("force", &Contacts::force).def_ro("sticking", &Contacts::sticking)
       .def_ro("was_sliding", &Contacts::was_sliding)
       .def("__len__", &Contacts::size);
+  m.def(
+      "box_separation",
+      [](const Vector3& half_a, const Matrix& pose_a, const Vector3& half_b, const Matrix& pose_b) {
+        if (pose_a.rows() != 4 || pose_a.cols() != 4 || pose_b.rows() != 4 || pose_b.cols() != 4)
+          throw std::invalid_argument("box poses must be 4 x 4 homogeneous matrices");
+        const pinocchio::SE3 placement_a{Eigen::Matrix4d(pose_a)}, placement_b{Eigen::Matrix4d(pose_b)};
+        return box_separation(half_a, placement_a, half_b, placement_b);
+      },
+      "half_a"_a, "pose_a"_a, "half_b"_a, "pose_b"_a,
+      "The separating-axis gap [m] of two boxes (half sides, world poses): a lower bound of their distance.");
   m.def("independent_model_text", &independent_model_text, "model"_a,
         "pin.Model.saveToString() of the model with every mimic joint made an independent joint (bhgrasp.model.couplings).");
   m.def("concatenate", &concatenate, "parts"_a, "The contacts of many steps as one Contacts (rows in order).");
@@ -85,6 +95,8 @@ void bind_simulation(nb::module_& m) {
            "max_penetration"_a, nb::call_guard<nb::gil_scoped_release>())
       .def("detect", &Engine::detect, "q"_a, "memory"_a)
       .def_prop_rw("kept_solver", &Engine::kept_solver, &Engine::set_kept_solver)
+      .def_rw("box_axes", &Engine::box_axes)
+      .def_ro("box_axes_skipped", &Engine::box_axes_skipped)
       .def_prop_ro("nq", &Engine::nq)
       .def_prop_ro("nv", &Engine::nv);
 

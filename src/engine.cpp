@@ -81,6 +81,7 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
     const bool bounded = std::isfinite(object.geometry->aabb_radius) && object.geometry->aabb_center.allFinite();
     bound_radius_.push_back(bounded ? object.geometry->aabb_radius : std::numeric_limits<double>::infinity());
     bound_centre_.push_back(bounded ? Vector3(object.geometry->aabb_center) : Vector3::Zero());
+    box_.push_back(dynamic_cast<const coal::Box*>(object.geometry.get()));
   }
   partners_.resize(geometry_.ngeoms);
   for (std::size_t k = 0; k < settings_.pairs.size(); ++k) {  // the broad phase's sweep (detect.cpp: broad_phase)

@@ -73,6 +73,11 @@ struct StepResult {
 class PartSystem;
 class Narrowphase;
 
+// The largest gap [m] between the projections of two boxes (half sides [m], placements in the world) onto the 15
+// axes of the separating-axis test: a lower bound of their distance; <= 0 when no axis separates them.
+double box_separation(const Vector3& half_a, const pinocchio::SE3& placement_a, const Vector3& half_b,
+                      const pinocchio::SE3& placement_b);
+
 class Engine {
  public:
   // `model` and `geometry`: Pinocchio's text serialisations (Model.saveToString, GeometryModel.saveToString).
@@ -98,6 +103,11 @@ class Engine {
   // same to the bit.  Not to be changed while another thread steps this engine.
   bool kept_solver() const;
   void set_kept_solver(bool kept);
+
+  // Whether a pair of boxes is skipped when an axis of the separating-axis test holds them apart (box_separation;
+  // the default); off, as the reference it is tested against, the narrow phase asks coal.  The same contacts.
+  bool box_axes = true;
+  std::int64_t box_axes_skipped = 0;  // the pairs it skipped, since the engine was made
 
   int nq() const { return model_.nq; }
   int nv() const { return model_.nv; }
@@ -200,6 +210,7 @@ class Engine {
   std::shared_ptr<coal::CollisionGeometry> probe_;
   std::vector<double> bound_radius_;  // per geometry: radius [m] of a sphere about bound_centre_ holding the shape
   std::vector<Vector3> bound_centre_; // in the geometry's frame; radius inf: unbounded (half-spaces)
+  std::vector<const coal::Box*> box_;  // per geometry: its box, or null (another shape)
   static constexpr int kSweepFrom = 128;  // pairs from which the broad phase sweeps (fewer: every pair is tested)
   // per geometry g: (geometry h > g, pair index) of its pairs with bounded geometries after it, sorted
   std::vector<std::vector<std::pair<int, int>>> partners_;
