@@ -2,6 +2,7 @@
 // memory and contacts, one step's result, the Engine and the Batch, the recorder's concatenate, the model text.
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
 #include <nanobind/stl/array.h>
 #include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
@@ -32,6 +33,17 @@ using namespace nb::literals;
   }()
 
 namespace bhgrasp {
+namespace {
+
+using ReadOnly = nb::ndarray<const double, nb::numpy, nb::ndim<1>, nb::c_contig>;
+
+// A read-only NumPy view of `vector` (its owner kept alive by the reference_internal policy of the property).
+ReadOnly read_only(const Vector& vector) {
+  const std::size_t shape[1] = {static_cast<std::size_t>(vector.size())};
+  return ReadOnly(vector.data(), 1, shape);
+}
+
+}  // namespace
 
 void bind_simulation(nb::module_& m) {
   BHGRASP_BIND_OPTIONS(m, ContactLaw, BHGRASP_CONTACT_LAW);
@@ -83,8 +95,10 @@ void bind_simulation(nb::module_& m) {
       .def_ro("kind", &Divergence::kind).def_ro("index", &Divergence::index)
       .def_ro("value", &Divergence::value);
 
+  // q and v read-only: they become a state's arrays, views of this result's (a state is a value)
   nb::class_<StepResult>(m, "StepResult")
-      .def_ro("q", &StepResult::q).def_ro("v", &StepResult::v)
+      .def_prop_ro("q", [](const StepResult& result) { return read_only(result.q); }, nb::rv_policy::reference_internal)
+      .def_prop_ro("v", [](const StepResult& result) { return read_only(result.v); }, nb::rv_policy::reference_internal)
       .def_ro("contacts", &StepResult::contacts).def_ro("memory", &StepResult::memory)
       .def_ro("drive", &StepResult::drive).def_ro("load", &StepResult::load)
       .def_ro("divergence", &StepResult::divergence);

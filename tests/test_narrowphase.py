@@ -25,12 +25,12 @@ import pinocchio as pin
 import pytest
 from scenes import prism_onto_banana
 
-from bhgrasp._core import box_separation
 from bhgrasp.scenarios.box_grasp import box_grasp
 from bhgrasp.scenarios.clutter import bin_walls, drop_pile, mixed_objects
 from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
+from bhgrasp.sim.compiled import core_module
 
 SLACK = 1e-9  # [m] how far beyond the security margin detect() wants a pair apart before it skips the pair
 CHECKED = "3.0.3"  # the coal whose collide() src/narrowphase.cpp mirrors (another one runs coal::collide itself)
@@ -146,7 +146,7 @@ def test_the_box_separation_is_a_lower_bound_of_coals_distance() -> None:
     for _ in range(3000):
         half_a, half_b = rng.uniform(0.002, 0.05, size=3), rng.uniform(0.002, 0.05, size=3)
         pose_a, pose_b = random_pose(rng, 0.08), random_pose(rng, 0.08)
-        gap = box_separation(half_a, pose_a.homogeneous, half_b, pose_b.homogeneous)
+        gap = core_module().box_separation(half_a, pose_a.homogeneous, half_b, pose_b.homogeneous)
         distance = coal_distance(half_a, pose_a, half_b, pose_b)
         assert gap <= max(distance, 0.0) + SLACK, (gap, distance)  # coal's own GJK is exact to ~1e-12 m
         apart += gap > 0.0
@@ -164,7 +164,7 @@ def test_the_box_separation_is_the_distance_of_boxes_apart_along_a_face_normal()
         offset[(axis + 1) % 3] = rng.uniform(-1, 1) * min(half_a[(axis + 1) % 3], half_b[(axis + 1) % 3])
         pose_a = pin.SE3(rotation, rng.normal(size=3) * 0.1)
         pose_b = pin.SE3(rotation, pose_a.translation + rotation @ offset)
-        gap = box_separation(half_a, pose_a.homogeneous, half_b, pose_b.homogeneous)
+        gap = core_module().box_separation(half_a, pose_a.homogeneous, half_b, pose_b.homogeneous)
         assert gap == pytest.approx(distance, abs=1e-12)
         assert gap == pytest.approx(coal_distance(half_a, pose_a, half_b, pose_b), abs=1e-9)
 
@@ -176,4 +176,4 @@ def test_overlapping_boxes_have_no_separating_axis() -> None:
         pose_a = random_pose(rng, 0.1)
         inside = pose_a.act(rng.uniform(-1, 1, size=3) * half_a)  # b's centre inside a
         pose_b = pin.SE3(pin.exp3(rng.normal(size=3) * 2.0), inside)
-        assert box_separation(half_a, pose_a.homogeneous, half_b, pose_b.homogeneous) <= 0.0
+        assert core_module().box_separation(half_a, pose_a.homogeneous, half_b, pose_b.homogeneous) <= 0.0

@@ -123,7 +123,10 @@ class SimulatedState(State):
         """
         state = object.__new__(cls)
         set_t, set_scene_q, set_scene_v, set_modes, set_source, set_q, set_v, set_signature, set_object_time = _SETTERS
-        scene_q.flags.writeable = scene_v.flags.writeable = False
+        if scene_q.flags.writeable:  # (the compiled engine's are read-only views already)
+            scene_q.flags.writeable = False
+        if scene_v.flags.writeable:
+            scene_v.flags.writeable = False
         set_t(state, t)
         set_scene_q(state, scene_q)
         set_scene_v(state, scene_v)
@@ -131,11 +134,9 @@ class SimulatedState(State):
         set_source(state, source)
         set_signature(state, scene_signature)
         set_object_time(state, None)
-        if hand_sizes is not None:  # the hand's q and v: read-only views of the scene's (built for every state)
-            q, v = scene_q[: hand_sizes[0]], scene_v[: hand_sizes[1]]
-            q.flags.writeable = v.flags.writeable = False
-            set_q(state, q)
-            set_v(state, v)
+        if hand_sizes is not None:  # the hand's q and v: views of the scene's, read-only as they are
+            set_q(state, scene_q[: hand_sizes[0]])
+            set_v(state, scene_v[: hand_sizes[1]])
         return state
 
 

@@ -78,13 +78,11 @@ class CompiledEngine:
     def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, drive: Any, memory: Any) -> StepResult:
         """One step from the engine's own ``Memory`` with a ``Drive`` of :meth:`drive`.
 
-        Returns the :class:`~bhgrasp.sim.engine.StepResult` with the C++ engine's ``Contacts`` and ``Memory``
-        objects (converted by :func:`contact_set` and :func:`memory_of` when read).
+        Returns the C++ engine's own ``StepResult``: the fields of :class:`~bhgrasp.sim.engine.StepResult`, each
+        read from C++ when asked for (``q`` and ``v`` as read-only views; the ``Contacts`` and ``Memory`` objects
+        converted by :func:`contact_set` and :func:`memory_of` when read).
         """
-        result = self._engine.step(q, v, tau_hand, drive, memory, *self._limits)
-        return StepResult(
-            result.q, result.v, result.contacts, result.drive, result.memory, result.divergence, result.load
-        )
+        return self._engine.step(q, v, tau_hand, drive, memory, *self._limits)
 
     def barrett(self, actuation: BarrettActuation):
         """A Barrett actuation's drive as C++ builds and steps it (its parameters now; its modes are a step's)."""
@@ -111,10 +109,7 @@ class CompiledEngine:
         result, after = drive.step(
             self._engine, q, v, u, _NONE if extra is None else extra, modes, memory, *self._limits
         )
-        step = StepResult(
-            result.q, result.v, result.contacts, result.drive, result.memory, result.divergence, result.load
-        )
-        return step, tuple(after)
+        return result, tuple(after)
 
     def detect(self, q: np.ndarray, memory: ContactMemory) -> ContactSet:
         """The contacts at ``q`` matched to ``memory`` (no forces)."""

@@ -66,7 +66,7 @@ NO_DIVERGENCE = Divergence(0, -1, 0.0)
 
 
 class StepResult(NamedTuple):
-    """What one engine step returns.
+    """What one engine step returns (the compiled engine returns its own C++ ``StepResult`` of the same fields).
 
     Attributes:
         q, v: The scene's configuration and velocity after the step.

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from bhgrasp._validation import as_positive, as_vector
-from bhgrasp.data import State, Trajectory, empty_contact_set
+from bhgrasp.data import State, Trajectory
 from bhgrasp.errors import InputError
 from bhgrasp.sim.inputs import joint_torques
 from bhgrasp.sim.recorder import Recorder
@@ -93,7 +93,7 @@ def run(
     state = _start(simulator, controller, state)
     recorder = Recorder(simulator.scene, simulator.actuation)
     u = np.zeros(simulator.actuation.n_inputs)
-    info = StepInfo(empty_contact_set(), np.zeros(simulator.scene.nv_hand))
+    info = StepInfo.empty(simulator.scene.nv_hand)
     iterator = range(steps)
     if progress and steps > 20_000:
         from tqdm import tqdm

@@ -275,7 +275,7 @@ class Simulator:
             nqh, nvh = self.scene.nq_hand, self.scene.nv_hand
             self.actuation.update(result.q[:nqh], result.v[:nvh], u, result.drive, result.load)
         return self._state(t, result.q, result.v, result.contacts, result.memory, start, modes), StepInfo(
-            result.contacts, result.drive, self.engine
+            result, self.engine
         )
 
     def _step_actuated(self, state: State, u: np.ndarray, disturbance: np.ndarray | None, memory: Any) -> Any:

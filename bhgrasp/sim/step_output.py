@@ -6,7 +6,7 @@ Python engine, or the compiled engine's ``Contacts``/``Memory``) and are convert
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 import numpy as np
 
@@ -37,18 +37,41 @@ class StepInfo:
             ``Contacts``; both carry the arrays ``pair``, ``point``, ``normal``, ``depth``, ``force``, ``sticking``.
     """
 
-    __slots__ = ("_contacts", "_engine", "contact_arrays", "drive_torques")
+    __slots__ = ("_contacts", "_engine", "_result")
 
-    def __init__(self, contacts: Any, drive_torques: np.ndarray, engine: Engine | None = None) -> None:
-        self.contact_arrays, self.drive_torques, self._engine, self._contacts = contacts, drive_torques, engine, None
+    def __init__(self, result: Any, engine: Engine | None = None) -> None:
+        """``result``: the engine's step (``contacts`` and ``drive`` read from it when asked for)."""
+        self._result, self._engine, self._contacts = result, engine, None
+
+    @classmethod
+    def empty(cls, nv_hand: int) -> StepInfo:
+        """The information before any step: no contacts, no drive torque."""
+        return cls(_Empty(empty_contact_set(), np.zeros(nv_hand)))
+
+    @property
+    def contact_arrays(self) -> Any:
+        """The step's contacts as the engine returned them."""
+        return self._result.contacts
+
+    @property
+    def drive_torques(self) -> np.ndarray:
+        """Hand joint torques the drive delivered over the step [N m], (nv_hand,)."""
+        return self._result.drive
 
     @property
     def contacts(self) -> ContactSet:
         """The step's contacts as a :class:`~bhgrasp.data.contacts.ContactSet` (built on first read, then kept)."""
         if self._contacts is None:
-            arrays = self.contact_arrays
+            arrays = self._result.contacts
             self._contacts = arrays if isinstance(arrays, ContactSet) else self._engine.contact_set(arrays)
         return self._contacts
+
+
+class _Empty(NamedTuple):
+    """A step's result as :class:`StepInfo` reads it, before any step."""
+
+    contacts: ContactSet
+    drive: np.ndarray
 
 
 class StepOutput:
