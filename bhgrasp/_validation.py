@@ -23,7 +23,7 @@ def as_vector(value: Any, name: str, size: int | None = None) -> np.ndarray:
         InputError: If the input is not numeric, not 1-D, has the wrong length, or holds NaN/inf.
     """
     if type(value) is np.ndarray and value.dtype == np.float64 and value.ndim == 1 and value.shape[0] == size:
-        if math.isfinite(np.dot(value, value)):  # fast path: a NaN/inf element makes the dot product non-finite
+        if math.isfinite(sum(value.tolist())):  # fast path: a NaN/inf element makes the sum non-finite
             return value
     try:
         array = np.asarray(value, dtype=np.float64)

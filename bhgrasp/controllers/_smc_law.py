@@ -14,6 +14,7 @@ lockstep.
 
 from __future__ import annotations
 
+import operator
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
@@ -83,7 +84,9 @@ class CompiledSMCLaw:
         self._size = self.kernel.log_size
         layout = log_layout(nv, fingers)
         self._tau = layout[0][1]
-        self._flat = [(key, index) for key, index in layout[1:] if not isinstance(index, tuple) or index[1] is Ellipsis]
+        flat = [(key, index) for key, index in layout[1:] if not isinstance(index, tuple) or index[1] is Ellipsis]
+        self._flat_keys = [key for key, _ in flat]
+        self._flat_views = operator.itemgetter(*(index for _, index in flat))  # buffer -> its views, in one call
         self._blocks = [
             (key, slice(*index), (fingers, 3))
             for key, index in layout
@@ -150,7 +153,8 @@ class CompiledSMCLaw:
         if law.reference is None:
             held = self._held
             if held is None or held[0] is not law._hold:
-                held = self._held = (law._hold, law._hold.rotation.copy(), law._hold.translation.copy())
+                rotation = law._hold.rotation.copy(order="F")  # Eigen's order: the kernel takes it without a copy
+                held = self._held = (law._hold, rotation, law._hold.translation.copy())
             rotation_d, position_d, velocity, acceleration = held[1], held[2], self._zeros, self._zeros
         else:
             sample, velocity, acceleration = law.reference(t)
@@ -176,7 +180,7 @@ class CompiledSMCLaw:
         )
         if status in (1, 2, 3):
             self._raise(law, state, status, out)
-        log.update([(key, out[index]) for key, index in self._flat])
+        log.update(zip(self._flat_keys, self._flat_views(out)))
         for key, index, shape in self._blocks:
             log[key] = out[index].reshape(shape)
         tau = out[self._tau]
