@@ -144,3 +144,21 @@ def test_hand_adaptation_path_matches_the_fixed_model_at_vanishing_rate():
     assert np.any(runs[0].log["phase"] >= 1)
     np.testing.assert_allclose(runs[1].u, runs[0].u, atol=1e-9)
     np.testing.assert_allclose(runs[1].q, runs[0].q, atol=1e-10)
+
+
+def test_finger_normal_forces_are_each_fingers_sum_of_f_dot_n_over_its_object_contacts():
+    """The vectorised sum against its definition, sample by sample, to the bit (the demo: pads, links, pedestal)."""
+    traj = run_grasp_demo(duration=1.0).trajectory
+    hand = box_grasp(mass=0.6).hand
+    expected = np.zeros((len(traj), len(hand.fingers)))
+    for k in range(len(traj)):
+        contacts = traj.contacts_at(k)
+        for (link, other), force, normal in zip(contacts["bodies"], contacts["force"], contacts["normal"]):
+            finger = next((f for f in hand.fingers if str(link).startswith(f + "_")), None)
+            if finger is not None and other in traj.object_names:
+                expected[k, hand.fingers.index(finger)] += force @ normal
+    measured = finger_normal_forces(hand, traj)
+    np.testing.assert_array_equal(measured, expected)
+    assert (measured > 1.0).all(axis=1).sum() > 300  # three fingers pressing for a third of the second
+    on_pedestal = [str(a) == "environment0" for a, _ in traj.pair_bodies[traj.contact_pair]]
+    assert any(on_pedestal)  # the box on its pedestal: an environment contact, not counted

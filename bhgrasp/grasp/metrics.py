@@ -19,14 +19,17 @@ def finger_of(hand: Hand, link: str) -> str | None:
 def finger_normal_forces(hand: Hand, traj: Trajectory) -> np.ndarray:
     """(N, n_fingers) measured normal force [N] of each finger on the objects (sum over its contact points)."""
     forces = np.zeros((len(traj), len(hand.fingers)))
+    if not len(traj.contact_pair) or not len(traj.pair_bodies):
+        return forces
     objects = set(traj.object_names)
     sensing = ContactSensing(hand)
-    for k in range(len(traj)):
-        contacts = traj.contacts_at(k)
-        for (link, other), force, normal in zip(contacts["bodies"], contacts["force"], contacts["normal"]):
-            finger = sensing.finger_of(link)
-            if finger is not None and other in objects:
-                forces[k, hand.fingers.index(finger)] += force @ normal
+    fingers = [sensing.finger_of(str(link)) if str(other) in objects else None for link, other in traj.pair_bodies]
+    column = np.array([-1 if finger is None else hand.fingers.index(finger) for finger in fingers])[traj.contact_pair]
+    sample = np.repeat(np.arange(len(traj)), np.diff(traj.contact_offsets))
+    force, normal = traj.contact_force, traj.contact_normal
+    pressed = force[:, 0] * normal[:, 0] + force[:, 1] * normal[:, 1] + force[:, 2] * normal[:, 2]  # f . n per row
+    on_finger = column >= 0
+    np.add.at(forces, (sample[on_finger], column[on_finger]), pressed[on_finger])  # in row order, as a loop adds
     return forces
 
 
