@@ -45,7 +45,8 @@ def as_array(value: Any, name: str, shape: tuple[int | None, ...]) -> np.ndarray
         and all(s is None or s == a for s, a in zip(shape, value.shape))
     ):
         flat = value.reshape(-1)
-        if math.isfinite(np.dot(flat, flat)):  # fast path, as in as_vector (an overflow takes the full check)
+        if math.isfinite(np.dot(flat, flat)):  # fast path: a NaN/inf makes the dot non-finite (so does an overflow,
+            # which takes the full check); for arrays of any size a BLAS dot beats as_vector's list sum
             return value
     try:
         array = np.asarray(value, dtype=np.float64)

@@ -38,11 +38,13 @@ bool converged(const coal::CollisionResult& result, double max_depth) {
 // The separating-axis test of two boxes (Gottschalk, Lin and Manocha, "OBBTree", SIGGRAPH 1996): the axes of each box
 // and the nine cross products of an axis of one with an axis of the other.  On a unit axis n the gap between the
 // boxes' projections, |t . n| - (the two half extents along n), is at most their distance.  Cross products of
-// (nearly) parallel axes are left out: they separate nothing the face axes do not.
+// (nearly) parallel axes are left out (dividing by their small length would amplify round-off): fewer axes can only
+// lower the gap.  A placement that is not finite gives NaN, which skips nothing.
 double box_separation(const Vector3& half_a, const pinocchio::SE3& placement_a, const Vector3& half_b,
                       const pinocchio::SE3& placement_b) {
   const Matrix3 axes = placement_a.rotation().transpose() * placement_b.rotation();  // b's axes in a's frame
   const Vector3 t = placement_a.rotation().transpose() * (placement_b.translation() - placement_a.translation());
+  if (!axes.allFinite() || !t.allFinite()) return std::numeric_limits<double>::quiet_NaN();
   const Matrix3 spread = axes.cwiseAbs();
   double gap = -std::numeric_limits<double>::infinity();
   for (int i = 0; i < 3; ++i) {
@@ -91,7 +93,8 @@ Contacts Engine::detect(const Vector& q, const Memory& memory) {
     const coal::Box* box_b = box_[static_cast<std::size_t>(pair.geom_b)];
     // two boxes apart along an axis: coal would find no contact either (the Python engine asks it; the same contacts)
     if (box_axes && box_a != nullptr && box_b != nullptr &&
-        box_separation(box_a->halfSide, placement_a, box_b->halfSide, placement_b) > request_.security_margin + 1e-9) {
+        box_separation(box_a->halfSide, placement_a, box_b->halfSide, placement_b) >
+            request_.security_margin + box_slack_) {
       ++box_axes_skipped;
       continue;
     }

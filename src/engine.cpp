@@ -75,13 +75,18 @@ Engine::Engine(const std::string& model, const std::string& geometry, Settings s
                                              query.patch_tolerance);
   patch_result_ = coal::ContactPatchResult(patch_request_);
   sweep_margin_ = request_.security_margin + 1e-6;  // the broad phase's (detect.cpp): 1e-6 above the test's 1e-9
+  // how far apart two boxes must be for coal to find no contact: GJK's distance never falls below the true one, but
+  // within its tolerance of touching it may report a contact, so the gap needs the larger tolerance, with room
+  box_slack_ = 1e-9 + 10.0 * std::max(query.tolerance, query.fallback_tolerance);
   probe_ = std::make_shared<coal::Sphere>(1e-12);
   for (const auto& object : geometry_.geometryObjects) {  // bounding spheres for the broad phase
     object.geometry->computeLocalAABB();
     const bool bounded = std::isfinite(object.geometry->aabb_radius) && object.geometry->aabb_center.allFinite();
     bound_radius_.push_back(bounded ? object.geometry->aabb_radius : std::numeric_limits<double>::infinity());
     bound_centre_.push_back(bounded ? Vector3(object.geometry->aabb_center) : Vector3::Zero());
-    box_.push_back(dynamic_cast<const coal::Box*>(object.geometry.get()));
+    // the boxes of detect.cpp's separating-axis test (not one a swept sphere inflates: the test knows no radius)
+    const auto* box = dynamic_cast<const coal::Box*>(object.geometry.get());
+    box_.push_back(box != nullptr && box->getSweptSphereRadius() == 0.0 ? box : nullptr);
   }
   partners_.resize(geometry_.ngeoms);
   for (std::size_t k = 0; k < settings_.pairs.size(); ++k) {  // the broad phase's sweep (detect.cpp: broad_phase)

@@ -210,7 +210,8 @@ class Engine {
   std::shared_ptr<coal::CollisionGeometry> probe_;
   std::vector<double> bound_radius_;  // per geometry: radius [m] of a sphere about bound_centre_ holding the shape
   std::vector<Vector3> bound_centre_; // in the geometry's frame; radius inf: unbounded (half-spaces)
-  std::vector<const coal::Box*> box_;  // per geometry: its box, or null (another shape)
+  std::vector<const coal::Box*> box_;  // per geometry: its box, or null (another shape, or a box with a swept sphere)
+  double box_slack_ = 0.0;             // [m] the gap beyond the security margin that skips two boxes (engine.cpp)
   static constexpr int kSweepFrom = 128;  // pairs from which the broad phase sweeps (fewer: every pair is tested)
   // per geometry g: (geometry h > g, pair index) of its pairs with bounded geometries after it, sorted
   std::vector<std::vector<std::pair<int, int>>> partners_;

@@ -30,9 +30,10 @@ from bhgrasp.scenarios.clutter import bin_walls, drop_pile, mixed_objects
 from bhgrasp.scenarios.hold import reference_hold
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
+from bhgrasp.sim.coal_queries import FALLBACK_TOLERANCE, NARROW_TOLERANCE
 from bhgrasp.sim.compiled import core_module
 
-SLACK = 1e-9  # [m] how far beyond the security margin detect() wants a pair apart before it skips the pair
+SLACK = 1e-9 + 10 * max(NARROW_TOLERANCE, FALLBACK_TOLERANCE)  # [m] detect()'s: apart beyond the margin by this
 CHECKED = "3.0.3"  # the coal whose collide() src/narrowphase.cpp mirrors (another one runs coal::collide itself)
 
 
@@ -148,9 +149,10 @@ def test_the_box_separation_is_a_lower_bound_of_coals_distance() -> None:
         pose_a, pose_b = random_pose(rng, 0.08), random_pose(rng, 0.08)
         gap = core_module().box_separation(half_a, pose_a.homogeneous, half_b, pose_b.homogeneous)
         distance = coal_distance(half_a, pose_a, half_b, pose_b)
-        assert gap <= max(distance, 0.0) + SLACK, (gap, distance)  # coal's own GJK is exact to ~1e-12 m
+        assert gap <= distance + 1e-9, (gap, distance)  # coal's distance (signed: < 0 overlapping) to ~1e-11 m
         apart += gap > 0.0
-    assert apart > 500  # the draws were apart often enough to try the bound
+    assert apart > 500  # the draws were apart often enough to try the bound, and overlapped too
+    assert 3000 - apart > 200
 
 
 def test_the_box_separation_is_the_distance_of_boxes_apart_along_a_face_normal() -> None:
@@ -177,3 +179,38 @@ def test_overlapping_boxes_have_no_separating_axis() -> None:
         inside = pose_a.act(rng.uniform(-1, 1, size=3) * half_a)  # b's centre inside a
         pose_b = pin.SE3(pin.exp3(rng.normal(size=3) * 2.0), inside)
         assert core_module().box_separation(half_a, pose_a.homogeneous, half_b, pose_b.homogeneous) <= 0.0
+
+
+@pytest.mark.parametrize("margin", [0.0, 2e-3])
+def test_boxes_the_test_skips_are_boxes_coal_finds_no_contact_between(margin: float) -> None:
+    """Pairs brought just past the skip's threshold (the gap a hair to 1 mm beyond the margin and the slack): coal,
+    asked as the engine asks it (its tolerance, the security margin), reports no contact for any of them."""
+    rng = np.random.default_rng(14)
+    request = coal.CollisionRequest(coal.CollisionRequestFlag.CONTACT, 4)
+    request.security_margin = margin
+    request.gjk_tolerance = request.epa_tolerance = NARROW_TOLERANCE
+    near = 0
+    for _ in range(400):
+        half_a, half_b = rng.uniform(0.002, 0.05, size=3), rng.uniform(0.002, 0.05, size=3)
+        pose_a, turn = random_pose(rng, 0.05), pin.exp3(rng.normal(size=3) * 2.0)
+        direction = rng.normal(size=3)
+        direction /= np.linalg.norm(direction)
+        target = margin + SLACK * (1.0 + 1e-6) + rng.choice([1e-12, 1e-9, 1e-6, 1e-3]) * rng.uniform()
+
+        def gap_at(reach: float) -> float:
+            pose_b = pin.SE3(turn, pose_a.translation + reach * direction)
+            return core_module().box_separation(half_a, pose_a.homogeneous, half_b, pose_b.homogeneous)
+
+        low, high = 0.0, 1.0  # the gap grows along the direction from overlap: bisect to the target
+        for _ in range(80):
+            middle = 0.5 * (low + high)
+            low, high = (middle, high) if gap_at(middle) < target else (low, middle)
+        pose_b = pin.SE3(turn, pose_a.translation + high * direction)
+        gap = gap_at(high)
+        assert margin + SLACK < gap < margin + SLACK + 1e-3 + 1e-9
+        near += gap < margin + SLACK + 1e-6
+        shapes = [coal.Box(*(2 * half)) for half in (half_a, half_b)]
+        transforms = [coal.Transform3s(pose.rotation, pose.translation) for pose in (pose_a, pose_b)]
+        result = coal.CollisionResult()
+        assert coal.collide(shapes[0], transforms[0], shapes[1], transforms[1], request, result) == 0
+    assert near > 100  # most pairs within a micrometre past the threshold

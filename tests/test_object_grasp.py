@@ -147,7 +147,10 @@ def test_hand_adaptation_path_matches_the_fixed_model_at_vanishing_rate():
 
 
 def test_finger_normal_forces_are_each_fingers_sum_of_f_dot_n_over_its_object_contacts():
-    """The vectorised sum against its definition, sample by sample, to the bit (the demo: pads, links, pedestal)."""
+    """The vectorised sum against its definition, sample by sample, to the bit (the demo: pads, links, pedestal).
+
+    f . n written out, as the function computes it (a BLAS dot rounds by the machine's kernel).
+    """
     traj = run_grasp_demo(duration=1.0).trajectory
     hand = box_grasp(mass=0.6).hand
     expected = np.zeros((len(traj), len(hand.fingers)))
@@ -156,7 +159,8 @@ def test_finger_normal_forces_are_each_fingers_sum_of_f_dot_n_over_its_object_co
         for (link, other), force, normal in zip(contacts["bodies"], contacts["force"], contacts["normal"]):
             finger = next((f for f in hand.fingers if str(link).startswith(f + "_")), None)
             if finger is not None and other in traj.object_names:
-                expected[k, hand.fingers.index(finger)] += force @ normal
+                pressed = force[0] * normal[0] + force[1] * normal[1] + force[2] * normal[2]
+                expected[k, hand.fingers.index(finger)] += pressed
     measured = finger_normal_forces(hand, traj)
     np.testing.assert_array_equal(measured, expected)
     assert (measured > 1.0).all(axis=1).sum() > 300  # three fingers pressing for a third of the second

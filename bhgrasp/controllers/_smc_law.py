@@ -153,7 +153,7 @@ class CompiledSMCLaw:
         if law.reference is None:
             held = self._held
             if held is None or held[0] is not law._hold:
-                rotation = law._hold.rotation.copy(order="F")  # Eigen's order: the kernel takes it without a copy
+                rotation = law._hold.rotation.copy(order="F")  # Eigen's order: no converted temporary per call
                 held = self._held = (law._hold, rotation, law._hold.translation.copy())
             rotation_d, position_d, velocity, acceleration = held[1], held[2], self._zeros, self._zeros
         else:

@@ -22,7 +22,7 @@ from bhgrasp._native import required_core
 from bhgrasp.data import ContactMemory, ContactSet, empty_contact_set
 from bhgrasp.sim.coal_queries import FALLBACK_TOLERANCE, NARROW_TOLERANCE
 from bhgrasp.sim.contact_law import SpringDamper
-from bhgrasp.sim.engine import DriveTerms, StepResult
+from bhgrasp.sim.engine import DriveTerms, StepFields
 from bhgrasp.sim.geometry_text import geometry_text
 from bhgrasp.sim.native_options import filled
 from bhgrasp.sim.scene import Scene
@@ -75,7 +75,7 @@ class CompiledEngine:
         """A step's ``Memory`` as a :class:`~bhgrasp.data.contacts.ContactMemory` (keeping the native one)."""
         return memory_of(memory)
 
-    def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, drive: Any, memory: Any) -> StepResult:
+    def step(self, q: np.ndarray, v: np.ndarray, tau_hand: np.ndarray, drive: Any, memory: Any) -> StepFields:
         """One step from the engine's own ``Memory`` with a ``Drive`` of :meth:`drive`.
 
         Returns the C++ engine's own ``StepResult``: the fields of :class:`~bhgrasp.sim.engine.StepResult`, each
@@ -97,7 +97,7 @@ class CompiledEngine:
         extra: np.ndarray | None,
         modes: tuple[int, ...],
         memory: Any,
-    ) -> tuple[StepResult, tuple[int, ...]]:
+    ) -> tuple[StepFields, tuple[int, ...]]:
         """One step under a Barrett drive of :meth:`barrett` in ``modes`` (6: TorqueSwitch, then worm locks).
 
         ``u``: the motor torques, then one per directly driven joint; ``extra``: joint torques (nv_hand) or

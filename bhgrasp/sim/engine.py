@@ -87,6 +87,22 @@ class StepResult(NamedTuple):
     load: np.ndarray
 
 
+class StepFields(Protocol):
+    """A step's result as the Simulator reads it, field by field.
+
+    A :class:`StepResult` (the Python engine) or the compiled engine's own ``StepResult`` (the same fields read from
+    C++, ``q`` and ``v`` read-only; not a tuple).
+    """
+
+    q: np.ndarray
+    v: np.ndarray
+    contacts: Any
+    drive: np.ndarray
+    memory: Any
+    divergence: Any
+    load: np.ndarray
+
+
 class Engine(Protocol):
     """One physics step over plain data; both engines implement it."""
 
@@ -98,7 +114,7 @@ class Engine(Protocol):
     def memory(self, memory: ContactMemory) -> Any:
         """A :class:`~bhgrasp.data.contacts.ContactMemory` in the form this engine's :meth:`step` takes."""
 
-    def step(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, drive: Any, memory: Any) -> StepResult:
+    def step(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, drive: Any, memory: Any) -> StepFields:
         """Advance ``dt`` from ``(q, v)`` with hand joint torques ``tau`` (or nv generalized forces)."""
 
     def detect(self, q: np.ndarray, memory: ContactMemory) -> ContactSet:
@@ -135,4 +151,4 @@ def divergence(q: np.ndarray, v: np.ndarray, contacts: ContactSet, settings: Sim
     return NO_DIVERGENCE
 
 
-__all__ = ["NO_DIVERGENCE", "Divergence", "DriveTerms", "Engine", "StepResult", "divergence", "drive_key"]
+__all__ = ["NO_DIVERGENCE", "Divergence", "DriveTerms", "Engine", "StepFields", "StepResult", "divergence", "drive_key"]
