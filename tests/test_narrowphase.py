@@ -131,6 +131,11 @@ def random_pose(rng: np.random.Generator, spread: float) -> pin.SE3:
     return pin.SE3(pin.exp3(rng.normal(size=3) * 2.0), rng.uniform(-spread, spread, size=3))
 
 
+def box_gap(half_a, pose_a: pin.SE3, half_b, pose_b: pin.SE3) -> float:
+    """The compiled separating-axis gap [m] of two boxes (half sides, world poses)."""
+    return core_module().box_separation(half_a, pose_a.homogeneous, half_b, pose_b.homogeneous)
+
+
 def coal_distance(half_a, pose_a: pin.SE3, half_b, pose_b: pin.SE3) -> float:
     """coal's distance [m] between two boxes (negative: penetrating)."""
     result = coal.DistanceResult()
@@ -197,16 +202,13 @@ def test_boxes_the_test_skips_are_boxes_coal_finds_no_contact_between(margin: fl
         direction /= np.linalg.norm(direction)
         target = margin + SLACK * (1.0 + 1e-6) + rng.choice([1e-12, 1e-9, 1e-6, 1e-3]) * rng.uniform()
 
-        def gap_at(reach: float) -> float:
-            pose_b = pin.SE3(turn, pose_a.translation + reach * direction)
-            return core_module().box_separation(half_a, pose_a.homogeneous, half_b, pose_b.homogeneous)
-
         low, high = 0.0, 1.0  # the gap grows along the direction from overlap: bisect to the target
         for _ in range(80):
             middle = 0.5 * (low + high)
-            low, high = (middle, high) if gap_at(middle) < target else (low, middle)
+            pose_b = pin.SE3(turn, pose_a.translation + middle * direction)
+            low, high = (middle, high) if box_gap(half_a, pose_a, half_b, pose_b) < target else (low, middle)
         pose_b = pin.SE3(turn, pose_a.translation + high * direction)
-        gap = gap_at(high)
+        gap = box_gap(half_a, pose_a, half_b, pose_b)
         assert margin + SLACK < gap < margin + SLACK + 1e-3 + 1e-9
         near += gap < margin + SLACK + 1e-6
         shapes = [coal.Box(*(2 * half)) for half in (half_a, half_b)]
