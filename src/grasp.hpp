@@ -2,7 +2,8 @@
 // object and on hand links, on Pinocchio's C++ API.
 //
 // The Python twin is bhgrasp.grasp.kinematics.contact_kinematics_python (its module docstring derives the maths);
-// compute() mirrors it line for line, named alike, and tests/test_grasp_kernels.py checks both agree to round-off.
+// compute() mirrors it line for line, named alike, but for J^+, which it takes block by block (pinv_by_blocks: the same
+// pseudo-inverse, to round-off), and tests/test_grasp_kernels.py checks both agree to round-off.
 // Units SI, world frame; arrays of points are (n, 3) row-major, as NumPy's.
 #pragma once
 
@@ -51,7 +52,9 @@ class GraspKinematics {
 
  private:
   void resize(Eigen::Index count);
-  void pinv(const Eigen::MatrixXd& matrix, Eigen::MatrixXd& result);  // singular values < 1e-15 max dropped
+  // J^+ of jacobian_world_ into pinv_world_, block by block (grasp.cpp): singular values <= 1e-15 of the largest
+  // dropped, as np.linalg.pinv of the whole J
+  void pinv_by_blocks(const std::vector<int>& joints);
 
   pinocchio::Model model_;
   pinocchio::Data data_;
@@ -68,9 +71,18 @@ class GraspKinematics {
   Eigen::MatrixXd p_map_, p_dot_;              // P, P_dot (nv, 6)
   Eigen::MatrixXd residual_, lifted_;          // (3n, 6), (nv, 6) terms of P_dot
   Eigen::MatrixXd gram_, rate_t_, projected_;  // J^+ J^+T (nv, nv), J_dot^T (nv, 3n), J J_dot^T (3n, 3n)
-  Eigen::MatrixXd inverse_u_;                  // V diag(1/s) (nv, r) of the pseudo-inverse
-  Eigen::VectorXd q_dot_, inverse_;
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd_;
+  Eigen::VectorXd q_dot_;
+  // pinv_by_blocks' work, kept between calls (a block keeps its size while the grasp keeps its contacts)
+  std::vector<int> block_of_;                          // per contact: its block
+  std::vector<std::vector<Eigen::Index>> block_rows_, block_columns_;
+  std::vector<Eigen::MatrixXd> block_, block_pinv_;    // J's block and its pseudo-inverse
+  std::vector<Eigen::JacobiSVD<Eigen::MatrixXd>> block_svd_;
+  std::vector<Eigen::VectorXd> block_inverse_;
+  std::vector<Eigen::MatrixXd> block_scaled_;          // V diag(1/s) of a block
+  std::vector<Eigen::MatrixXd> block_u_, block_v_;     // a block's SVD: U, V (thin) and the singular values
+  std::vector<Eigen::VectorXd> block_singular_;
+  Eigen::JacobiSVD<Eigen::Matrix3d> square_svd_;       // the SVD of a 3x3 block (fixed size: no allocation)
+  Eigen::RowVectorXd block_mask_;                      // the columns of the block being gathered
   GraspMaps maps_;
 };
 

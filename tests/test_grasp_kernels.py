@@ -256,3 +256,13 @@ def test_compiled_kernel_rejects_arrays_of_the_wrong_size():
     ):
         with pytest.raises(ValueError, match="GraspKinematics.compute|joint the model lacks"):
             kernel.compute(*args[:index], wrong, *args[index + 1 :])
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_block_pseudo_inverse_gathers_contacts_that_share_joints_and_leaves_the_palm_out(seed):
+    """The compiled J^+ goes block by block (contacts linked by shared joints): two contacts on F1 make one block of
+    six rows, F3's its own, and a contact on the palm, which no joint moves, a zero block; against NumPy's pinv of
+    the whole J (the twin)."""
+    hand = bh.BarrettHand()
+    links = ["F1_distal_link", "F3_distal_link", "F1_proximal_link", "palm"]
+    assert_twins_agree(hand, *world_grasp(hand, links, np.random.default_rng(seed), count=4))

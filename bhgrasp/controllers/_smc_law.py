@@ -23,6 +23,7 @@ import pinocchio as pin
 
 from bhgrasp._native import required_core
 from bhgrasp._validation import as_array, as_vector
+from bhgrasp.data import SimulatedState
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.forces import solver_arguments
 from bhgrasp.grasp.frames import TANGENT_SWITCH, ZERO_NORMAL, contact_frames, grasp_map_from_frames
@@ -135,7 +136,10 @@ class CompiledSMCLaw:
     def __call__(self, law: Any, t: float, state: Any) -> np.ndarray:
         """Joint torques [N m]: ``law.__call__`` (ObjectGraspController's then SMCAdaptiveGrasp's) on the kernel."""
         hand, log, kernel = law.nominal, law.log, self.kernel
-        q = as_vector(state.q, "state.q", hand.nq)
+        # a simulator's step made it (not dataclasses.replace, which leaves no source): finite, read-only
+        q, trusted = state.q, type(state) is SimulatedState and getattr(state, "_source", None) is not None
+        if not trusted or q.shape != (hand.nq,):
+            q = as_vector(q, "state.q", hand.nq)
         if not state.object_poses:
             raise InputError(f"{type(law).__name__} needs the object's pose in the state (a scene with an object)")
         bodies = state.contact_bodies
@@ -159,7 +163,9 @@ class CompiledSMCLaw:
         else:
             sample, velocity, acceleration = law.reference(t)
             rotation_d, position_d = pin.exp3(sample[3:]), sample[:3]
-        v = as_vector(state.v, "v", hand.nv)  # (Hand.slotine_li_torque's check)
+        v = state.v
+        if not trusted or v.shape != (hand.nv,):
+            v = as_vector(v, "v", hand.nv)  # (Hand.slotine_li_torque's check)
         base = hand.base  # a new one whenever the hand's placement or gravity change
         if self._base is not base:
             kernel.set_base(base.rotation, base.translation, base.gravity)
