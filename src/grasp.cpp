@@ -4,6 +4,7 @@
 #include "model_io.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 
 #include <pinocchio/algorithm/jacobian.hpp>
@@ -57,9 +58,14 @@ void GraspKinematics::resize(Eigen::Index count) {
 // bodies that share no moving joint (different fingers) have rows in disjoint columns: J is block diagonal up to an
 // order of rows and columns, its singular values are its blocks', and J^+ is the blocks' pseudo-inverses put back in
 // place (transposed).  A block gathers the contacts linked by shared joints; each gets its own SVD, kept between calls.
-// Three 3x3 SVDs cost a fraction of one of the whole 9x8 J with its QR preconditioner; the result is the same up to
-// round-off (tests/test_grasp_kernels.py holds it to NumPy's pinv of the whole J).
+// The BH8-280's three fingertips make two 3x3 blocks (fixed-size SVDs) and a 3x2 one (F3 has no spread): a fraction of
+// the cost of one SVD of the whole 9x8 J with its QR preconditioner; the result is the same up to round-off
+// (tests/test_grasp_kernels.py holds it to NumPy's pinv of the whole J).
 void GraspKinematics::pinv_by_blocks(const std::vector<int>& joints) {
+  if (!jacobian_world_.allFinite()) {  // NaN in, NaN out (outside the masks too), as an SVD of the whole J gives
+    pinv_world_.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return;
+  }
   const auto count = static_cast<std::size_t>(count_);
   block_of_.assign(count, -1);
   std::size_t blocks = 0;

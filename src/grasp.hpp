@@ -79,7 +79,7 @@ class GraspKinematics {
   std::vector<Eigen::JacobiSVD<Eigen::MatrixXd>> block_svd_;
   std::vector<Eigen::VectorXd> block_inverse_;
   std::vector<Eigen::MatrixXd> block_scaled_;          // V diag(1/s) of a block
-  std::vector<Eigen::MatrixXd> block_u_, block_v_;     // a block's SVD: U, V (thin) and the singular values
+  std::vector<Eigen::MatrixXd> block_u_, block_v_;     // a block's SVD: U, V (thin; full for 3x3) and singular values
   std::vector<Eigen::VectorXd> block_singular_;
   Eigen::JacobiSVD<Eigen::Matrix3d> square_svd_;       // the SVD of a 3x3 block (fixed size: no allocation)
   Eigen::RowVectorXd block_mask_;                      // the columns of the block being gathered

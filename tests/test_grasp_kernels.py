@@ -24,6 +24,7 @@ import bhgrasp as bh
 import bhgrasp.grasp.kinematics as kinematics_module
 from bhgrasp import _native
 from bhgrasp.grasp import ObjectState, contact_frames, contact_kinematics, contact_kinematics_python, grasp_kinematics
+from bhgrasp.model.mount import mounted
 from bhgrasp.scenarios.allegro_grasp import allegro_hand
 from bhgrasp.scenarios.hold import reference_hold
 
@@ -258,11 +259,13 @@ def test_compiled_kernel_rejects_arrays_of_the_wrong_size():
             kernel.compute(*args[:index], wrong, *args[index + 1 :])
 
 
+@pytest.mark.parametrize("mount", [False, True], ids=["hand", "mounted"])
 @pytest.mark.parametrize("seed", range(3))
-def test_the_block_pseudo_inverse_gathers_contacts_that_share_joints_and_leaves_the_palm_out(seed):
+def test_the_block_pseudo_inverse_gathers_contacts_that_share_joints_and_leaves_the_palm_out(mount, seed):
     """The compiled J^+ goes block by block (contacts linked by shared joints): two contacts on F1 make one block of
-    six rows, F3's its own, and a contact on the palm, which no joint moves, a zero block; against NumPy's pinv of
-    the whole J (the twin)."""
-    hand = bh.BarrettHand()
+    six rows, F3's its own, and a contact on the palm, which no joint moves, a zero block; on a mounted hand the mount's
+    joints move every contact, the palm's too, and all make one block.  Against NumPy's pinv of the whole J (the
+    twin)."""
+    hand = mounted(bh.BarrettHand()) if mount else bh.BarrettHand()
     links = ["F1_distal_link", "F3_distal_link", "F1_proximal_link", "palm"]
     assert_twins_agree(hand, *world_grasp(hand, links, np.random.default_rng(seed), count=4))

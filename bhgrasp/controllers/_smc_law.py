@@ -137,7 +137,9 @@ class CompiledSMCLaw:
         """Joint torques [N m]: ``law.__call__`` (ObjectGraspController's then SMCAdaptiveGrasp's) on the kernel."""
         hand, log, kernel = law.nominal, law.log, self.kernel
         # a simulator's step made it (not dataclasses.replace, which leaves no source): finite, read-only
-        q, trusted = state.q, type(state) is SimulatedState and getattr(state, "_source", None) is not None
+        q = state.q
+        trusted = type(state) is SimulatedState and not q.flags.writeable
+        trusted = trusted and getattr(state, "_source", None) is not None
         if not trusted or q.shape != (hand.nq,):
             q = as_vector(q, "state.q", hand.nq)
         if not state.object_poses:

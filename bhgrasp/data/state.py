@@ -92,6 +92,8 @@ class SimulatedState(State):
 
     def __getattr__(self, name: str) -> Any:
         """Build a derived field on first access (Python calls this only for a field not set yet)."""
+        if name == "_source":  # a state dataclasses.replace made has none (asked per control cycle: no message)
+            raise AttributeError(name)
         if name not in DERIVED_FIELDS:
             raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
         try:
