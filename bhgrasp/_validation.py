@@ -11,6 +11,11 @@ import numpy as np
 from bhgrasp.errors import InputError
 
 
+def finite_vector(vector: np.ndarray) -> bool:
+    """Whether a float 1-D array holds no NaN/inf: its sum, a cheap test per call (an overflow: the full test)."""
+    return math.isfinite(sum(vector.tolist())) or bool(np.isfinite(vector).all())
+
+
 def as_vector(value: Any, name: str, size: int | None = None) -> np.ndarray:
     """Return ``value`` as a finite float64 1-D array, optionally of a given length.
 
@@ -23,7 +28,7 @@ def as_vector(value: Any, name: str, size: int | None = None) -> np.ndarray:
         InputError: If the input is not numeric, not 1-D, has the wrong length, or holds NaN/inf.
     """
     if type(value) is np.ndarray and value.dtype == np.float64 and value.ndim == 1 and value.shape[0] == size:
-        if math.isfinite(sum(value.tolist())):  # fast path: a NaN/inf element makes the sum non-finite
+        if finite_vector(value):
             return value
     try:
         array = np.asarray(value, dtype=np.float64)
