@@ -96,6 +96,22 @@ double torque_scale(const Rows& grasp) {
 
 }  // namespace
 
+int SMCAdaptiveLaw::grasp_free_body(const ConstVector& q, const ConstVector& v, const Vector7& object_q,
+                                    const Vector6& object_v, double dt, const Eigen::Matrix3d& target_rotation,
+                                    const Eigen::Vector3d& target_translation, const Vector6& velocity,
+                                    const Vector6& acceleration, Eigen::Ref<Eigen::VectorXd> out) {
+  // pin.XYZQUATToSE3: Eigen's quaternion (w, x, y, z) to its matrix, not normalised
+  const Eigen::Matrix3d rotation =
+      Eigen::Quaterniond(object_q[6], object_q[3], object_q[4], object_q[5]).toRotationMatrix();
+  // Scene.object_twist: (v, R omega_body), each row of R omega summed left to right as NumPy's R @ omega
+  Vector6 twist;
+  twist.head<3>() = object_v.head<3>();
+  for (int row = 0; row < 3; ++row)
+    twist[3 + row] = (rotation(row, 0) * object_v[3] + rotation(row, 1) * object_v[4]) + rotation(row, 2) * object_v[5];
+  return grasp(q, v, rotation, object_q.head<3>(), twist, dt, target_rotation, target_translation, velocity,
+               acceleration, out);
+}
+
 int SMCAdaptiveLaw::grasp(const ConstVector& q, const ConstVector& v, const Eigen::Matrix3d& rotation,
                           const Eigen::Vector3d& translation, const Vector6& twist, double dt,
                           const Eigen::Matrix3d& target_rotation, const Eigen::Vector3d& target_translation,

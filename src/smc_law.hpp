@@ -70,6 +70,14 @@ class SMCAdaptiveLaw {
                   const Eigen::Matrix3d& target_rotation, const Eigen::Vector3d& target_translation,
                   const Vector6& velocity, const Vector6& acceleration, Eigen::Ref<Eigen::VectorXd> out);
 
+  // grasp() with the object's pose and twist as a simulated scene holds its free body (bhgrasp.sim.scene.Scene's
+  // object_pose and object_twist, the same operations): `object_q` = COM position and unit quaternion (x, y, z, w),
+  // `object_v` = COM velocity (world-aligned) and angular velocity (body frame).  A state read this way needs no
+  // pin.SE3 built in Python per cycle.
+  int grasp_free_body(const ConstVector& q, const ConstVector& v, const Vector7& object_q, const Vector6& object_v,
+                      double dt, const Eigen::Matrix3d& target_rotation, const Eigen::Vector3d& target_translation,
+                      const Vector6& velocity, const Vector6& acceleration, Eigen::Ref<Eigen::VectorXd> out);
+
   Vector7 object_estimate() const { return estimate_; }
   void set_object_estimate(const Vector7& estimate) { estimate_ = estimate; }
   Eigen::Index log_size() const { return 2 * nv_ + 7 * fingers_ + 31; }

@@ -79,6 +79,9 @@ class CompiledSMCLaw:
         self._rows: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
         self._base: BaseFrame | None = None  # the hand base the kernel was last given
         self._held: tuple[Any, np.ndarray, np.ndarray] | None = None  # law._hold and its arrays
+        self._scene: Any = None  # the scene of the last simulated state and its object's free-body slices
+        self._body: tuple[slice, slice] | None = None
+        self._target: tuple[bytes, np.ndarray | None] = (b"", None)  # the last target rotation vector, its exp
         self._zeros = np.zeros(6)
         self._zeros.flags.writeable = False
         nv, fingers = hand.nv, len(hand.fingers)
@@ -139,19 +142,24 @@ class CompiledSMCLaw:
         # a simulator's step made it (not dataclasses.replace, which leaves no source): finite, read-only
         q = state.q
         trusted = type(state) is SimulatedState and not q.flags.writeable
-        trusted = trusted and getattr(state, "_source", None) is not None
+        source = getattr(state, "_source", None) if trusted else None
+        trusted = source is not None
         if not trusted or q.shape != (hand.nq,):
             q = as_vector(q, "state.q", hand.nq)
-        if not state.object_poses:
-            raise InputError(f"{type(law).__name__} needs the object's pose in the state (a scene with an object)")
+        # the object's free-body coordinates in the scene's arrays: its pose and twist are not built in Python
+        body = self._free_body(source.simulator.scene) if trusted else None
+        pose = None
+        if body is None:
+            if not state.object_poses:
+                raise InputError(f"{type(law).__name__} needs the object's pose in the state (a scene with an object)")
+            pose = state.object_poses[0]
         bodies = state.contact_bodies
         finger, joint = self._rows.get(bodies) or self._index(bodies)
         touching = kernel.sense(finger, joint, state.contact_points, state.contact_normals, state.contact_forces)
         if touching < 2:
             return self._approach(law, q, touching)
-        pose = state.object_poses[0]
         if law._hold is None:
-            law._hold = pin.SE3(pose)
+            law._hold = pin.SE3(state.object_poses[0])
         dt = 0.0 if law._time is None else t - law._time
         if dt < 0.0:
             raise InputError(f"time went backwards: t = {t} after {law._time}; call reset() to restart")
@@ -164,7 +172,7 @@ class CompiledSMCLaw:
             rotation_d, position_d, velocity, acceleration = held[1], held[2], self._zeros, self._zeros
         else:
             sample, velocity, acceleration = law.reference(t)
-            rotation_d, position_d = pin.exp3(sample[3:]), sample[:3]
+            rotation_d, position_d = self._target_rotation(sample[3:]), sample[:3]
         v = state.v
         if not trusted or v.shape != (hand.nv,):
             v = as_vector(v, "v", hand.nv)  # (Hand.slotine_li_torque's check)
@@ -173,19 +181,14 @@ class CompiledSMCLaw:
             kernel.set_base(base.rotation, base.translation, base.gravity)
             self._base = base
         out = np.empty(self._size)
-        status = kernel.grasp(
-            q,
-            v,
-            pose.rotation,
-            pose.translation,
-            state.object_twists[0],
-            dt,
-            rotation_d,
-            position_d,
-            velocity,
-            acceleration,
-            out,
-        )
+        if pose is None:
+            object_q, object_v = state.scene_q[body[0]], state.scene_v[body[1]]
+            targets = (rotation_d, position_d, velocity, acceleration, out)
+            status = kernel.grasp_free_body(q, v, object_q, object_v, dt, *targets)
+        else:
+            twist = state.object_twists[0]
+            targets = (rotation_d, position_d, velocity, acceleration, out)
+            status = kernel.grasp(q, v, pose.rotation, pose.translation, twist, dt, *targets)
         if status in (1, 2, 3):
             self._raise(law, state, status, out)
         log.update(zip(self._flat_keys, self._flat_views(out)))
@@ -195,13 +198,27 @@ class CompiledSMCLaw:
         if status:
             raise InputError(f"{type(law).__name__} produced non-finite torques {tau} at t = {t} s")
         if law.identification is not None:
-            sliding = log["object_sliding"]
+            pose, sliding = state.object_poses[0], log["object_sliding"]
             twist = np.asarray(state.object_twists[0], dtype=float)
             v_r, a_r = twist - sliding, acceleration - law.rho * (twist - velocity)
             law.identify(dt, state, self._regressor(pose.rotation, twist[3:], v_r, a_r, law.gravity), sliding)
             log["object_parameters"] = out[self._parameters] = kernel.object_estimate
         log["mass_estimate"] = out[self._mass]
         return tau
+
+    def _free_body(self, scene: Any) -> tuple[slice, slice] | None:
+        """The (q, v) slices of the scene's object 0 when it is a free body (7 and 6 coordinates), else ``None``."""
+        if scene is not self._scene:
+            free = bool(scene.objects) and scene.object_q_slice(0).stop - scene.object_q_slice(0).start == 7
+            self._scene, self._body = scene, (scene.object_q_slice(0), scene.object_v_slice(0)) if free else None
+        return self._body
+
+    def _target_rotation(self, rotation_vector: np.ndarray) -> np.ndarray:
+        """exp(rotation_vector) as the kernel takes it (Eigen's order); a repeated vector's is the last call's."""
+        key = rotation_vector.tobytes()
+        if key != self._target[0]:
+            self._target = (key, pin.exp3(rotation_vector).copy(order="F"))
+        return self._target[1]
 
     def _approach(self, law: Any, q: np.ndarray, touching: int) -> np.ndarray:
         """Fewer than two touching fingers: SMCAdaptiveGrasp's zero logs, then the base's closing torques."""
