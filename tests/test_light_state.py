@@ -189,3 +189,17 @@ def test_a_trajectory_records_what_each_state_holds(engine: str) -> None:
             np.testing.assert_array_equal(contacts["force"], state.contact_forces)
             assert [tuple(b) for b in contacts["bodies"]] == list(state.contact_bodies)
         assert trajectory.contact_count().sum() > 0
+
+
+def test_contact_body_names_come_from_a_bounded_cache_that_answers_as_the_pairs_say() -> None:
+    """SceneLayout.body_names keeps the tuple of each contact list it met (a run meets a handful), up to a bound."""
+    simulator = reference_hold().simulator
+    layout = simulator.layout
+    rng = np.random.default_rng(5)
+    lists = [rng.integers(0, len(layout.pair_bodies), size=rng.integers(0, 9)) for _ in range(3000)]
+    for pairs in lists + lists[:50]:
+        names = layout.body_names(pairs)
+        assert names == tuple((simulator.scene.pairs[k].body_a, simulator.scene.pairs[k].body_b) for k in pairs)
+        assert len(layout._names) <= 1024
+    again = np.array(lists[-1])  # another array with the same indices: the kept tuple itself
+    assert layout.body_names(again) is layout.body_names(lists[-1])

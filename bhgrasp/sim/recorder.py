@@ -12,6 +12,8 @@ from bhgrasp.data import State, Trajectory
 from bhgrasp.sim.actuation import Actuation
 from bhgrasp.sim.scene import Scene
 
+_FLOAT = np.dtype(float)  # the native float64 of a logged array that is copied as it is
+
 
 class Recorder:
     """Collects a run sample by sample and assembles the :class:`~bhgrasp.data.trajectory.Trajectory`.
@@ -51,8 +53,8 @@ class Recorder:
         count = len(self.t)
         logged = self.log
         if self._logged == count - 1 and log.keys() == logged.keys():  # the usual sample: the keys of the last one
-            for name, value in log.items():
-                logged[name].append(np.array(value, dtype=float))
+            for name, value in log.items():  # a float array's copy, as np.array(value, dtype=float) makes it
+                logged[name].append(value.copy() if getattr(value, "dtype", None) is _FLOAT else np.array(value, float))
             self._logged = count
             return
         self._logged = count

@@ -8,7 +8,7 @@ coordinates are unit quaternions).
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -16,6 +16,8 @@ import pinocchio as pin
 from bhgrasp.model.objects import RigidObject
 from bhgrasp.sim.geometry_text import geometry_text
 from bhgrasp.sim.scene import Scene
+
+_NAME_CACHE = 1024  # contact lists whose body names are kept (a grasp meets a handful, a pile more)
 
 
 @dataclass(frozen=True, eq=False)
@@ -38,6 +40,18 @@ class SceneLayout:
     quaternions: tuple[slice, ...]
     pair_bodies: tuple[tuple[str, str], ...]
     signature: str
+    _names: dict[bytes, tuple[tuple[str, str], ...]] = field(default_factory=dict, init=False, repr=False)
+
+    def body_names(self, pairs: np.ndarray) -> tuple[tuple[str, str], ...]:
+        """(body a, body b) of each contact's pair index in ``pairs`` (int64); a repeated list's tuple is kept."""
+        key = pairs.tobytes()
+        names = self._names.get(key)
+        if names is None:
+            if len(self._names) >= _NAME_CACHE:
+                self._names.clear()
+            bodies = self.pair_bodies
+            names = self._names[key] = tuple(bodies[k] for k in pairs)
+        return names
 
     @classmethod
     def of(cls, scene: Scene) -> SceneLayout:

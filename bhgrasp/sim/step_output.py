@@ -103,12 +103,11 @@ class StepOutput:
         contacts = self.contacts  # a ContactSet or the compiled Contacts: both carry the arrays read here
         if not len(contacts):
             contacts = empty_contact_set()
-        bodies = self.simulator.layout.pair_bodies
         return {
             "contact_points": contacts.point,
             "contact_normals": contacts.normal,
             "contact_forces": contacts.force,
-            "contact_bodies": tuple(bodies[k] for k in contacts.pair),
+            "contact_bodies": self.simulator.layout.body_names(contacts.pair),
         }
 
 
