@@ -89,6 +89,8 @@ void bind_grasp(nb::module_& m) {
   force_qp.attr("FEASIBLE_RESIDUAL") = ForceQPConstants::feasible_residual;
   force_qp.attr("ADMISSIBLE_TOLERANCE") = ForceQPConstants::admissible_tolerance;
   force_qp.attr("CHECK_ITER") = ForceQPConstants::check_iter;
+  force_qp.attr("ACTIVE_TOLERANCE") = ForceQPConstants::active_tolerance;
+  force_qp.attr("FULL_RANK") = ForceQPConstants::full_rank;
   nb::class_<SMCAdaptiveLaw>(m, "SMCAdaptiveLaw")
       .def(nb::init<GraspKinematics&, HandDynamics&, int>(), "kinematics"_a, "dynamics"_a, "fingers"_a,
            nb::keep_alive<1, 2>(), nb::keep_alive<1, 3>())

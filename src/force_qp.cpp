@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include <Eigen/Cholesky>
 #include <proxsuite/proxqp/dense/dense.hpp>
 
 namespace bhgrasp {
@@ -65,7 +66,7 @@ struct ContactForceQP::Solvers {
 ContactForceQP::ContactForceQP(int n_contacts, double mu, const ConstRows& pyramid, double inscribed,
                                double min_normal_force, double tolerance, int max_iter, int max_iter_in)
     : n_(n_contacts), facets_(static_cast<int>(pyramid.rows())), mu_(mu), inscribed_(inscribed),
-      min_normal_force_(min_normal_force) {
+      min_normal_force_(min_normal_force), tolerance_(tolerance) {
   if (n_ < 1 || facets_ < 1 || pyramid.cols() != 3 || max_iter < 1 || max_iter_in < 1)
     throw std::invalid_argument("ContactForceQP: n_contacts >= 1, a (facets, 3) pyramid and iteration limits >= 1");
   const Eigen::Index size = 3 * n_, rows = n_ * (facets_ + 1);
@@ -106,6 +107,14 @@ ContactForceQP::ContactForceQP(int n_contacts, double mu, const ConstRows& pyram
   pyramid_values_.setZero(n_ * facets_);
   result_.forces.setZero(n_, 3);
   result_.wrench_error.setZero();
+  active_.reserve(static_cast<std::size_t>(rows));
+  active_side_.reserve(static_cast<std::size_t>(rows));
+  system_.setZero(6 + size, size);  // at most 3n rows: more make the Gram matrix singular
+  gram_.setZero(6 + size, 6 + size);
+  bounds_.setZero(6 + size);
+  lambda_.setZero(6 + size);
+  residual_.setZero(6 + size);
+  values_.setZero(rows);
 }
 
 ContactForceQP::~ContactForceQP() = default;
@@ -159,6 +168,8 @@ const ForceResult& ContactForceQP::solve(const Vector6& wrench, const ConstVecto
   gradient_ = -desired;
   int iterations = 0;
   bool have_nearest = false, doubtful = true;
+  if (!infeasible_ && has_active_ && active_set_forces(desired))  // the last active set still holds: no QP
+    return result(wrench, x_, kSolved, 0);
   if (infeasible_) {  // the last call was infeasible: the nearest problem first, it is likely the answer
     iterations = nearest_forces(desired, doubtful);
     have_nearest = true;
@@ -168,6 +179,7 @@ const ForceResult& ContactForceQP::solve(const Vector6& wrench, const ConstVecto
   const Run first = run(qp, warm_, hessian_, gradient_, equality_, inequality_);
   iterations += first.iterations;
   x_ = qp.results.x;
+  if (first.solved) remember_active(x_, qp.results.z);
   const char* status = first.status;
   bool solved = first.solved;
   Warm warm = solved ? Warm::previous : Warm::scratch;
@@ -187,11 +199,73 @@ const ForceResult& ContactForceQP::solve(const Vector6& wrench, const ConstVecto
       warm_x_ = x_;
       warm_y_ = check.results.y;
       warm_z_ = check.results.z;
+      remember_active(x_, warm_z_);
     }
   }
   warm_ = solved ? warm : Warm::scratch;
   infeasible_ = !solved;
+  has_active_ = has_active_ && solved;
   return result(wrench, solved ? x_ : nearest_, status, iterations);
+}
+
+// _remember_active: the rows at a bound with a nonzero multiplier in a solved call (proxsuite's z: > 0 upper,
+// < 0 lower), the active set the next call tries first.
+void ContactForceQP::remember_active(const Eigen::VectorXd& forces, const Eigen::VectorXd& multipliers) {
+  values_.noalias() = inequality_ * forces;
+  active_.clear();
+  active_side_.clear();
+  for (Eigen::Index i = 0; i < values_.size(); ++i) {
+    const double z = multipliers[i];
+    if (z == 0.0) continue;
+    const double bound = z > 0.0 ? upper_[i] : lower_[i];
+    if (std::abs(values_[i] - bound) <= ForceQPConstants::active_tolerance) {
+      active_.push_back(i);
+      active_side_.push_back(z > 0.0 ? 1.0 : -1.0);
+    }
+  }
+  has_active_ = static_cast<Eigen::Index>(active_.size()) <= 3 * n_;  // the rows system_ holds
+}
+
+// _active_set_forces: min 1/2 |f - f_d|^2 with A f = b and the remembered rows at their bounds, M f = r for
+// M = [A; C_K]: f = f_d - M^T lambda, (M M^T) lambda = M f_d - r (Cholesky, in place; refused when a pivot is
+// below FULL_RANK times the largest: a redundant row, e.g. two contacts' G of rank 5).  Accepted only with its
+// proof of optimality, the QP's own tolerance: M f = r and every row within its bounds to eps_abs, and each
+// multiplier of the right sign (>= -eps_abs towards its bound).  Then it is the QP's optimum; the next proxsuite
+// solve still starts as it would have (the warm start is left as it is).
+bool ContactForceQP::active_set_forces(const ConstVector& desired) {
+  const Eigen::Index size = 3 * n_, k = static_cast<Eigen::Index>(active_.size()), m = 6 + k;
+  auto system = system_.topRows(m);
+  system.topRows(6) = equality_;
+  bounds_.head(6) = b_;
+  for (Eigen::Index j = 0; j < k; ++j) {
+    const Eigen::Index row = active_[static_cast<std::size_t>(j)];
+    system.row(6 + j) = inequality_.row(row);
+    bounds_[6 + j] = active_side_[static_cast<std::size_t>(j)] > 0.0 ? upper_[row] : lower_[row];
+  }
+  Eigen::Ref<Eigen::MatrixXd> gram = gram_.topLeftCorner(m, m);
+  gram.noalias() = system * system.transpose();
+  Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> cholesky(gram);  // in place: no allocation
+  const auto pivots = cholesky.matrixLLT().diagonal();  // M of full row rank, not only in round-off
+  if (cholesky.info() != Eigen::Success || !(pivots.minCoeff() >= ForceQPConstants::full_rank * pivots.maxCoeff()))
+    return false;
+  auto lambda = lambda_.head(m);
+  lambda.noalias() = system * desired;
+  lambda -= bounds_.head(m);
+  cholesky.solveInPlace(lambda);
+  auto forces = x_.head(size);
+  forces = desired;
+  forces.noalias() -= system.transpose() * lambda;
+  if (!forces.allFinite()) return false;
+  auto residual = residual_.head(m);
+  residual.noalias() = system * forces;
+  residual -= bounds_.head(m);
+  if (residual.cwiseAbs().maxCoeff() > tolerance_) return false;
+  values_.noalias() = inequality_ * forces;
+  for (Eigen::Index i = 0; i < values_.size(); ++i)
+    if (values_[i] > upper_[i] + tolerance_ || values_[i] < lower_[i] - tolerance_) return false;
+  for (Eigen::Index j = 0; j < k; ++j)
+    if (active_side_[static_cast<std::size_t>(j)] * lambda[6 + j] < -tolerance_) return false;
+  return true;
 }
 
 // _nearest_forces: the admissible forces into nearest_, and whether the QP may be feasible after all.

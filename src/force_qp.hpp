@@ -2,12 +2,14 @@
 // pyramids, closest to desired forces f_d, or the nearest admissible forces when none do, on proxsuite's C++ API.
 //
 // The Python twin is bhgrasp.grasp.forces.ContactForceQP (its module docstring states the QP, the nearest problem,
-// the check of a doubtful infeasibility certificate, the warm starts and the iteration bound); solve() mirrors its
-// state machine line for line, named alike, with the same three proxsuite dense problems and settings.
-// tests/test_force_qp_twin.py checks both agree cycle by cycle.  Forces in contact frames (t1, t2, n) [N].
+// the check of a doubtful infeasibility certificate, the warm starts, the last active set's optimum tried first and
+// the iteration bound); solve() mirrors its state machine line for line, named alike, with the same three proxsuite
+// dense problems and settings.  tests/test_force_qp_twin.py checks both agree cycle by cycle.  Forces in contact
+// frames (t1, t2, n) [N].
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -25,6 +27,8 @@ struct ForceQPConstants {
   static constexpr double feasible_residual = 1e-6;     // FEASIBLE_RESIDUAL
   static constexpr double admissible_tolerance = 1e-7;  // ADMISSIBLE_TOLERANCE [N]
   static constexpr int check_iter = 4;                  // ContactForceQP.CHECK_ITER
+  static constexpr double active_tolerance = 1e-8;      // ACTIVE_TOLERANCE [N], a solved row counted as at its bound
+  static constexpr double full_rank = 1e-6;             // FULL_RANK, least Cholesky pivot / largest of M M^T
 };
 
 // One solve (bhgrasp.grasp.forces.ContactForceResult, same fields in the same order).
@@ -76,12 +80,14 @@ class ContactForceQP {
   Run run(Problem& qp, Warm warm, const Rows& hessian, const Eigen::VectorXd& gradient, const Rows& equality,
           const Rows& inequality);
   int nearest_forces(const ConstVector& desired, bool& doubtful);  // into nearest_; returns iterations
+  bool active_set_forces(const ConstVector& desired);  // the last active set's optimum into x_, if proven
+  void remember_active(const Eigen::VectorXd& forces, const Eigen::VectorXd& multipliers);
   void admissible(Eigen::Ref<Eigen::VectorXd> forces) const;
   const ForceResult& result(const Vector6& wrench, const Eigen::VectorXd& forces, const char* status,
                             int iterations);
 
   int n_, facets_;
-  double mu_, inscribed_, min_normal_force_;
+  double mu_, inscribed_, min_normal_force_, tolerance_;
   std::unique_ptr<Solvers> solvers_;
   Rows hessian_, inequality_, nearest_hessian_, nearest_inequality_;  // H, C and their nearest-problem forms
   Eigen::VectorXd lower_, upper_;
@@ -96,6 +102,14 @@ class ContactForceQP {
   Eigen::VectorXd nearest_, x_;               // the nearest problem's forces, the QP's (or the check's) x
   Vector6 miss_;                              // A f - b of the nearest forces
   Eigen::VectorXd pyramid_values_;            // C_pyramid f
+  // the active set of the last solved call: rows of C at a bound, and the bound (+1 upper, -1 lower)
+  std::vector<Eigen::Index> active_;
+  std::vector<double> active_side_;
+  bool has_active_ = false;
+  Rows system_;                                // [A; C_active] (6 + k, 3n)
+  Eigen::MatrixXd gram_;                       // its Gram matrix, factorised in place
+  Eigen::VectorXd bounds_, lambda_, residual_;  // [b; bounds], the multipliers, M f - [b; bounds]
+  Eigen::VectorXd values_;                       // C f
   ForceResult result_;
 };
 

@@ -6,11 +6,17 @@ is a build vectorised for it (``proxsuite_pywrap_avx2``/``_avx512``: wider Eigen
 solver uses proxsuite's headers without -march flags (SSE2, like the plain ``proxsuite_pywrap``).  So:
 
 * against the plain module (a subprocess that hides the CPU's vector extensions from proxsuite's loader) the two
-  agree bit for bit: forces, verdict, status and iterations in every cycle of every case below; the metrics
-  (residual, margins) to round-off, as NumPy's BLAS and Eigen sum G f in different orders (<= 1e-14 N);
+  agree bit for bit wherever only proxsuite runs: forces, verdict, status and iterations of every random request
+  below (each a first solve) and of every cycle of the two-contact loops (whose G of rank 5 never lets the last
+  active set answer); the metrics (residual, margins) to round-off, as NumPy's BLAS and Eigen sum G f in different
+  orders (<= 1e-14 N).  Where the last active set answers (the QP's optimum from one small Cholesky solve, NumPy's
+  and SciPy's in the twin, Eigen's in C++; proxsuite's warm start is left as it was), only those forces differ:
+  measured, the same verdict, status and iterations in every cycle, the forces within 8e-14 N, and 2.3e-9 N in the
+  drifting loop (an active set whose M M^T is ill-conditioned: each answer is still proven optimal to eps_abs);
 * against the vectorised module, round-off differs, and so do paths now and then (and, its Eigen kernels peeling
   unaligned heads, with the heap's alignment too).  Measured on an AVX-512 machine over the eight 1200-cycle loops
-  and 150 random requests below: the same feasible verdict in every cycle; forces within 1.2e-10 N (|f| ~ 1-10 N);
+  and 150 random requests below: the same feasible verdict in every cycle; forces within 1.3e-13 N (|f| ~ 1-10 N),
+  except in the drifting loop (2.1e-8 N: its ill-conditioned active sets, as above);
   iteration counts different in 1 % of the feasible cycles (by <= 11) and 16 % of the infeasible ones (by up to
   ~760: whether and when the QP's infeasibility certificate fires within max_iter is decided by tests at their
   threshold), the same in total to 0.1 %; the QP's status PROXQP_PRIMAL_INFEASIBLE against PROXQP_MAX_ITER_REACHED
@@ -239,7 +245,7 @@ else:
 
 @pytest.mark.slow  # 15 s
 def test_the_engines_agree_bit_for_bit_against_the_plain_proxsuite():
-    """Same arithmetic (proxsuite without vector extensions on both sides): identical in every cycle."""
+    """Same arithmetic (proxsuite without vector extensions on both sides): identical where proxsuite alone runs."""
     run = subprocess.run(
         [sys.executable, "-c", PLAIN_PROXSUITE, str(Path(__file__).parent)],
         capture_output=True,
@@ -251,9 +257,13 @@ def test_the_engines_agree_bit_for_bit_against_the_plain_proxsuite():
     if summary is None:
         pytest.skip("proxsuite's plain module proxsuite_pywrap cannot be selected")
     for name, case in summary.items():
-        assert case["forces"] == 0.0 and case["force_bits"] == 0, (name, case)
-        assert case["feasible"] == 0 and case["status"] == [] and case["iterations"] == [], (name, case)
-        assert case["metrics"] <= METRIC_TOLERANCE, (name, case)
+        assert case["feasible"] == 0 and case["status"] == [], (name, case)
+        if name == "random requests" or name.startswith("2 contacts"):  # proxsuite alone
+            assert case["forces"] == 0.0 and case["force_bits"] == 0, (name, case)
+            assert case["iterations"] == [] and case["metrics"] <= METRIC_TOLERANCE, (name, case)
+        else:  # the last active set's Cholesky solves round differently (module docstring)
+            assert case["forces"] <= FORCE_TOLERANCE and case["metrics"] <= 10 * FORCE_TOLERANCE, (name, case)
+            assert case["iterations"] == [], (name, case)
 
 
 def test_torque_scale_has_the_bits_of_default_torque_scale():
@@ -276,6 +286,8 @@ def test_the_constants_are_the_same():
         "FEASIBLE_RESIDUAL",
         "ADMISSIBLE_TOLERANCE",
         "CHECK_ITER",
+        "ACTIVE_TOLERANCE",
+        "FULL_RANK",
     ):
         assert getattr(core.ContactForceQP, name) == getattr(grasp_forces, name), name
 
@@ -297,3 +309,27 @@ def test_engine_selection(monkeypatch):
     assert ContactForceQP(3, 0.5, engine="python").engine == "python"
     monkeypatch.setattr(_native, "DEFAULT_ENGINE", "python")  # BHGRASP_ENGINE=python
     assert ContactForceQP(3, 0.5).engine == "python"
+
+
+@pytest.mark.parametrize("engine", ["compiled", "python"])
+def test_the_last_active_set_answers_most_cycles_with_the_qps_optimum(engine):
+    """On the drifting loop the last solved call's active set answers most feasible cycles (0 proxsuite iterations,
+    the faces the forces sit on change now and then); each such answer is the optimum of the same QP solved from
+    scratch by a new solver (proxsuite alone), to the solvers' tolerance, and meets the wrench and the pyramids."""
+    _, n, mu, f_min, gmap, wrench = loops()[-1]
+    assert callable(gmap)
+    qp = ContactForceQP(n, mu, min_normal_force=f_min, engine=engine)
+    desired = np.tile([0.0, 0.0, 3.0], (n, 1))
+    shortcut = solved_by_proxsuite = 0
+    for s in np.arange(600) / 600:
+        g, w = gmap(s), wrench(s)
+        result = qp.solve(g, w, desired)
+        if result.iterations == 0:
+            fresh = ContactForceQP(n, mu, min_normal_force=f_min, engine=engine).solve(g, w, desired)
+            assert result.status == "PROXQP_SOLVED" and result.feasible and fresh.feasible, s
+            np.testing.assert_allclose(result.forces, fresh.forces, rtol=0, atol=FORCE_TOLERANCE, err_msg=f"s = {s}")
+            assert result.wrench_residual <= 1e-9 and max(result.cone_violation, -result.normal_margin) <= 1e-9
+            shortcut += 1
+        else:
+            solved_by_proxsuite += result.feasible
+    assert shortcut > 300 and solved_by_proxsuite >= 10, (shortcut, solved_by_proxsuite)

@@ -6,7 +6,8 @@ and the iteration bound.  Both classes have one interface on validated arrays: :
 and :meth:`~ContactForceQPPython.set_grasp_map` (the grasp map and its torque scale, when it changes), then
 :meth:`~ContactForceQPPython.solve`, whose answer is the fields of
 :class:`~bhgrasp.grasp.forces.ContactForceResult` in order.  The same three proxsuite dense problems, settings and
-state machine, line for line; ``tests/test_force_qp_twin.py`` holds the two in lockstep.
+state machine, line for line (the active set's optimum by NumPy's and SciPy's Cholesky there, Eigen's in C++);
+``tests/test_force_qp_twin.py`` holds the two in lockstep.
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ DUALITY_GAP_REL = 1e-12  # relative duality-gap tolerance (besides the absolute 
 FEASIBLE_RESIDUAL = 1e-6  # |G f - w| <= this * max(1, |w|): the wrench is met
 ADMISSIBLE_TOLERANCE = 1e-7  # [N] pyramid and normal-bound violation still counted as inside
 CHECK_ITER = 4  # the check (the QP without the certificate test) may take CHECK_ITER * max_iter outer iterations
+ACTIVE_TOLERANCE = 1e-8  # [N] a solved row this close to its bound, with a nonzero multiplier, is in the active set
+FULL_RANK = 1e-6  # the active set's M M^T: least Cholesky pivot over the largest, below it M is rank-deficient
 
 
 class ContactForceQPPython:
@@ -40,7 +43,7 @@ class ContactForceQPPython:
         import proxsuite
 
         self.n, self.mu, self.inscribed, self.min_normal_force = n_contacts, mu, inscribed, min_normal_force
-        self.max_iter_in = max_iter_in
+        self.max_iter_in, self.tolerance = max_iter_in, tolerance
         self.facets = len(pyramid)
         size = 3 * self.n
         rows = self.n * (self.facets + 1)
@@ -64,6 +67,7 @@ class ContactForceQPPython:
         self._nearest_C = np.hstack((self._C, np.zeros((rows, 6))))
         self._warm: bool | tuple = False  # how the QP starts: from its last result, from (x, y, z), from scratch
         self._warm_nearest = self._infeasible = False
+        self._active: tuple[np.ndarray, np.ndarray] | None = None  # the last solved call's active rows and sides
         self._grasp_map: np.ndarray | None = None
         self._rows = np.ones(6)
         self._A = np.zeros((6, size))
@@ -116,6 +120,10 @@ class ContactForceQPPython:
         b = self._rows * w
         problem = (self._H, -f_d, self._A, b, self._C, self._lower, self._upper)
         iterations, nearest, doubtful = 0, None, True
+        if not self._infeasible and self._active is not None:  # the last active set still holds: no QP
+            optimum = self._active_set_forces(f_d, b)
+            if optimum is not None:
+                return self._result(w, optimum, "PROXQP_SOLVED", 0)
         if self._infeasible:  # the last call was infeasible: the nearest problem first, it is likely the answer
             nearest, iterations, doubtful = self._nearest_forces(f_d, b)
             if not doubtful:
@@ -123,6 +131,8 @@ class ContactForceQPPython:
         status, spent, x = self._run(self._qp, self._warm, problem)
         iterations += spent
         warm = solved = status == "PROXQP_SOLVED"
+        if solved:
+            self._remember_active(x, self._qp.results.z)
         if not solved and nearest is None:
             nearest, spent, doubtful = self._nearest_forces(f_d, b)
             iterations += spent
@@ -132,8 +142,49 @@ class ContactForceQPPython:
             solved = check == "PROXQP_SOLVED"
             if solved:  # the next cycle starts the QP from here, not from its own failed iterate
                 status, warm = check, (x, self._check.results.y.copy(), self._check.results.z.copy())
+                self._remember_active(x, warm[2])
         self._warm, self._infeasible = warm if solved else False, not solved
+        if not solved:
+            self._active = None
         return self._result(w, x if solved else nearest, status, iterations)
+
+    def _remember_active(self, forces: np.ndarray, multipliers: np.ndarray) -> None:
+        """The rows at a bound with a nonzero multiplier (proxsuite's z: > 0 upper, < 0 lower) in a solved call."""
+        values = self._C @ forces
+        bound = np.where(multipliers > 0.0, self._upper, self._lower)
+        rows = np.flatnonzero((multipliers != 0.0) & (np.abs(values - bound) <= ACTIVE_TOLERANCE))
+        self._active = (rows, np.where(multipliers[rows] > 0.0, 1.0, -1.0)) if len(rows) <= 3 * self.n else None
+
+    def _active_set_forces(self, f_d: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+        """The QP's optimum if the last active set K still holds, else None (the warm starts are left as they are).
+
+        min 1/2 |f - f_d|^2 with M f = r, M = [A; C_K], r = [b; bounds of K]: f = f_d - M^T lambda with
+        (M M^T) lambda = M f_d - r.  Kept only with its proof of optimality at the QP's tolerance: M f = r and every
+        row inside its bounds to eps_abs, each multiplier of K of its bound's sign (>= -eps_abs).
+        """
+        import scipy.linalg  # here: importing bhgrasp.grasp does not import scipy
+
+        rows, sides = self._active
+        tolerance = self.tolerance
+        system = np.vstack((self._A, self._C[rows]))
+        bounds = np.concatenate((b, np.where(sides > 0.0, self._upper[rows], self._lower[rows])))
+        try:
+            factor = np.linalg.cholesky(system @ system.T)
+        except np.linalg.LinAlgError:
+            return None
+        pivots = np.diag(factor)  # M of full row rank, not only in round-off (two contacts' G has rank 5)
+        if not pivots.min() >= FULL_RANK * pivots.max():
+            return None
+        multipliers = scipy.linalg.cho_solve((factor, True), system @ f_d - bounds)
+        forces = f_d - system.T @ multipliers
+        if not np.all(np.isfinite(forces)) or np.max(np.abs(system @ forces - bounds)) > tolerance:
+            return None
+        values = self._C @ forces
+        if np.any(values > self._upper + tolerance) or np.any(values < self._lower - tolerance):
+            return None
+        if np.any(sides * multipliers[6:] < -tolerance):
+            return None
+        return forces
 
     def _nearest_forces(self, f_d: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, int, bool]:
         """The nearest problem: admissible forces, iterations, and whether the QP may be feasible after all.

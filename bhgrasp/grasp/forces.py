@@ -31,6 +31,14 @@ the cycles of ``benchmarks/bench_qp.py`` from scratch), the check: the QP from s
 test.  After an infeasible call the next one tries the nearest problem first, so a persistently infeasible
 request costs one warm-started solve per cycle.
 
+After a solved call the next one first tries its active set K (the pyramid faces and normal bounds the forces sit on,
+with nonzero multipliers): the forces closest to f_d with S G f = S w and the rows of K at their bounds,
+f = f_d - M^T lambda with (M M^T) lambda = M f_d - r for M = [S G; C_K], one small Cholesky solve.  They are the QP's
+optimum when every row holds and every multiplier of K has its bound's sign, both to the QP's tolerance (the KKT
+conditions; ``ACTIVE_TOLERANCE`` picks K from proxsuite's answer); then no proxsuite solve runs (``iterations`` 0,
+status ``PROXQP_SOLVED``; the next proxsuite solve starts from proxsuite's last result, as it would have).  A control
+loop changes K only when a force reaches or leaves a face, so most cycles take this path.
+
 This runs compiled (``src/force_qp.cpp``, proxsuite's C++ API, the same problems, settings and steps) when the default
 engine is the compiled one (:mod:`bhgrasp._native`), otherwise in Python (``bhgrasp/grasp/_force_qp.py``, the readable
 twin; ``engine="python"`` picks it); ``tests/test_force_qp_twin.py`` holds the two in lockstep.
@@ -51,11 +59,13 @@ from bhgrasp._native import engine_name, required_core
 from bhgrasp._validation import as_array, as_real, as_vector
 from bhgrasp.errors import InputError
 from bhgrasp.grasp._force_qp import (  # noqa: F401  (the constants are part of this module's API)
+    ACTIVE_TOLERANCE,
     ADMISSIBLE_TOLERANCE,
     CHECK_ITER,
     DOUBTFUL_ERROR,
     DUALITY_GAP_REL,
     FEASIBLE_RESIDUAL,
+    FULL_RANK,
     NEAREST_WEIGHT,
     PRIMAL_INFEASIBILITY,
     ContactForceQPPython,
@@ -76,9 +86,11 @@ class ContactForceResult:
         wrench_residual: |G f - w| [N, N m] of the returned forces (0 up to solver tolerance when feasible).
         cone_violation: Largest |f_t| - mu f_n over contacts [N] for the *exact* cone (<= 0 inside).
         normal_margin: Smallest f_n - f_min [N] (>= 0 when the bounds hold).
-        status: proxsuite's status name for the QP itself: ``PROXQP_SOLVED``, ``PROXQP_PRIMAL_INFEASIBLE`` or
-            ``PROXQP_MAX_ITER_REACHED`` (iteration bound hit; the problem is reported infeasible).
-        iterations: proxsuite iterations (inner ones, summed over every solve of the call).
+        status: proxsuite's status name for the QP itself: ``PROXQP_SOLVED`` (also for the optimum on the last
+            active set, module docstring), ``PROXQP_PRIMAL_INFEASIBLE`` or ``PROXQP_MAX_ITER_REACHED`` (iteration
+            bound hit; the problem is reported infeasible).
+        iterations: proxsuite iterations (inner ones, summed over every solve of the call; 0: the last active set's
+            optimum, no proxsuite solve).
         wrench_error: G f - w (6,) [N, N m] of the returned forces.
     """
 
