@@ -27,6 +27,7 @@ QUICK = {  # script -> its arguments for a smoke run
     "bench_build.py": ["--sizes", "16", "--steps", "2"],
     "bench_linear_solver.py": ["--small", "2", "8", "--large", "3", "10", "--steps", "3"],
     "bench_trial.py": ["--duration", "0.2"],
+    "bench_demo.py": ["--repeat", "1", "--duration", "1.0"],
 }
 
 
