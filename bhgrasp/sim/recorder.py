@@ -61,8 +61,8 @@ class Recorder:
         for name, value in log.items():
             value = np.array(value, dtype=float)
             values = self.log.setdefault(name, [])
-            if len(values) < count - 1:
-                values.extend(np.full(value.shape, np.nan) for _ in range(count - 1 - len(values)))
+            if len(values) < count - 1:  # one NaN array for every missing sample (stacked, never written)
+                values.extend([np.full(value.shape, np.nan)] * (count - 1 - len(values)))
             values.append(value)
         for values in self.log.values():
             if len(values) < count:
