@@ -109,7 +109,7 @@ ContactForceQP::ContactForceQP(int n_contacts, double mu, const ConstRows& pyram
   result_.wrench_error.setZero();
   active_.reserve(static_cast<std::size_t>(rows));
   active_side_.reserve(static_cast<std::size_t>(rows));
-  system_.setZero(6 + size, size);  // at most 3n rows: more make the Gram matrix singular
+  system_.setZero(6 + size, size);  // k <= 3n active rows (past 3n - 6 M M^T is singular: the pivot test refuses)
   gram_.setZero(6 + size, 6 + size);
   bounds_.setZero(6 + size);
   lambda_.setZero(6 + size);
