@@ -8,7 +8,7 @@ Per run: the simulation's wall time (``GraspDemoResult.wall_time``: ``Simulator.
 whole call (the grasp choice, the scene, the supervisor, the summary), the real-time factor and the wall per physics
 step over ``mj_step``'s.  Then one run with timers around its parts (the controller, ``Simulator.step``, the
 recorder; the timers' own cost included), and the share of grasp cycles whose QP the last active set answered
-(``qp_iterations`` 0).  Targets (issue 33): RTF >= 20 on this machine, the wall per step <= 1x ``mj_step``.
+(``qp_iterations`` 0).  Targets: RTF >= 20 on this machine, the wall per step <= 1x ``mj_step``.
 
 Usage: ``python benchmarks/bench_demo.py [--repeat 5] [--duration 3.0]``.
 """

@@ -109,12 +109,14 @@ ContactForceQP::ContactForceQP(int n_contacts, double mu, const ConstRows& pyram
   result_.wrench_error.setZero();
   active_.reserve(static_cast<std::size_t>(rows));
   active_side_.reserve(static_cast<std::size_t>(rows));
-  system_.setZero(6 + size, size);  // k <= 3n active rows (past 3n - 6 M M^T is singular: the pivot test refuses)
+  system_.setZero(6 + size, size);  // 6 + k <= 3n rows: more make M M^T singular
   gram_.setZero(6 + size, 6 + size);
   bounds_.setZero(6 + size);
   lambda_.setZero(6 + size);
   residual_.setZero(6 + size);
   values_.setZero(rows);
+  active_forces_.setZero(size);
+  active_tolerance_ = std::max(ForceQPConstants::active_tolerance, 10.0 * tolerance);
 }
 
 ContactForceQP::~ContactForceQP() = default;
@@ -169,7 +171,7 @@ const ForceResult& ContactForceQP::solve(const Vector6& wrench, const ConstVecto
   int iterations = 0;
   bool have_nearest = false, doubtful = true;
   if (!infeasible_ && has_active_ && active_set_forces(desired))  // the last active set still holds: no QP
-    return result(wrench, x_, kSolved, 0);
+    return result(wrench, active_forces_, kSolved, 0);
   if (infeasible_) {  // the last call was infeasible: the nearest problem first, it is likely the answer
     iterations = nearest_forces(desired, doubtful);
     have_nearest = true;
@@ -218,20 +220,21 @@ void ContactForceQP::remember_active(const Eigen::VectorXd& forces, const Eigen:
     const double z = multipliers[i];
     if (z == 0.0) continue;
     const double bound = z > 0.0 ? upper_[i] : lower_[i];
-    if (std::abs(values_[i] - bound) <= ForceQPConstants::active_tolerance) {
+    if (std::abs(values_[i] - bound) <= active_tolerance_) {
       active_.push_back(i);
       active_side_.push_back(z > 0.0 ? 1.0 : -1.0);
     }
   }
-  has_active_ = static_cast<Eigen::Index>(active_.size()) <= 3 * n_;  // the rows system_ holds
+  has_active_ = 6 + static_cast<Eigen::Index>(active_.size()) <= 3 * n_;  // else M M^T is singular
 }
 
 // _active_set_forces: min 1/2 |f - f_d|^2 with A f = b and the remembered rows at their bounds, M f = r for
-// M = [A; C_K]: f = f_d - M^T lambda, (M M^T) lambda = M f_d - r (Cholesky, in place; refused when a pivot is
-// below FULL_RANK times the largest: a redundant row, e.g. two contacts' G of rank 5).  Accepted only with its
+// M = [A; C_K]: f = f_d - M^T lambda, (M M^T) lambda = M f_d - r (Cholesky, in place; refused when a diagonal entry
+// of its factor is below FULL_RANK times the largest: a redundant row, e.g. two contacts' G of rank 5).  Accepted
+// only with its
 // proof of optimality, the QP's own tolerance: M f = r and every row within its bounds to eps_abs, and each
-// multiplier of the right sign (>= -eps_abs towards its bound).  Then it is the QP's optimum; the next proxsuite
-// solve still starts as it would have (the warm start is left as it is).
+// multiplier of the right sign (>= -eps_abs towards its bound).  Then it is the QP's optimum.  The warm start is
+// left as it is: the next proxsuite solve starts from proxsuite's own last result, however many calls ago.
 bool ContactForceQP::active_set_forces(const ConstVector& desired) {
   const Eigen::Index size = 3 * n_, k = static_cast<Eigen::Index>(active_.size()), m = 6 + k;
   auto system = system_.topRows(m);
@@ -252,7 +255,7 @@ bool ContactForceQP::active_set_forces(const ConstVector& desired) {
   lambda.noalias() = system * desired;
   lambda -= bounds_.head(m);
   cholesky.solveInPlace(lambda);
-  auto forces = x_.head(size);
+  auto& forces = active_forces_;
   forces = desired;
   forces.noalias() -= system.transpose() * lambda;
   if (!forces.allFinite()) return false;

@@ -27,8 +27,8 @@ struct ForceQPConstants {
   static constexpr double feasible_residual = 1e-6;     // FEASIBLE_RESIDUAL
   static constexpr double admissible_tolerance = 1e-7;  // ADMISSIBLE_TOLERANCE [N]
   static constexpr int check_iter = 4;                  // ContactForceQP.CHECK_ITER
-  static constexpr double active_tolerance = 1e-8;      // ACTIVE_TOLERANCE [N], a solved row counted as at its bound
-  static constexpr double full_rank = 1e-6;             // FULL_RANK, least Cholesky pivot / largest of M M^T
+  static constexpr double active_tolerance = 1e-8;      // ACTIVE_TOLERANCE [N], a solved row at its bound (or 10 eps)
+  static constexpr double full_rank = 1e-6;             // FULL_RANK, least / largest diagonal of M M^T's factor L
 };
 
 // One solve (bhgrasp.grasp.forces.ContactForceResult, same fields in the same order).
@@ -80,7 +80,7 @@ class ContactForceQP {
   Run run(Problem& qp, Warm warm, const Rows& hessian, const Eigen::VectorXd& gradient, const Rows& equality,
           const Rows& inequality);
   int nearest_forces(const ConstVector& desired, bool& doubtful);  // into nearest_; returns iterations
-  bool active_set_forces(const ConstVector& desired);  // the last active set's optimum into x_, if proven
+  bool active_set_forces(const ConstVector& desired);  // the last active set's optimum into active_forces_
   void remember_active(const Eigen::VectorXd& forces, const Eigen::VectorXd& multipliers);
   void admissible(Eigen::Ref<Eigen::VectorXd> forces) const;
   const ForceResult& result(const Vector6& wrench, const Eigen::VectorXd& forces, const char* status,
@@ -106,6 +106,8 @@ class ContactForceQP {
   std::vector<Eigen::Index> active_;
   std::vector<double> active_side_;
   bool has_active_ = false;
+  double active_tolerance_ = 0.0;              // max(ACTIVE_TOLERANCE, 10 eps_abs)
+  Eigen::VectorXd active_forces_;              // the active set's forces
   Rows system_;                                // [A; C_active] (6 + k, 3n)
   Eigen::MatrixXd gram_;                       // its Gram matrix, factorised in place
   Eigen::VectorXd bounds_, lambda_, residual_;  // [b; bounds], the multipliers, M f - [b; bounds]

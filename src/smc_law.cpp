@@ -103,7 +103,8 @@ int SMCAdaptiveLaw::grasp_free_body(const ConstVector& q, const ConstVector& v, 
   // pin.XYZQUATToSE3: Eigen's quaternion (w, x, y, z) to its matrix, not normalised
   const Eigen::Matrix3d rotation =
       Eigen::Quaterniond(object_q[6], object_q[3], object_q[4], object_q[5]).toRotationMatrix();
-  // Scene.object_twist: (v, R omega_body), each row of R omega summed left to right as NumPy's R @ omega
+  // Scene.object_twist: (v, R omega_body), each row of R omega summed left to right, as NumPy's R @ omega is under
+  // OpenBLAS's Haswell kernels (CI pins them; its AVX-512 kernels fuse the multiply-adds: round-off apart there)
   Vector6 twist;
   twist.head<3>() = object_v.head<3>();
   for (int row = 0; row < 3; ++row)

@@ -11,8 +11,10 @@ solver uses proxsuite's headers without -march flags (SSE2, like the plain ``pro
   active set answer); the metrics (residual, margins) to round-off, as NumPy's BLAS and Eigen sum G f in different
   orders (<= 1e-14 N).  Where the last active set answers (the QP's optimum from one small Cholesky solve, NumPy's
   and SciPy's in the twin, Eigen's in C++; proxsuite's warm start is left as it was), only those forces differ:
-  measured, the same verdict, status and iterations in every cycle, the forces within 8e-14 N, and 2.3e-9 N in the
-  drifting loop (an active set whose M M^T is ill-conditioned: each answer is still proven optimal to eps_abs);
+  measured, the same verdict, status and iterations in every cycle, the forces within 8e-14 N, and in the drifting
+  loop 2.3e-9 N under OpenBLAS's Haswell kernels, 1.4e-8 N under its AVX-512 ones (active sets whose M M^T is
+  ill-conditioned amplify the factorisations' round-off; each answer is still proven optimal to eps_abs; tolerance:
+  1e-7 N, as below);
 * against the vectorised module, round-off differs, and so do paths now and then (and, its Eigen kernels peeling
   unaligned heads, with the heap's alignment too).  Measured on an AVX-512 machine over the eight 1200-cycle loops
   and 150 random requests below: the same feasible verdict in every cycle; forces within 1.3e-13 N (|f| ~ 1-10 N),
@@ -262,7 +264,7 @@ def test_the_engines_agree_bit_for_bit_against_the_plain_proxsuite():
             assert case["forces"] == 0.0 and case["force_bits"] == 0, (name, case)
             assert case["iterations"] == [] and case["metrics"] <= METRIC_TOLERANCE, (name, case)
         else:  # the last active set's Cholesky solves round differently (module docstring)
-            assert case["forces"] <= FORCE_TOLERANCE and case["metrics"] <= 10 * FORCE_TOLERANCE, (name, case)
+            assert case["forces"] <= FORCE_TOLERANCE and case["metrics"] <= FORCE_TOLERANCE, (name, case)
             assert case["iterations"] == [], (name, case)
 
 
@@ -328,7 +330,8 @@ def test_the_last_active_set_answers_most_cycles_with_the_qps_optimum(engine):
             fresh = ContactForceQP(n, mu, min_normal_force=f_min, engine=engine).solve(g, w, desired)
             assert result.status == "PROXQP_SOLVED" and result.feasible and fresh.feasible, s
             np.testing.assert_allclose(result.forces, fresh.forces, rtol=0, atol=FORCE_TOLERANCE, err_msg=f"s = {s}")
-            assert result.wrench_residual <= 1e-9 and max(result.cone_violation, -result.normal_margin) <= 1e-9
+            # proven to eps_abs = 1e-9 per scaled row: the unscaled 2-norm and the exact cone within a few times that
+            assert result.wrench_residual <= 1e-8 and max(result.cone_violation, -result.normal_margin) <= 1e-8
             shortcut += 1
         else:
             solved_by_proxsuite += result.feasible

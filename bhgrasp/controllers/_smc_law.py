@@ -209,8 +209,9 @@ class CompiledSMCLaw:
     def _free_body(self, scene: Any) -> tuple[slice, slice] | None:
         """The (q, v) slices of the scene's object 0 when it is a free body (7 and 6 coordinates), else ``None``."""
         if scene is not self._scene:
-            free = bool(scene.objects) and scene.object_q_slice(0).stop - scene.object_q_slice(0).start == 7
-            self._scene, self._body = scene, (scene.object_q_slice(0), scene.object_v_slice(0)) if free else None
+            self._scene, self._body = scene, None
+            if scene.objects and scene.object_q_slice(0).stop - scene.object_q_slice(0).start == 7:
+                self._body = (scene.object_q_slice(0), scene.object_v_slice(0))
         return self._body
 
     def _target_rotation(self, rotation_vector: np.ndarray) -> np.ndarray:

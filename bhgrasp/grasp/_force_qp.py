@@ -21,8 +21,8 @@ DUALITY_GAP_REL = 1e-12  # relative duality-gap tolerance (besides the absolute 
 FEASIBLE_RESIDUAL = 1e-6  # |G f - w| <= this * max(1, |w|): the wrench is met
 ADMISSIBLE_TOLERANCE = 1e-7  # [N] pyramid and normal-bound violation still counted as inside
 CHECK_ITER = 4  # the check (the QP without the certificate test) may take CHECK_ITER * max_iter outer iterations
-ACTIVE_TOLERANCE = 1e-8  # [N] a solved row this close to its bound, with a nonzero multiplier, is in the active set
-FULL_RANK = 1e-6  # the active set's M M^T: least Cholesky pivot over the largest, below it M is rank-deficient
+ACTIVE_TOLERANCE = 1e-8  # [N] a solved row this close to its bound (or 10 eps_abs), its multiplier nonzero, is active
+FULL_RANK = 1e-6  # least over largest diagonal entry of M M^T's Cholesky factor L: below it M is rank-deficient
 
 
 class ContactForceQPPython:
@@ -44,6 +44,7 @@ class ContactForceQPPython:
 
         self.n, self.mu, self.inscribed, self.min_normal_force = n_contacts, mu, inscribed, min_normal_force
         self.max_iter_in, self.tolerance = max_iter_in, tolerance
+        self._active_tolerance = max(ACTIVE_TOLERANCE, 10.0 * tolerance)
         self.facets = len(pyramid)
         size = 3 * self.n
         rows = self.n * (self.facets + 1)
@@ -152,8 +153,9 @@ class ContactForceQPPython:
         """The rows at a bound with a nonzero multiplier (proxsuite's z: > 0 upper, < 0 lower) in a solved call."""
         values = self._C @ forces
         bound = np.where(multipliers > 0.0, self._upper, self._lower)
-        rows = np.flatnonzero((multipliers != 0.0) & (np.abs(values - bound) <= ACTIVE_TOLERANCE))
-        self._active = (rows, np.where(multipliers[rows] > 0.0, 1.0, -1.0)) if len(rows) <= 3 * self.n else None
+        rows = np.flatnonzero((multipliers != 0.0) & (np.abs(values - bound) <= self._active_tolerance))
+        full_rank = 6 + len(rows) <= 3 * self.n  # else M M^T is singular
+        self._active = (rows, np.where(multipliers[rows] > 0.0, 1.0, -1.0)) if full_rank else None
 
     def _active_set_forces(self, f_d: np.ndarray, b: np.ndarray) -> np.ndarray | None:
         """The QP's optimum if the last active set K still holds, else None (the warm starts are left as they are).

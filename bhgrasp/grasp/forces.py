@@ -34,10 +34,11 @@ request costs one warm-started solve per cycle.
 After a solved call the next one first tries its active set K (the pyramid faces and normal bounds the forces sit on,
 with nonzero multipliers): the forces closest to f_d with S G f = S w and the rows of K at their bounds,
 f = f_d - M^T lambda with (M M^T) lambda = M f_d - r for M = [S G; C_K], one small Cholesky solve.  They are the QP's
-optimum when every row holds and every multiplier of K has its bound's sign, both to the QP's tolerance (the KKT
-conditions; ``ACTIVE_TOLERANCE`` picks K from proxsuite's answer); then no proxsuite solve runs (``iterations`` 0,
-status ``PROXQP_SOLVED``; the next proxsuite solve starts from proxsuite's last result, as it would have).  A control
-loop changes K only when a force reaches or leaves a face, so most cycles take this path.
+optimum when M has full row rank (``FULL_RANK``), every row holds and every multiplier of K has its bound's sign,
+both to the QP's tolerance (the KKT conditions; K is read from proxsuite's answer to ``ACTIVE_TOLERANCE``); then no
+proxsuite solve runs (``iterations`` 0, status ``PROXQP_SOLVED``), and the next proxsuite solve starts from its own
+last result, however many calls ago.  A control loop changes K only when a force reaches or leaves a face, so most
+cycles take this path; two contacts never do (their G has rank 5).
 
 This runs compiled (``src/force_qp.cpp``, proxsuite's C++ API, the same problems, settings and steps) when the default
 engine is the compiled one (:mod:`bhgrasp._native`), otherwise in Python (``bhgrasp/grasp/_force_qp.py``, the readable

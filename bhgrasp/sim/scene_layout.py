@@ -43,8 +43,8 @@ class SceneLayout:
     _names: dict[bytes, tuple[tuple[str, str], ...]] = field(default_factory=dict, init=False, repr=False)
 
     def body_names(self, pairs: np.ndarray) -> tuple[tuple[str, str], ...]:
-        """(body a, body b) of each contact's pair index in ``pairs`` (int64); a repeated list's tuple is kept."""
-        key = pairs.tobytes()
+        """(body a, body b) of each contact's pair index in ``pairs``; a repeated list's tuple is kept."""
+        key = np.asarray(pairs, dtype=np.int64).tobytes()  # (an int32 [1, 0] has the bytes of an int64 [1])
         names = self._names.get(key)
         if names is None:
             if len(self._names) >= _NAME_CACHE:
