@@ -28,6 +28,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.grasp.forces import solver_arguments
 from bhgrasp.grasp.frames import TANGENT_SWITCH, ZERO_NORMAL, contact_frames, grasp_map_from_frames
 from bhgrasp.grasp.kinematics import grasp_kinematics_kernel, hand_index
+from bhgrasp.model.spring_mounted import SpringMounted
 
 if TYPE_CHECKING:
     from bhgrasp.model.hand_description import BaseFrame
@@ -181,14 +182,12 @@ class CompiledSMCLaw:
             kernel.set_base(base.rotation, base.translation, base.gravity)
             self._base = base
         out = np.empty(self._size)
+        targets = (rotation_d, position_d, velocity, acceleration, out)
         if pose is None:
             object_q, object_v = state.scene_q[body[0]], state.scene_v[body[1]]
-            targets = (rotation_d, position_d, velocity, acceleration, out)
             status = kernel.grasp_free_body(q, v, object_q, object_v, dt, *targets)
         else:
-            twist = state.object_twists[0]
-            targets = (rotation_d, position_d, velocity, acceleration, out)
-            status = kernel.grasp(q, v, pose.rotation, pose.translation, twist, dt, *targets)
+            status = kernel.grasp(q, v, pose.rotation, pose.translation, state.object_twists[0], dt, *targets)
         if status in (1, 2, 3):
             self._raise(law, state, status, out)
         log.update(zip(self._flat_keys, self._flat_views(out)))
@@ -207,11 +206,10 @@ class CompiledSMCLaw:
         return tau
 
     def _free_body(self, scene: Any) -> tuple[slice, slice] | None:
-        """The (q, v) slices of the scene's object 0 when it is a free body (7 and 6 coordinates), else ``None``."""
+        """The (q, v) slices of the scene's object 0 when it is a free body (as Scene.object_pose tells), else None."""
         if scene is not self._scene:
-            self._scene, self._body = scene, None
-            if scene.objects and scene.object_q_slice(0).stop - scene.object_q_slice(0).start == 7:
-                self._body = (scene.object_q_slice(0), scene.object_v_slice(0))
+            free = bool(scene.objects) and not isinstance(scene.objects[0], SpringMounted)
+            self._scene, self._body = scene, (scene.object_q_slice(0), scene.object_v_slice(0)) if free else None
         return self._body
 
     def _target_rotation(self, rotation_vector: np.ndarray) -> np.ndarray:
