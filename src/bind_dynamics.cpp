@@ -1,5 +1,5 @@
 // Bindings of the dynamics family: the hand's Slotine-Li and contact torques, a finger's workspace terms, the
-// object regressor, the wrist servo of a mounted hand.
+// object regressor, a pose path, the wrist servo of a mounted hand.
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/array.h>
@@ -9,6 +9,7 @@
 #include <nanobind/stl/vector.h>
 
 #include "dynamics.hpp"
+#include "pose_path.hpp"
 #include "smc_law.hpp"
 #include "workspace.hpp"
 #include "wrist_servo.hpp"
@@ -19,6 +20,27 @@ namespace nb = nanobind;
 using namespace nb::literals;
 
 namespace bhgrasp {
+
+namespace {
+
+using Rows6 = Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>;
+
+// A pose path's moves from one list per field (PosePath's segments, in time order).
+std::vector<PoseMove> pose_moves(const std::vector<Eigen::Matrix3d>& rotations,
+                                 const std::vector<Eigen::Vector3d>& translations, const Rows6& offsets,
+                                 const std::vector<double>& durations, const std::vector<double>& delays) {
+  const std::size_t n = rotations.size();
+  if (translations.size() != n || static_cast<std::size_t>(offsets.rows()) != n || durations.size() != n ||
+      delays.size() != n)
+    throw std::invalid_argument("one rotation, translation, offset, duration and delay per move");
+  std::vector<PoseMove> moves;
+  for (std::size_t i = 0; i < n; ++i)
+    moves.push_back(
+        {rotations[i], translations[i], offsets.row(static_cast<Eigen::Index>(i)).transpose(), durations[i], delays[i]});
+  return moves;
+}
+
+}  // namespace
 
 void bind_dynamics(nb::module_& m) {
   nb::class_<HandDynamics>(m, "HandDynamics")
@@ -41,7 +63,26 @@ void bind_dynamics(nb::module_& m) {
           "base_rotation"_a, "base_translation"_a, "q"_a, "joints"_a, "points"_a, "forces"_a)
       .def_prop_ro("nv", &HandDynamics::nv);
 
-  using Rows6 = Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>;
+  nb::class_<PosePath>(m, "PosePath")
+      .def(
+          "__init__",
+          [](PosePath* path, const std::vector<Eigen::Matrix3d>& rotations,
+             const std::vector<Eigen::Vector3d>& translations, const Rows6& offsets, const std::vector<double>& durations,
+             const std::vector<double>& delays) {
+            new (path) PosePath(pose_moves(rotations, translations, offsets, durations, delays));
+          },
+          "rotations"_a, "translations"_a, "offsets"_a, "durations"_a, "delays"_a)
+      .def(
+          "sample",
+          [](const PosePath& path, double t) {
+            Eigen::Matrix3d rotation;
+            Eigen::Vector3d position;
+            Vector6 twist, derivative;
+            path.at(t, rotation, position, twist, derivative);
+            return std::make_tuple(rotation, position, twist, derivative);
+          },
+          "t"_a, "(rotation (3, 3), position (3,), world twist (6,), its derivative (6,)) at t [s]");
+
   nb::class_<WristServo>(m, "WristServo")
       .def(
           "__init__",
@@ -50,16 +91,8 @@ void bind_dynamics(nb::module_& m) {
              const Rows6& offsets, const std::vector<double>& durations, const std::vector<double>& delays,
              const Eigen::Matrix3d& origin_rotation, const Eigen::Vector3d& origin_translation, const Vector6& kp,
              const Vector6& kd, bool hold_fingers, double finger_kp, double finger_kd) {
-            const std::size_t n = rotations.size();
-            if (translations.size() != n || static_cast<std::size_t>(offsets.rows()) != n || durations.size() != n ||
-                delays.size() != n)
-              throw std::invalid_argument("one rotation, translation, offset, duration and delay per move");
-            std::vector<PoseMove> moves;
-            for (std::size_t i = 0; i < n; ++i)
-              moves.push_back({rotations[i], translations[i], offsets.row(static_cast<Eigen::Index>(i)).transpose(),
-                               durations[i], delays[i]});
-            new (servo) WristServo(model, gravity, std::move(moves), origin_rotation, origin_translation, kp, kd,
-                                   hold_fingers, finger_kp, finger_kd);
+            new (servo) WristServo(model, gravity, pose_moves(rotations, translations, offsets, durations, delays),
+                                   origin_rotation, origin_translation, kp, kd, hold_fingers, finger_kp, finger_kd);
           },
           "model"_a, "gravity"_a, "rotations"_a, "translations"_a, "offsets"_a, "durations"_a, "delays"_a,
           "origin_rotation"_a, "origin_translation"_a, "kp"_a, "kd"_a, "hold_fingers"_a, "finger_kp"_a, "finger_kd"_a)

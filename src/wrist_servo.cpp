@@ -39,7 +39,7 @@ Eigen::Matrix3d angular_map_rate(double yaw, double pitch, double yaw_dot, doubl
 WristServo::WristServo(const std::string& model, const Eigen::Vector3d& gravity, std::vector<PoseMove> moves,
                        const Eigen::Matrix3d& origin_rotation, const Eigen::Vector3d& origin_translation,
                        const Vector6& kp, const Vector6& kd, bool hold_fingers, double finger_kp, double finger_kd)
-    : moves_(std::move(moves)),
+    : path_(std::move(moves)),
       origin_rotation_(origin_rotation),
       origin_translation_(origin_translation),
       kp_(kp),
@@ -51,32 +51,17 @@ WristServo::WristServo(const std::string& model, const Eigen::Vector3d& gravity,
   model_.gravity.linear(gravity);
   data_ = pinocchio::Data(model_);
   if (model_.nv < 6 || model_.nq != model_.nv) throw std::invalid_argument("the mounted hand needs six mount joints");
-  if (moves_.empty()) throw std::invalid_argument("a pose path needs at least one move");
-  for (const PoseMove& move : moves_)
-    if (!(move.duration > 0.0) || !std::isfinite(move.delay)) throw std::invalid_argument("a move needs duration > 0");
   acceleration_ = Eigen::VectorXd::Zero(model_.nv);
   tau_ = Eigen::VectorXd::Zero(model_.nv);
   hold_ = Eigen::VectorXd::Zero(model_.nq - 6);
 }
 
 void WristServo::pose(double t, Vector6& sample, Vector6& twist, Vector6& derivative) const {
-  const PoseMove* move = &moves_.back();  // PosePath: the move whose end is still ahead, else the last
-  for (const PoseMove& candidate : moves_)
-    if (t < candidate.delay + candidate.duration) {
-      move = &candidate;
-      break;
-    }
-  const double s = std::min(std::max((t - move->delay) / move->duration, 0.0), 1.0);  // PoseMotion, minimum_jerk
-  const double square = s * s, rest = 1.0 - s;
-  const double blend = square * s * (10.0 + s * (-15.0 + 6.0 * s));
-  const double rate = 30.0 * square * rest * rest / move->duration;
-  const double curvature = 60.0 * s * rest * (1.0 - 2.0 * s) / (move->duration * move->duration);
-  const Eigen::Vector3d turn = blend * move->offset.tail<3>();
-  const Eigen::Matrix3d rotation = pinocchio::exp3(turn) * move->start_rotation;
-  sample.head<3>() = move->start_translation + blend * move->offset.head<3>();
+  Eigen::Matrix3d rotation;
+  Eigen::Vector3d position;
+  path_.at(t, rotation, position, twist, derivative);
+  sample.head<3>() = position;
   sample.tail<3>() = pinocchio::log3(rotation);
-  twist = rate * move->offset;
-  derivative = curvature * move->offset;
 }
 
 void WristServo::reference(double t, double held, Vector6& c, Vector6& c_dot, Vector6& c_dd) const {

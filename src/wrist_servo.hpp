@@ -14,19 +14,9 @@
 
 #include <pinocchio/multibody.hpp>
 
+#include "pose_path.hpp"
+
 namespace bhgrasp {
-
-using Vector6 = Eigen::Matrix<double, 6, 1>;
-
-// One move of a pose path: from (start_rotation, start_translation) (world <- body) by the world offset
-// (dx [m], dtheta [rad]) over `duration` [s] from `delay` [s] (PoseMotion).
-struct PoseMove {
-  Eigen::Matrix3d start_rotation;
-  Eigen::Vector3d start_translation;
-  Vector6 offset;
-  double duration;
-  double delay;
-};
 
 class WristServo {
  public:
@@ -57,7 +47,7 @@ class WristServo {
 
   pinocchio::Model model_;
   pinocchio::Data data_;
-  std::vector<PoseMove> moves_;
+  PosePath path_;
   Eigen::Matrix3d origin_rotation_;
   Eigen::Vector3d origin_translation_;
   Vector6 kp_, kd_;

@@ -335,3 +335,25 @@ def test_a_simulated_state_gives_its_object_as_free_body_coordinates_with_the_sa
     assert grasp_cycles > 400 and direct._compiled.kernel.calls["grasp"] == 0
     assert built._compiled.kernel.calls == {"grasp": grasp_cycles, "grasp_free_body": 0}
     assert np.ptp(np.array([s.object_poses[0].rotation for _, s in states[::4]]), axis=0).max() > 0.05  # it turned
+
+
+class Resampled(PoseMotion):
+    """A PoseMotion the compiled law does not know (a subclass): sampled in Python, as the twin samples it."""
+
+
+def test_the_compiled_law_samples_its_pose_path_in_cpp_and_commands_what_the_python_sample_commands(run, monkeypatch):
+    """The supervisor's moving reference sampled by ``bhgrasp._core.PosePath`` (its rotation given to the law as
+    exp(b dtheta) R_0) and by PoseMotion (the rotation exp(log(exp(b dtheta) R_0)), NumPy's product): fed the same
+    states, two compiled laws command the same torques to round-off."""
+    setup, states = run
+    in_cpp = GraspSupervisor(setup.hand, setup.q_contact, smc(setup, "compiled"), offset=OFFSET)
+    torques = [in_cpp(t, state) for t, state in states]
+    monkeypatch.setattr("bhgrasp.controllers.supervisor.PoseMotion", Resampled)
+    in_python = GraspSupervisor(setup.hand, setup.q_contact, smc(setup, "compiled"), offset=OFFSET)
+    moving, largest = 0, max(float(np.abs(tau).max()) for tau in torques)
+    for (t, state), tau in zip(states, torques, strict=True):
+        np.testing.assert_allclose(in_python(t, state), tau, rtol=0, atol=1e-9 * largest, err_msg=f"t = {t}")
+        moving += type(in_python.grasp.reference) is Resampled
+    assert moving > 2000 and type(in_cpp.grasp.reference) is PoseMotion
+    assert in_cpp.grasp._compiled._reference[1] is not None  # sampled in C++
+    assert in_python.grasp._compiled._reference[1] is None  # the subclass: in Python

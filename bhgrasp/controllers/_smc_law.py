@@ -7,7 +7,9 @@
 by finger, their frames, P, P_dot, G, J_h, J_h^+, the errors, the object regressor and estimate, the wrench, its QP
 distribution (one warm-started QP per contact count), the force errors and their integrals, and the torques.  This
 module keeps what stays in Python, exactly as the twin does it: the input checks, the approach branch (fewer than two
-touching fingers), the hold pose, the clock and the reference; and it publishes the log.  The log's arrays are views
+touching fingers), the hold pose, the clock and a reference other than a minimum-jerk pose path (a ``PoseMotion`` or
+``PosePath`` is sampled by ``bhgrasp._core.PosePath``, its target rotation exp(b dtheta) R_0 given to the law as it
+is, where the twin takes the exp of the sample's log); and it publishes the log.  The log's arrays are views
 of one fresh buffer per call (a recorder may keep them).  ``tests/test_smc_law_twin.py`` holds both engines in
 lockstep.
 """
@@ -23,12 +25,14 @@ import pinocchio as pin
 
 from bhgrasp._native import required_core
 from bhgrasp._validation import as_array, as_vector
+from bhgrasp.controllers._pose_path import compiled_path
 from bhgrasp.data import SimulatedState
 from bhgrasp.errors import InputError
 from bhgrasp.grasp.forces import solver_arguments
 from bhgrasp.grasp.frames import TANGENT_SWITCH, ZERO_NORMAL, contact_frames, grasp_map_from_frames
 from bhgrasp.grasp.kinematics import grasp_kinematics_kernel, hand_index
 from bhgrasp.model.spring_mounted import SpringMounted
+from bhgrasp.motion.trajectories import time_of
 
 if TYPE_CHECKING:
     from bhgrasp.model.hand_description import BaseFrame
@@ -83,6 +87,7 @@ class CompiledSMCLaw:
         self._scene: Any = None  # the scene of the last simulated state and its object's free-body slices
         self._body: tuple[slice, slice] | None = None
         self._target: tuple[bytes, np.ndarray | None] = (b"", None)  # the last target rotation vector, its exp
+        self._core, self._reference = core, (None, None)  # the last reference and its compiled path
         self._zeros = np.zeros(6)
         self._zeros.flags.writeable = False
         nv, fingers = hand.nv, len(hand.fingers)
@@ -172,8 +177,12 @@ class CompiledSMCLaw:
                 held = self._held = (law._hold, rotation, law._hold.translation.copy())
             rotation_d, position_d, velocity, acceleration = held[1], held[2], self._zeros, self._zeros
         else:
-            sample, velocity, acceleration = law.reference(t)
-            rotation_d, position_d = self._target_rotation(sample[3:]), sample[:3]
+            path = self._path(law.reference)
+            if path is None:
+                sample, velocity, acceleration = law.reference(t)
+                rotation_d, position_d = self._target_rotation(sample[3:]), sample[:3]
+            else:  # a minimum-jerk pose path, sampled in C++ (its rotation not through log3 and exp3)
+                rotation_d, position_d, velocity, acceleration = path.sample(time_of(t))
         v = state.v
         if not trusted or v.shape != (hand.nv,):
             v = as_vector(v, "v", hand.nv)  # (Hand.slotine_li_torque's check)
@@ -211,6 +220,12 @@ class CompiledSMCLaw:
             free = bool(scene.objects) and not isinstance(scene.objects[0], SpringMounted)
             self._scene, self._body = scene, (scene.object_q_slice(0), scene.object_v_slice(0)) if free else None
         return self._body
+
+    def _path(self, reference: Any) -> Any | None:
+        """The compiled path of ``reference`` (kept while the law's reference is that object), else None."""
+        if reference is not self._reference[0]:
+            self._reference = (reference, compiled_path(self._core, reference))
+        return self._reference[1]
 
     def _target_rotation(self, rotation_vector: np.ndarray) -> np.ndarray:
         """exp(rotation_vector) as the kernel takes it (Eigen's order); a repeated vector's is the last call's."""

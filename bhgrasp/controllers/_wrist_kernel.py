@@ -18,9 +18,10 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from bhgrasp.controllers._pose_path import path_arguments, pose_moves
 from bhgrasp.model.hand import Hand
 from bhgrasp.motion.held import HeldReference
-from bhgrasp.motion.pose_references import PoseMotion, PosePath
+from bhgrasp.motion.pose_references import PoseMotion
 from bhgrasp.motion.trajectories import Reference
 from bhgrasp.motion.wrist import MountReference
 
@@ -44,12 +45,8 @@ def path_of(reference: Reference) -> tuple[list[PoseMotion], MountReference, Hel
     mount = reference.reference if held is not None else reference
     if type(mount) is not MountReference:
         return None
-    pose = mount.pose
-    if type(pose) is PosePath:
-        return list(pose.segments), mount, held
-    if type(pose) is PoseMotion:
-        return [pose], mount, held
-    return None
+    moves = pose_moves(mount.pose)
+    return None if moves is None else (moves, mount, held)
 
 
 def covers(servo: ServoSetup) -> list[str]:
@@ -76,11 +73,7 @@ class CompiledWristServo:
         self.kernel = core.WristServo(
             model=hand.model.saveToString(),
             gravity=np.array(hand.model.gravity.linear),
-            rotations=[np.array(move.start.rotation) for move in moves],
-            translations=[np.array(move.start.translation) for move in moves],
-            offsets=np.array([move.offset for move in moves]).reshape(len(moves), 6),
-            durations=[move.duration for move in moves],
-            delays=[move.delay for move in moves],
+            **path_arguments(moves),
             origin_rotation=np.array(mount.origin.rotation),
             origin_translation=np.array(mount.origin.translation),
             kp=servo.kp,
