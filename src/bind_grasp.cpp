@@ -102,6 +102,7 @@ void bind_grasp(nb::module_& m) {
       .def("reset", &SMCAdaptiveLaw::reset)
       .def("set_base", &SMCAdaptiveLaw::set_base, "rotation"_a, "translation"_a, "gravity"_a)
       .def("sense", &SMCAdaptiveLaw::sense, "finger"_a, "joint"_a, "points"_a, "normals"_a, "forces"_a)
+      .def("sense_contacts", &SMCAdaptiveLaw::sense_contacts, "contacts"_a, "finger_of_pair"_a, "joint_of_pair"_a)
       .def("grasp", &SMCAdaptiveLaw::grasp, "q"_a, "v"_a, "rotation"_a, "translation"_a, "twist"_a, "dt"_a,
            "target_rotation"_a, "target_translation"_a, "velocity"_a, "acceleration"_a, "out"_a)
       .def("grasp_free_body", &SMCAdaptiveLaw::grasp_free_body, "q"_a, "v"_a, "object_q"_a, "object_v"_a, "dt"_a,

@@ -83,6 +83,22 @@ int SMCAdaptiveLaw::sense(const ConstIndices& finger, const ConstIndices& joint,
   return static_cast<int>(touching_.size());
 }
 
+int SMCAdaptiveLaw::sense_contacts(const Contacts& contacts, const ConstIndices& finger_of_pair,
+                                   const ConstIndices& joint_of_pair) {
+  if (joint_of_pair.size() != finger_of_pair.size())
+    throw std::invalid_argument("finger_of_pair and joint_of_pair must have one entry per collision pair");
+  const Eigen::Index rows = contacts.size();
+  row_finger_.resize(rows);
+  row_joint_.resize(rows);
+  for (Eigen::Index row = 0; row < rows; ++row) {
+    const std::int64_t pair = contacts.pair[row];
+    if (pair < 0 || pair >= finger_of_pair.size()) throw std::invalid_argument("a contact's pair is not the scene's");
+    row_finger_[row] = finger_of_pair[pair];
+    row_joint_[row] = joint_of_pair[pair];
+  }
+  return sense(row_finger_, row_joint_, contacts.point, contacts.normal, contacts.force);
+}
+
 namespace {
 
 // bhgrasp.grasp.forces._torque_scale: the largest lever |d_i| = ||G_i[3:]||_F / sqrt(2), 1 if every lever is 0.

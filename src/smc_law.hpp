@@ -58,6 +58,9 @@ class SMCAdaptiveLaw {
   // each row's hand link), points, normals and forces (m, 3); returns the number of touching fingers.
   int sense(const ConstIndices& finger, const ConstIndices& joint, const ConstPoints& points,
             const ConstPoints& normals, const ConstPoints& forces);
+  // sense() on a step's contacts as the engine returned them: each row's finger and joint by its collision pair
+  // (`finger_of_pair`, `joint_of_pair`: one entry per pair of the scene; std::invalid_argument on a pair beyond them).
+  int sense_contacts(const Contacts& contacts, const ConstIndices& finger_of_pair, const ConstIndices& joint_of_pair);
 
   // One grasp cycle for the touching fingers of the last sense() (>= 1): joint state q, v, object pose (rotation,
   // translation of the COM) and twist, dt [s] since the last grasp cycle, the target pose, twist and its rate.
@@ -109,6 +112,7 @@ class SMCAdaptiveLaw {
   // the last sense()
   FingerSums sums_;
   FingerWork work_;
+  Indices row_finger_, row_joint_;      // sense_contacts: each contact row's finger and joint
   std::vector<int> touching_, joints_;  // touching fingers in hand order, the joint of each one's strongest contact
   // work arrays, sized for F contacts once
   Rows points_, frames_;                          // (F, 3), (3F, 3)

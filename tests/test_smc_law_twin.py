@@ -291,7 +291,15 @@ class CountingKernel:
     """The compiled kernel, counting its grasp calls by entry point."""
 
     def __init__(self, kernel):
-        self.kernel, self.calls = kernel, {"grasp": 0, "grasp_free_body": 0}
+        self.kernel, self.calls = kernel, {"grasp": 0, "grasp_free_body": 0, "sense": 0, "sense_contacts": 0}
+
+    def sense(self, *arguments):
+        self.calls["sense"] += 1
+        return self.kernel.sense(*arguments)
+
+    def sense_contacts(self, *arguments):
+        self.calls["sense_contacts"] += 1
+        return self.kernel.sense_contacts(*arguments)
 
     def __getattr__(self, name):
         return getattr(self.kernel, name)
@@ -316,9 +324,10 @@ def world_twist(scene, state):
 
 def test_a_simulated_state_gives_its_object_as_free_body_coordinates_with_the_same_bits(run):
     """A simulator's state hands the kernel the box's scene coordinates (its quaternion turned to R in C++, its
-    body angular velocity to world); the same state made by dataclasses.replace hands it the pin.SE3 of
-    Scene.object_pose and the twist of Scene.object_twist.  Two compiled laws fed one and the other command the same
-    bits."""
+    body angular velocity to world) and the compiled step's contacts (each row's finger and joint by its collision
+    pair); the same state made by dataclasses.replace hands it the pin.SE3 of Scene.object_pose, the twist of
+    Scene.object_twist and the state's contact arrays with their body names.  Two compiled laws fed one and the other
+    command the same bits."""
     setup, states = run
     direct, built = smc(setup, "compiled"), smc(setup, "compiled")
     direct._compiled.kernel = CountingKernel(direct._compiled.kernel)
@@ -333,7 +342,15 @@ def test_a_simulated_state_gives_its_object_as_free_body_coordinates_with_the_sa
             np.testing.assert_array_equal(built.log[key], value, err_msg=f"{key} at t = {t}")
     grasp_cycles = direct._compiled.kernel.calls["grasp_free_body"]
     assert grasp_cycles > 400 and direct._compiled.kernel.calls["grasp"] == 0
-    assert built._compiled.kernel.calls == {"grasp": grasp_cycles, "grasp_free_body": 0}
+    cycles = len(states[::4])
+    # every state but the start state (whose contacts the scene found, a ContactSet) hands the kernel its step's
+    assert (direct._compiled.kernel.calls["sense_contacts"], direct._compiled.kernel.calls["sense"]) == (cycles - 1, 1)
+    assert built._compiled.kernel.calls == {
+        "grasp": grasp_cycles,
+        "grasp_free_body": 0,
+        "sense": cycles,
+        "sense_contacts": 0,
+    }
     assert np.ptp(np.array([s.object_poses[0].rotation for _, s in states[::4]]), axis=0).max() > 0.05  # it turned
 
 
@@ -357,3 +374,14 @@ def test_the_compiled_law_samples_its_pose_path_in_cpp_and_commands_what_the_pyt
     assert moving > 2000 and type(in_cpp.grasp.reference) is PoseMotion
     assert in_cpp.grasp._compiled._reference[1] is not None  # sampled in C++
     assert in_python.grasp._compiled._reference[1] is None  # the subclass: in Python
+
+
+def test_the_kernel_refuses_contacts_whose_pairs_it_was_not_given(run):
+    setup, states = run
+    kernel = smc(setup, "compiled")._compiled.kernel
+    contacts = states[-1][1]._source.contacts  # the compiled step's, the box held
+    assert len(contacts.pair) >= 3
+    with pytest.raises(ValueError, match="not the scene's"):
+        kernel.sense_contacts(contacts, np.zeros(0, np.int64), np.zeros(0, np.int64))
+    with pytest.raises(ValueError, match="one entry per collision pair"):
+        kernel.sense_contacts(contacts, np.zeros(3, np.int64), np.zeros(2, np.int64))

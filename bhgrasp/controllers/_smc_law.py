@@ -88,6 +88,8 @@ class CompiledSMCLaw:
         self._body: tuple[slice, slice] | None = None
         self._target: tuple[bytes, np.ndarray | None] = (b"", None)  # the last target rotation vector, its exp
         self._core, self._reference = core, (None, None)  # the last reference and its compiled path
+        self._contacts_type = core.Contacts  # a compiled step's contacts, and the last layout's rows of its pairs
+        self._pairs: tuple[Any, tuple[np.ndarray, np.ndarray]] = (None, (np.zeros(0, np.int64), np.zeros(0, np.int64)))
         self._zeros = np.zeros(6)
         self._zeros.flags.writeable = False
         nv, fingers = hand.nv, len(hand.fingers)
@@ -130,13 +132,23 @@ class CompiledSMCLaw:
             TANGENT_SWITCH,
         )
 
-    def _index(self, bodies: tuple) -> tuple[np.ndarray, np.ndarray]:
-        """The finger (-1: none) and parent joint of every contact row (ContactSensing's and parent_joints' maps)."""
+    def _pair_rows(self, layout: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The finger (-1: none) and parent joint of every collision pair of ``layout``'s scene, by its hand link."""
+        if layout is not self._pairs[0]:
+            self._pairs = (layout, self._rows_of(layout.pair_bodies))
+        return self._pairs[1]
+
+    def _rows_of(self, bodies: tuple) -> tuple[np.ndarray, np.ndarray]:
+        """The finger (-1: none) and parent joint of each (hand link, body): ContactSensing's, parent_joints' maps."""
         finger_of, joint_of = self._finger_of, self._joint_of
-        rows = (
+        return (
             np.array([finger_of.get(link, -1) for link, _ in bodies], dtype=np.int64),
             np.array([joint_of.get(link, -1) for link, _ in bodies], dtype=np.int64),
         )
+
+    def _index(self, bodies: tuple) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_rows_of` the contact rows' bodies, kept for the next call with the same bodies."""
+        rows = self._rows_of(bodies)
         if len(self._rows) >= _ROW_CACHE:
             self._rows.clear()
         self._rows[bodies] = rows
@@ -159,9 +171,13 @@ class CompiledSMCLaw:
             if not state.object_poses:
                 raise InputError(f"{type(law).__name__} needs the object's pose in the state (a scene with an object)")
             pose = state.object_poses[0]
-        bodies = state.contact_bodies
-        finger, joint = self._rows.get(bodies) or self._index(bodies)
-        touching = kernel.sense(finger, joint, state.contact_points, state.contact_normals, state.contact_forces)
+        contacts = source.contacts if trusted else None
+        if type(contacts) is self._contacts_type:  # the compiled step's: read in C++, rows by their collision pairs
+            touching = kernel.sense_contacts(contacts, *self._pair_rows(source.simulator.layout))
+        else:
+            bodies = state.contact_bodies
+            finger, joint = self._rows.get(bodies) or self._index(bodies)
+            touching = kernel.sense(finger, joint, state.contact_points, state.contact_normals, state.contact_forces)
         if touching < 2:
             return self._approach(law, q, touching)
         if law._hold is None:
