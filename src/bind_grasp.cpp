@@ -10,6 +10,7 @@
 
 #include "force_qp.hpp"
 #include "grasp.hpp"
+#include "pose_path.hpp"
 #include "sensing.hpp"
 #include "smc_law.hpp"
 #include "touch_search.hpp"
@@ -107,6 +108,8 @@ void bind_grasp(nb::module_& m) {
            "target_rotation"_a, "target_translation"_a, "velocity"_a, "acceleration"_a, "out"_a)
       .def("grasp_free_body", &SMCAdaptiveLaw::grasp_free_body, "q"_a, "v"_a, "object_q"_a, "object_v"_a, "dt"_a,
            "target_rotation"_a, "target_translation"_a, "velocity"_a, "acceleration"_a, "out"_a)
+      .def("grasp_free_body_on_path", &SMCAdaptiveLaw::grasp_free_body_on_path, "q"_a, "v"_a, "object_q"_a,
+           "object_v"_a, "dt"_a, "path"_a, "t"_a, "out"_a)
       .def_prop_rw("object_estimate", &SMCAdaptiveLaw::object_estimate, &SMCAdaptiveLaw::set_object_estimate)
       .def_prop_ro("log_size", &SMCAdaptiveLaw::log_size);
 }

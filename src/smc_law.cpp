@@ -129,6 +129,16 @@ int SMCAdaptiveLaw::grasp_free_body(const ConstVector& q, const ConstVector& v, 
                acceleration, out);
 }
 
+int SMCAdaptiveLaw::grasp_free_body_on_path(const ConstVector& q, const ConstVector& v, const Vector7& object_q,
+                                            const Vector6& object_v, double dt, const PosePath& path, double t,
+                                            Eigen::Ref<Eigen::VectorXd> out) {
+  Eigen::Matrix3d rotation;
+  Eigen::Vector3d position;
+  Vector6 twist, derivative;
+  path.at(t, rotation, position, twist, derivative);
+  return grasp_free_body(q, v, object_q, object_v, dt, rotation, position, twist, derivative, out);
+}
+
 int SMCAdaptiveLaw::grasp(const ConstVector& q, const ConstVector& v, const Eigen::Matrix3d& rotation,
                           const Eigen::Vector3d& translation, const Vector6& twist, double dt,
                           const Eigen::Matrix3d& target_rotation, const Eigen::Vector3d& target_translation,

@@ -16,6 +16,7 @@
 #include "dynamics.hpp"
 #include "force_qp.hpp"
 #include "grasp.hpp"
+#include "pose_path.hpp"
 #include "sensing.hpp"
 
 namespace bhgrasp {
@@ -80,6 +81,10 @@ class SMCAdaptiveLaw {
   int grasp_free_body(const ConstVector& q, const ConstVector& v, const Vector7& object_q, const Vector6& object_v,
                       double dt, const Eigen::Matrix3d& target_rotation, const Eigen::Vector3d& target_translation,
                       const Vector6& velocity, const Vector6& acceleration, Eigen::Ref<Eigen::VectorXd> out);
+  // grasp_free_body() toward the pose of `path` at t [s], with its twist and the twist's rate (PosePath::at).
+  int grasp_free_body_on_path(const ConstVector& q, const ConstVector& v, const Vector7& object_q,
+                              const Vector6& object_v, double dt, const PosePath& path, double t,
+                              Eigen::Ref<Eigen::VectorXd> out);
 
   Vector7 object_estimate() const { return estimate_; }
   void set_object_estimate(const Vector7& estimate) { estimate_ = estimate; }

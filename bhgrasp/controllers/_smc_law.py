@@ -186,6 +186,7 @@ class CompiledSMCLaw:
         if dt < 0.0:
             raise InputError(f"time went backwards: t = {t} after {law._time}; call reset() to restart")
         law._time = t
+        on_path = None  # a compiled pose path the kernel samples in the grasp call
         if law.reference is None:
             held = self._held
             if held is None or held[0] is not law._hold:
@@ -197,7 +198,9 @@ class CompiledSMCLaw:
             if path is None:
                 sample, velocity, acceleration = law.reference(t)
                 rotation_d, position_d = self._target_rotation(sample[3:]), sample[:3]
-            else:  # a minimum-jerk pose path, sampled in C++ (its rotation not through log3 and exp3)
+            elif pose is None and law.identification is None:  # a minimum-jerk pose path, sampled in the law's call
+                on_path, t = path, time_of(t)  # (the reference's check of t)
+            else:  # sampled in C++ too, its targets wanted here (its rotation not through log3 and exp3)
                 rotation_d, position_d, velocity, acceleration = path.sample(time_of(t))
         v = state.v
         if not trusted or v.shape != (hand.nv,):
@@ -207,11 +210,15 @@ class CompiledSMCLaw:
             kernel.set_base(base.rotation, base.translation, base.gravity)
             self._base = base
         out = np.empty(self._size)
-        targets = (rotation_d, position_d, velocity, acceleration, out)
-        if pose is None:
+        if on_path is not None:
+            object_q, object_v = state.scene_q[body[0]], state.scene_v[body[1]]
+            status = kernel.grasp_free_body_on_path(q, v, object_q, object_v, dt, on_path, t, out)
+        elif pose is None:
+            targets = (rotation_d, position_d, velocity, acceleration, out)
             object_q, object_v = state.scene_q[body[0]], state.scene_v[body[1]]
             status = kernel.grasp_free_body(q, v, object_q, object_v, dt, *targets)
         else:
+            targets = (rotation_d, position_d, velocity, acceleration, out)
             status = kernel.grasp(q, v, pose.rotation, pose.translation, state.object_twists[0], dt, *targets)
         if status in (1, 2, 3):
             self._raise(law, state, status, out)
