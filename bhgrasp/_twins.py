@@ -59,6 +59,11 @@ KERNELS = (
         "tests/test_wrist_servo.py::test_the_compiled_servo_is_its_python_twin_to_round_off",
     ),
     Twin(
+        "PosePath",
+        "bhgrasp.motion.pose_references.PosePath",
+        "tests/test_pose_path_kernel.py::test_the_compiled_path_samples_what_the_python_reference_does",
+    ),
+    Twin(
         "TouchSearch",
         "bhgrasp.bench.reach.Reach._touch",
         "tests/test_touch_search.py::test_every_touch_angle_is_the_twins_to_the_bit",
