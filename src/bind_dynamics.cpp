@@ -26,7 +26,7 @@ namespace {
 using Rows6 = Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>;
 
 // A pose path's moves from one list per field (PosePath's segments, in time order).
-std::vector<PoseMove> pose_moves(const std::vector<Eigen::Matrix3d>& rotations,
+std::vector<PoseMove> moves_from_fields(const std::vector<Eigen::Matrix3d>& rotations,
                                  const std::vector<Eigen::Vector3d>& translations, const Rows6& offsets,
                                  const std::vector<double>& durations, const std::vector<double>& delays) {
   const std::size_t n = rotations.size();
@@ -69,7 +69,7 @@ void bind_dynamics(nb::module_& m) {
           [](PosePath* path, const std::vector<Eigen::Matrix3d>& rotations,
              const std::vector<Eigen::Vector3d>& translations, const Rows6& offsets, const std::vector<double>& durations,
              const std::vector<double>& delays) {
-            new (path) PosePath(pose_moves(rotations, translations, offsets, durations, delays));
+            new (path) PosePath(moves_from_fields(rotations, translations, offsets, durations, delays));
           },
           "rotations"_a, "translations"_a, "offsets"_a, "durations"_a, "delays"_a)
       .def(
@@ -91,7 +91,7 @@ void bind_dynamics(nb::module_& m) {
              const Rows6& offsets, const std::vector<double>& durations, const std::vector<double>& delays,
              const Eigen::Matrix3d& origin_rotation, const Eigen::Vector3d& origin_translation, const Vector6& kp,
              const Vector6& kd, bool hold_fingers, double finger_kp, double finger_kd) {
-            new (servo) WristServo(model, gravity, pose_moves(rotations, translations, offsets, durations, delays),
+            new (servo) WristServo(model, gravity, moves_from_fields(rotations, translations, offsets, durations, delays),
                                    origin_rotation, origin_translation, kp, kd, hold_fingers, finger_kp, finger_kd);
           },
           "model"_a, "gravity"_a, "rotations"_a, "translations"_a, "offsets"_a, "durations"_a, "delays"_a,

@@ -5,7 +5,8 @@
 // mirror ObjectGraspController.__call__ and SMCAdaptiveGrasp.grasp_torques line for line, named alike, through the
 // same kernels: finger_contacts and contact_frame (sensing.cpp), GraspKinematics (grasp.cpp), object_regressor,
 // ContactForceQP (force_qp.cpp) and HandDynamics (dynamics.cpp).  tests/test_smc_law_twin.py holds the two in
-// lockstep.  The reference, the hold pose, the clock and the approach branch stay in Python.  Units SI, world frame.
+// lockstep.  A minimum-jerk pose reference can be sampled in the grasp call (pose_path.cpp; grasp_free_body_on_path);
+// any other reference, the hold pose, the clock and the approach branch stay in Python.  Units SI, world frame.
 #pragma once
 
 #include <memory>

@@ -1,7 +1,6 @@
 #include "wrist_servo.hpp"
 #include "model_io.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 

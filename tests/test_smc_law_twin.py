@@ -34,6 +34,7 @@ from bhgrasp.scenarios.box_grasp import box_grasp
 from bhgrasp.scenarios.demo_result import MU_ASSUMED
 from bhgrasp.scenarios.grasp_controllers import SQUEEZE
 from bhgrasp.scenarios.grasp_demo import OFFSET
+from bhgrasp.sim.compiled import core_module
 
 DEMO = GraspOptions(mu=MU_ASSUMED, squeeze=SQUEEZE)  # the demo's shared options
 PINV = GraspOptions(distribution="pinv")
@@ -291,7 +292,13 @@ class CountingKernel:
     """The compiled kernel, counting its grasp calls by entry point."""
 
     def __init__(self, kernel):
-        self.kernel, self.calls = kernel, {"grasp": 0, "grasp_free_body": 0, "sense": 0, "sense_contacts": 0}
+        self.kernel = kernel
+        entries = ("grasp", "grasp_free_body", "grasp_free_body_on_path", "sense", "sense_contacts")
+        self.calls = dict.fromkeys(entries, 0)
+
+    def grasp_free_body_on_path(self, *arguments):
+        self.calls["grasp_free_body_on_path"] += 1
+        return self.kernel.grasp_free_body_on_path(*arguments)
 
     def sense(self, *arguments):
         self.calls["sense"] += 1
@@ -303,6 +310,12 @@ class CountingKernel:
 
     def __getattr__(self, name):
         return getattr(self.kernel, name)
+
+    def __setattr__(self, name, value):  # the kernel's properties (the identification sets object_estimate)
+        if name in ("kernel", "calls"):
+            object.__setattr__(self, name, value)
+        else:
+            setattr(self.kernel, name, value)
 
     def grasp(self, *arguments):
         self.calls["grasp"] += 1
@@ -348,6 +361,7 @@ def test_a_simulated_state_gives_its_object_as_free_body_coordinates_with_the_sa
     assert built._compiled.kernel.calls == {
         "grasp": grasp_cycles,
         "grasp_free_body": 0,
+        "grasp_free_body_on_path": 0,
         "sense": cycles,
         "sense_contacts": 0,
     }
@@ -364,7 +378,9 @@ def test_the_compiled_law_samples_its_pose_path_in_cpp_and_commands_what_the_pyt
     states, two compiled laws command the same torques to round-off."""
     setup, states = run
     in_cpp = GraspSupervisor(setup.hand, setup.q_contact, smc(setup, "compiled"), offset=OFFSET)
+    in_cpp.grasp._compiled.kernel = CountingKernel(in_cpp.grasp._compiled.kernel)
     torques = [in_cpp(t, state) for t, state in states]
+    assert in_cpp.grasp._compiled.kernel.calls["grasp_free_body_on_path"] > 2000  # sampled in the grasp call
     monkeypatch.setattr("bhgrasp.controllers.supervisor.PoseMotion", Resampled)
     in_python = GraspSupervisor(setup.hand, setup.q_contact, smc(setup, "compiled"), offset=OFFSET)
     moving, largest = 0, max(float(np.abs(tau).max()) for tau in torques)
@@ -372,7 +388,7 @@ def test_the_compiled_law_samples_its_pose_path_in_cpp_and_commands_what_the_pyt
         np.testing.assert_allclose(in_python(t, state), tau, rtol=0, atol=1e-9 * largest, err_msg=f"t = {t}")
         moving += type(in_python.grasp.reference) is Resampled
     assert moving > 2000 and type(in_cpp.grasp.reference) is PoseMotion
-    assert in_cpp.grasp._compiled._reference[1] is not None  # sampled in C++
+    assert in_cpp.grasp._compiled._reference[1] is not None  # compiled
     assert in_python.grasp._compiled._reference[1] is None  # the subclass: in Python
 
 
@@ -380,8 +396,48 @@ def test_the_kernel_refuses_contacts_whose_pairs_it_was_not_given(run):
     setup, states = run
     kernel = smc(setup, "compiled")._compiled.kernel
     contacts = states[-1][1]._source.contacts  # the compiled step's, the box held
+    assert type(contacts) is core_module().Contacts, "the run is on the compiled engine"
     assert len(contacts.pair) >= 3
     with pytest.raises(ValueError, match="not the scene's"):
         kernel.sense_contacts(contacts, np.zeros(0, np.int64), np.zeros(0, np.int64))
     with pytest.raises(ValueError, match="one entry per collision pair"):
         kernel.sense_contacts(contacts, np.zeros(3, np.int64), np.zeros(2, np.int64))
+
+
+def test_a_pose_path_sampled_in_the_grasp_call_or_before_it_commands_the_same_bits(run):
+    """Under the supervisor's moving reference, a simulator's states take the grasp call that samples the path
+    (grasp_free_body_on_path); their dataclasses.replace copies take path.sample and the grasp call given the pose:
+    the same bits."""
+    setup, states = run
+    assert type(states[-1][1]._source.contacts) is core_module().Contacts, "the run is on the compiled engine"
+    direct, built = (GraspSupervisor(setup.hand, setup.q_contact, smc(setup, "compiled"), offset=OFFSET) for _ in "ab")
+    direct.grasp._compiled.kernel = CountingKernel(direct.grasp._compiled.kernel)
+    built.grasp._compiled.kernel = CountingKernel(built.grasp._compiled.kernel)
+    for t, state in states:
+        tau = direct(t, state)
+        copy = replace(state, object_twists=world_twist(setup.simulator.scene, state))
+        np.testing.assert_array_equal(built(t, copy), tau, err_msg=f"t = {t}")
+        for key, value in direct.log.items():
+            np.testing.assert_array_equal(built.log[key], value, err_msg=f"{key} at t = {t}")
+    on_path = direct.grasp._compiled.kernel.calls["grasp_free_body_on_path"]
+    assert on_path > 2000 and built.grasp._compiled.kernel.calls["grasp"] == on_path
+
+
+def test_the_engines_agree_under_the_supervisor_with_composite_identification(run):
+    """Identification wants the reference's twist and its rate in Python: the compiled law samples the path first
+    (path.sample) and agrees with the twin to round-off."""
+    setup, states = run
+    compiled, python = (
+        GraspSupervisor(
+            setup.hand,
+            setup.q_contact,
+            smc(setup, engine, identification=ObjectIdentification(), object_adaptation=(5.0, 1e-3)),
+            offset=OFFSET,
+        )
+        for engine in ("compiled", "python")
+    )
+    compiled.grasp._compiled.kernel = CountingKernel(compiled.grasp._compiled.kernel)
+    worst = lockstep(compiled, python, states)
+    print("moving, composite:", {key: f"{error:.1e}" for key, error in worst.items()})
+    assert compiled.grasp._compiled.kernel.calls["grasp_free_body"] > 2000
+    assert compiled.grasp._compiled.kernel.calls["grasp_free_body_on_path"] == 0

@@ -72,7 +72,11 @@ def log_layout(nv: int, fingers: int) -> list[tuple[str, Any]]:
 
 
 class CompiledSMCLaw:
-    """The compiled law of one controller, with its caches (contact rows by body names, the hand's base)."""
+    """The compiled law of one controller, with its caches.
+
+    Contact rows by body names and by collision pair (per scene layout), the hand's base, the compiled path of the
+    last reference object.
+    """
 
     def __init__(self, law: Any, core: ModuleType) -> None:
         """Build ``core.SMCAdaptiveLaw`` on the hand's kernels and configure it from ``law``."""
@@ -199,7 +203,7 @@ class CompiledSMCLaw:
                 sample, velocity, acceleration = law.reference(t)
                 rotation_d, position_d = self._target_rotation(sample[3:]), sample[:3]
             elif pose is None and law.identification is None:  # a minimum-jerk pose path, sampled in the law's call
-                on_path, t = path, time_of(t)  # (the reference's check of t)
+                on_path, path_time = path, time_of(t)  # (the reference's check of t)
             else:  # sampled in C++ too, its targets wanted here (its rotation not through log3 and exp3)
                 rotation_d, position_d, velocity, acceleration = path.sample(time_of(t))
         v = state.v
@@ -212,7 +216,7 @@ class CompiledSMCLaw:
         out = np.empty(self._size)
         if on_path is not None:
             object_q, object_v = state.scene_q[body[0]], state.scene_v[body[1]]
-            status = kernel.grasp_free_body_on_path(q, v, object_q, object_v, dt, on_path, t, out)
+            status = kernel.grasp_free_body_on_path(q, v, object_q, object_v, dt, on_path, path_time, out)
         elif pose is None:
             targets = (rotation_d, position_d, velocity, acceleration, out)
             object_q, object_v = state.scene_q[body[0]], state.scene_v[body[1]]

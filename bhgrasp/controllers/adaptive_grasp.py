@@ -63,7 +63,8 @@ class SMCAdaptiveGrasp(ObjectGraspController):
 
     :attr:`engine` says which engine runs (module docstring).  The compiled one reads the gains and ``force_error``
     when it is built and at every :meth:`reset` (the Python one at every call); the shared :attr:`options` are fixed
-    for the controller's life; ``reference`` is read at every call by both.
+    for the controller's life; ``reference`` is read at every call by both (the compiled one copies a ``PoseMotion``'s
+    or ``PosePath``'s moves the first time it meets that object: a path is fixed once built).
     """
 
     def __init__(
