@@ -360,3 +360,64 @@ def test_recorded_log_copies_each_sample_and_marks_absent_keys_nan() -> None:
     log = simulator.run(Logging(), 6 * simulator.dt, progress=False).log
     np.testing.assert_array_equal(log["always"], np.repeat(np.arange(7.0), 2).reshape(7, 2).clip(max=5.0))
     np.testing.assert_array_equal(log["late"], [np.nan, np.nan, 2.0, 3.0, np.nan, 5.0, 5.0])
+
+
+def reference_log(samples: list) -> dict:
+    """What a log's arrays are, sample by sample: each entry as np.array(value, float), NaN where it is absent (a
+    sample that logged nothing, None, counts as absent for every entry), up to the last sample that logged."""
+    names: dict = {}
+    for log in samples:
+        for name, value in (log or {}).items():
+            names.setdefault(name, np.shape(np.array(value, dtype=float)))
+    last = max((k for k, log in enumerate(samples) if log is not None), default=-1)
+    return {
+        name: np.array(
+            [
+                np.array(log[name], dtype=float) if log is not None and name in log else np.full(shape, np.nan)
+                for log in samples[: last + 1]
+            ]
+        )
+        for name, shape in names.items()
+    }
+
+
+def test_the_log_columns_record_what_sample_by_sample_arrays_would() -> None:
+    """Columns grown from 2 rows to 300 samples: entries appearing late and vanishing, samples without a log,
+    booleans, integers, Python floats and 0-d, 1-d and 2-d arrays; the same values, NaN and entry order."""
+    from bhgrasp.sim.recorder import LogColumns
+
+    rng = np.random.default_rng(5)
+    samples = []
+    for k in range(300):
+        if k % 37 == 5:
+            samples.append(None)  # a sample without a log (the controller had none then)
+            continue
+        log = {"matrix": rng.normal(size=(3, 2)), "count": np.array(k)}
+        if k >= 40:
+            log["late"] = rng.normal(size=4)
+        if k % 7 == 0:
+            log["sometimes"] = bool(k % 2)
+        if 100 <= k < 150:
+            log["scalar"] = float(k) / 3
+        samples.append(log)
+    samples.extend([None, None])  # trailing samples without a log are not rows
+    columns = LogColumns(2)
+    for k, log in enumerate(samples):
+        if log is not None:
+            columns.add(log, k)
+    recorded, expected = columns.arrays(), reference_log(samples)
+    assert list(recorded) == list(expected) == ["matrix", "count", "sometimes", "late", "scalar"]
+    for name, array in expected.items():
+        assert recorded[name].dtype == np.float64 and recorded[name].shape == array.shape == (300, *array.shape[1:])
+        assert recorded[name].tobytes() == array.tobytes(), name
+
+
+def test_a_log_entry_that_changes_shape_or_is_not_numbers_is_refused() -> None:
+    from bhgrasp.sim.recorder import LogColumns
+
+    columns = LogColumns(4)
+    columns.add({"force": np.zeros(3)}, 0)
+    with pytest.raises(bh.InputError, match=r"'force' has shape \(2,\) at sample 1, \(3,\) before"):
+        columns.add({"force": np.zeros(2)}, 1)
+    with pytest.raises(bh.InputError, match="'name' at sample 1 must be numbers"):
+        columns.add({"force": np.zeros(3), "name": "F1"}, 1)

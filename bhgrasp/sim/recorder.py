@@ -9,6 +9,7 @@ import pinocchio as pin
 
 from bhgrasp._native import default_core
 from bhgrasp.data import State, Trajectory
+from bhgrasp.errors import InputError
 from bhgrasp.sim.actuation import Actuation
 from bhgrasp.sim.scene import Scene
 
@@ -24,13 +25,15 @@ class Recorder:
 
     _CONTACT_FIELDS = ("pair", "point", "normal", "depth", "force", "sticking")
 
-    def __init__(self, scene: Scene, actuation: Actuation) -> None:
-        """Record ``scene`` driven through ``actuation`` (for its mode flags)."""
+    def __init__(self, scene: Scene, actuation: Actuation, samples: int = 1024) -> None:
+        """Record ``scene`` driven through ``actuation`` (for its mode flags).
+
+        ``samples``: the run's expected count of samples (the log's columns start that long, double when full).
+        """
         self.scene, self.actuation = scene, actuation
         self.t, self.scene_q, self.scene_v = [], [], []
         self.u, self.tau, self.modes, self.contacts = [], [], [], []
-        self.log: dict[str, list] = {}
-        self._logged = 0  # samples whose log every list of self.log holds
+        self.log = LogColumns(max(int(samples), 1))
 
     def add(self, state: State, u: np.ndarray, info: Any, log: Any) -> None:
         """Append one sample: state, held input, the step's contacts and drive torques, controller internals.
@@ -46,27 +49,7 @@ class Recorder:
         self.modes.append(self.actuation.modes() if modes is None else modes)
         self.contacts.append(info.contact_arrays)
         if isinstance(log, dict):
-            self._add_log(log)
-
-    def _add_log(self, log: dict) -> None:
-        """Append the controller's log; a key absent from a sample (before it first appears, or skipped) is NaN."""
-        count = len(self.t)
-        logged = self.log
-        if self._logged == count - 1 and log.keys() == logged.keys():  # the usual sample: the keys of the last one
-            for name, value in log.items():  # a float array's copy, as np.array(value, dtype=float) makes it
-                logged[name].append(value.copy() if getattr(value, "dtype", None) is _FLOAT else np.array(value, float))
-            self._logged = count
-            return
-        self._logged = count
-        for name, value in log.items():
-            value = np.array(value, dtype=float)
-            values = self.log.setdefault(name, [])
-            if len(values) < count - 1:  # one NaN array for every missing sample (stacked, never written)
-                values.extend([np.full(value.shape, np.nan)] * (count - 1 - len(values)))
-            values.append(value)
-        for values in self.log.values():
-            if len(values) < count:
-                values.append(np.full(values[-1].shape, np.nan))
+            self.log.add(log, len(self.t) - 1)
 
     def _objects(self, scene_q: np.ndarray, scene_v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(N, n_objects, 3) COM positions [m], (N, n_objects, 4) quaternions (x, y, z, w), (N, n_objects, 6) twists.
@@ -133,7 +116,7 @@ class Recorder:
             contact_depth=arrays["depth"],
             contact_force=arrays["force"],
             contact_sticking=arrays["sticking"],
-            log={name: np.array(values) for name, values in self.log.items()},
+            log=self.log.arrays(),
             joint_names=scene.hand.joint_names,
             object_names=tuple(scene.object_names),
             pair_bodies=np.array([(p.body_a, p.body_b) for p in scene.pairs], dtype=str).reshape(-1, 2),
@@ -145,3 +128,70 @@ def _rotate(quaternions: np.ndarray, vectors: np.ndarray) -> np.ndarray:
     axis, scalar = quaternions[:, :3], quaternions[:, 3:]
     turned = 2.0 * np.cross(axis, vectors)
     return vectors + scalar * turned + np.cross(axis, turned)
+
+
+class LogColumns:
+    """A run's controller log, one preallocated column per entry: sample k's value written into row k.
+
+    Every entry is recorded as ``np.array(value, dtype=float)`` would make it, rows of one shape per entry; a sample
+    without an entry (before it first appears, or skipped) holds NaN.  Writing into the columns allocates nothing
+    per sample (a copy per entry and sample, and stacking them at the end, cost the grasp demo ~15 us a step).
+    """
+
+    def __init__(self, capacity: int) -> None:
+        """Columns of ``capacity`` rows to start with (doubled when a sample does not fit)."""
+        self._columns: dict[str, np.ndarray] = {}  # entry -> (capacity, *shape) float64, in order of first appearance
+        self._shapes: dict[str, tuple[int, ...]] = {}
+        self._capacity, self._logged = capacity, 0  # rows allocated; samples every column holds (NaN where absent)
+
+    def add(self, log: dict, sample: int) -> None:
+        """Record ``log`` (entry -> number or array) as sample ``sample`` (samples logged before it and skipped: NaN).
+
+        Raises:
+            InputError: An entry that is not numbers, or whose shape differs from its earlier samples'.
+        """
+        if sample >= self._capacity:
+            self._grow(sample + 1)
+        columns, shapes = self._columns, self._shapes
+        if self._logged == sample and log.keys() == columns.keys():  # the usual sample: the last one's entries
+            for name, value in log.items():
+                if getattr(value, "dtype", None) is not _FLOAT or value.shape != shapes[name]:
+                    break
+                columns[name][sample] = value
+            else:
+                self._logged = sample + 1
+                return
+        for name, value in log.items():
+            try:
+                value = np.array(value, dtype=float)
+            except (TypeError, ValueError) as error:
+                raise InputError(f"log entry {name!r} at sample {sample} must be numbers, got {value!r}") from error
+            column = columns.get(name)
+            if column is None:  # NaN for every earlier sample (the rows after this one are written when reached)
+                column = columns[name] = np.empty((self._capacity, *value.shape))
+                column[:sample] = np.nan
+                shapes[name] = value.shape
+            elif value.shape != shapes[name]:
+                raise InputError(
+                    f"log entry {name!r} has shape {value.shape} at sample {sample}, {shapes[name]} before: an entry "
+                    "keeps its shape through a run"
+                )
+            column[self._logged : sample] = np.nan  # samples skipped since the last log
+            column[sample] = value
+        for name, column in columns.items():
+            if name not in log:
+                column[self._logged : sample + 1] = np.nan
+        self._logged = sample + 1
+
+    def _grow(self, rows: int) -> None:
+        """Room for ``rows`` samples at least (twice the capacity), the logged ones copied."""
+        capacity = max(rows, 2 * self._capacity)
+        for name, column in self._columns.items():
+            grown = np.empty((capacity, *column.shape[1:]))
+            grown[: self._logged] = column[: self._logged]
+            self._columns[name] = grown
+        self._capacity = capacity
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Each entry's (samples logged, *shape) array, in the order the entries first appeared."""
+        return {name: column[: self._logged].copy() for name, column in self._columns.items()}

@@ -91,7 +91,7 @@ def run(
     if disturbance is not None and not callable(disturbance):
         disturbance = joint_torques(disturbance, simulator.scene.nv_hand, "disturbance")
     state = _start(simulator, controller, state)
-    recorder = Recorder(simulator.scene, simulator.actuation)
+    recorder = Recorder(simulator.scene, simulator.actuation, steps // record_every + 2)
     u = np.zeros(simulator.actuation.n_inputs)
     info = StepInfo.empty(simulator.scene.nv_hand)
     iterator = range(steps)
