@@ -412,12 +412,21 @@ def test_the_log_columns_record_what_sample_by_sample_arrays_would() -> None:
         assert recorded[name].tobytes() == array.tobytes(), name
 
 
-def test_a_log_entry_that_changes_shape_or_is_not_numbers_is_refused() -> None:
+def test_a_log_entry_that_changes_shape_or_is_not_numbers_is_refused_and_nothing_of_its_sample_kept() -> None:
     from bhgrasp.sim.recorder import LogColumns
 
     columns = LogColumns(4)
-    columns.add({"force": np.zeros(3)}, 0)
+    columns.add({"force": np.zeros(3), "gain": 2.5}, 0)  # a Python float is an entry like any other
     with pytest.raises(bh.InputError, match=r"'force' has shape \(2,\) at sample 1, \(3,\) before"):
-        columns.add({"force": np.zeros(2)}, 1)
+        columns.add({"force": np.zeros(2), "gain": 2.5}, 1)
     with pytest.raises(bh.InputError, match="'name' at sample 1 must be numbers"):
-        columns.add({"force": np.zeros(3), "name": "F1"}, 1)
+        columns.add({"force": np.ones(3), "new": np.ones(2), "name": "F1"}, 1)
+    with pytest.raises(bh.InputError, match="'huge' at sample 1 must be numbers"):
+        columns.add({"force": np.ones(3), "huge": 10**400}, 1)
+    columns.add({"force": np.full(3, 7.0), "gain": True}, 1)
+    with pytest.raises(bh.InputError, match="sample 0 after sample 1"):
+        columns.add({"force": np.zeros(3), "gain": 1.0}, 0)
+    arrays = columns.arrays()
+    assert list(arrays) == ["force", "gain"]  # the refused samples left no entry behind
+    np.testing.assert_array_equal(arrays["force"], [[0.0, 0.0, 0.0], [7.0, 7.0, 7.0]])
+    np.testing.assert_array_equal(arrays["gain"], [2.5, 1.0])

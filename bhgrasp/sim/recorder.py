@@ -134,9 +134,13 @@ class LogColumns:
     """A run's controller log, one preallocated column per entry: sample k's value written into row k.
 
     Every entry is recorded as ``np.array(value, dtype=float)`` would make it, rows of one shape per entry; a sample
-    without an entry (before it first appears, or skipped) holds NaN.  Writing into the columns allocates nothing
-    per sample (a copy per entry and sample, and stacking them at the end, cost the grasp demo ~15 us a step).
+    without an entry (before it first appears, or a skipped sample) holds NaN, so every entry has one row per sample
+    up to the last that logged.  A sample with the last one's entries is written in place, with no array made per
+    entry when they are float64 arrays (a copy per entry and sample, and stacking them at the end, cost the grasp demo
+    ~15 us a step).
     """
+
+    _NOT_NUMBERS = (TypeError, ValueError, OverflowError)
 
     def __init__(self, capacity: int) -> None:
         """Columns of ``capacity`` rows to start with (doubled when a sample does not fit)."""
@@ -148,40 +152,54 @@ class LogColumns:
         """Record ``log`` (entry -> number or array) as sample ``sample`` (samples logged before it and skipped: NaN).
 
         Raises:
-            InputError: An entry that is not numbers, or whose shape differs from its earlier samples'.
+            InputError: An entry that is not numbers or whose shape differs from its earlier samples' (nothing of the
+                sample is recorded), or a sample before one already recorded.
         """
+        if sample < self._logged:
+            raise InputError(f"log sample {sample} after sample {self._logged - 1}: samples are recorded in order")
         if sample >= self._capacity:
             self._grow(sample + 1)
         columns, shapes = self._columns, self._shapes
         if self._logged == sample and log.keys() == columns.keys():  # the usual sample: the last one's entries
             for name, value in log.items():
-                if getattr(value, "dtype", None) is not _FLOAT or value.shape != shapes[name]:
+                if getattr(value, "dtype", None) is not _FLOAT:
+                    try:
+                        value = np.asarray(value, dtype=float)
+                    except self._NOT_NUMBERS:
+                        break  # (the checks below say why)
+                if value.shape != shapes[name]:
                     break
                 columns[name][sample] = value
             else:
                 self._logged = sample + 1
                 return
-        for name, value in log.items():
-            try:
-                value = np.array(value, dtype=float)
-            except (TypeError, ValueError) as error:
-                raise InputError(f"log entry {name!r} at sample {sample} must be numbers, got {value!r}") from error
+        values = {name: self._checked(name, value, sample) for name, value in log.items()}
+        for name, value in values.items():
             column = columns.get(name)
             if column is None:  # NaN for every earlier sample (the rows after this one are written when reached)
                 column = columns[name] = np.empty((self._capacity, *value.shape))
                 column[:sample] = np.nan
                 shapes[name] = value.shape
-            elif value.shape != shapes[name]:
-                raise InputError(
-                    f"log entry {name!r} has shape {value.shape} at sample {sample}, {shapes[name]} before: an entry "
-                    "keeps its shape through a run"
-                )
             column[self._logged : sample] = np.nan  # samples skipped since the last log
             column[sample] = value
         for name, column in columns.items():
-            if name not in log:
+            if name not in values:
                 column[self._logged : sample + 1] = np.nan
         self._logged = sample + 1
+
+    def _checked(self, name: str, value: Any, sample: int) -> np.ndarray:
+        """``value`` as a float array of entry ``name``'s shape (its first sample's), else an ``InputError``."""
+        try:
+            array = np.asarray(value, dtype=float)
+        except self._NOT_NUMBERS as error:
+            raise InputError(f"log entry {name!r} at sample {sample} must be numbers, got {value!r}") from error
+        shape = self._shapes.get(name, array.shape)
+        if array.shape != shape:
+            raise InputError(
+                f"log entry {name!r} has shape {array.shape} at sample {sample}, {shape} before: an entry keeps its "
+                "shape through a run"
+            )
+        return array
 
     def _grow(self, rows: int) -> None:
         """Room for ``rows`` samples at least (twice the capacity), the logged ones copied."""
