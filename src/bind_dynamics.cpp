@@ -35,8 +35,8 @@ std::vector<PoseMove> moves_from_fields(const std::vector<Eigen::Matrix3d>& rota
     throw std::invalid_argument("one rotation, translation, offset, duration and delay per move");
   std::vector<PoseMove> moves;
   for (std::size_t i = 0; i < n; ++i)
-    moves.push_back(
-        {rotations[i], translations[i], offsets.row(static_cast<Eigen::Index>(i)).transpose(), durations[i], delays[i]});
+    moves.push_back({rotations[i], translations[i], offsets.row(static_cast<Eigen::Index>(i)).transpose(),
+                     durations[i], delays[i]});
   return moves;
 }
 
@@ -67,8 +67,8 @@ void bind_dynamics(nb::module_& m) {
       .def(
           "__init__",
           [](PosePath* path, const std::vector<Eigen::Matrix3d>& rotations,
-             const std::vector<Eigen::Vector3d>& translations, const Rows6& offsets, const std::vector<double>& durations,
-             const std::vector<double>& delays) {
+             const std::vector<Eigen::Vector3d>& translations, const Rows6& offsets,
+             const std::vector<double>& durations, const std::vector<double>& delays) {
             new (path) PosePath(moves_from_fields(rotations, translations, offsets, durations, delays));
           },
           "rotations"_a, "translations"_a, "offsets"_a, "durations"_a, "delays"_a)
@@ -91,8 +91,9 @@ void bind_dynamics(nb::module_& m) {
              const Rows6& offsets, const std::vector<double>& durations, const std::vector<double>& delays,
              const Eigen::Matrix3d& origin_rotation, const Eigen::Vector3d& origin_translation, const Vector6& kp,
              const Vector6& kd, bool hold_fingers, double finger_kp, double finger_kd) {
-            new (servo) WristServo(model, gravity, moves_from_fields(rotations, translations, offsets, durations, delays),
-                                   origin_rotation, origin_translation, kp, kd, hold_fingers, finger_kp, finger_kd);
+            new (servo)
+                WristServo(model, gravity, moves_from_fields(rotations, translations, offsets, durations, delays),
+                           origin_rotation, origin_translation, kp, kd, hold_fingers, finger_kp, finger_kd);
           },
           "model"_a, "gravity"_a, "rotations"_a, "translations"_a, "offsets"_a, "durations"_a, "delays"_a,
           "origin_rotation"_a, "origin_translation"_a, "kp"_a, "kd"_a, "hold_fingers"_a, "finger_kp"_a, "finger_kd"_a)

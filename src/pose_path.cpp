@@ -12,7 +12,8 @@ namespace bhgrasp {
 PosePath::PosePath(std::vector<PoseMove> moves) : moves_(std::move(moves)) {
   if (moves_.empty()) throw std::invalid_argument("a pose path needs at least one move");
   for (const PoseMove& move : moves_)
-    if (!(move.duration > 0.0) || !std::isfinite(move.delay)) throw std::invalid_argument("a move needs duration > 0 and a finite delay");
+    if (!(move.duration > 0.0) || !std::isfinite(move.delay))
+      throw std::invalid_argument("a move needs duration > 0 and a finite delay");
 }
 
 void PosePath::at(double t, Eigen::Matrix3d& rotation, Eigen::Vector3d& position, Vector6& twist,

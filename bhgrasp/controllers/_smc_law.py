@@ -214,16 +214,16 @@ class CompiledSMCLaw:
             kernel.set_base(base.rotation, base.translation, base.gravity)
             self._base = base
         out = np.empty(self._size)
-        if on_path is not None:
-            object_q, object_v = state.scene_q[body[0]], state.scene_v[body[1]]
-            status = kernel.grasp_free_body_on_path(q, v, object_q, object_v, dt, on_path, path_time, out)
-        elif pose is None:
-            targets = (rotation_d, position_d, velocity, acceleration, out)
-            object_q, object_v = state.scene_q[body[0]], state.scene_v[body[1]]
-            status = kernel.grasp_free_body(q, v, object_q, object_v, dt, *targets)
-        else:
+        if pose is not None:
             targets = (rotation_d, position_d, velocity, acceleration, out)
             status = kernel.grasp(q, v, pose.rotation, pose.translation, state.object_twists[0], dt, *targets)
+        else:
+            object_q, object_v = state.scene_q[body[0]], state.scene_v[body[1]]
+            if on_path is not None:
+                status = kernel.grasp_free_body_on_path(q, v, object_q, object_v, dt, on_path, path_time, out)
+            else:
+                targets = (rotation_d, position_d, velocity, acceleration, out)
+                status = kernel.grasp_free_body(q, v, object_q, object_v, dt, *targets)
         if status in (1, 2, 3):
             self._raise(law, state, status, out)
         log.update(zip(self._flat_keys, self._flat_views(out)))
