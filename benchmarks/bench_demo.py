@@ -6,9 +6,10 @@ with ``mj_step`` of the reference hold (``bench_sim.mujoco_hold``, the same hand
 
 Per run: the simulation's wall time (``GraspDemoResult.wall_time``: ``Simulator.run``, the recorder included), the
 whole call (the grasp choice, the scene, the supervisor, the summary), the real-time factor and the wall per physics
-step over ``mj_step``'s.  Then one run with timers around its parts (the controller, ``Simulator.step``, the
-recorder; the timers' own cost included), and the share of grasp cycles whose QP the last active set answered
-(``qp_iterations`` 0).  Targets: RTF >= 20 on this machine, the wall per step <= 1x ``mj_step``.
+step over ``mj_step``'s.  Then one run with timers around its parts (the controller and ``Simulator.step`` of the
+steps the Python loop takes, the recorder, the compiled loop's calls with the steps they take; the timers' own cost
+included), and the share of grasp cycles whose QP the last active set answered (``qp_iterations`` 0).  Targets:
+RTF >= 20 on this machine, the wall per step <= 1x ``mj_step``.
 
 Usage: ``python benchmarks/bench_demo.py [--repeat 5] [--duration 3.0]``.
 """
@@ -45,20 +46,25 @@ def demo(duration: float) -> dict:
     }
 
 
-def parts(duration: float) -> dict[str, float]:
-    """One demo run with timers around the controller, the step and the recorder: seconds in each."""
-    spent = {"controller": 0.0, "Simulator.step": 0.0, "recorder": 0.0}
+def parts(duration: float) -> tuple[dict[str, float], int]:
+    """One demo run with timers around its parts: seconds in each, and the steps the compiled loop took."""
+    spent = {"controller": 0.0, "Simulator.step": 0.0, "recorder": 0.0, "compiled loop": 0.0}
     patched = [(run_loop, "_control", "controller"), (Simulator, "step", "Simulator.step")]
-    patched += [(Recorder, "add", "recorder"), (Recorder, "trajectory", "recorder")]
+    patched += [(Recorder, "add", "recorder"), (Recorder, "add_run", "recorder"), (Recorder, "trajectory", "recorder")]
+    patched += [(Simulator, "run_compiled", "compiled loop")]
     originals = [(owner, name, getattr(owner, name)) for owner, name, _ in patched]
+    in_cpp: list[int] = []
 
     def timer(function, key):
         def timed(*args, **kwargs):
             start = time.perf_counter()
             try:
-                return function(*args, **kwargs)
+                result = function(*args, **kwargs)
             finally:
                 spent[key] += time.perf_counter() - start
+            if key == "compiled loop" and result is not None:
+                in_cpp.append(int(result[0].steps))
+            return result
 
         return timed
 
@@ -70,7 +76,7 @@ def parts(duration: float) -> dict[str, float]:
         for owner, name, function in originals:
             setattr(owner, name, function)
     spent["total (timed run)"] = result.wall_time
-    return spent
+    return spent, sum(in_cpp)
 
 
 def main() -> None:
@@ -100,8 +106,9 @@ def main() -> None:
         f"{np.sum(iterations == 0)} (proxsuite iterations: {int(np.sum(iterations))} in all)"
     )
     print(f"  position error    {best['position_error'] * 1e6:.2f} um (the same in every run)")
-    print("one run with timers (us per physics step):")
-    for key, seconds in parts(args.duration).items():
+    spent, in_cpp = parts(args.duration)
+    print(f"one run with timers (us per physics step; {in_cpp} of its {steps} steps in the compiled loop):")
+    for key, seconds in spent.items():
         print(f"  {key:20s} {seconds / steps * 1e6:7.1f}")
 
 

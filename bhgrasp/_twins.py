@@ -40,6 +40,7 @@ class Twin:
 _STEP = "tests/test_compiled.py::test_reference_hold"
 _DIVERGED = "tests/test_simulator_contract.py::test_a_non_finite_result_names_its_coordinate_and_value"
 _RUN = "tests/test_simulator_contract.py::test_a_whole_run_agrees_across_engines"
+_LOOP = "tests/test_closed_loop.py::test_the_demo_takes_its_grasp_phases_in_cpp_with_the_python_loops_bits"
 
 KERNELS = (
     Twin("Engine", "bhgrasp.sim.python_engine.PythonEngine", _STEP),
@@ -113,6 +114,8 @@ KERNELS = (
         "bhgrasp.sim.recorder.Recorder._contact_arrays",
         "tests/test_compiled.py::test_the_recorders_join_is_its_numpy_twin",
     ),
+    Twin("run_closed_loop", "bhgrasp.sim.run_loop.run", _LOOP),
+    Twin("SMCGraspLoop", "bhgrasp.controllers._smc_law.CompiledSMCLaw.__call__", _LOOP),
     Twin(
         "box_separation",
         "",
@@ -144,6 +147,8 @@ DATA = (
     Twin("Contacts", "bhgrasp.data.contacts.ContactSet", _RUN),
     Twin("Divergence", "bhgrasp.sim.engine.Divergence", _DIVERGED),
     Twin("StepResult", "bhgrasp.sim.engine.StepResult", _STEP),
+    Twin("LoopController", "bhgrasp.controllers.compiled_control.CompiledControl", _LOOP),
+    Twin("LoopRun", "bhgrasp.sim.recorder.Recorder.add_run", _LOOP),
     Twin(
         "Barrett",
         "bhgrasp.sim.actuation.BarrettActuation",

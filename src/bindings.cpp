@@ -12,4 +12,5 @@ NB_MODULE(_core, m) {
   bhgrasp::bind_simulation(m);
   bhgrasp::bind_dynamics(m);
   bhgrasp::bind_grasp(m);
+  bhgrasp::bind_loop(m);
 }

@@ -10,5 +10,6 @@ namespace bhgrasp {
 void bind_simulation(nanobind::module_& m);  // bind_simulation.cpp
 void bind_dynamics(nanobind::module_& m);    // bind_dynamics.cpp
 void bind_grasp(nanobind::module_& m);       // bind_grasp.cpp
+void bind_loop(nanobind::module_& m);        // bind_loop.cpp
 
 }  // namespace bhgrasp

@@ -14,6 +14,7 @@ namespace bhgrasp {
 
 using Vector = Eigen::VectorXd;
 using Matrix = Eigen::MatrixXd;
+using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;  // NumPy's layout
 using Vector3 = Eigen::Vector3d;
 using Matrix3 = Eigen::Matrix3d;
 using IntList = std::vector<int>;

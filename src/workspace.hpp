@@ -15,9 +15,10 @@
 
 #include <pinocchio/multibody.hpp>
 
+#include "options.hpp"
+
 namespace bhgrasp {
 
-using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;  // NumPy's layout
 
 // What Hand.fingertip_positions, fingertip_jacobian, mass_matrix, gravity_torques, nonlinear_effects and
 // fingertip_bias_acceleration give for one finger with n_f joints (velocity indices `index`), model frame.

@@ -412,6 +412,42 @@ def test_the_log_columns_record_what_sample_by_sample_arrays_would() -> None:
         assert recorded[name].tobytes() == array.tobytes(), name
 
 
+def test_log_rows_added_a_run_at_a_time_record_what_sample_by_sample_arrays_would() -> None:
+    """Runs of samples with the same entries added at once (``add_rows``, as a compiled loop's), between samples added
+    one by one, gaps without a log, entries absent from a run: the same values, NaN and entry order."""
+    from bhgrasp.sim.recorder import LogColumns
+
+    rng = np.random.default_rng(8)
+    samples = []
+    for k in range(400):
+        log = None if k % 53 == 9 else {"force": rng.normal(size=(3, 2)), "count": np.array(float(k))}
+        if log is not None and 60 <= k < 200:
+            log["late"] = rng.normal(size=4)
+        samples.append(log)
+    columns, k = LogColumns(3), 0
+    while k < len(samples):
+        n = int(rng.integers(1, 25))
+        run = samples[k : k + n]
+        if all(log is not None and log.keys() == run[0].keys() for log in run):
+            columns.add_rows({name: np.array([log[name] for log in run]) for name in run[0]}, k)
+            k += len(run)
+        else:
+            if samples[k] is not None:
+                columns.add(samples[k], k)
+            k += 1
+    recorded, expected = columns.arrays(), reference_log(samples)
+    assert list(recorded) == list(expected) == ["force", "count", "late"]
+    for name, array in expected.items():
+        assert recorded[name].shape == array.shape and recorded[name].tobytes() == array.tobytes(), name
+    with pytest.raises(bh.InputError, match=r"'force' has rows of shape \(2,\) from sample 400, \(3, 2\) before"):
+        columns.add_rows({"force": np.zeros((2, 2))}, 400)
+    with pytest.raises(bh.InputError, match="as many for every entry"):
+        columns.add_rows({"force": np.zeros((2, 3, 2)), "count": np.zeros(3)}, 400)
+    with pytest.raises(bh.InputError, match="sample 10 after sample 399"):
+        columns.add_rows({"force": np.zeros((1, 3, 2))}, 10)
+    assert columns.arrays()["force"].shape == (400, 3, 2)  # nothing of the refused runs kept
+
+
 def test_a_log_entry_that_changes_shape_or_is_not_numbers_is_refused_and_nothing_of_its_sample_kept() -> None:
     from bhgrasp.sim.recorder import LogColumns
 

@@ -99,6 +99,7 @@ class CompiledSMCLaw:
         nv, fingers = hand.nv, len(hand.fingers)
         self._size = self.kernel.log_size
         layout = log_layout(nv, fingers)
+        self._layout, self._fingers = layout, fingers
         self._tau = layout[0][1]
         flat = [(key, index) for key, index in layout[1:] if not isinstance(index, tuple) or index[1] is Ellipsis]
         self._flat_keys = [key for key, _ in flat]
@@ -226,9 +227,7 @@ class CompiledSMCLaw:
                 status = kernel.grasp_free_body(q, v, object_q, object_v, dt, *targets)
         if status in (1, 2, 3):
             self._raise(law, state, status, out)
-        log.update(zip(self._flat_keys, self._flat_views(out)))
-        for key, index, shape in self._blocks:
-            log[key] = out[index].reshape(shape)
+        self._publish(log, out)
         tau = out[self._tau]
         if status:
             raise InputError(f"{type(law).__name__} produced non-finite torques {tau} at t = {t} s")
@@ -240,6 +239,70 @@ class CompiledSMCLaw:
             log["object_parameters"] = out[self._parameters] = kernel.object_estimate
         log["mass_estimate"] = out[self._mass]
         return tau
+
+    def _publish(self, log: dict, out: np.ndarray) -> None:
+        """The log entries of a grasp cycle's ``out`` (views of it) but the mass estimate."""
+        log.update(zip(self._flat_keys, self._flat_views(out)))
+        for key, index, shape in self._blocks:
+            log[key] = out[index].reshape(shape)
+
+    def loop(self, law: Any, state: Any) -> Any | None:
+        """The grasp cycles from ``state`` on as a compiled loop controller (``bhgrasp._core.SMCGraspLoop``), or None.
+
+        Only where :meth:`__call__` would sample a compiled pose path in the kernel's grasp call for a state a
+        compiled step made (the object a free body, no identification) and a grasp is under way (a hold pose and a
+        last grasp cycle): the loop's cycles are then :meth:`__call__`'s, bit for bit, while two fingers or more touch.
+        """
+        if law._hold is None or law._time is None or law.identification is not None or law.reference is None:
+            return None
+        source = getattr(state, "_source", None) if type(state) is SimulatedState else None
+        if source is None or type(source.contacts) is not self._contacts_type or state.scene_q.flags.writeable:
+            return None
+        scene, hand = source.simulator.scene, law.nominal
+        body = self._free_body(scene)
+        path = self._path(law.reference)
+        if body is None or path is None or (scene.nq_hand, scene.nv_hand) != (hand.nq, hand.nv):
+            return None
+        base = hand.base
+        if self._base is not base:
+            self.kernel.set_base(base.rotation, base.translation, base.gravity)
+            self._base = base
+        finger, joint = self._pair_rows(source.simulator.layout)
+        sizes = (hand.nq, hand.nv, body[0].start, body[1].start)
+        return self._core.SMCGraspLoop(self.kernel, path, finger, joint, *sizes, law._time)
+
+    def log_rows(self, rows: np.ndarray) -> dict[str, np.ndarray]:
+        """The log entries of grasp cycles from the kernel's rows (n, log_size): each (n, *shape), views of ``rows``."""
+        n, fingers = len(rows), self._fingers
+        entries = {}
+        for key, index in self._layout[1:]:
+            if isinstance(index, tuple) and index[1] is Ellipsis:
+                entries[key] = rows[:, index[0]]
+            elif isinstance(index, tuple):
+                entries[key] = rows[:, index[0] : index[1]].reshape(n, fingers, 3)
+            else:
+                entries[key] = rows[:, index]
+        entries["mass_estimate"] = rows[:, self._mass]
+        return entries
+
+    def finish(self, law: Any, loop: Any, run: Any, state: Any) -> None:
+        """After a ``run`` of :meth:`loop`'s ``loop``: the law's clock and log as its last cycle left them.
+
+        Raises what :meth:`__call__` raises for a cycle that failed (the run's ``status`` 1-4) at ``state``.
+        """
+        law._time = loop.last_time
+        n, status = int(run.steps), int(run.status) if run.stop == 1 else 0
+        if n and status <= 0:
+            out = np.array(run.log[n - 1])  # a fresh buffer, as each call's (a recorder may keep its views)
+            self._publish(law.log, out)
+            law.log["mass_estimate"] = out[self._mass]
+        if status in (1, 2, 3):
+            self._raise(law, state, status, np.array(run.log[n]))
+        if status == 4:
+            out = np.array(run.log[n])
+            self._publish(law.log, out)
+            law.log["mass_estimate"] = out[self._mass]
+            raise InputError(f"{type(law).__name__} produced non-finite torques {out[self._tau]} at t = {state.t} s")
 
     def _free_body(self, scene: Any) -> tuple[slice, slice] | None:
         """The (q, v) slices of the scene's object 0 when it is a free body (as Scene.object_pose tells), else None."""

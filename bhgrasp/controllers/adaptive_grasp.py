@@ -32,6 +32,7 @@ and ``options.distribution="qp"`` (either ``force_error``); other options run th
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -40,6 +41,7 @@ from bhgrasp._native import engine_name, required_core
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.controllers._smc_law import CompiledSMCLaw, compiled_state, restore_compiled, uncovered_options
 from bhgrasp.controllers.base import gain_vector
+from bhgrasp.controllers.compiled_control import CompiledControl, held_rows
 from bhgrasp.controllers.grasp_options import DEFAULT_GRASP, GraspOptions
 from bhgrasp.controllers.grasping import GraspContacts, ObjectGraspController
 from bhgrasp.controllers.object_identification import ObjectIdentification
@@ -186,6 +188,27 @@ class SMCAdaptiveGrasp(ObjectGraspController):
             self.identification.reset()
         if self._compiled is not None:
             self._compiled.configure(self)  # also resets the compiled law's estimate, integrals and QPs
+
+    def compiled_control(self, t: float, state: State) -> CompiledControl | None:
+        """The grasp cycles from ``state`` on as a compiled loop for :meth:`Simulator.run`, or ``None``.
+
+        Offered by the compiled law for a state a compiled step made, once a grasp is under way toward a minimum-jerk
+        pose path (:meth:`CompiledSMCLaw.loop <bhgrasp.controllers._smc_law.CompiledSMCLaw.loop>`); the loop hands a
+        cycle with fewer than two fingers touching back to :meth:`__call__`.
+        """
+        compiled = self._compiled
+        if compiled is None or type(self).__call__ is not SMCAdaptiveGrasp.__call__:
+            return None
+        loop = compiled.loop(self, state)
+        if loop is None:
+            return None
+
+        def log_rows(rows: np.ndarray, q_hand: np.ndarray) -> dict[str, np.ndarray]:
+            entries = held_rows(self.log, len(rows))
+            entries.update(compiled.log_rows(rows))
+            return entries
+
+        return CompiledControl(loop, math.inf, log_rows, lambda run, after: compiled.finish(self, loop, run, after))
 
     def __call__(self, t: float, state: State) -> np.ndarray:
         """Joint torques [N m]; before the grasp the base closes the fingers."""

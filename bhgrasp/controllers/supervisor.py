@@ -20,6 +20,7 @@ joint torques into motor commands.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -28,6 +29,7 @@ import pinocchio as pin
 
 from bhgrasp._validation import as_positive, as_vector, require_name
 from bhgrasp.controllers.base import Controller
+from bhgrasp.controllers.compiled_control import CompiledControl, held_rows
 from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.joint import ComputedTorque
 from bhgrasp.controllers.supervisor_options import DEFAULT_APPROACH, DEFAULT_PLANNING, Approach, Planning
@@ -152,6 +154,40 @@ class GraspSupervisor(Controller):
         self.log["phase"] = np.array(float(self.phase))
         self.log["arrived"] = self._arrived.copy()
         return tau
+
+    def compiled_control(self, t: float, state: State) -> CompiledControl | None:
+        """The grasp phases' cycles from ``state`` as a compiled loop for :meth:`Simulator.run`, or ``None``.
+
+        The grasp controller's compiled loop (``compiled_control``), stopped before the squeeze ends (the switch to
+        the motion, and its plan, are this method's :meth:`__call__`'s); ``None`` in the approach.
+        """
+        offer = getattr(self.grasp, "compiled_control", None)
+        if self.phase == APPROACH or offer is None or type(self).__call__ is not GraspSupervisor.__call__:
+            return None
+        until = math.inf if self.phase == MANIPULATE else self.switch_time + self.squeeze_time
+        grasp = offer(t, state) if t < until else None
+        if grasp is None:
+            return None
+        last_error: list[np.ndarray] = []  # the last cycle's joint error, for the log after the run
+
+        def log_rows(rows: np.ndarray, q_hand: np.ndarray) -> dict[str, np.ndarray]:
+            entries = held_rows(self.log, len(rows))
+            entries.update(grasp.log_rows(rows, q_hand))
+            error = q_hand - self.q_close
+            last_error[:] = [error[-1]]
+            held = {"q_d": self.q_close, "phase": float(self.phase), "arrived": self._arrived}
+            entries.update(held_rows(held, len(rows)), error=error)
+            return entries
+
+        def finish(run: Any, after: State) -> None:
+            grasp.finish(run, after)
+            if run.steps:
+                self.log.update(self.grasp.log)
+                self.log["q_d"], self.log["error"] = self.q_close, last_error[0]
+                self.log["phase"] = np.array(float(self.phase))
+                self.log["arrived"] = self._arrived.copy()
+
+        return CompiledControl(grasp.loop, min(until, grasp.until), log_rows, finish)
 
     def _plan(self, t: float, state: State) -> None:
         """Track the offset the grasp can make: ``offset`` projected onto its manipulable space at the sensed contacts.

@@ -115,6 +115,19 @@ class CompiledEngine:
         """The contacts at ``q`` matched to ``memory`` (no forces)."""
         return contact_set(self._engine.detect(q, native_memory(memory)))
 
+    def run_loop(
+        self, controller: Any, drive: Any, start: tuple, dt: float, steps: int, until: float, limit: Any
+    ) -> Any:
+        """Up to ``steps`` steps under a compiled loop controller (``bhgrasp._core.LoopController``) in one call.
+
+        ``start``: (q, v, contacts, memory, t [s]) as a compiled step made them; ``drive``: a ``Drive`` of
+        :meth:`drive`; each step's joint torques are the controller's inputs, clipped to +-``limit`` unless ``None``;
+        the loop stops before a step at t >= ``until`` [s].  Returns the C++ ``LoopRun`` (``src/closed_loop.hpp``).
+        """
+        clip = _NONE if limit is None else limit
+        arguments = (*start, dt, steps, until, clip, *self._limits)
+        return core_module().run_closed_loop(self._engine, controller, drive, *arguments)
+
 
 def engine_settings(
     scene: Scene, layout: SceneLayout, law: SpringDamper, settings: SimulatorSettings, match_radius: float

@@ -32,7 +32,8 @@ class Recorder:
         """
         self.scene, self.actuation = scene, actuation
         self.t, self.scene_q, self.scene_v = [], [], []
-        self.u, self.tau, self.modes, self.contacts = [], [], [], []
+        self.u, self.tau, self.modes = [], [], []
+        self.contacts, self.counts = [], []  # the contacts as the engine returned them (those with rows); rows a sample
         self.log = LogColumns(max(int(samples), 1))
 
     def add(self, state: State, u: np.ndarray, info: Any, log: Any) -> None:
@@ -47,9 +48,42 @@ class Recorder:
         self.tau.append(info.drive_torques)
         modes = state.actuation_modes
         self.modes.append(self.actuation.modes() if modes is None else modes)
-        self.contacts.append(info.contact_arrays)
+        self._add_contacts(info.contact_arrays)
         if isinstance(log, dict):
             self.log.add(log, len(self.t) - 1)
+
+    def add_run(self, state: State, info: Any, run: Any, log: dict[str, np.ndarray]) -> None:
+        """Append the samples of a compiled closed loop's ``run`` (``bhgrasp._core.LoopRun``) that began at ``state``.
+
+        Sample i is the state before the run's step i: ``state`` (with ``info``, the step that made it) for the
+        first, the run's rows after that; the inputs are the run's.  ``log``: each controller log entry's rows, one
+        per sample (:meth:`LogColumns.add_rows`).  The run's arrays are kept, not copied.
+        """
+        n = int(run.steps)
+        first = len(self.t)
+        self.t.append(state.t)
+        self.t.extend(run.t[: n - 1].tolist())
+        self.scene_q.append(state.scene_q)
+        self.scene_q.extend(run.q[: n - 1])
+        self.scene_v.append(state.scene_v)
+        self.scene_v.extend(run.v[: n - 1])
+        self.u.extend(run.u)
+        self.tau.append(info.drive_torques)
+        self.tau.extend(run.drive[: n - 1])
+        modes = state.actuation_modes  # (a compiled loop runs an actuation without modes)
+        self.modes.extend([self.actuation.modes() if modes is None else modes] * n)
+        self._add_contacts(info.contact_arrays)
+        self.counts.extend(run.counts.tolist())
+        if len(run.contacts):
+            self.contacts.append(run.contacts)
+        self.log.add_rows(log, first)
+
+    def _add_contacts(self, contacts: Any) -> None:
+        """One sample's contacts as the engine returned them (kept only if it has rows)."""
+        count = len(contacts)
+        self.counts.append(count)
+        if count:
+            self.contacts.append(contacts)
 
     def _objects(self, scene_q: np.ndarray, scene_v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(N, n_objects, 3) COM positions [m], (N, n_objects, 4) quaternions (x, y, z, w), (N, n_objects, 6) twists.
@@ -97,8 +131,8 @@ class Recorder:
         scene_q = np.array(self.scene_q).reshape(n, scene.nq)
         scene_v = np.array(self.scene_v).reshape(n, scene.nv)
         position, quaternion, twist = self._objects(scene_q, scene_v)
-        counts = [len(contacts) for contacts in self.contacts]
-        arrays = self._contact_arrays([contacts for contacts, count in zip(self.contacts, counts) if count])
+        counts = self.counts
+        arrays = self._contact_arrays(self.contacts)
         return Trajectory(
             t=np.array(self.t),
             q=scene_q[:, : scene.nq_hand].copy(),
@@ -209,6 +243,52 @@ class LogColumns:
             grown[: self._logged] = column[: self._logged]
             self._columns[name] = grown
         self._capacity = capacity
+
+    def add_rows(self, rows: dict[str, np.ndarray], sample: int) -> None:
+        """Record samples ``sample``, ``sample + 1``, ... at once: ``rows`` maps each entry to its (n, *shape) rows.
+
+        Entries absent from ``rows`` hold NaN in these samples, as :meth:`add`'s.
+
+        Raises:
+            InputError: An entry whose rows are not numbers, or not n of its shape (nothing is recorded), or samples
+                before one already recorded.
+        """
+        if sample < self._logged:
+            raise InputError(f"log sample {sample} after sample {self._logged - 1}: samples are recorded in order")
+        blocks = {name: self._rows_checked(name, value, sample) for name, value in rows.items()}
+        counts = {len(block) for block in blocks.values()}
+        if len(counts) > 1:
+            raise InputError(f"the log's rows from sample {sample} must be as many for every entry, got {counts}")
+        n = counts.pop() if counts else 0
+        if sample + n > self._capacity:
+            self._grow(sample + n)
+        columns = self._columns
+        for name, block in blocks.items():
+            column = columns.get(name)
+            if column is None:
+                column = columns[name] = np.empty((self._capacity, *block.shape[1:]))
+                column[:sample] = np.nan
+                self._shapes[name] = block.shape[1:]
+            column[self._logged : sample] = np.nan
+            column[sample : sample + n] = block
+        for name, column in columns.items():
+            if name not in blocks:
+                column[self._logged : sample + n] = np.nan
+        self._logged = sample + n
+
+    def _rows_checked(self, name: str, value: Any, sample: int) -> np.ndarray:
+        """``value`` as float rows of entry ``name``'s shape (its first sample's), else an ``InputError``."""
+        try:
+            rows = np.asarray(value, dtype=float)
+        except self._NOT_NUMBERS as error:
+            raise InputError(f"log entry {name!r} from sample {sample} must be numbers, got {value!r}") from error
+        shape = self._shapes.get(name, rows.shape[1:])
+        if rows.ndim == 0 or rows.shape[1:] != shape:
+            raise InputError(
+                f"log entry {name!r} has rows of shape {rows.shape[1:]} from sample {sample}, {shape} before: an "
+                "entry keeps its shape through a run"
+            )
+        return rows
 
     def arrays(self) -> dict[str, np.ndarray]:
         """Each entry's (samples logged, *shape) array, in the order the entries first appeared."""

@@ -94,12 +94,22 @@ def run(
     recorder = Recorder(simulator.scene, simulator.actuation, steps // record_every + 2)
     u = np.zeros(simulator.actuation.n_inputs)
     info = StepInfo.empty(simulator.scene.nv_hand)
-    iterator = range(steps)
+    bar = None
     if progress and steps > 20_000:
         from tqdm import tqdm
 
-        iterator = tqdm(iterator, desc="simulating", unit="step", mininterval=1.0)
-    for k in iterator:
+        bar = tqdm(total=steps, desc="simulating", unit="step", mininterval=1.0)
+    plain = hold == 1 and record_every == 1 and reader.model.exact and disturbance is None and object_forces is None
+    compiled = plain and until is None and hasattr(controller, "compiled_control")
+    k = 0
+    while k < steps:
+        if compiled:  # the steps the controller can take in C++ (none in the approach, say), then the next in Python
+            taken, state, info, last = _compiled_steps(simulator, controller, recorder, state, info, steps - k)
+            k, u = k + taken, u if last is None else last
+            if bar is not None:
+                bar.update(taken)
+            if k >= steps:
+                break
         if k % hold == 0:
             sensed = reader.read(state)
             u = _control(controller, state.t, sensed)
@@ -110,10 +120,40 @@ def run(
             torque = joint_torques(disturbance(state.t), simulator.scene.nv_hand, "disturbance(t)")
         forces = None if object_forces is None else object_forces(state.t)
         state, info = simulator.step(state, u, torque, forces)
+        k += 1
+        if bar is not None:
+            bar.update(1)
         if until is not None and until(state):
             break
+    if bar is not None:
+        bar.close()
     recorder.add(state, u, info, getattr(controller, "log", None))
     return recorder.trajectory()
+
+
+def _compiled_steps(
+    simulator: Any, controller: Any, recorder: Recorder, state: State, info: StepInfo, steps: int
+) -> tuple[int, State, StepInfo, np.ndarray | None]:
+    """The steps (up to ``steps``) the controller's compiled loop takes from ``state``, recorded as the loop would.
+
+    The controller's ``compiled_control(t, state)`` offers its compiled loop controller for the steps from ``state``
+    (``None``: not now); the simulator's ``run_compiled`` runs them in C++ (``None``: it cannot), bit for bit the
+    steps this loop would take with exact sensors, one control cycle and one sample a step and no disturbance.
+    Returns the steps taken, the state and info after them and the last inputs.
+    """
+    run_compiled = getattr(simulator, "run_compiled", None)
+    control = controller.compiled_control(state.t, state) if run_compiled is not None else None
+    done = None if control is None else run_compiled(state, control, steps)
+    if done is None:
+        return 0, state, info, None
+    run, after, after_info = done
+    n = int(run.steps)
+    if n:
+        nq = simulator.scene.nq_hand
+        q_hand = np.concatenate((state.scene_q[None, :nq], run.q[: n - 1, :nq]))
+        recorder.add_run(state, info, run, control.log_rows(run.log[:n], q_hand))
+    control.finish(run, after)  # the controller's clock and log after its last cycle; a failed cycle's error
+    return n, after, after_info if n else info, run.u[n - 1] if n else None
 
 
 def _control_steps(dt: float, control_dt: float | None) -> int:

@@ -269,14 +269,50 @@ class Simulator:
         source = getattr(state, "_source", None)
         start = source.start if isinstance(source, StepOutput) and source.simulator is self else ()
         if result.divergence.kind:
-            contacts = self.engine.contact_set(result.contacts) if result.divergence.kind == 4 else None
-            raise describe_divergence(t, result.divergence, self.settings, self.scene, start, contacts)
+            raise self._diverged(t, result, start)
         if self._modal and self._barrett is None:
             nqh, nvh = self.scene.nq_hand, self.scene.nv_hand
             self.actuation.update(result.q[:nqh], result.v[:nvh], u, result.drive, result.load)
         return self._state(t, result.q, result.v, result.contacts, result.memory, start, modes), StepInfo(
             result, self.engine
         )
+
+    def _diverged(self, t: float, result: Any, start: tuple) -> Exception:
+        """The ``SimulationDiverged`` of a step that ended at ``t`` [s] with ``result``'s divergence."""
+        contacts = self.engine.contact_set(result.contacts) if result.divergence.kind == 4 else None
+        return describe_divergence(t, result.divergence, self.settings, self.scene, start, contacts)
+
+    def run_compiled(self, state: State, control: Any, steps: int) -> tuple[Any, State, StepInfo] | None:
+        """Up to ``steps`` steps from ``state`` under a compiled loop controller, in one C++ call.
+
+        ``control``: its ``loop`` (a ``bhgrasp._core.LoopController``) and ``until`` [s] (the loop stops before a
+        step at t >= until).  Each step is :meth:`step`'s with the controller's inputs, bit for bit.  Returns the
+        C++ ``LoopRun`` (``src/closed_loop.hpp``), the state after its last step and that step's info (``state`` and
+        ``None`` if it took none); ``None`` where this simulator has no compiled loop: the Python engine, an
+        actuation other than :class:`~bhgrasp.sim.actuation.FullyActuated` itself, a state its own compiled step did
+        not make.
+
+        Raises:
+            SimulationDiverged: A step diverged, as :meth:`step` raises it.
+        """
+        source = getattr(state, "_source", None) if type(state) is SimulatedState else None
+        actuation = self.actuation
+        if source is None or source.simulator is not self or type(actuation) is not FullyActuated:
+            return None
+        if self.settings.engine != "compiled" or isinstance(source.contacts, ContactSet):
+            return None  # (a compiled step's contacts, not an initial state's ContactSet)
+        memory = self._start_memory(state)
+        limit = actuation.limit if actuation.saturate else None
+        start = (state.scene_q, state.scene_v, source.contacts, memory, state.t)
+        with self._lock:
+            run = self.engine.run_loop(control.loop, self._drive(), start, self.dt, steps, control.until, limit)
+        if run.stop == 2:
+            raise self._diverged(run.diverged_at, run.last, source.start)
+        if not run.steps:
+            return run, state, None
+        last = run.last
+        after = self._state(float(run.t[-1]), last.q, last.v, last.contacts, last.memory, source.start)
+        return run, after, StepInfo(last, self.engine)
 
     def _step_actuated(self, state: State, u: np.ndarray, disturbance: np.ndarray | None, memory: Any) -> Any:
         """The engine's step under the actuation's joint torques and drive in the state's modes."""

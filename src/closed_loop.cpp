@@ -1,0 +1,110 @@
+// A controller closed on the compiled step: see closed_loop.hpp.
+#include "closed_loop.hpp"
+
+#include <cmath>
+#include <initializer_list>
+#include <utility>
+
+#include "recording.hpp"
+
+namespace bhgrasp {
+
+SMCGraspLoop::SMCGraspLoop(SMCAdaptiveLaw& law, const PosePath& path, Indices finger_of_pair, Indices joint_of_pair,
+                           Eigen::Index nq_hand, Eigen::Index nv_hand, Eigen::Index object_q, Eigen::Index object_v,
+                           double last_time)
+    : law_(law),
+      path_(path),
+      finger_of_pair_(std::move(finger_of_pair)),
+      joint_of_pair_(std::move(joint_of_pair)),
+      nq_hand_(nq_hand),
+      nv_hand_(nv_hand),
+      object_q_(object_q),
+      object_v_(object_v),
+      last_time_(last_time) {
+  if (nq_hand < 0 || nv_hand < 0 || object_q < 0 || object_v < 0)
+    throw std::invalid_argument("SMCGraspLoop: the hand's sizes and the object's offsets must be >= 0");
+}
+
+int SMCGraspLoop::control(double t, const Vector& q, const Vector& v, const Contacts& contacts, Eigen::Ref<Vector> u,
+                          Eigen::Ref<Vector> log) {
+  if (object_q_ + 7 > q.size() || object_v_ + 6 > v.size() || nq_hand_ > q.size() || nv_hand_ > v.size())
+    throw std::invalid_argument("SMCGraspLoop: the scene's q and v are shorter than the hand and object in them");
+  if (law_.sense_contacts(contacts, finger_of_pair_, joint_of_pair_) < 2) return -1;
+  const double dt = t - last_time_;  // (the twin's check of a clock going back cannot fail: the loop's t grows)
+  last_time_ = t;
+  const int status = law_.grasp_free_body_on_path(q.head(nq_hand_), v.head(nv_hand_), q.segment<7>(object_q_),
+                                                  v.segment<6>(object_v_), dt, path_, t, log);
+  if (status == 0) u = log.head(nv_hand_);
+  return status;
+}
+
+LoopRun run_closed_loop(Engine& engine, LoopController& controller, const Drive& drive, const Vector& q,
+                        const Vector& v, const Contacts& contacts, const Memory& memory, double t, double dt,
+                        Eigen::Index steps, double until, const Vector& limit, double max_speed,
+                        double max_penetration) {
+  const Eigen::Index inputs = controller.inputs();
+  if (steps < 0 || !(dt > 0.0) || (limit.size() != 0 && limit.size() != inputs))
+    throw std::invalid_argument("run_closed_loop: steps >= 0, dt > 0 and a limit per input (or none)");
+  LoopRun run;
+  run.t.resize(steps);
+  run.q.resize(steps, q.size());
+  run.v.resize(steps, v.size());
+  run.u.resize(steps, inputs);
+  run.drive.resize(steps, inputs);
+  run.log.resize(steps + 1, controller.log_size());  // one more: the row of a cycle that stopped the loop
+  std::vector<Contacts> kept;  // the contacts of each state after a step but the last
+  kept.reserve(static_cast<std::size_t>(steps));
+  const Vector *state_q = &q, *state_v = &v;
+  const Contacts* state_contacts = &contacts;
+  const Memory* state_memory = &memory;
+  StepResult current;
+  Vector u(inputs), tau(inputs);
+  Eigen::Index k = 0;
+  for (; k < steps && t < until; ++k) {
+    const int status = controller.control(t, *state_q, *state_v, *state_contacts, u, run.log.row(k).transpose());
+    if (status != 0) {
+      run.stop = 1;
+      run.status = status;
+      break;
+    }
+    if (limit.size() != 0)
+      tau = u.cwiseMax(-limit).cwiseMin(limit);  // np.clip(u, -limit, limit) for finite u
+    else
+      tau = u;
+    StepResult result = engine.step(*state_q, *state_v, tau, drive, *state_memory, max_speed, max_penetration);
+    t = std::nearbyint(t / dt + 1.0) * dt;  // Simulator.step's clock: k dt exactly
+    if (result.divergence.kind != 0) {
+      run.stop = 2;
+      run.diverged_at = t;
+      current = std::move(result);
+      break;
+    }
+    run.t(k) = t;
+    run.q.row(k) = result.q.transpose();
+    run.v.row(k) = result.v.transpose();
+    run.u.row(k) = u.transpose();
+    run.drive.row(k) = result.drive.transpose();
+    if (k > 0) kept.push_back(std::move(current.contacts));  // the state before this step: sample k's
+    current = std::move(result);
+    state_q = &current.q;
+    state_v = &current.v;
+    state_contacts = &current.contacts;
+    state_memory = &current.memory;
+  }
+  run.steps = k;
+  run.last = std::move(current);
+  run.t.conservativeResize(k);
+  for (RowMatrix* rows : {&run.q, &run.v, &run.u, &run.drive}) rows->conservativeResize(k, Eigen::NoChange);
+  run.log.conservativeResize(run.stop == 1 ? k + 1 : k, Eigen::NoChange);
+  std::vector<const Contacts*> parts;
+  parts.reserve(kept.size());
+  run.counts.resize(static_cast<Eigen::Index>(kept.size()));
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    parts.push_back(&kept[i]);
+    run.counts(static_cast<Eigen::Index>(i)) = kept[i].size();
+  }
+  run.contacts = concatenate(parts);
+  return run;
+}
+
+}  // namespace bhgrasp

@@ -1,0 +1,84 @@
+// A controller closed on the compiled step, many steps in one call: the loop of bhgrasp/sim/run_loop.py in its
+// plainest case (sensors exact, one control cycle and one recorded sample per step, no disturbance, one torque per
+// joint), which Simulator.run hands over while the controller offers a compiled loop controller.  Python keeps
+// everything else: the first and last cycles of a phase, a cycle the loop controller declines, the recorder's
+// assembly of the samples, the errors.  tests/test_closed_loop.py holds a run through it to the Python loop, bit for
+// bit.  Units SI, world frame.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "engine.hpp"
+#include "pose_path.hpp"
+#include "smc_law.hpp"
+
+namespace bhgrasp {
+
+// What the loop asks of a controller each step.
+class LoopController {
+ public:
+  virtual ~LoopController() = default;
+  virtual Eigen::Index inputs() const = 0;    // the size of u
+  virtual Eigen::Index log_size() const = 0;  // the size of its log row
+  // The inputs u and the log row of the control cycle at t from the scene's (q, v) and the contacts that made it.
+  // 0: written; otherwise the loop stops before this step and returns the code (< 0: the cycle is Python's to run,
+  // nothing of the controller changed; > 0: the cycle failed, its log row written as far as it got).
+  virtual int control(double t, const Vector& q, const Vector& v, const Contacts& contacts, Eigen::Ref<Vector> u,
+                      Eigen::Ref<Vector> log) = 0;
+};
+
+// The SMC-adaptive law's grasp cycle toward a pose path, as CompiledSMCLaw.__call__ runs it for a simulated state
+// with two fingers or more touching (bhgrasp/controllers/_smc_law.py): sense_contacts, the clock, then
+// grasp_free_body_on_path; u is the log row's tau.  Fewer than two touching fingers: -1 (the approach branch is
+// Python's).  A law status 1-4 is returned as it is.
+class SMCGraspLoop : public LoopController {
+ public:
+  // `law` and `path` are kept by reference (the caller keeps them alive); the per-pair finger and joint maps of the
+  // scene; the hand's coordinates first in the scene's q and v, the object's free body at `object_q` (position and
+  // quaternion, 7) and `object_v` (6); `last_time` [s]: the law's last grasp cycle.
+  SMCGraspLoop(SMCAdaptiveLaw& law, const PosePath& path, Indices finger_of_pair, Indices joint_of_pair,
+               Eigen::Index nq_hand, Eigen::Index nv_hand, Eigen::Index object_q, Eigen::Index object_v,
+               double last_time);
+
+  Eigen::Index inputs() const override { return nv_hand_; }
+  Eigen::Index log_size() const override { return law_.log_size(); }
+  int control(double t, const Vector& q, const Vector& v, const Contacts& contacts, Eigen::Ref<Vector> u,
+              Eigen::Ref<Vector> log) override;
+  double last_time() const { return last_time_; }  // the law's clock: its last grasp cycle [s]
+
+ private:
+  SMCAdaptiveLaw& law_;
+  const PosePath& path_;
+  Indices finger_of_pair_, joint_of_pair_;
+  Eigen::Index nq_hand_, nv_hand_, object_q_, object_v_;
+  double last_time_;
+};
+
+// What run_closed_loop did.  Row k of t, q, v, drive is the state after step k and the step's drive torques; row k
+// of u and log the control cycle that step took.
+struct LoopRun {
+  Eigen::Index steps = 0;  // steps taken
+  // 0: `steps` steps, or the next step's t reached `until`; 1: the controller returned `status` for the next step
+  // (its log row is log's row `steps`); 2: the next step diverged (`last` is its result, at time `diverged_at`)
+  int stop = 0;
+  int status = 0;
+  double diverged_at = 0.0;
+  Vector t;
+  RowMatrix q, v, u, drive, log;
+  Contacts contacts;  // the contacts of the states after steps 0 .. steps - 2, one after the other (the last's: last)
+  Indices counts;     // their rows per state
+  StepResult last;    // the last step's result (the diverged one when stop == 2)
+};
+
+// Up to `steps` steps of `engine` from (q, v) at time t with the contacts and memory that made them, under `drive`,
+// each step's joint torques the controller's u (clipped to +-limit when `limit` is not empty); the clock advances as
+// Simulator.step's (round(t / dt + 1) dt).  Stops early before a step whose t >= until, when the controller stops,
+// or at a diverged step.
+LoopRun run_closed_loop(Engine& engine, LoopController& controller, const Drive& drive, const Vector& q,
+                        const Vector& v, const Contacts& contacts, const Memory& memory, double t, double dt,
+                        Eigen::Index steps, double until, const Vector& limit, double max_speed,
+                        double max_penetration);
+
+}  // namespace bhgrasp

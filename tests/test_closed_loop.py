@@ -1,0 +1,144 @@
+"""The compiled closed loop (``src/closed_loop.cpp``) against the Python run loop it stands in for, bit for bit.
+
+:meth:`Simulator.run <bhgrasp.sim.simulator.Simulator.run>` hands a controller's cycles to one C++ call while the
+controller offers a compiled loop controller (a :class:`GraspSupervisor`'s grasp phases over a compiled
+:class:`SMCAdaptiveGrasp`; a bare compiled law once it grasps toward a pose path) and the run is plain: exact
+sensors, one control cycle and one sample a step, nothing else acting on the scene.  Each run here is made twice,
+the second with the offer withdrawn (every step through Python's loop, the law's compiled cycle called from
+Python), and every recorded array, log entry and error must be the same to the bit.  The runs cover the squeeze's
+end (the loop stops for the supervisor's switch and plan), clipped torques, a friction margin, fingers letting go
+(the loop hands the cycle back), a diverged step and a failed cycle.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
+from bhgrasp.controllers.grasp_options import GraspOptions
+from bhgrasp.controllers.supervisor import GraspSupervisor
+from bhgrasp.errors import InputError, SimulationDiverged
+from bhgrasp.model.objects import Box
+from bhgrasp.motion.pose_references import PoseMotion
+from bhgrasp.scenarios.box_grasp import box_grasp
+from bhgrasp.scenarios.demo_result import MU_ASSUMED
+from bhgrasp.scenarios.grasp_controllers import SQUEEZE
+from bhgrasp.scenarios.grasp_demo import OFFSET, run_grasp_demo
+from bhgrasp.sim.simulator import Simulator
+
+pytest.importorskip("bhgrasp._core")
+
+
+@pytest.fixture
+def compiled_steps(monkeypatch):
+    """The steps each compiled loop took (stop and status too), as a list filled by the runs."""
+    taken: list[tuple[int, int, int]] = []
+    run_compiled = Simulator.run_compiled
+
+    def counted(self, state, control, steps):
+        done = run_compiled(self, state, control, steps)
+        if done is not None:
+            taken.append((int(done[0].steps), int(done[0].stop), int(done[0].status)))
+        return done
+
+    monkeypatch.setattr(Simulator, "run_compiled", counted)
+    return taken
+
+
+def python_loop(monkeypatch) -> None:
+    """Withdraw the controllers' offers: every step through the Python loop."""
+    for kind in (GraspSupervisor, SMCAdaptiveGrasp):
+        monkeypatch.setattr(kind, "compiled_control", lambda self, t, state: None)
+
+
+def assert_same_run(compiled, python) -> None:
+    """Every array of the two trajectories and every log entry, in the same order, equal to the bit."""
+    for field in dataclasses.fields(python):
+        a, b = getattr(compiled, field.name), getattr(python, field.name)
+        if isinstance(b, np.ndarray):
+            assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes(), field.name
+    assert list(compiled.log) == list(python.log)
+    for key, value in python.log.items():
+        assert compiled.log[key].shape == value.shape and compiled.log[key].tobytes() == value.tobytes(), key
+
+
+@pytest.mark.parametrize(
+    "case",
+    [{}, {"friction_margin": 0.3, "duration": 2.0}, {"torque_limit": 0.5, "mass": 1.5, "duration": 2.0}],
+    ids=["demo", "friction-margin", "clipped-torques"],
+)
+def test_the_demo_takes_its_grasp_phases_in_cpp_with_the_python_loops_bits(case, compiled_steps, monkeypatch):
+    compiled = run_grasp_demo(**case)
+    steps = round(case.get("duration", 3.0) * 1000)
+    taken = sum(count for count, _, _ in compiled_steps)
+    assert [stop for _, stop, _ in compiled_steps] == [0, 0]  # the squeeze's end, then the run's
+    assert taken > 0.65 * steps  # the approach (~630 steps) and the first cycle of each phase in Python
+    if "torque_limit" in case:
+        u = compiled.trajectory.u
+        assert np.abs(u).max() > case["torque_limit"]  # the drive clipped some commands
+        tau = compiled.trajectory.tau  # sample k: the torques of the step that made it
+        delivered = np.clip(u[:-1], -0.5, 0.5)  # (no joint friction, no damping; the drive's round-off)
+        np.testing.assert_allclose(tau[1:], delivered, rtol=0.0, atol=1e-12)
+    python_loop(monkeypatch)
+    python = run_grasp_demo(**case)
+    assert_same_run(compiled.trajectory, python.trajectory)
+    assert compiled.position_error == python.position_error
+
+
+def test_fingers_that_let_go_hand_the_cycle_back_to_python(compiled_steps, monkeypatch):
+    """True friction 0.22 (the law assumes 0.6): the box slides out and F1, F2 let go at ~2.1 s."""
+    compiled = run_grasp_demo(friction=0.22, duration=2.25)
+    assert (1, -1) in {(stop, status) for _, stop, status in compiled_steps}
+    contacts = compiled.trajectory.log["contacts"]
+    assert np.nanmax(contacts[-100:]) < 2  # the approach branch, in Python, after the loop handed it back
+    python_loop(monkeypatch)
+    assert_same_run(compiled.trajectory, run_grasp_demo(friction=0.22, duration=2.25).trajectory)
+
+
+def test_a_step_that_diverges_in_the_loop_raises_what_the_python_loop_raises(compiled_steps, monkeypatch):
+    with pytest.raises(SimulationDiverged) as in_cpp:
+        run_grasp_demo(friction=0.25)
+    assert len(compiled_steps) == 1  # the squeeze; the motion's loop raised
+    python_loop(monkeypatch)
+    with pytest.raises(SimulationDiverged) as in_python:
+        run_grasp_demo(friction=0.25)
+    assert str(in_cpp.value) == str(in_python.value)
+    assert "t = 2.204 s" in str(in_python.value)
+
+
+def bare_law(setup, **options):
+    """A bare compiled law (no supervisor; told 0.3 kg) that follows the demo's motion from 0.8 s on."""
+    box = Box(size=setup.box.size, mass=0.3)
+    grasp = GraspOptions(mu=MU_ASSUMED, squeeze=SQUEEZE)
+    law = SMCAdaptiveGrasp(setup.hand, box, options=grasp, engine="compiled", **options)
+    law.reference = PoseMotion(setup.state.object_poses[0], OFFSET, 1.0, 0.8)  # (a reset keeps it)
+    return law
+
+
+def test_a_bare_law_runs_its_grasp_cycles_in_cpp_with_the_python_loops_bits(compiled_steps, monkeypatch):
+    """The law closes the fingers itself (its approach branch, in Python), then grasps and moves the box."""
+    setup = box_grasp(mass=0.6)
+    compiled = setup.simulator.run(bare_law(setup), 1.5, state=setup.state, progress=False)
+    assert sum(count for count, _, _ in compiled_steps) > 1000
+    python_loop(monkeypatch)
+    assert_same_run(compiled, setup.simulator.run(bare_law(setup), 1.5, state=setup.state, progress=False))
+
+
+def test_a_cycle_that_fails_in_the_loop_raises_what_the_python_cycle_raises(compiled_steps, monkeypatch):
+    """An adaptation rate that overflows the object estimate once the grasp adapts: the same error either way."""
+    errors = []
+    for python in (False, True):
+        if python:
+            python_loop(monkeypatch)
+        setup = box_grasp(mass=0.6)
+        supervisor = GraspSupervisor(
+            setup.hand, setup.q_contact, bare_law(setup, object_adaptation=np.full(7, 1e308)), offset=OFFSET
+        )
+        with pytest.raises(InputError) as error:
+            setup.simulator.run(supervisor, 1.5, state=setup.state, progress=False)
+        errors.append(str(error.value))
+    assert errors[0] == errors[1]
+    assert any(stop == 1 and status > 0 for _, stop, status in compiled_steps)
