@@ -15,6 +15,17 @@ namespace nb = nanobind;
 using namespace nb::literals;
 
 namespace bhgrasp {
+namespace {
+
+using ReadOnlyRows = nb::ndarray<const double, nb::numpy, nb::ndim<2>, nb::c_contig>;
+
+// A read-only NumPy view of `rows` (its owner kept alive by the reference_internal policy of the property).
+ReadOnlyRows read_only(const RowMatrix& rows) {
+  const std::size_t shape[2] = {static_cast<std::size_t>(rows.rows()), static_cast<std::size_t>(rows.cols())};
+  return ReadOnlyRows(rows.data(), 2, shape);
+}
+
+}  // namespace
 
 void bind_loop(nb::module_& m) {
   nb::class_<LoopController>(m, "LoopController")
@@ -28,12 +39,17 @@ void bind_loop(nb::module_& m) {
            "object_v"_a, "last_time"_a, nb::keep_alive<1, 2>(), nb::keep_alive<1, 3>())
       .def_prop_ro("last_time", &SMCGraspLoop::last_time);
 
-  // the arrays are views of the run's (kept alive by them)
+  // the rows are read-only views of the run's (kept alive by them): a recorder keeps them
+  const auto rows = [](RowMatrix LoopRun::* member) {
+    return [member](const LoopRun& run) { return read_only(run.*member); };
+  };
+  const auto view = nb::rv_policy::reference_internal;
   nb::class_<LoopRun>(m, "LoopRun")
       .def_ro("steps", &LoopRun::steps).def_ro("stop", &LoopRun::stop).def_ro("status", &LoopRun::status)
-      .def_ro("diverged_at", &LoopRun::diverged_at)
-      .def_ro("t", &LoopRun::t).def_ro("q", &LoopRun::q).def_ro("v", &LoopRun::v).def_ro("u", &LoopRun::u)
-      .def_ro("drive", &LoopRun::drive).def_ro("log", &LoopRun::log)
+      .def_ro("diverged_at", &LoopRun::diverged_at).def_ro("t", &LoopRun::t)
+      .def_prop_ro("q", rows(&LoopRun::q), view).def_prop_ro("v", rows(&LoopRun::v), view)
+      .def_prop_ro("u", rows(&LoopRun::u), view).def_prop_ro("drive", rows(&LoopRun::drive), view)
+      .def_prop_ro("log", rows(&LoopRun::log), view)
       .def_ro("contacts", &LoopRun::contacts).def_ro("counts", &LoopRun::counts).def_ro("last", &LoopRun::last);
 
   m.def("run_closed_loop", &run_closed_loop, "engine"_a, "controller"_a, "drive"_a, "q"_a, "v"_a, "contacts"_a,

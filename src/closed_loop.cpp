@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <initializer_list>
+#include <stdexcept>
 #include <utility>
 
 #include "recording.hpp"
@@ -67,10 +68,14 @@ LoopRun run_closed_loop(Engine& engine, LoopController& controller, const Drive&
       run.status = status;
       break;
     }
-    if (limit.size() != 0)
-      tau = u.cwiseMax(-limit).cwiseMin(limit);  // np.clip(u, -limit, limit) for finite u
-    else
+    if (limit.size() != 0) {
+      for (Eigen::Index i = 0; i < inputs; ++i) {  // np.clip(u, -limit, limit) for finite u, its signs of zero too
+        const double low = -limit(i), high = limit(i), above = u(i) > low ? u(i) : low;
+        tau(i) = above < high ? above : high;
+      }
+    } else {
       tau = u;
+    }
     StepResult result = engine.step(*state_q, *state_v, tau, drive, *state_memory, max_speed, max_penetration);
     t = std::nearbyint(t / dt + 1.0) * dt;  // Simulator.step's clock: k dt exactly
     if (result.divergence.kind != 0) {
@@ -95,7 +100,7 @@ LoopRun run_closed_loop(Engine& engine, LoopController& controller, const Drive&
   run.last = std::move(current);
   run.t.conservativeResize(k);
   for (RowMatrix* rows : {&run.q, &run.v, &run.u, &run.drive}) rows->conservativeResize(k, Eigen::NoChange);
-  run.log.conservativeResize(run.stop == 1 ? k + 1 : k, Eigen::NoChange);
+  run.log.conservativeResize(run.stop == 0 ? k : k + 1, Eigen::NoChange);
   std::vector<const Contacts*> parts;
   parts.reserve(kept.size());
   run.counts.resize(static_cast<Eigen::Index>(kept.size()));

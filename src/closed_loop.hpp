@@ -1,9 +1,9 @@
 // A controller closed on the compiled step, many steps in one call: the loop of bhgrasp/sim/run_loop.py in its
 // plainest case (sensors exact, one control cycle and one recorded sample per step, no disturbance, one torque per
 // joint), which Simulator.run hands over while the controller offers a compiled loop controller.  Python keeps
-// everything else: the first and last cycles of a phase, a cycle the loop controller declines, the recorder's
-// assembly of the samples, the errors.  tests/test_closed_loop.py holds a run through it to the Python loop, bit for
-// bit.  Units SI, world frame.
+// everything else: the cycles before the first it offers and a phase's switch (the loop stops before it), a cycle
+// the loop controller declines, the recorder's assembly of the samples, the errors.  tests/test_closed_loop.py
+// holds runs through it to the Python loop, bit for bit.  Units SI, world frame.
 #pragma once
 
 #include <vector>
@@ -24,7 +24,8 @@ class LoopController {
   virtual Eigen::Index log_size() const = 0;  // the size of its log row
   // The inputs u and the log row of the control cycle at t from the scene's (q, v) and the contacts that made it.
   // 0: written; otherwise the loop stops before this step and returns the code (< 0: the cycle is Python's to run,
-  // nothing of the controller changed; > 0: the cycle failed, its log row written as far as it got).
+  // nothing the cycle's Python call would not redo has changed; > 0: the cycle failed, its log row written as far
+  // as it got).
   virtual int control(double t, const Vector& q, const Vector& v, const Contacts& contacts, Eigen::Ref<Vector> u,
                       Eigen::Ref<Vector> log) = 0;
 };
@@ -61,7 +62,8 @@ class SMCGraspLoop : public LoopController {
 struct LoopRun {
   Eigen::Index steps = 0;  // steps taken
   // 0: `steps` steps, or the next step's t reached `until`; 1: the controller returned `status` for the next step
-  // (its log row is log's row `steps`); 2: the next step diverged (`last` is its result, at time `diverged_at`)
+  // (the cycle's log row is log's row `steps`); 2: the next step diverged (`last` is its result, at time
+  // `diverged_at`; its cycle's log row is log's row `steps`)
   int stop = 0;
   int status = 0;
   double diverged_at = 0.0;

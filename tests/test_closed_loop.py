@@ -5,9 +5,10 @@ controller offers a compiled loop controller (a :class:`GraspSupervisor`'s grasp
 :class:`SMCAdaptiveGrasp`; a bare compiled law once it grasps toward a pose path) and the run is plain: exact
 sensors, one control cycle and one sample a step, nothing else acting on the scene.  Each run here is made twice,
 the second with the offer withdrawn (every step through Python's loop, the law's compiled cycle called from
-Python), and every recorded array, log entry and error must be the same to the bit.  The runs cover the squeeze's
-end (the loop stops for the supervisor's switch and plan), clipped torques, a friction margin, fingers letting go
-(the loop hands the cycle back), a diverged step and a failed cycle.
+Python), and every recorded array, log entry and error, and the controllers as the runs leave them, must be the same
+to the bit.  The runs cover the squeeze's end (the loop stops for the supervisor's switch and plan), clipped torques,
+a friction margin, fingers letting go (the loop hands the cycle back), a diverged step, a failed cycle and runs cut
+into chunks.
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ from bhgrasp.scenarios.box_grasp import box_grasp
 from bhgrasp.scenarios.demo_result import MU_ASSUMED
 from bhgrasp.scenarios.grasp_controllers import SQUEEZE
 from bhgrasp.scenarios.grasp_demo import OFFSET, run_grasp_demo
+from bhgrasp.sim import run_loop
+from bhgrasp.sim.actuation import FullyActuated
 from bhgrasp.sim.simulator import Simulator
 
 pytest.importorskip("bhgrasp._core")
@@ -38,8 +41,8 @@ def compiled_steps(monkeypatch):
     taken: list[tuple[int, int, int]] = []
     run_compiled = Simulator.run_compiled
 
-    def counted(self, state, control, steps):
-        done = run_compiled(self, state, control, steps)
+    def counted(self, *arguments):
+        done = run_compiled(self, *arguments)
         if done is not None:
             taken.append((int(done[0].steps), int(done[0].stop), int(done[0].status)))
         return done
@@ -98,15 +101,88 @@ def test_fingers_that_let_go_hand_the_cycle_back_to_python(compiled_steps, monke
     assert_same_run(compiled.trajectory, run_grasp_demo(friction=0.22, duration=2.25).trajectory)
 
 
-def test_a_step_that_diverges_in_the_loop_raises_what_the_python_loop_raises(compiled_steps, monkeypatch):
+@pytest.fixture
+def controllers(monkeypatch):
+    """The controller of every ``Simulator.run`` call, as a list filled by the runs."""
+    given = []
+    run = Simulator.run
+
+    def kept(self, controller, *arguments, **options):
+        given.append(controller)
+        return run(self, controller, *arguments, **options)
+
+    monkeypatch.setattr(Simulator, "run", kept)
+    return given
+
+
+def assert_same_logs(compiled: dict, python: dict) -> None:
+    """Two controllers' logs: the same entries in the same order, equal to the bit."""
+    assert list(compiled) == list(python)
+    for key, value in python.items():
+        a, b = np.asarray(compiled[key], dtype=float), np.asarray(value, dtype=float)
+        assert a.shape == b.shape and a.tobytes() == b.tobytes(), key
+
+
+def assert_same_controllers(compiled: GraspSupervisor, python: GraspSupervisor) -> None:
+    """Two supervisors over SMC-adaptive laws as their runs left them: clocks, logs, estimates."""
+    assert compiled.grasp._time == python.grasp._time and compiled.phase == python.phase
+    assert_same_logs(compiled.log, python.log)
+    assert_same_logs(compiled.grasp.log, python.grasp.log)
+    assert compiled.grasp.object_estimate.tobytes() == python.grasp.object_estimate.tobytes()
+
+
+def test_the_controllers_are_left_as_the_python_loop_leaves_them(controllers, monkeypatch):
+    run_grasp_demo(duration=2.0)
+    python_loop(monkeypatch)
+    run_grasp_demo(duration=2.0)
+    assert_same_controllers(*controllers)
+
+
+def test_a_step_that_diverges_in_the_loop_raises_what_the_python_loop_raises(compiled_steps, controllers, monkeypatch):
+    """The diverged step's cycle ran: the controllers are left as after it, on either loop."""
     with pytest.raises(SimulationDiverged) as in_cpp:
         run_grasp_demo(friction=0.25)
-    assert len(compiled_steps) == 1  # the squeeze; the motion's loop raised
+    assert [stop for _, stop, _ in compiled_steps] == [0, 2]  # the squeeze; the motion's loop diverged
     python_loop(monkeypatch)
     with pytest.raises(SimulationDiverged) as in_python:
         run_grasp_demo(friction=0.25)
     assert str(in_cpp.value) == str(in_python.value)
     assert "t = 2.204 s" in str(in_python.value)
+    assert_same_controllers(*controllers)
+
+
+def test_runs_of_at_most_a_chunk_of_steps_a_call_take_the_same_steps(compiled_steps, monkeypatch):
+    """The loop resumes each chunk from the controller as the last one left it: the same bits as one call."""
+    whole = run_grasp_demo(duration=2.0).trajectory
+    calls = len(compiled_steps)
+    monkeypatch.setattr(run_loop, "CHUNK", 97)
+    chunked = run_grasp_demo(duration=2.0).trajectory
+    assert len(compiled_steps) - calls > 12 and max(count for count, _, _ in compiled_steps[calls:]) == 97
+    assert_same_run(chunked, whole)
+
+
+def test_a_simulator_without_the_compiled_loop_runs_every_step_in_python(compiled_steps):
+    """The Python engine, a subclass of FullyActuated (its hooks are Python's) or a Barrett drive: no offer taken."""
+    setup = box_grasp(mass=0.6)
+
+    class Limited(FullyActuated):
+        """A subclass, which may change what the inputs do."""
+
+    hand = setup.simulator.scene.hand
+    simulators = [
+        setup.simulator.with_settings(engine="python"),
+        Simulator(setup.simulator.scene, dt=setup.simulator.dt, contact=setup.simulator.law, actuation=Limited(hand)),
+        box_grasp(mass=0.6, actuation="barrett").simulator,
+    ]
+    assert setup.simulator.closes_loops_in_cpp()
+    for simulator in simulators:
+        assert not simulator.closes_loops_in_cpp()
+    law = bare_law(setup)
+    setup.simulator.run(law, 1.2, state=setup.state, progress=False)
+    assert compiled_steps
+    compiled_steps.clear()
+    simulators[1].run(bare_law(setup), 1.2, state=simulators[1].initial_state(setup.state.q), progress=False)
+    assert compiled_steps == []
 
 
 def bare_law(setup, **options):
@@ -128,8 +204,9 @@ def test_a_bare_law_runs_its_grasp_cycles_in_cpp_with_the_python_loops_bits(comp
 
 
 def test_a_cycle_that_fails_in_the_loop_raises_what_the_python_cycle_raises(compiled_steps, monkeypatch):
-    """An adaptation rate that overflows the object estimate once the grasp adapts: the same error either way."""
-    errors = []
+    """An adaptation rate that overflows the object estimate once the grasp adapts: the same error either way, and
+    the controllers left alike (the failed cycle's clock, the last good cycle's logs)."""
+    errors, supervisors = [], []
     for python in (False, True):
         if python:
             python_loop(monkeypatch)
@@ -140,5 +217,7 @@ def test_a_cycle_that_fails_in_the_loop_raises_what_the_python_cycle_raises(comp
         with pytest.raises(InputError) as error:
             setup.simulator.run(supervisor, 1.5, state=setup.state, progress=False)
         errors.append(str(error.value))
+        supervisors.append(supervisor)
     assert errors[0] == errors[1]
-    assert any(stop == 1 and status > 0 for _, stop, status in compiled_steps)
+    assert [(stop, status) for _, stop, status in compiled_steps][-1] == (1, 3)  # the wrench not finite
+    assert_same_controllers(*supervisors)

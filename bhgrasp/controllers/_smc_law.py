@@ -227,7 +227,7 @@ class CompiledSMCLaw:
                 status = kernel.grasp_free_body(q, v, object_q, object_v, dt, *targets)
         if status in (1, 2, 3):
             self._raise(law, state, status, out)
-        self._publish(log, out)
+        self._publish(log, out, mass=False)
         tau = out[self._tau]
         if status:
             raise InputError(f"{type(law).__name__} produced non-finite torques {tau} at t = {t} s")
@@ -240,11 +240,13 @@ class CompiledSMCLaw:
         log["mass_estimate"] = out[self._mass]
         return tau
 
-    def _publish(self, log: dict, out: np.ndarray) -> None:
-        """The log entries of a grasp cycle's ``out`` (views of it) but the mass estimate."""
+    def _publish(self, log: dict, out: np.ndarray, mass: bool = True) -> None:
+        """The log entries of a grasp cycle's ``out`` (views of it); its mass estimate too if ``mass``."""
         log.update(zip(self._flat_keys, self._flat_views(out)))
         for key, index, shape in self._blocks:
             log[key] = out[index].reshape(shape)
+        if mass:
+            log["mass_estimate"] = out[self._mass]
 
     def loop(self, law: Any, state: Any) -> Any | None:
         """The grasp cycles from ``state`` on as a compiled loop controller (``bhgrasp._core.SMCGraspLoop``), or None.
@@ -285,24 +287,25 @@ class CompiledSMCLaw:
         entries["mass_estimate"] = rows[:, self._mass]
         return entries
 
-    def finish(self, law: Any, loop: Any, run: Any, state: Any) -> None:
-        """After a ``run`` of :meth:`loop`'s ``loop``: the law's clock and log as its last cycle left them.
+    def settle(self, law: Any, loop: Any, run: Any, cycles: int) -> None:
+        """After a ``run`` of :meth:`loop`'s ``loop``: the law's clock and log as its last completed cycle left them.
 
-        Raises what :meth:`__call__` raises for a cycle that failed (the run's ``status`` 1-4) at ``state``.
+        ``cycles``: the cycles it completed (the run's first log rows); the clock as a failed cycle after them left it.
         """
         law._time = loop.last_time
-        n, status = int(run.steps), int(run.status) if run.stop == 1 else 0
-        if n and status <= 0:
-            out = np.array(run.log[n - 1])  # a fresh buffer, as each call's (a recorder may keep its views)
-            self._publish(law.log, out)
-            law.log["mass_estimate"] = out[self._mass]
+        if cycles:
+            self._publish(law.log, np.array(run.log[cycles - 1]))  # a fresh buffer, as each call's
+
+    def fail(self, law: Any, run: Any, state: Any) -> None:
+        """Raise what :meth:`__call__` raises at ``state`` for the cycle that stopped ``run`` (its status 1-4)."""
+        status = int(run.status) if run.stop == 1 else 0
+        if status <= 0:
+            return
+        out = np.array(run.log[run.steps])
         if status in (1, 2, 3):
-            self._raise(law, state, status, np.array(run.log[n]))
-        if status == 4:
-            out = np.array(run.log[n])
-            self._publish(law.log, out)
-            law.log["mass_estimate"] = out[self._mass]
-            raise InputError(f"{type(law).__name__} produced non-finite torques {out[self._tau]} at t = {state.t} s")
+            self._raise(law, state, status, out)
+        self._publish(law.log, out, mass=False)
+        raise InputError(f"{type(law).__name__} produced non-finite torques {out[self._tau]} at t = {state.t} s")
 
     def _free_body(self, scene: Any) -> tuple[slice, slice] | None:
         """The (q, v) slices of the scene's object 0 when it is a free body (as Scene.object_pose tells), else None."""

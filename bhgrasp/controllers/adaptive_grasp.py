@@ -208,7 +208,10 @@ class SMCAdaptiveGrasp(ObjectGraspController):
             entries.update(compiled.log_rows(rows))
             return entries
 
-        return CompiledControl(loop, math.inf, log_rows, lambda run, after: compiled.finish(self, loop, run, after))
+        def settle(run: Any, q_hand: np.ndarray) -> None:
+            compiled.settle(self, loop, run, len(q_hand))
+
+        return CompiledControl(loop, math.inf, log_rows, settle, lambda run, after: compiled.fail(self, run, after))
 
     def __call__(self, t: float, state: State) -> np.ndarray:
         """Joint torques [N m]; before the grasp the base closes the fingers."""

@@ -147,12 +147,11 @@ class GraspSupervisor(Controller):
         if self.phase == APPROACH:
             tau = self._approach_law(t, state) + self.approach.damping * np.asarray(state.v, dtype=float)
             self.log.update(self._approach_law.log)
+            self.log["phase"] = np.array(float(self.phase))
+            self.log["arrived"] = self._arrived.copy()
         else:
             tau = self.grasp(t, state)
-            self.log.update(self.grasp.log)
-            self.log["q_d"], self.log["error"] = self.q_close, np.asarray(state.q) - self.q_close
-        self.log["phase"] = np.array(float(self.phase))
-        self.log["arrived"] = self._arrived.copy()
+            self._log_grasp(np.asarray(state.q))
         return tau
 
     def compiled_control(self, t: float, state: State) -> CompiledControl | None:
@@ -168,26 +167,27 @@ class GraspSupervisor(Controller):
         grasp = offer(t, state) if t < until else None
         if grasp is None:
             return None
-        last_error: list[np.ndarray] = []  # the last cycle's joint error, for the log after the run
 
         def log_rows(rows: np.ndarray, q_hand: np.ndarray) -> dict[str, np.ndarray]:
             entries = held_rows(self.log, len(rows))
             entries.update(grasp.log_rows(rows, q_hand))
-            error = q_hand - self.q_close
-            last_error[:] = [error[-1]]
             held = {"q_d": self.q_close, "phase": float(self.phase), "arrived": self._arrived}
-            entries.update(held_rows(held, len(rows)), error=error)
+            entries.update(held_rows(held, len(rows)), error=q_hand - self.q_close)
             return entries
 
-        def finish(run: Any, after: State) -> None:
-            grasp.finish(run, after)
-            if run.steps:
-                self.log.update(self.grasp.log)
-                self.log["q_d"], self.log["error"] = self.q_close, last_error[0]
-                self.log["phase"] = np.array(float(self.phase))
-                self.log["arrived"] = self._arrived.copy()
+        def settle(run: Any, q_hand: np.ndarray) -> None:
+            grasp.settle(run, q_hand)
+            if len(q_hand):
+                self._log_grasp(q_hand[-1])
 
-        return CompiledControl(grasp.loop, min(until, grasp.until), log_rows, finish)
+        return CompiledControl(grasp.loop, min(until, grasp.until), log_rows, settle, grasp.fail)
+
+    def _log_grasp(self, q: np.ndarray) -> None:
+        """The log of a grasp-phase cycle at joint positions ``q`` [rad], after the grasp controller's."""
+        self.log.update(self.grasp.log)
+        self.log["q_d"], self.log["error"] = self.q_close, q - self.q_close
+        self.log["phase"] = np.array(float(self.phase))
+        self.log["arrived"] = self._arrived.copy()
 
     def _plan(self, t: float, state: State) -> None:
         """Track the offset the grasp can make: ``offset`` projected onto its manipulable space at the sensed contacts.

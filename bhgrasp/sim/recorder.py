@@ -60,6 +60,8 @@ class Recorder:
         per sample (:meth:`LogColumns.add_rows`).  The run's arrays are kept, not copied.
         """
         n = int(run.steps)
+        if n < 1:
+            raise InputError(f"a compiled run's samples are recorded once it took a step, got {n} steps")
         first = len(self.t)
         self.t.append(state.t)
         self.t.extend(run.t[: n - 1].tolist())

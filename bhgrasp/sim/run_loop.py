@@ -100,35 +100,67 @@ def run(
 
         bar = tqdm(total=steps, desc="simulating", unit="step", mininterval=1.0)
     plain = hold == 1 and record_every == 1 and reader.model.exact and disturbance is None and object_forces is None
-    compiled = plain and until is None and hasattr(controller, "compiled_control")
+    in_cpp = plain and until is None and hasattr(controller, "compiled_control")
+    in_cpp = in_cpp and getattr(simulator, "closes_loops_in_cpp", lambda: False)()
     k = 0
-    while k < steps:
-        if compiled:  # the steps the controller can take in C++ (none in the approach, say), then the next in Python
-            taken, state, info, last = _compiled_steps(simulator, controller, recorder, state, info, steps - k)
-            k, u = k + taken, u if last is None else last
+    try:
+        while k < steps:
+            if in_cpp:  # the steps the controller's compiled loop takes (none in an approach, say), then one here
+                taken, state, info, last = _compiled_steps(simulator, controller, recorder, state, info, steps - k)
+                k, u = k + taken, u if last is None else last
+                if bar is not None:
+                    bar.update(taken)
+                if k >= steps:
+                    break
+            if k % hold == 0:
+                sensed = reader.read(state)
+                u = _control(controller, state.t, sensed)
+            if k % record_every == 0:
+                recorder.add(state, u, info, getattr(controller, "log", None))
+            torque = disturbance
+            if callable(disturbance):
+                torque = joint_torques(disturbance(state.t), simulator.scene.nv_hand, "disturbance(t)")
+            forces = None if object_forces is None else object_forces(state.t)
+            state, info = simulator.step(state, u, torque, forces)
+            k += 1
             if bar is not None:
-                bar.update(taken)
-            if k >= steps:
+                bar.update(1)
+            if until is not None and until(state):
                 break
-        if k % hold == 0:
-            sensed = reader.read(state)
-            u = _control(controller, state.t, sensed)
-        if k % record_every == 0:
-            recorder.add(state, u, info, getattr(controller, "log", None))
-        torque = disturbance
-        if callable(disturbance):
-            torque = joint_torques(disturbance(state.t), simulator.scene.nv_hand, "disturbance(t)")
-        forces = None if object_forces is None else object_forces(state.t)
-        state, info = simulator.step(state, u, torque, forces)
-        k += 1
+    finally:
         if bar is not None:
-            bar.update(1)
-        if until is not None and until(state):
-            break
-    if bar is not None:
-        bar.close()
+            bar.close()
     recorder.add(state, u, info, getattr(controller, "log", None))
     return recorder.trajectory()
+
+
+class CompiledControl(Protocol):
+    """What the loop needs of a controller's ``compiled_control(t, state)``: its next cycles as a compiled loop.
+
+    ``loop``: the loop controller (a ``bhgrasp._core.LoopController``); ``until`` [s]: its next switch (the loop
+    stops before a step at t >= until); ``log_rows``, ``settle`` and ``fail`` as their docstrings say.
+    """
+
+    loop: Any
+    until: float
+
+    def log_rows(self, rows: np.ndarray, q_hand: np.ndarray) -> dict[str, np.ndarray]:
+        """Every entry of the controller's log after each of n cycles, (n, *shape).
+
+        From the loop's log rows (n, log_size) and the hand's joint positions [rad] the cycles read (n, nq).
+        """
+        ...
+
+    def settle(self, run: Any, q_hand: np.ndarray) -> None:
+        """The controller's clock and log as the last cycle the run completed left them (``q_hand``: one row each)."""
+        ...
+
+    def fail(self, run: Any, state: State) -> None:
+        """Raise what the cycle that stopped the run (its ``status`` > 0) raises at ``state``; else nothing."""
+        ...
+
+
+CHUNK = 4096  # steps at most in one compiled call (the GIL and Ctrl-C wait for it; its rows are allocated at once)
 
 
 def _compiled_steps(
@@ -136,23 +168,29 @@ def _compiled_steps(
 ) -> tuple[int, State, StepInfo, np.ndarray | None]:
     """The steps (up to ``steps``) the controller's compiled loop takes from ``state``, recorded as the loop would.
 
-    The controller's ``compiled_control(t, state)`` offers its compiled loop controller for the steps from ``state``
+    The controller's ``compiled_control(t, state)`` offers a :class:`CompiledControl` for the steps from ``state``
     (``None``: not now); the simulator's ``run_compiled`` runs them in C++ (``None``: it cannot), bit for bit the
     steps this loop would take with exact sensors, one control cycle and one sample a step and no disturbance.
-    Returns the steps taken, the state and info after them and the last inputs.
+    Returns the steps taken, the state and info after them and the last inputs (``None`` if none).
+
+    Raises:
+        SimulationDiverged: A step diverged (the controller settled first, as this loop leaves it).
     """
-    run_compiled = getattr(simulator, "run_compiled", None)
-    control = controller.compiled_control(state.t, state) if run_compiled is not None else None
-    done = None if control is None else run_compiled(state, control, steps)
+    control = controller.compiled_control(state.t, state)
+    done = None if control is None else simulator.run_compiled(state, control.loop, control.until, min(steps, CHUNK))
     if done is None:
         return 0, state, info, None
-    run, after, after_info = done
+    run, after, after_info, diverged = done
     n = int(run.steps)
+    cycles = n + (diverged is not None)  # the diverged step's cycle ran
+    nq = simulator.scene.nq_hand
+    q_hand = np.concatenate((state.scene_q[None, :nq], run.q[: cycles - 1, :nq]))[:cycles]
     if n:
-        nq = simulator.scene.nq_hand
-        q_hand = np.concatenate((state.scene_q[None, :nq], run.q[: n - 1, :nq]))
-        recorder.add_run(state, info, run, control.log_rows(run.log[:n], q_hand))
-    control.finish(run, after)  # the controller's clock and log after its last cycle; a failed cycle's error
+        recorder.add_run(state, info, run, control.log_rows(run.log[:n], q_hand[:n]))
+    control.settle(run, q_hand)
+    if diverged is not None:
+        raise diverged
+    control.fail(run, after)
     return n, after, after_info if n else info, run.u[n - 1] if n else None
 
 
@@ -197,4 +235,4 @@ def _control(controller: Callable[[float, State], Any], t: float, sensed: State)
         raise InputError(f"the controller must return numbers (the inputs u), got {u!r} at t = {t:.6g} s") from error
 
 
-__all__ = ["Stepper", "run"]
+__all__ = ["CHUNK", "CompiledControl", "Stepper", "run"]

@@ -282,37 +282,38 @@ class Simulator:
         contacts = self.engine.contact_set(result.contacts) if result.divergence.kind == 4 else None
         return describe_divergence(t, result.divergence, self.settings, self.scene, start, contacts)
 
-    def run_compiled(self, state: State, control: Any, steps: int) -> tuple[Any, State, StepInfo] | None:
-        """Up to ``steps`` steps from ``state`` under a compiled loop controller, in one C++ call.
+    def closes_loops_in_cpp(self) -> bool:
+        """Whether :meth:`run_compiled` can run: the compiled engine, a :class:`FullyActuated` (not a subclass)."""
+        return self.settings.engine == "compiled" and type(self.actuation) is FullyActuated
 
-        ``control``: its ``loop`` (a ``bhgrasp._core.LoopController``) and ``until`` [s] (the loop stops before a
-        step at t >= until).  Each step is :meth:`step`'s with the controller's inputs, bit for bit.  Returns the
-        C++ ``LoopRun`` (``src/closed_loop.hpp``), the state after its last step and that step's info (``state`` and
-        ``None`` if it took none); ``None`` where this simulator has no compiled loop: the Python engine, an
-        actuation other than :class:`~bhgrasp.sim.actuation.FullyActuated` itself, a state its own compiled step did
-        not make.
+    def run_compiled(self, state: State, loop: Any, until: float, steps: int) -> tuple[Any, State, Any, Any] | None:
+        """Up to ``steps`` steps from ``state`` under a compiled loop controller ``loop``, in one C++ call.
 
-        Raises:
-            SimulationDiverged: A step diverged, as :meth:`step` raises it.
+        ``loop``: a ``bhgrasp._core.LoopController``; the loop stops before a step at t >= ``until`` [s].  Each step
+        is :meth:`step`'s with the controller's inputs, bit for bit.  Returns the C++ ``LoopRun``
+        (``src/closed_loop.hpp``), the state after its last step and that step's info (``state`` and ``None`` if it
+        took none), and ``None``; or, when a step diverged, the run, ``None``, ``None`` and the ``SimulationDiverged``
+        :meth:`step` raises for it (for the caller to raise once the controller is settled).  ``None`` where the
+        loop cannot run (:meth:`closes_loops_in_cpp`, or a state this simulator's compiled step did not make).
         """
         source = getattr(state, "_source", None) if type(state) is SimulatedState else None
-        actuation = self.actuation
-        if source is None or source.simulator is not self or type(actuation) is not FullyActuated:
+        if source is None or source.simulator is not self or not self.closes_loops_in_cpp():
             return None
-        if self.settings.engine != "compiled" or isinstance(source.contacts, ContactSet):
-            return None  # (a compiled step's contacts, not an initial state's ContactSet)
+        if isinstance(source.contacts, ContactSet):
+            return None  # (an initial state's contacts, not a compiled step's)
         memory = self._start_memory(state)
+        actuation = self.actuation
         limit = actuation.limit if actuation.saturate else None
         start = (state.scene_q, state.scene_v, source.contacts, memory, state.t)
         with self._lock:
-            run = self.engine.run_loop(control.loop, self._drive(), start, self.dt, steps, control.until, limit)
+            run = self.engine.run_loop(loop, self._drive(), start, self.dt, steps, until, limit)
         if run.stop == 2:
-            raise self._diverged(run.diverged_at, run.last, source.start)
+            return run, None, None, self._diverged(run.diverged_at, run.last, source.start)
         if not run.steps:
-            return run, state, None
+            return run, state, None, None
         last = run.last
         after = self._state(float(run.t[-1]), last.q, last.v, last.contacts, last.memory, source.start)
-        return run, after, StepInfo(last, self.engine)
+        return run, after, StepInfo(last, self.engine), None
 
     def _step_actuated(self, state: State, u: np.ndarray, disturbance: np.ndarray | None, memory: Any) -> Any:
         """The engine's step under the actuation's joint torques and drive in the state's modes."""
