@@ -116,6 +116,7 @@ KERNELS = (
     ),
     Twin("run_closed_loop", "bhgrasp.sim.run_loop.run", _LOOP),
     Twin("SMCGraspLoop", "bhgrasp.controllers._smc_law.CompiledSMCLaw.__call__", _LOOP),
+    Twin("ApproachLoop", "bhgrasp.controllers.supervisor.GraspSupervisor.__call__", _LOOP),
     Twin(
         "box_separation",
         "",

@@ -39,6 +39,63 @@ int SMCGraspLoop::control(double t, const Vector& q, const Vector& v, const Cont
   return status;
 }
 
+ApproachLoop::ApproachLoop(HandDynamics& dynamics, const Eigen::Vector3d& gravity, RowMatrix reference, Vector kp,
+                           Vector kv, double damping, Indices finger_of_pair, Indices grasping, Vector arrived,
+                           double contact_force, double last_time)
+    : dynamics_(dynamics),
+      gravity_(gravity),
+      reference_(std::move(reference)),
+      kp_(std::move(kp)),
+      kv_(std::move(kv)),
+      damping_(damping),
+      finger_of_pair_(std::move(finger_of_pair)),
+      grasping_(std::move(grasping)),
+      arrived_(std::move(arrived)),
+      contact_force_(contact_force),
+      last_time_(last_time) {
+  const Eigen::Index nv = kp_.size();
+  if (nv != dynamics.nv() || nv != dynamics.nq() || kv_.size() != nv || reference_.cols() != 3 * nv)
+    throw std::invalid_argument("ApproachLoop: kp, kv of nv and a reference of 3 nv columns (nq == nv)");
+  for (Eigen::Index i = 0; i < grasping_.size(); ++i)
+    if (grasping_(i) < 0 || grasping_(i) >= arrived_.size())
+      throw std::invalid_argument("ApproachLoop: a grasping finger beyond the fingers' flags");
+  acceleration_.resize(nv);
+}
+
+int ApproachLoop::control(double t, const Vector& q, const Vector& v, const Contacts& contacts, Eigen::Ref<Vector> u,
+                          Eigen::Ref<Vector> log) {
+  const Eigen::Index nv = kp_.size(), fingers = arrived_.size();
+  if (q.size() < nv || v.size() < nv) throw std::invalid_argument("ApproachLoop: q and v shorter than the hand's");
+  const Eigen::Index rows = contacts.size();
+  row_finger_.resize(rows);
+  for (Eigen::Index row = 0; row < rows; ++row) {
+    const std::int64_t pair = contacts.pair[row];
+    if (pair < 0 || pair >= finger_of_pair_.size()) throw std::invalid_argument("a contact's pair is not the scene's");
+    row_finger_[row] = finger_of_pair_[pair];
+  }
+  finger_contacts_into(row_finger_, fingers, contacts.point, contacts.normal, contacts.force, sums_, work_);
+  for (Eigen::Index f = 0; f < fingers; ++f)
+    if (sums_.count(f) > 0 && sums_.normal_force(f) >= contact_force_) arrived_(f) = 1.0;
+  bool all = true;
+  for (Eigen::Index i = 0; i < grasping_.size(); ++i) all = all && arrived_(grasping_(i)) != 0.0;
+  if (all || cycle_ >= reference_.rows()) return -1;
+  const auto q_d = reference_.row(cycle_).segment(0, nv).transpose();
+  const auto v_d = reference_.row(cycle_).segment(nv, nv).transpose();
+  const auto a_d = reference_.row(cycle_).segment(2 * nv, nv).transpose();
+  const auto q_hand = q.head(nv), v_hand = v.head(nv);
+  // a_d - Kv @ (v - v_d) - Kp @ (q - q_d), the gains diagonal: each product one term, as NumPy's sum makes it
+  acceleration_ = (a_d - kv_.cwiseProduct(v_hand - v_d)) - kp_.cwiseProduct(q_hand - q_d);
+  const Eigen::VectorXd& torque = dynamics_.inverse_dynamics(gravity_, q_hand, v_hand, acceleration_);
+  if (!torque.allFinite()) return -1;
+  last_time_ = t;
+  u = torque + damping_ * v_hand;
+  log.segment(0, nv) = q_d;
+  log.segment(nv, nv) = q_hand - q_d;
+  log.segment(2 * nv, fingers) = arrived_;
+  ++cycle_;
+  return 0;
+}
+
 LoopRun run_closed_loop(Engine& engine, LoopController& controller, const Drive& drive, const Vector& q,
                         const Vector& v, const Contacts& contacts, const Memory& memory, double t, double dt,
                         Eigen::Index steps, double until, const Vector& limit, double max_speed,

@@ -57,6 +57,44 @@ class SMCGraspLoop : public LoopController {
   double last_time_;
 };
 
+// A GraspSupervisor's approach (bhgrasp/controllers/supervisor.py: __call__ in its approach phase, on the
+// ComputedTorque of bhgrasp/controllers/joint.py): the fingers whose sensed normal force reaches `contact_force`
+// (finger_contacts' sums, as ContactSensing.fingers) count as arrived; then the computed torque toward the next row
+// of `reference` ((q_d, v_d, a_d) per cycle, sampled in Python), a_d - kv (v - v_d) - kp (q - q_d) through RNEA, plus
+// `damping` v.  -1 (the cycle is Python's): every grasping finger has arrived (the supervisor switches), the table is
+// used up, or the torque is not finite (Python raises).  Log row: q_d (nv) | error q - q_d (nv) | arrived (F).
+class ApproachLoop : public LoopController {
+ public:
+  // `dynamics`: the hand's (kept by reference, alive by the caller), `gravity` in its model frame; `kp`, `kv` the
+  // diagonals of the gains [1/s^2, 1/s]; `finger_of_pair` per collision pair of the scene (-1: no finger);
+  // `grasping` the fingers that must arrive; `arrived` (F) the flags so far (1.0 arrived); `last_time` [s] the law's
+  // last cycle; the hand's coordinates first in the scene's q and v (nq == nv).
+  ApproachLoop(HandDynamics& dynamics, const Eigen::Vector3d& gravity, RowMatrix reference, Vector kp, Vector kv,
+               double damping, Indices finger_of_pair, Indices grasping, Vector arrived, double contact_force,
+               double last_time);
+
+  Eigen::Index inputs() const override { return kp_.size(); }
+  Eigen::Index log_size() const override { return 2 * kp_.size() + arrived_.size(); }
+  int control(double t, const Vector& q, const Vector& v, const Contacts& contacts, Eigen::Ref<Vector> u,
+              Eigen::Ref<Vector> log) override;
+  double last_time() const { return last_time_; }  // the computed torque's clock: its last cycle [s]
+
+ private:
+  HandDynamics& dynamics_;
+  Eigen::Vector3d gravity_;
+  RowMatrix reference_;
+  Vector kp_, kv_;
+  double damping_;
+  Indices finger_of_pair_, grasping_;
+  Vector arrived_;
+  double contact_force_, last_time_;
+  Eigen::Index cycle_ = 0;  // the reference's next row
+  Indices row_finger_;
+  FingerSums sums_;
+  FingerWork work_;
+  Vector acceleration_;
+};
+
 // What run_closed_loop did.  Row k of t, q, v, drive is the state after step k and the step's drive torques; row k
 // of u and log the control cycle that step took.
 struct LoopRun {

@@ -38,6 +38,16 @@ const Eigen::VectorXd& HandDynamics::slotine_li_torque(const Eigen::Vector3d& gr
   return result_;
 }
 
+const Eigen::VectorXd& HandDynamics::inverse_dynamics(const Eigen::Vector3d& gravity, const ConstVector& q,
+                                                      const ConstVector& v, const ConstVector& a) {
+  if (q.size() != model_.nq || v.size() != model_.nv || a.size() != model_.nv)
+    throw std::invalid_argument("q, v or a of the wrong size");
+  using Ref = Eigen::Ref<const Eigen::VectorXd>;
+  model_.gravity.linear(gravity);
+  result_ = pinocchio::rnea(model_, data_, Ref(q), Ref(v), Ref(a));
+  return result_;
+}
+
 const Eigen::VectorXd& HandDynamics::contact_torques(const Eigen::Matrix3d& base_rotation,
                                                      const Eigen::Vector3d& base_translation, const ConstVector& q,
                                                      const std::vector<int>& joints, const ConstRows& points,

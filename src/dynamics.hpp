@@ -36,6 +36,11 @@ class HandDynamics {
                                          const ConstVector& q, const std::vector<int>& joints, const ConstRows& points,
                                          const ConstRows& forces);
 
+  // pin.rnea on the same model: M(q) a + C(q, v) v + G(q) [N m] under `gravity` [m/s^2] (the model's base frame).
+  // The result lives in this object until the next call.  Sizes are checked (std::invalid_argument).
+  const Eigen::VectorXd& inverse_dynamics(const Eigen::Vector3d& gravity, const ConstVector& q, const ConstVector& v,
+                                          const ConstVector& a);
+
   int nq() const { return model_.nq; }
   int nv() const { return model_.nv; }
 

@@ -1,8 +1,8 @@
 """The compiled closed loop (``src/closed_loop.cpp``) against the Python run loop it stands in for, bit for bit.
 
 :meth:`Simulator.run <bhgrasp.sim.simulator.Simulator.run>` hands a controller's cycles to one C++ call while the
-controller offers a compiled loop controller (a :class:`GraspSupervisor`'s grasp phases over a compiled
-:class:`SMCAdaptiveGrasp`; a bare compiled law once it grasps toward a pose path) and the run is plain: exact
+controller offers a compiled loop controller (a :class:`GraspSupervisor`'s approach, and its grasp phases over a
+compiled :class:`SMCAdaptiveGrasp`; a bare compiled law once it grasps toward a pose path) and the run is plain: exact
 sensors, one control cycle and one sample a step, nothing else acting on the scene.  Each run here is made twice,
 the second with the offer withdrawn (every step through Python's loop, the law's compiled cycle called from
 Python), and every recorded array, log entry and error, and the controllers as the runs leave them, must be the same
@@ -77,8 +77,9 @@ def test_the_demo_takes_its_grasp_phases_in_cpp_with_the_python_loops_bits(case,
     compiled = run_grasp_demo(**case)
     steps = round(case.get("duration", 3.0) * 1000)
     taken = sum(count for count, _, _ in compiled_steps)
-    assert [stop for _, stop, _ in compiled_steps] == [0, 0]  # the squeeze's end, then the run's
-    assert taken > 0.65 * steps  # the approach (~630 steps) and the first cycle of each phase in Python
+    # the approach until the fingers arrive (handed back), the squeeze to its end, the motion to the run's end
+    assert [(stop, status) for _, stop, status in compiled_steps] == [(1, -1), (0, 0), (0, 0)]
+    assert taken == steps - 3  # in Python: the approach's first cycle, the grasp's first (the switch), the motion's
     if "torque_limit" in case:
         u = compiled.trajectory.u
         assert np.abs(u).max() > case["torque_limit"]  # the drive clipped some commands
@@ -142,7 +143,7 @@ def test_a_step_that_diverges_in_the_loop_raises_what_the_python_loop_raises(com
     """The diverged step's cycle ran: the controllers are left as after it, on either loop."""
     with pytest.raises(SimulationDiverged) as in_cpp:
         run_grasp_demo(friction=0.25)
-    assert [stop for _, stop, _ in compiled_steps] == [0, 2]  # the squeeze; the motion's loop diverged
+    assert [stop for _, stop, _ in compiled_steps] == [1, 0, 2]  # the approach, the squeeze; the motion diverged
     python_loop(monkeypatch)
     with pytest.raises(SimulationDiverged) as in_python:
         run_grasp_demo(friction=0.25)

@@ -359,3 +359,16 @@ def test_cartesian_reference_arguments(barrett: bh.Hand) -> None:
 
 def test_repr_names_the_class_and_size() -> None:
     assert repr(Quintic([0.0, 1.0], 2.0, 1.0)) == "Quintic(size=2)"
+
+
+def test_a_smooth_steps_table_is_its_samples_to_the_bit() -> None:
+    """Per-component delays (some times before them, one at a delay), every row as ``__call__`` gives it."""
+    rng = np.random.default_rng(4)
+    step = SmoothStep(rng.normal(size=7), rng.normal(size=7), rng.uniform(0.05, 0.3, 7), rng.uniform(0.0, 0.2, 7))
+    times = np.concatenate((np.arange(0, 1500) * 1e-3, step.delay[:1]))
+    table = step.table(times)
+    assert table.shape == (len(times), 21)
+    for row, t in zip(table, times):
+        assert row.tobytes() == np.concatenate(step(float(t))).tobytes(), t
+    with pytest.raises(bh.InputError, match="times"):
+        step.table([0.1, np.nan])

@@ -27,13 +27,14 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from bhgrasp._native import default_core
 from bhgrasp._validation import as_positive, as_vector, require_name
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.compiled_control import CompiledControl, held_rows
 from bhgrasp.controllers.grasping import ObjectGraspController
 from bhgrasp.controllers.joint import ComputedTorque
 from bhgrasp.controllers.supervisor_options import DEFAULT_APPROACH, DEFAULT_PLANNING, Approach, Planning
-from bhgrasp.data import State
+from bhgrasp.data import SimulatedState, State
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.grasp.manipulability import manipulable_space
 from bhgrasp.grasp.path_check import path_contacts
@@ -43,6 +44,7 @@ from bhgrasp.motion.pose_references import PoseMotion
 from bhgrasp.motion.trajectories import Reference, SmoothStep
 
 APPROACH, SQUEEZE, MANIPULATE = 0, 1, 2
+APPROACH_ROWS = 2048  # the approach's reference samples a compiled loop is given at most (then it hands back)
 PLAN_LENGTH = 0.1  # [m] the plan's metric (dx, L dtheta): 5 mrad weighs as 0.5 mm, the motion targets' ratio
 
 
@@ -116,6 +118,7 @@ class GraspSupervisor(Controller):
         self._approach_law: ComputedTorque | None = None
         self._arrived = np.zeros(len(nominal.fingers))
         self._grasping = _finger_indices(nominal, fingers)
+        self._pair_fingers: tuple[Any, np.ndarray] = (None, np.zeros(0, np.int64))  # a scene layout's, its rows
 
     def reset(self, state: State) -> None:
         """Start over with the approach from ``state``."""
@@ -155,13 +158,18 @@ class GraspSupervisor(Controller):
         return tau
 
     def compiled_control(self, t: float, state: State) -> CompiledControl | None:
-        """The grasp phases' cycles from ``state`` as a compiled loop for :meth:`Simulator.run`, or ``None``.
+        """The cycles from ``state`` on as a compiled loop for :meth:`Simulator.run`, or ``None``.
 
-        The grasp controller's compiled loop (``compiled_control``), stopped before the squeeze ends (the switch to
-        the motion, and its plan, are this method's :meth:`__call__`'s); ``None`` in the approach.
+        In the approach, the computed torque and the fingers' arrival (:meth:`_compiled_approach`), handing back the
+        cycle that starts the grasp; then the grasp controller's compiled loop (``compiled_control``), stopped before
+        the squeeze ends (the switch to the motion, and its plan, are :meth:`__call__`'s).
         """
+        if type(self).__call__ is not GraspSupervisor.__call__:
+            return None
+        if self.phase == APPROACH:
+            return self._compiled_approach(t, state)
         offer = getattr(self.grasp, "compiled_control", None)
-        if self.phase == APPROACH or offer is None or type(self).__call__ is not GraspSupervisor.__call__:
+        if offer is None:
             return None
         until = math.inf if self.phase == MANIPULATE else self.switch_time + self.squeeze_time
         grasp = offer(t, state) if t < until else None
@@ -181,6 +189,59 @@ class GraspSupervisor(Controller):
                 self._log_grasp(q_hand[-1])
 
         return CompiledControl(grasp.loop, min(until, grasp.until), log_rows, settle, grasp.fail)
+
+    def _compiled_approach(self, t: float, state: State) -> CompiledControl | None:
+        """The approach's cycles from ``state`` on as a compiled loop (``bhgrasp._core.ApproachLoop``), or ``None``.
+
+        Once the approach's first cycle made its computed torque (diagonal gains, the hand with nq = nv), for a state
+        a compiled step made at t = k dt: the reference's samples up to the timeout (or :data:`APPROACH_ROWS` of them)
+        in one table; the loop hands back the cycle in which every grasping finger has arrived.
+        """
+        law, core = self._approach_law, default_core()
+        source = getattr(state, "_source", None) if type(state) is SimulatedState else None
+        if law is None or law._time is None or core is None or source is None or t >= self.approach.timeout:
+            return None
+        diagonal = all(np.array_equal(gain, np.diag(np.diag(gain))) for gain in (law.kp, law.kv))
+        hand, simulator = self.nominal, source.simulator
+        dt = getattr(simulator, "dt", None)
+        if type(law) is not ComputedTorque or type(law.reference) is not SmoothStep or not diagonal or dt is None:
+            return None
+        first = round(t / dt)
+        if first * dt != t or hand.nq != hand.nv or simulator.scene.nq_hand != hand.nq:
+            return None
+        times = np.arange(first, first + APPROACH_ROWS) * dt
+        table = law.reference.table(times[times < self.approach.timeout])
+        fingers = self._finger_rows(simulator.layout)
+        arguments = (np.diag(law.kp).copy(), np.diag(law.kv).copy(), self.approach.damping, fingers, self._grasping)
+        base = hand.base
+        loop = core.ApproachLoop(
+            hand.compiled_dynamics(), base.gravity, table, *arguments, self._arrived, self.approach.contact_force, t
+        )
+        nv = hand.nv
+
+        def log_rows(rows: np.ndarray, q_hand: np.ndarray) -> dict[str, np.ndarray]:
+            entries = held_rows(self.log, len(rows))
+            entries.update(q_d=rows[:, :nv], error=rows[:, nv : 2 * nv], arrived=rows[:, 2 * nv :])
+            entries.update(held_rows({"phase": float(self.phase)}, len(rows)))
+            return entries
+
+        def settle(run: Any, q_hand: np.ndarray) -> None:
+            law._time = loop.last_time
+            if len(q_hand):
+                row = np.array(run.log[len(q_hand) - 1])
+                law.log["q_d"], law.log["error"] = row[:nv], row[nv : 2 * nv]
+                self._arrived[:] = row[2 * nv :]
+                self.log.update(law.log)
+                self.log["phase"] = np.array(float(self.phase))
+                self.log["arrived"] = self._arrived.copy()
+
+        return CompiledControl(loop, self.approach.timeout, log_rows, settle, lambda run, after: None)
+
+    def _finger_rows(self, layout: Any) -> np.ndarray:
+        """The finger (-1: none) of every collision pair of ``layout``'s scene, by its hand link (as the sensing's)."""
+        if self._pair_fingers[0] is not layout:
+            self._pair_fingers = (layout, self.sensing.finger_rows(link for link, _ in layout.pair_bodies))
+        return self._pair_fingers[1]
 
     def _log_grasp(self, q: np.ndarray) -> None:
         """The log of a grasp-phase cycle at joint positions ``q`` [rad], after the grasp controller's."""
@@ -283,4 +344,4 @@ def _finger_indices(nominal: Hand, fingers: Sequence[str] | None) -> np.ndarray:
     return np.array([nominal.fingers.index(f) for f in grasping])
 
 
-__all__ = ["APPROACH", "MANIPULATE", "PLAN_LENGTH", "SQUEEZE", "GraspSupervisor"]
+__all__ = ["APPROACH", "APPROACH_ROWS", "MANIPULATE", "PLAN_LENGTH", "SQUEEZE", "GraspSupervisor"]

@@ -8,6 +8,7 @@ contact forces produce (thesis (4.8), tau_d = J_f^T F_c).
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -64,6 +65,11 @@ class ContactSensing:
         self._joint_of: dict[str, int] = {}  # frame name -> its parent joint (the first frame of a name, as getFrameId)
         for frame in model.frames:
             self._joint_of.setdefault(frame.name, frame.parentJoint)
+
+    def finger_rows(self, links: Iterable[str]) -> np.ndarray:
+        """The index in ``hand.fingers`` of each link frame's finger (-1: the palm or a frame of no finger), int64."""
+        index = self._finger_index
+        return np.array([index.get(link, -1) for link in links], dtype=np.int64)
 
     def finger_of(self, link: str) -> str | None:
         """The finger a link frame belongs to (``None`` for the palm or a frame of no finger)."""

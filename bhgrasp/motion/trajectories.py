@@ -84,7 +84,19 @@ class SmoothStep(Reference):
 
     def __call__(self, t: float) -> Sample:
         """Position, velocity and acceleration at time ``t`` [s]."""
-        elapsed = time_of(t) - self.delay
+        return self._sample(time_of(t))
+
+    def table(self, times: Any) -> np.ndarray:
+        """(position, velocity, acceleration) at each of ``times`` [s], one row each, (n, 3 size).
+
+        The samples of :meth:`__call__` to the bit: the same operations, on every time at once.
+        """
+        times = as_vector(times, "times")
+        return np.concatenate(self._sample(times[:, None]), axis=1)
+
+    def _sample(self, t: Any) -> Sample:
+        """The step at ``t`` [s], a float (rows of size) or a column of times (rows of (n, size))."""
+        elapsed = t - self.delay
         moving = elapsed >= 0.0
         scaled = np.where(moving, elapsed, 0.0) / self.time_constant
         decay = np.where(moving, np.exp(-scaled), 0.0)
