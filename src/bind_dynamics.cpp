@@ -46,6 +46,13 @@ void bind_dynamics(nb::module_& m) {
   nb::class_<HandDynamics>(m, "HandDynamics")
       .def(nb::init<const std::string&>(), "model"_a)
       .def(
+          "inverse_dynamics",
+          [](HandDynamics& kernel, const Eigen::Vector3d& gravity, const HandDynamics::ConstVector& q,
+             const HandDynamics::ConstVector& v, const HandDynamics::ConstVector& a) -> Eigen::VectorXd {
+            return kernel.inverse_dynamics(gravity, q, v, a);  // a copy: the kernel's is overwritten
+          },
+          "gravity"_a, "q"_a, "v"_a, "a"_a)
+      .def(
           "slotine_li_torque",
           [](HandDynamics& kernel, const Eigen::Vector3d& gravity, const HandDynamics::ConstVector& q,
              const HandDynamics::ConstVector& v, const HandDynamics::ConstVector& v_r,

@@ -40,10 +40,10 @@ void bind_loop(nb::module_& m) {
       .def_prop_ro("last_time", &SMCGraspLoop::last_time);
 
   nb::class_<ApproachLoop, LoopController>(m, "ApproachLoop")
-      .def(nb::init<HandDynamics&, const Eigen::Vector3d&, RowMatrix, Vector, Vector, double, Indices, Indices, Vector,
-                    double, double>(),
-           "dynamics"_a, "gravity"_a, "reference"_a, "kp"_a, "kv"_a, "damping"_a, "finger_of_pair"_a, "grasping"_a,
-           "arrived"_a, "contact_force"_a, "last_time"_a, nb::keep_alive<1, 2>())
+      .def(nb::init<HandDynamics&, const Eigen::Vector3d&, Vector, RowMatrix, Vector, Vector, double, Indices, Indices,
+                    Vector, double, double>(),
+           "dynamics"_a, "gravity"_a, "times"_a, "reference"_a, "kp"_a, "kv"_a, "damping"_a, "finger_of_pair"_a,
+           "grasping"_a, "arrived"_a, "contact_force"_a, "last_time"_a, nb::keep_alive<1, 2>())
       .def_prop_ro("last_time", &ApproachLoop::last_time);
 
   // the rows are read-only views of the run's (kept alive by them): a recorder keeps them

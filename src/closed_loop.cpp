@@ -39,11 +39,12 @@ int SMCGraspLoop::control(double t, const Vector& q, const Vector& v, const Cont
   return status;
 }
 
-ApproachLoop::ApproachLoop(HandDynamics& dynamics, const Eigen::Vector3d& gravity, RowMatrix reference, Vector kp,
-                           Vector kv, double damping, Indices finger_of_pair, Indices grasping, Vector arrived,
-                           double contact_force, double last_time)
+ApproachLoop::ApproachLoop(HandDynamics& dynamics, const Eigen::Vector3d& gravity, Vector times, RowMatrix reference,
+                           Vector kp, Vector kv, double damping, Indices finger_of_pair, Indices grasping,
+                           Vector arrived, double contact_force, double last_time)
     : dynamics_(dynamics),
       gravity_(gravity),
+      times_(std::move(times)),
       reference_(std::move(reference)),
       kp_(std::move(kp)),
       kv_(std::move(kv)),
@@ -54,11 +55,15 @@ ApproachLoop::ApproachLoop(HandDynamics& dynamics, const Eigen::Vector3d& gravit
       contact_force_(contact_force),
       last_time_(last_time) {
   const Eigen::Index nv = kp_.size();
-  if (nv != dynamics.nv() || nv != dynamics.nq() || kv_.size() != nv || reference_.cols() != 3 * nv)
-    throw std::invalid_argument("ApproachLoop: kp, kv of nv and a reference of 3 nv columns (nq == nv)");
+  if (nv != dynamics.nv() || nv != dynamics.nq() || kv_.size() != nv || reference_.cols() != 3 * nv ||
+      times_.size() != reference_.rows())
+    throw std::invalid_argument("ApproachLoop: kp, kv of nv and a reference of 3 nv columns at each time (nq == nv)");
   for (Eigen::Index i = 0; i < grasping_.size(); ++i)
     if (grasping_(i) < 0 || grasping_(i) >= arrived_.size())
       throw std::invalid_argument("ApproachLoop: a grasping finger beyond the fingers' flags");
+  for (Eigen::Index i = 0; i < finger_of_pair_.size(); ++i)
+    if (finger_of_pair_(i) < -1 || finger_of_pair_(i) >= arrived_.size())
+      throw std::invalid_argument("ApproachLoop: a pair's finger beyond the fingers' flags");
   acceleration_.resize(nv);
 }
 
@@ -78,13 +83,15 @@ int ApproachLoop::control(double t, const Vector& q, const Vector& v, const Cont
     if (sums_.count(f) > 0 && sums_.normal_force(f) >= contact_force_) arrived_(f) = 1.0;
   bool all = true;
   for (Eigen::Index i = 0; i < grasping_.size(); ++i) all = all && arrived_(grasping_(i)) != 0.0;
-  if (all || cycle_ >= reference_.rows()) return -1;
+  if (all || cycle_ >= reference_.rows() || times_(cycle_) != t) return -1;
   const auto q_d = reference_.row(cycle_).segment(0, nv).transpose();
   const auto v_d = reference_.row(cycle_).segment(nv, nv).transpose();
   const auto a_d = reference_.row(cycle_).segment(2 * nv, nv).transpose();
   const auto q_hand = q.head(nv), v_hand = v.head(nv);
-  // a_d - Kv @ (v - v_d) - Kp @ (q - q_d), the gains diagonal: each product one term, as NumPy's sum makes it
-  acceleration_ = (a_d - kv_.cwiseProduct(v_hand - v_d)) - kp_.cwiseProduct(q_hand - q_d);
+  // a_d - Kv @ (v - v_d) - Kp @ (q - q_d) with diagonal gains: NumPy's product sums one term and zeros from +0, so
+  // each row is the term, a -0 made +0 (x + 0.0)
+  acceleration_ = (a_d.array() - (kv_.cwiseProduct(v_hand - v_d).array() + 0.0)) -
+                  (kp_.cwiseProduct(q_hand - q_d).array() + 0.0);
   const Eigen::VectorXd& torque = dynamics_.inverse_dynamics(gravity_, q_hand, v_hand, acceleration_);
   if (!torque.allFinite()) return -1;
   last_time_ = t;

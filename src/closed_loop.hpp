@@ -60,18 +60,19 @@ class SMCGraspLoop : public LoopController {
 // A GraspSupervisor's approach (bhgrasp/controllers/supervisor.py: __call__ in its approach phase, on the
 // ComputedTorque of bhgrasp/controllers/joint.py): the fingers whose sensed normal force reaches `contact_force`
 // (finger_contacts' sums, as ContactSensing.fingers) count as arrived; then the computed torque toward the next row
-// of `reference` ((q_d, v_d, a_d) per cycle, sampled in Python), a_d - kv (v - v_d) - kp (q - q_d) through RNEA, plus
-// `damping` v.  -1 (the cycle is Python's): every grasping finger has arrived (the supervisor switches), the table is
-// used up, or the torque is not finite (Python raises).  Log row: q_d (nv) | error q - q_d (nv) | arrived (F).
+// of `reference` ((q_d, v_d, a_d) at each of `times`, sampled in Python), a_d - kv (v - v_d) - kp (q - q_d) through
+// RNEA, plus `damping` v.  -1 (the cycle is Python's): every grasping finger has arrived (the supervisor switches),
+// the table is used up or is not at t, or the torque is not finite (Python raises).  Log row: q_d (nv) | error
+// q - q_d (nv) | arrived (F).  The HandDynamics is used from the loop's thread (one loop at a time on one hand).
 class ApproachLoop : public LoopController {
  public:
   // `dynamics`: the hand's (kept by reference, alive by the caller), `gravity` in its model frame; `kp`, `kv` the
   // diagonals of the gains [1/s^2, 1/s]; `finger_of_pair` per collision pair of the scene (-1: no finger);
   // `grasping` the fingers that must arrive; `arrived` (F) the flags so far (1.0 arrived); `last_time` [s] the law's
   // last cycle; the hand's coordinates first in the scene's q and v (nq == nv).
-  ApproachLoop(HandDynamics& dynamics, const Eigen::Vector3d& gravity, RowMatrix reference, Vector kp, Vector kv,
-               double damping, Indices finger_of_pair, Indices grasping, Vector arrived, double contact_force,
-               double last_time);
+  ApproachLoop(HandDynamics& dynamics, const Eigen::Vector3d& gravity, Vector times, RowMatrix reference, Vector kp,
+               Vector kv, double damping, Indices finger_of_pair, Indices grasping, Vector arrived,
+               double contact_force, double last_time);
 
   Eigen::Index inputs() const override { return kp_.size(); }
   Eigen::Index log_size() const override { return 2 * kp_.size() + arrived_.size(); }
@@ -82,6 +83,7 @@ class ApproachLoop : public LoopController {
  private:
   HandDynamics& dynamics_;
   Eigen::Vector3d gravity_;
+  Vector times_;
   RowMatrix reference_;
   Vector kp_, kv_;
   double damping_;

@@ -18,9 +18,11 @@ import dataclasses
 import numpy as np
 import pytest
 
+from bhgrasp.controllers import supervisor as supervisor_module
 from bhgrasp.controllers.adaptive_grasp import SMCAdaptiveGrasp
 from bhgrasp.controllers.grasp_options import GraspOptions
 from bhgrasp.controllers.supervisor import GraspSupervisor
+from bhgrasp.controllers.supervisor_options import DEFAULT_APPROACH, Approach
 from bhgrasp.errors import InputError, SimulationDiverged
 from bhgrasp.model.objects import Box
 from bhgrasp.motion.pose_references import PoseMotion
@@ -125,11 +127,55 @@ def assert_same_logs(compiled: dict, python: dict) -> None:
 
 
 def assert_same_controllers(compiled: GraspSupervisor, python: GraspSupervisor) -> None:
-    """Two supervisors over SMC-adaptive laws as their runs left them: clocks, logs, estimates."""
+    """Two supervisors over SMC-adaptive laws as their runs left them: clocks, logs, estimates, arrived fingers."""
     assert compiled.grasp._time == python.grasp._time and compiled.phase == python.phase
+    assert compiled.switch_time == python.switch_time
+    assert compiled._arrived.tobytes() == python._arrived.tobytes()
+    assert compiled._approach_law._time == python._approach_law._time
+    assert_same_logs(compiled._approach_law.log, python._approach_law.log)
     assert_same_logs(compiled.log, python.log)
     assert_same_logs(compiled.grasp.log, python.grasp.log)
     assert compiled.grasp.object_estimate.tobytes() == python.grasp.object_estimate.tobytes()
+
+
+def supervised(approach: Approach = DEFAULT_APPROACH, runs: int = 1, duration: float = 1.2, scene=None, **law):
+    """The box scene (``scene``: box_grasp's options) and a supervisor over a bare law (the demo's motion from its
+    squeeze's end) run ``runs`` times (each run resets it): the last trajectory and the supervisor."""
+    setup = box_grasp(mass=0.6, **(scene or {}))
+    supervisor = GraspSupervisor(setup.hand, setup.q_contact, bare_law(setup, **law), offset=OFFSET, approach=approach)
+    for _ in range(runs):
+        trajectory = setup.simulator.run(supervisor, duration, state=setup.state, progress=False)
+    return trajectory, supervisor
+
+
+@pytest.mark.parametrize("rows", [1, 97, 625])
+def test_an_approach_handed_back_at_any_cycle_leaves_the_python_loops_bits(rows, compiled_steps, monkeypatch):
+    """Reference tables of ``rows`` samples: the loop hands back when one is used up (at 625: on the cycle the fingers
+    arrive, before it took a step)."""
+    monkeypatch.setattr(supervisor_module, "APPROACH_ROWS", rows)
+    compiled = supervised()
+    assert (1, -1) in {(stop, status) for _, stop, status in compiled_steps}
+    python_loop(monkeypatch)
+    python = supervised()
+    assert_same_run(compiled[0], python[0])
+    assert_same_controllers(compiled[1], python[1])
+
+
+@pytest.mark.parametrize(
+    "approach",
+    [Approach(timeout=0.3), Approach(damping=0.05, kp=900.0, kv=60.0, time=0.1)],
+    ids=["timeout", "damping-and-gains"],
+)
+def test_an_approach_with_other_settings_and_a_second_run_leave_the_python_loops_bits(approach, monkeypatch):
+    """A timeout before the fingers arrive (the grasp starts anyway), other gains and damping; the supervisor run
+    twice (the second after its reset)."""
+    compiled = supervised(approach, runs=2)
+    python_loop(monkeypatch)
+    python = supervised(approach, runs=2)
+    assert_same_run(compiled[0], python[0])
+    assert_same_controllers(compiled[1], python[1])
+    if approach.timeout == 0.3:
+        assert compiled[1].switch_time == pytest.approx(0.3) and not compiled[1]._arrived.all()
 
 
 def test_the_controllers_are_left_as_the_python_loop_leaves_them(controllers, monkeypatch):
@@ -222,3 +268,22 @@ def test_a_cycle_that_fails_in_the_loop_raises_what_the_python_cycle_raises(comp
     assert errors[0] == errors[1]
     assert [(stop, status) for _, stop, status in compiled_steps][-1] == (1, 3)  # the wrench not finite
     assert_same_controllers(*supervisors)
+
+
+def test_an_approach_torque_that_is_not_finite_raises_what_the_python_loop_raises(
+    controllers, compiled_steps, monkeypatch
+):
+    """Gains that overflow the computed torque (the drive clips what it applies, 0.5 N m): the loop hands the cycle
+    back, and Python raises as it would."""
+    approach = Approach(kp=1.7e308, time=1e-3, closing=3.0)
+    errors = []
+    for python in (False, True):
+        if python:
+            python_loop(monkeypatch)
+        with pytest.raises(InputError) as error, np.errstate(over="ignore", invalid="ignore"):
+            supervised(approach, duration=0.3, scene={"torque_limit": 0.5, "opening": 1.5})
+        errors.append(str(error.value))
+    assert errors[0] == errors[1] and "non-finite torques" in errors[0]
+    assert compiled_steps == [(0, 1, -1)]  # the loop's first cycle overflows: handed back
+    assert_same_logs(controllers[0].log, controllers[1].log)
+    assert controllers[0]._approach_law._time == controllers[1]._approach_law._time

@@ -44,6 +44,20 @@ def test_slotine_li_torque_is_the_python_twin_to_the_bit(hand: bh.Hand) -> None:
         )
 
 
+@pytest.mark.parametrize("hand", list(hands()), ids=["barrett", "perturbed", "tilted", "allegro"])
+def test_the_kernels_inverse_dynamics_is_pinocchios_rnea_to_the_bit(hand: bh.Hand) -> None:
+    """What the compiled approach takes for ComputedTorque's pin.rnea: random states, signed zeros, gravity."""
+    rng = np.random.default_rng(2)
+    kernel, gravity = hand.compiled_dynamics(), hand.model.gravity.linear
+    for k in range(200):
+        q = pin.randomConfiguration(hand.model)
+        v, a = rng.normal(size=hand.nv), rng.normal(size=hand.nv)
+        if k % 4 == 0:
+            v[::2], a[1::2] = -0.0, -0.0
+        truth = pin.rnea(hand.model, hand.data, q, v, a)
+        assert kernel.inverse_dynamics(gravity, q, v, a).tobytes() == truth.tobytes()
+
+
 def test_a_changed_gravity_reaches_the_kernel() -> None:
     hand = bh.BarrettHand()
     q, zero = hand.configuration(F1_proximal=0.7), np.zeros(hand.nv)

@@ -364,7 +364,9 @@ def test_repr_names_the_class_and_size() -> None:
 def test_a_smooth_steps_table_is_its_samples_to_the_bit() -> None:
     """Per-component delays (some times before them, one at a delay), every row as ``__call__`` gives it."""
     rng = np.random.default_rng(4)
-    step = SmoothStep(rng.normal(size=7), rng.normal(size=7), rng.uniform(0.05, 0.3, 7), rng.uniform(0.0, 0.2, 7))
+    start, goal = rng.normal(size=7), rng.normal(size=7)
+    goal[2] = start[2]  # a component that does not move (its acceleration -0.0)
+    step = SmoothStep(start, goal, rng.uniform(0.05, 0.3, 7), rng.uniform(0.0, 0.2, 7))
     times = np.concatenate((np.arange(0, 1500) * 1e-3, step.delay[:1]))
     table = step.table(times)
     assert table.shape == (len(times), 21)

@@ -83,7 +83,7 @@ class CompiledSMCLaw:
         hand = law.nominal
         self._regressor = core.object_regressor
         self.kernel = core.SMCAdaptiveLaw(grasp_kinematics_kernel(hand), hand.compiled_dynamics(), len(hand.fingers))
-        self._finger_of = {link: hand.fingers.index(f) for link, f in law.sensing._finger_of.items()}
+        self._sensing = law.sensing
         self._joint_of = hand_index(hand).joints
         self._rows: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
         self._base: BaseFrame | None = None  # the hand base the kernel was last given
@@ -145,9 +145,9 @@ class CompiledSMCLaw:
 
     def _rows_of(self, bodies: tuple) -> tuple[np.ndarray, np.ndarray]:
         """The finger (-1: none) and parent joint of each (hand link, body): ContactSensing's, parent_joints' maps."""
-        finger_of, joint_of = self._finger_of, self._joint_of
+        joint_of = self._joint_of
         return (
-            np.array([finger_of.get(link, -1) for link, _ in bodies], dtype=np.int64),
+            self._sensing.finger_rows(link for link, _ in bodies),
             np.array([joint_of.get(link, -1) for link, _ in bodies], dtype=np.int64),
         )
 

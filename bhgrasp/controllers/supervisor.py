@@ -149,9 +149,7 @@ class GraspSupervisor(Controller):
                 self._plan(t, state)
         if self.phase == APPROACH:
             tau = self._approach_law(t, state) + self.approach.damping * np.asarray(state.v, dtype=float)
-            self.log.update(self._approach_law.log)
-            self.log["phase"] = np.array(float(self.phase))
-            self.log["arrived"] = self._arrived.copy()
+            self._log_approach()
         else:
             tau = self.grasp(t, state)
             self._log_grasp(np.asarray(state.q))
@@ -195,7 +193,8 @@ class GraspSupervisor(Controller):
 
         Once the approach's first cycle made its computed torque (diagonal gains, the hand with nq = nv), for a state
         a compiled step made at t = k dt: the reference's samples up to the timeout (or :data:`APPROACH_ROWS` of them)
-        in one table; the loop hands back the cycle in which every grasping finger has arrived.
+        in one table; the loop hands back the cycle in which every grasping finger has arrived.  Its RNEA runs on the
+        hand's compiled dynamics, a copy of the model made when first asked for (a hand's inertias do not change).
         """
         law, core = self._approach_law, default_core()
         source = getattr(state, "_source", None) if type(state) is SimulatedState else None
@@ -204,18 +203,27 @@ class GraspSupervisor(Controller):
         diagonal = all(np.array_equal(gain, np.diag(np.diag(gain))) for gain in (law.kp, law.kv))
         hand, simulator = self.nominal, source.simulator
         dt = getattr(simulator, "dt", None)
-        if type(law) is not ComputedTorque or type(law.reference) is not SmoothStep or not diagonal or dt is None:
+        kinds = (type(law), type(law.reference), type(self.sensing))  # their subclasses may do otherwise
+        if kinds != (ComputedTorque, SmoothStep, ContactSensing) or not diagonal or dt is None:
             return None
         first = round(t / dt)
         if first * dt != t or hand.nq != hand.nv or simulator.scene.nq_hand != hand.nq:
             return None
         times = np.arange(first, first + APPROACH_ROWS) * dt
-        table = law.reference.table(times[times < self.approach.timeout])
-        fingers = self._finger_rows(simulator.layout)
-        arguments = (np.diag(law.kp).copy(), np.diag(law.kv).copy(), self.approach.damping, fingers, self._grasping)
-        base = hand.base
+        times = times[times < self.approach.timeout]
         loop = core.ApproachLoop(
-            hand.compiled_dynamics(), base.gravity, table, *arguments, self._arrived, self.approach.contact_force, t
+            hand.compiled_dynamics(),
+            hand.model.gravity.linear,
+            times,
+            law.reference.table(times),
+            kp=np.diag(law.kp).copy(),
+            kv=np.diag(law.kv).copy(),
+            damping=self.approach.damping,
+            finger_of_pair=self._finger_rows(simulator.layout),
+            grasping=self._grasping,
+            arrived=self._arrived,
+            contact_force=self.approach.contact_force,
+            last_time=law._time,
         )
         nv = hand.nv
 
@@ -231,9 +239,7 @@ class GraspSupervisor(Controller):
                 row = np.array(run.log[len(q_hand) - 1])
                 law.log["q_d"], law.log["error"] = row[:nv], row[nv : 2 * nv]
                 self._arrived[:] = row[2 * nv :]
-                self.log.update(law.log)
-                self.log["phase"] = np.array(float(self.phase))
-                self.log["arrived"] = self._arrived.copy()
+                self._log_approach()
 
         return CompiledControl(loop, self.approach.timeout, log_rows, settle, lambda run, after: None)
 
@@ -242,6 +248,12 @@ class GraspSupervisor(Controller):
         if self._pair_fingers[0] is not layout:
             self._pair_fingers = (layout, self.sensing.finger_rows(link for link, _ in layout.pair_bodies))
         return self._pair_fingers[1]
+
+    def _log_approach(self) -> None:
+        """The log of an approach cycle, after the computed torque's."""
+        self.log.update(self._approach_law.log)
+        self.log["phase"] = np.array(float(self.phase))
+        self.log["arrived"] = self._arrived.copy()
 
     def _log_grasp(self, q: np.ndarray) -> None:
         """The log of a grasp-phase cycle at joint positions ``q`` [rad], after the grasp controller's."""
