@@ -40,7 +40,7 @@ class Twin:
 _STEP = "tests/test_compiled.py::test_reference_hold"
 _DIVERGED = "tests/test_simulator_contract.py::test_a_non_finite_result_names_its_coordinate_and_value"
 _RUN = "tests/test_simulator_contract.py::test_a_whole_run_agrees_across_engines"
-_LOOP = "tests/test_closed_loop.py::test_the_demo_takes_its_grasp_phases_in_cpp_with_the_python_loops_bits"
+_LOOP = "tests/test_closed_loop.py::test_the_demo_runs_in_the_compiled_loop_with_the_python_loops_bits"
 
 KERNELS = (
     Twin("Engine", "bhgrasp.sim.python_engine.PythonEngine", _STEP),

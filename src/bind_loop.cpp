@@ -61,7 +61,6 @@ void bind_loop(nb::module_& m) {
 
   m.def("run_closed_loop", &run_closed_loop, "engine"_a, "controller"_a, "drive"_a, "q"_a, "v"_a, "contacts"_a,
         "memory"_a, "t"_a, "dt"_a, "steps"_a, "until"_a, "limit"_a, "max_speed"_a, "max_penetration"_a,
-        nb::call_guard<nb::gil_scoped_release>(),
         "Up to `steps` steps of `engine` under `controller` in one call (closed_loop.hpp): a LoopRun.");
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <stdexcept>
+#include <vector>
 #include <utility>
 
 #include "recording.hpp"

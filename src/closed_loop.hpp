@@ -3,10 +3,10 @@
 // joint), which Simulator.run hands over while the controller offers a compiled loop controller.  Python keeps
 // everything else: the cycles before the first it offers and a phase's switch (the loop stops before it), a cycle
 // the loop controller declines, the recorder's assembly of the samples, the errors.  tests/test_closed_loop.py
-// holds runs through it to the Python loop, bit for bit.  Units SI, world frame.
+// holds runs through it to the Python loop, bit for bit.  Units SI: [s], [m], [rad], [N], [N m]; the scene's
+// coordinates as the engine's, gravity in the hand model's frame.  The loop runs with the GIL held: its controllers
+// use kernels (a hand's HandDynamics) that other Python threads may call.
 #pragma once
-
-#include <vector>
 
 #include <Eigen/Core>
 
@@ -63,13 +63,14 @@ class SMCGraspLoop : public LoopController {
 // of `reference` ((q_d, v_d, a_d) at each of `times`, sampled in Python), a_d - kv (v - v_d) - kp (q - q_d) through
 // RNEA, plus `damping` v.  -1 (the cycle is Python's): every grasping finger has arrived (the supervisor switches),
 // the table is used up or is not at t, or the torque is not finite (Python raises).  Log row: q_d (nv) | error
-// q - q_d (nv) | arrived (F).  The HandDynamics is used from the loop's thread (one loop at a time on one hand).
+// q - q_d (nv) | arrived (F).
 class ApproachLoop : public LoopController {
  public:
-  // `dynamics`: the hand's (kept by reference, alive by the caller), `gravity` in its model frame; `kp`, `kv` the
-  // diagonals of the gains [1/s^2, 1/s]; `finger_of_pair` per collision pair of the scene (-1: no finger);
-  // `grasping` the fingers that must arrive; `arrived` (F) the flags so far (1.0 arrived); `last_time` [s] the law's
-  // last cycle; the hand's coordinates first in the scene's q and v (nq == nv).
+  // `dynamics`: the hand's (kept by reference, alive by the caller), `gravity` [m/s^2] in its model frame; `times`
+  // [s] and `reference` rows (q_d [rad], v_d [rad/s], a_d [rad/s^2]); `kp`, `kv` the diagonals of the gains [1/s^2,
+  // 1/s]; `damping` [N m s/rad]; `finger_of_pair` per collision pair of the scene (-1: no finger); `grasping` the
+  // fingers that must arrive; `arrived` (F) the flags so far (1.0 arrived); `contact_force` [N]; `last_time` [s] the
+  // law's last cycle; the hand's coordinates first in the scene's q and v (nq == nv).
   ApproachLoop(HandDynamics& dynamics, const Eigen::Vector3d& gravity, Vector times, RowMatrix reference, Vector kp,
                Vector kv, double damping, Indices finger_of_pair, Indices grasping, Vector arrived,
                double contact_force, double last_time);
@@ -102,8 +103,8 @@ class ApproachLoop : public LoopController {
 struct LoopRun {
   Eigen::Index steps = 0;  // steps taken
   // 0: `steps` steps, or the next step's t reached `until`; 1: the controller returned `status` for the next step
-  // (the cycle's log row is log's row `steps`); 2: the next step diverged (`last` is its result, at time
-  // `diverged_at`; its cycle's log row is log's row `steps`)
+  // (for a status > 0 the failed cycle's log row is log's row `steps`; < 0: that row holds nothing); 2: the next step
+  // diverged (`last` is its result, at time `diverged_at`; its cycle's log row is log's row `steps`)
   int stop = 0;
   int status = 0;
   double diverged_at = 0.0;
@@ -114,10 +115,11 @@ struct LoopRun {
   StepResult last;    // the last step's result (the diverged one when stop == 2)
 };
 
-// Up to `steps` steps of `engine` from (q, v) at time t with the contacts and memory that made them, under `drive`,
-// each step's joint torques the controller's u (clipped to +-limit when `limit` is not empty); the clock advances as
-// Simulator.step's (round(t / dt + 1) dt).  Stops early before a step whose t >= until, when the controller stops,
-// or at a diverged step.
+// Up to `steps` steps of `engine` from (q, v) at time t [s] with the contacts and memory that made them, under
+// `drive`, each step's joint torques [N m] the controller's u (clipped to +-limit [N m] when `limit` is not empty);
+// the clock advances as Simulator.step's (round(t / dt + 1) dt, dt [s]).  Stops early before a step whose t >= until
+// [s], when the controller stops, or at a diverged step (speed above max_speed [m/s or rad/s], depth above
+// max_penetration [m], or not finite).
 LoopRun run_closed_loop(Engine& engine, LoopController& controller, const Drive& drive, const Vector& q,
                         const Vector& v, const Contacts& contacts, const Memory& memory, double t, double dt,
                         Eigen::Index steps, double until, const Vector& limit, double max_speed,

@@ -19,7 +19,6 @@
 
 namespace bhgrasp {
 
-
 // What Hand.fingertip_positions, fingertip_jacobian, mass_matrix, gravity_torques, nonlinear_effects and
 // fingertip_bias_acceleration give for one finger with n_f joints (velocity indices `index`), model frame.
 struct FingerTerms {

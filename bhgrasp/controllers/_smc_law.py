@@ -274,7 +274,7 @@ class CompiledSMCLaw:
         return self._core.SMCGraspLoop(self.kernel, path, finger, joint, *sizes, law._time)
 
     def log_rows(self, rows: np.ndarray) -> dict[str, np.ndarray]:
-        """The log entries of grasp cycles from the kernel's rows (n, log_size): each (n, *shape), views of ``rows``."""
+        """The log entries of grasp cycles from the kernel's rows (n, log_size): ``(n, *shape)`` views of ``rows``."""
         n, fingers = len(rows), self._fingers
         entries = {}
         for key, index in self._layout[1:]:

@@ -1,4 +1,4 @@
-"""Recorder: collects a simulation run sample by sample into a :class:`~bhgrasp.data.trajectory.Trajectory`."""
+"""Recorder: collects a simulation run's samples (one by one, or a compiled loop's at once) into a Trajectory."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ _FLOAT = np.dtype(float)  # the native float64 of a logged array that is copied 
 
 
 class Recorder:
-    """Collects a run sample by sample and assembles the :class:`~bhgrasp.data.trajectory.Trajectory`.
+    """Collects a run's samples (:meth:`add`, :meth:`add_run`) and assembles the :class:`~bhgrasp.data.Trajectory`.
 
     A sample keeps references to what the step made (the scene's q and v, the input, the drive torques, the
     contacts as the engine returned them); the arrays of the trajectory are assembled once, at the end.
@@ -247,7 +247,7 @@ class LogColumns:
         self._capacity = capacity
 
     def add_rows(self, rows: dict[str, np.ndarray], sample: int) -> None:
-        """Record samples ``sample``, ``sample + 1``, ... at once: ``rows`` maps each entry to its (n, *shape) rows.
+        """Record samples ``sample``, ``sample + 1``, ... at once: ``rows`` maps each entry to its ``(n, *shape)`` rows.
 
         Entries absent from ``rows`` hold NaN in these samples, as :meth:`add`'s.
 

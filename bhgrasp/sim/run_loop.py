@@ -4,6 +4,9 @@ Each physics step: the controller reads the sensed state every ``control_dt`` (i
 recorded every ``record_every`` steps, the disturbance torques and object forces of the step's start time are added,
 and the run stops early at the first state ``until`` accepts.  The loop steps through the Simulator's public
 :meth:`~bhgrasp.sim.simulator.Simulator.step`, and the function is the Simulator's ``run`` method (one signature).
+While the controller offers its next cycles as a compiled loop (``compiled_control``, a :class:`LoopOffer`) and the
+run is plain (exact sensors, one cycle and one sample a step, no disturbance, object forces or ``until``), the
+simulator's ``run_compiled`` takes them in C++ instead, with the same bits (``tests/test_closed_loop.py``).
 """
 
 from __future__ import annotations
@@ -27,7 +30,11 @@ if TYPE_CHECKING:
 
 
 class Stepper(Protocol):
-    """What the loop needs of a :class:`~bhgrasp.sim.simulator.Simulator`: its step, scene, actuation and dt."""
+    """What the loop needs of a :class:`~bhgrasp.sim.simulator.Simulator`: its step, scene, actuation and dt.
+
+    Optional: ``closes_loops_in_cpp()`` and ``run_compiled(state, loop, until, steps)``, the compiled loop
+    (:meth:`Simulator.run_compiled <bhgrasp.sim.simulator.Simulator.run_compiled>`).
+    """
 
     dt: float
     scene: Scene
@@ -66,7 +73,8 @@ def run(
     Args:
         simulator: The simulator (``self`` of :meth:`Simulator.run <bhgrasp.sim.simulator.Simulator.run>`).
         controller: ``(t, state) -> u`` callable or object with ``reset(state)``; an optional ``log`` dict
-            (name -> latest value) is recorded at every sample.
+            (name -> latest value) is recorded at every sample; an optional ``compiled_control(t, state)`` offers
+            its next cycles as a compiled loop (:class:`LoopOffer`, or ``None``).
         duration: Simulated time [s].
         state: Start state (default :meth:`~bhgrasp.sim.simulator.Simulator.initial_state`).
         control_dt: Controller period [s] (a multiple of ``dt``; inputs held in between); default ``dt``.
@@ -105,7 +113,7 @@ def run(
     k = 0
     try:
         while k < steps:
-            if in_cpp:  # the steps the controller's compiled loop takes (none in an approach, say), then one here
+            if in_cpp:  # the steps the controller's compiled loop takes (none if it offers none), then one here
                 taken, state, info, last = _compiled_steps(simulator, controller, recorder, state, info, steps - k)
                 k, u = k + taken, u if last is None else last
                 if bar is not None:
@@ -134,7 +142,7 @@ def run(
     return recorder.trajectory()
 
 
-class CompiledControl(Protocol):
+class LoopOffer(Protocol):
     """What the loop needs of a controller's ``compiled_control(t, state)``: its next cycles as a compiled loop.
 
     ``loop``: the loop controller (a ``bhgrasp._core.LoopController``); ``until`` [s]: its next switch (the loop
@@ -145,7 +153,7 @@ class CompiledControl(Protocol):
     until: float
 
     def log_rows(self, rows: np.ndarray, q_hand: np.ndarray) -> dict[str, np.ndarray]:
-        """Every entry of the controller's log after each of n cycles, (n, *shape).
+        """Every entry of the controller's log after each of n cycles, ``(n, *shape)``.
 
         From the loop's log rows (n, log_size) and the hand's joint positions [rad] the cycles read (n, nq).
         """
@@ -168,7 +176,7 @@ def _compiled_steps(
 ) -> tuple[int, State, StepInfo, np.ndarray | None]:
     """The steps (up to ``steps``) the controller's compiled loop takes from ``state``, recorded as the loop would.
 
-    The controller's ``compiled_control(t, state)`` offers a :class:`CompiledControl` for the steps from ``state``
+    The controller's ``compiled_control(t, state)`` offers a :class:`LoopOffer` for the steps from ``state``
     (``None``: not now); the simulator's ``run_compiled`` runs them in C++ (``None``: it cannot), bit for bit the
     steps this loop would take with exact sensors, one control cycle and one sample a step and no disturbance.
     Returns the steps taken, the state and info after them and the last inputs (``None`` if none).
@@ -235,4 +243,4 @@ def _control(controller: Callable[[float, State], Any], t: float, sensed: State)
         raise InputError(f"the controller must return numbers (the inputs u), got {u!r} at t = {t:.6g} s") from error
 
 
-__all__ = ["CHUNK", "CompiledControl", "Stepper", "run"]
+__all__ = ["CHUNK", "LoopOffer", "Stepper", "run"]
