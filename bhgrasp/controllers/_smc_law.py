@@ -210,10 +210,7 @@ class CompiledSMCLaw:
         v = state.v
         if not trusted or v.shape != (hand.nv,):
             v = as_vector(v, "v", hand.nv)  # (Hand.slotine_li_torque's check)
-        base = hand.base  # a new one whenever the hand's placement or gravity change
-        if self._base is not base:
-            kernel.set_base(base.rotation, base.translation, base.gravity)
-            self._base = base
+        self._set_base(hand)
         out = np.empty(self._size)
         if pose is not None:
             targets = (rotation_d, position_d, velocity, acceleration, out)
@@ -240,6 +237,13 @@ class CompiledSMCLaw:
         log["mass_estimate"] = out[self._mass]
         return tau
 
+    def _set_base(self, hand: Any) -> None:
+        """Give the kernel ``hand``'s base (a new object whenever its placement or gravity change) if it changed."""
+        base = hand.base
+        if self._base is not base:
+            self.kernel.set_base(base.rotation, base.translation, base.gravity)
+            self._base = base
+
     def _publish(self, log: dict, out: np.ndarray, mass: bool = True) -> None:
         """The log entries of a grasp cycle's ``out`` (views of it); its mass estimate too if ``mass``."""
         log.update(zip(self._flat_keys, self._flat_views(out)))
@@ -265,10 +269,7 @@ class CompiledSMCLaw:
         path = self._path(law.reference)
         if body is None or path is None or (scene.nq_hand, scene.nv_hand) != (hand.nq, hand.nv):
             return None
-        base = hand.base
-        if self._base is not base:
-            self.kernel.set_base(base.rotation, base.translation, base.gravity)
-            self._base = base
+        self._set_base(hand)
         finger, joint = self._pair_rows(source.simulator.layout)
         sizes = (hand.nq, hand.nv, body[0].start, body[1].start)
         return self._core.SMCGraspLoop(self.kernel, path, finger, joint, *sizes, law._time)

@@ -210,18 +210,7 @@ class LogColumns:
                 self._logged = sample + 1
                 return
         values = {name: self._checked(name, value, sample) for name, value in log.items()}
-        for name, value in values.items():
-            column = columns.get(name)
-            if column is None:  # NaN for every earlier sample (the rows after this one are written when reached)
-                column = columns[name] = np.empty((self._capacity, *value.shape))
-                column[:sample] = np.nan
-                shapes[name] = value.shape
-            column[self._logged : sample] = np.nan  # samples skipped since the last log
-            column[sample] = value
-        for name, column in columns.items():
-            if name not in values:
-                column[self._logged : sample + 1] = np.nan
-        self._logged = sample + 1
+        self._write({name: value[None] for name, value in values.items()}, sample, 1)
 
     def _checked(self, name: str, value: Any, sample: int) -> np.ndarray:
         """``value`` as a float array of entry ``name``'s shape (its first sample's), else an ``InputError``."""
@@ -264,14 +253,18 @@ class LogColumns:
         n = counts.pop() if counts else 0
         if sample + n > self._capacity:
             self._grow(sample + n)
+        self._write(blocks, sample, n)
+
+    def _write(self, blocks: dict[str, np.ndarray], sample: int, n: int) -> None:
+        """Checked ``blocks`` (entry -> (n, *shape) rows) as samples ``sample`` .. ``sample + n - 1`` (room made)."""
         columns = self._columns
         for name, block in blocks.items():
             column = columns.get(name)
-            if column is None:
+            if column is None:  # NaN for every earlier sample (the rows after these are written when reached)
                 column = columns[name] = np.empty((self._capacity, *block.shape[1:]))
                 column[:sample] = np.nan
                 self._shapes[name] = block.shape[1:]
-            column[self._logged : sample] = np.nan
+            column[self._logged : sample] = np.nan  # samples skipped since the last log
             column[sample : sample + n] = block
         for name, column in columns.items():
             if name not in blocks:
