@@ -396,5 +396,6 @@ def uncovered_options(law: Any, base: type) -> str:
     return ", ".join(
         [f"hand_adaptation={law.hand_adaptation}"] * (law.hand_adaptation is not None)
         + [f"distribution={law.distribution!r}"] * (law.distribution != "qp")
+        + [f"torque_limit={law.options.torque_limit}"] * (law.options.torque_limit is not None)
         + [f"a subclass overriding {name}" for name in overridden]
     )

@@ -33,6 +33,7 @@ and ``options.distribution="qp"`` (either ``force_error``); other options run th
 from __future__ import annotations
 
 import math
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -106,9 +107,10 @@ class SMCAdaptiveGrasp(ObjectGraspController):
             options: The shared options (:class:`~bhgrasp.controllers.grasp_options.GraspOptions`), as in
                 :class:`~bhgrasp.controllers.grasping.ObjectGraspController`.
             engine: ``None`` (default): the default engine (:func:`~bhgrasp._native.default_engine`) where the
-                compiled law covers the options (``hand_adaptation=None``, ``options.distribution="qp"``, no subclass
-                overriding a step of the law), else the Python one; ``"compiled"`` (raises if the core does not
-                load or the law does not cover the options) or ``"python"``.
+                compiled law covers the options (``hand_adaptation=None``, ``options.distribution="qp"``, no
+                ``options.torque_limit``, no subclass overriding a step of the law), else the Python one;
+                ``"compiled"`` (raises if the core does not load or the law does not cover the options) or
+                ``"python"``.
             identification: Composite adaptation of sigma_o
                 (:class:`~bhgrasp.controllers.object_identification.ObjectIdentification`: the measured contact
                 wrench's prediction error joins (5.52), P(0) = Gamma_o); ``None``: the thesis' law (5.52) alone.
@@ -231,26 +233,40 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         contacts.reference = current.com
         wrench, regressor, s_o, v_r, a_r = self.object_law(t, dt, state)
         desired = self.distribute(contacts, wrench)
+        finger_law = partial(self._finger_law, dt, state, contacts, maps, v_r, a_r)
+        desired = self.limit_squeeze(contacts, desired, lambda forces: finger_law(forces)[0])
+        tau, integral, force_error, s_f, hand_estimate = finger_law(desired)
+        self._integral = dict(zip(contacts.fingers, integral))
+        if hand_estimate is not None:
+            self.hand_estimate = hand_estimate
+        if self.identification is not None:  # after the cycle, as the compiled engine does it
+            self.identify(dt, state, regressor, s_o)
+        self._log(contacts, s_o, s_f, force_error, desired)
+        return tau
 
+    def _finger_law(self, dt: float, state: State, contacts: GraspContacts, maps: Any, v_r, a_r, desired) -> tuple:
+        """(5.57)-(5.60) for the desired contact forces (n, 3) [N], without side effects.
+
+        Returns (tau, the force errors' integrals, e_fc, s_f, the hand estimate after (5.60) or ``None``).
+        """
+        hand = self.nominal
         force_error = desired - contacts.measured()
         if self.force_error == "normal":
             force_error[:, :2] = 0.0
         integral = np.array([self._integral.get(f, np.zeros(3)) for f in contacts.fingers]) + dt * force_error
-        self._integral = dict(zip(contacts.fingers, integral))
         correction = self.force_gain * force_error + self.force_integral * integral
         q_dot_r = maps.joint_map @ v_r + maps.hand_jacobian_pinv @ correction.ravel()
         q_dd_r = maps.joint_map @ a_r + maps.joint_map_rate @ v_r
         s_f = np.asarray(state.v, dtype=float) - q_dot_r
+        hand_estimate = None
         if self.hand_adaptation is None:
             model = hand.slotine_li_torque(state.q, state.v, q_dot_r, q_dd_r)
         else:
             y_f = hand.slotine_li_regressor(state.q, state.v, q_dot_r, q_dd_r)
-            self.hand_estimate = self.hand_estimate - dt * self._hand_rates * (y_f.T @ s_f)
-            model = y_f @ self.hand_estimate
-        if self.identification is not None:  # after the cycle, as the compiled engine does it
-            self.identify(dt, state, regressor, s_o)
-        self._log(contacts, s_o, s_f, force_error, desired)
-        return model + maps.hand_jacobian.T @ desired.ravel() - self.k_f * s_f
+            hand_estimate = self.hand_estimate - dt * self._hand_rates * (y_f.T @ s_f)
+            model = y_f @ hand_estimate
+        tau = model + maps.hand_jacobian.T @ desired.ravel() - self.k_f * s_f
+        return tau, integral, force_error, s_f, hand_estimate
 
     def parameter_information(self) -> np.ndarray:
         """P^-1 (7, 7) weighing the object estimate's error in V (5.63) (:mod:`bhgrasp.controllers.grasp_lyapunov`).

@@ -77,7 +77,9 @@ class GraspForceController(ObjectGraspController):
             self.log["mass_estimate"] = np.array(self.mass_estimate)
         torque = -self.kp[1] * error[3:] - self.kd[1] * velocity_error[3:]
         forces = self.distribute(contacts, np.concatenate((force, torque)))
-        return self.nominal.gravity_torques(state.q) + contacts.jacobian(self.nominal, state.q).T @ forces.ravel()
+        gravity, jacobian = self.nominal.gravity_torques(state.q), contacts.jacobian(self.nominal, state.q)
+        forces = self.limit_squeeze(contacts, forces, lambda f: gravity + jacobian.T @ f.ravel())
+        return gravity + jacobian.T @ forces.ravel()
 
 
 __all__ = ["GraspForceController"]

@@ -9,6 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from bhgrasp._validation import as_positive, as_real, as_vector
 from bhgrasp.errors import InputError
 
@@ -33,6 +35,13 @@ class GraspOptions:
             (a wrong mass estimate, the object leaving its support) is met with more squeeze, not with sliding
             (the grip-load coupling of human grasping: Johansson and Westling, Exp. Brain Res. 56, 1984).  0 keeps
             the cones at mu and the grip reflex on.
+        torque_limit: ``None`` (default): no limit.  The joints' torque limit [N m] the controller respects: one
+            number for every joint, or one per joint (positive; ``inf`` for a joint without one).  When the
+            distribution's forces would load a joint past it, the controller squeezes less: it scales the forces'
+            internal part (the part the grasp map cancels) down until every joint is within its limit, so the
+            fingers keep exerting the same wrench and press less together, relying on more friction than the cones
+            allow (:mod:`bhgrasp.grasp.torque_limited`).  A drive that clips one joint instead leaves the object
+            pushed by the fingers that are not clipped.
     """
 
     mu: float = 0.5
@@ -42,6 +51,7 @@ class GraspOptions:
     gravity: Any = (0.0, 0.0, -9.81)
     distribution: str = "qp"
     friction_margin: float | None = None
+    torque_limit: Any = None
 
     def __post_init__(self) -> None:
         if self.distribution not in DISTRIBUTIONS:
@@ -58,6 +68,8 @@ class GraspOptions:
             if not 0.0 <= margin < 1.0:
                 raise InputError(f"`friction_margin` must be None or in [0, 1) (a fraction of mu), got {margin}")
             object.__setattr__(self, "friction_margin", margin)
+        if self.torque_limit is not None:
+            object.__setattr__(self, "torque_limit", torque_limits(self.torque_limit))
 
     @property
     def design_mu(self) -> float:
@@ -65,6 +77,19 @@ class GraspOptions:
         return self.mu if self.friction_margin is None else (1.0 - self.friction_margin) * self.mu
 
 
+def torque_limits(value: Any) -> float | tuple[float, ...]:
+    """A torque limit [N m] as a positive float, or a tuple of them (``inf`` allowed), else InputError."""
+    if isinstance(value, (bool, np.bool_)):
+        raise InputError(f"`torque_limit` must be None, a positive number or one per joint, got {value!r}")
+    try:
+        limits = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise InputError(f"`torque_limit` must be None, a positive number or one per joint, got {value!r}") from error
+    if limits.ndim > 1 or limits.size == 0 or np.any(np.isnan(limits)) or np.any(limits <= 0.0):
+        raise InputError(f"`torque_limit` must be None, a positive number or one per joint [N m], got {value!r}")
+    return float(limits) if limits.ndim == 0 else tuple(float(x) for x in limits)
+
+
 DEFAULT_GRASP = GraspOptions()
 
-__all__ = ["DEFAULT_GRASP", "DISTRIBUTIONS", "GraspOptions"]
+__all__ = ["DEFAULT_GRASP", "DISTRIBUTIONS", "GraspOptions", "torque_limits"]

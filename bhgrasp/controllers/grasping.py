@@ -18,7 +18,9 @@ only compensates gravity and closes each finger with ``approach_torque``.
 from __future__ import annotations
 
 from abc import abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -31,6 +33,7 @@ from bhgrasp.errors import InputError
 from bhgrasp.grasp.forces import ContactForceQP, cone_violations, pseudo_inverse_forces
 from bhgrasp.grasp.frames import contact_frames, grasp_map_from_frames, hand_jacobian
 from bhgrasp.grasp.sensing import ContactSensing, FingerContact
+from bhgrasp.grasp.torque_limited import internal_scale, split_internal
 from bhgrasp.model.hand import Hand
 from bhgrasp.motion.trajectories import Reference
 
@@ -53,7 +56,9 @@ class ObjectGraspController(Controller):
     iterations of the cycle, at most :attr:`~bhgrasp.grasp.forces.ContactForceQP.iteration_bound`; 0 for
     ``"pinv"``), ``cone_margin`` (smallest mu f_n - |f_t| of the commanded forces [N], negative = outside the
     assumed cone; mu less the friction margin when one is set, :attr:`design_mu`), ``contacts`` (number of touching
-    fingers).
+    fingers).  With a torque limit (``options.torque_limit``) the grasp squeezes less where the distribution's forces
+    would load a joint past it (:meth:`limit_squeeze`) and logs ``squeeze_scale``, the fraction of the internal
+    force kept (1 within the limits).
     """
 
     def __init__(
@@ -86,6 +91,7 @@ class ObjectGraspController(Controller):
         self._hold: pin.SE3 | None = None
         self._time: float | None = None
         self._closing = self._closing_torque()
+        self._torque_limits = joint_limits(options.torque_limit, nominal.nv)
 
     @property
     def options(self) -> GraspOptions:
@@ -116,6 +122,11 @@ class ObjectGraspController(Controller):
     def min_normal_force(self) -> float:
         """Lower bound of every normal force in the QP [N]."""
         return self._options.min_normal_force
+
+    @property
+    def torque_limit(self) -> np.ndarray | None:
+        """The joints' torque limits (nv,) [N m] the grasp respects (``None``: none; see :meth:`limit_squeeze`)."""
+        return self._torque_limits
 
     @property
     def approach_torque(self) -> float:
@@ -227,12 +238,53 @@ class ObjectGraspController(Controller):
         self.log["infeasible_cycles"] = np.array(float(self._infeasible_cycles))
         self.log["wrench_residual"] = np.array(float(np.linalg.norm(gmap @ forces.ravel() - wrench)))
         self.log["qp_iterations"] = np.array(float(iterations))
+        self._log_commanded(contacts, forces)
+        return forces
+
+    def _log_commanded(self, contacts: GraspContacts, forces: np.ndarray) -> None:
         self.log["cone_margin"] = np.array(-np.max(cone_violations(forces, self.design_mu)))
         commanded = np.zeros(len(self.nominal.fingers))
         for finger, force in zip(contacts.fingers, forces):
             commanded[self.nominal.fingers.index(finger)] = force[2]
         self.log["commanded_normal"] = commanded
+
+    def limit_squeeze(
+        self, contacts: GraspContacts, forces: np.ndarray, torques_of: Callable[[np.ndarray], np.ndarray]
+    ) -> np.ndarray:
+        """``forces`` (n, 3) with their internal part scaled down to keep every joint within :attr:`torque_limit`.
+
+        ``torques_of`` maps contact forces to the law's joint torques [N m] (affine in them, without side effects).
+        Unchanged (the same array) without a limit or within it; the wrench they exert is the same
+        (:mod:`bhgrasp.grasp.torque_limited`).  With a limit, logs ``squeeze_scale`` (beta, 1 when unchanged) and
+        the scaled forces' ``commanded_normal``, ``cone_margin`` and ``wrench_residual``.
+        """
+        limits = self._torque_limits
+        if limits is None:
+            return forces
+        torque = torques_of(forces)
+        beta = 1.0
+        if not np.all(np.abs(torque) <= limits):
+            wrench_part, internal = split_internal(contacts.grasp_map, forces)
+            beta = internal_scale(
+                torque, torques_of(wrench_part), limits, forces[:, 2], wrench_part[:, 2], self.min_normal_force
+            )
+            forces = wrench_part + beta * internal
+            self._log_commanded(contacts, forces)
+            residual = contacts.grasp_map @ forces.ravel() - self.log["wrench"]
+            self.log["wrench_residual"] = np.array(float(np.linalg.norm(residual)))
+        self.log["squeeze_scale"] = np.array(beta)
         return forces
+
+
+def joint_limits(torque_limit: Any, nv: int) -> np.ndarray | None:
+    """``GraspOptions.torque_limit`` (:class:`~bhgrasp.controllers.grasp_options.GraspOptions`) as (nv,) [N m]."""
+    if torque_limit is None:
+        return None
+    limits = np.array(np.broadcast_to(torque_limit, (nv,)) if np.ndim(torque_limit) == 0 else torque_limit)
+    if limits.shape != (nv,):
+        raise InputError(f"`torque_limit` must be one number or one per joint ({nv}), got {len(limits)} limits")
+    limits.flags.writeable = False
+    return limits
 
 
 @dataclass

@@ -140,6 +140,7 @@ class ObjectSpaceController(ObjectGraspController):
         forces = self.distribute(contacts, wrench)
         tau_h = hand_part(hand, state, maps, acceleration, velocity)
         self.log["object_force"], self.log["hand_torque"] = wrench, tau_h
+        forces = self.limit_squeeze(contacts, forces, lambda f: maps.hand_jacobian.T @ f.ravel() + tau_h)
         return maps.hand_jacobian.T @ forces.ravel() + tau_h
 
 

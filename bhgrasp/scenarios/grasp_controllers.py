@@ -32,6 +32,7 @@ def grasp_controller(
     mu: float = MU_ASSUMED,
     adaptation: str = "thesis",
     friction_margin: float | None = None,
+    torque_limit: float | None = None,
 ) -> ObjectGraspController:
     """The object-space controller called ``name`` (one of :data:`CONTROLLERS`) with the demo's gains.
 
@@ -40,9 +41,12 @@ def grasp_controller(
     "composite" adds the measured wrench's prediction error
     (:class:`~bhgrasp.controllers.object_identification.ObjectIdentification`, Gamma_o = :data:`COMPOSITE_RATES`);
     ``friction_margin`` the fraction of ``mu`` kept in reserve
-    (:class:`~bhgrasp.controllers.grasp_options.GraspOptions`).
+    (:class:`~bhgrasp.controllers.grasp_options.GraspOptions`); ``torque_limit`` [N m] the joints' limit the
+    controller keeps within (``None``: none).
     """
-    options = GraspOptions(mu=mu, squeeze=SQUEEZE, distribution=distribution, friction_margin=friction_margin)
+    options = GraspOptions(
+        mu=mu, squeeze=SQUEEZE, distribution=distribution, friction_margin=friction_margin, torque_limit=torque_limit
+    )
     shared = {"options": options}
     if adaptation not in ADAPTATIONS:
         raise InputError(f"`adaptation` must be one of {ADAPTATIONS}, got {adaptation!r}")

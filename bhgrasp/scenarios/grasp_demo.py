@@ -17,6 +17,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from bhgrasp._validation import as_positive, as_vector
 from bhgrasp.controllers.base import Controller
 from bhgrasp.controllers.estimated_object import EstimatedObject
@@ -65,6 +67,7 @@ SWEEPABLE = (
     "finger_spacing",
     "friction_margin",
     "estimator",
+    "torque_limit_known",
     *UNCERTAINTIES,
 )
 """The parameters of :func:`run_grasp_demo` a sweep case may set (the case's seed comes from the sweep)."""
@@ -115,6 +118,8 @@ def check_demo_arguments(**arguments: Any) -> None:
         as_positive(arguments["finger_spacing"], "finger_spacing")
     if arguments.get("friction_margin") is not None:
         GraspOptions(friction_margin=arguments["friction_margin"])  # its check: a fraction in [0, 1)
+    if not isinstance(arguments.get("torque_limit_known", False), (bool, np.bool_)):
+        raise InputError(f"`torque_limit_known` must be True or False, got {arguments['torque_limit_known']!r}")
     check_uncertainty(**{name: arguments[name] for name in UNCERTAINTIES if name in arguments})
 
 
@@ -137,6 +142,7 @@ def run_grasp_demo(
     adaptation: str = "thesis",
     friction_margin: float | None = None,
     estimator: str | None = None,
+    torque_limit_known: bool = False,
     **uncertainty: Any,
 ) -> GraspDemoResult:
     """Grasp, lift and turn the box; see the module docstring.
@@ -183,6 +189,10 @@ def run_grasp_demo(
             ``"hand"``: through a :class:`~bhgrasp.controllers.object_estimator.HeldObjectEstimator` (Barrett
             scene), which carries the estimate with the fingers' encoders once three fingers hold the box and
             corrects it with the tracker (its noise taken as ``pose_noise``; 0.5 mm / 5 mrad for a part without one).
+        torque_limit_known: ``False`` (default): the joints' ``torque_limit`` (an uncertainty below) is the
+            drive's alone, which clips the torques the controller commands; ``True``: the controller is told it and
+            keeps its commands within it (``GraspOptions.torque_limit``: it squeezes less where a joint would pass
+            it).
         uncertainty: What the controller does not know (:data:`UNCERTAINTIES`, Barrett scene only):
             ``pose_noise`` (sigma [m], sigma [rad]) on the object pose, ``twist_noise`` (sigma [m/s], sigma
             [rad/s]) on its twist, ``force_noise`` sigma [N] on the contact forces, ``delay`` [s] of every reading,
@@ -204,6 +214,7 @@ def run_grasp_demo(
         hand=hand,
         friction_margin=friction_margin,
         estimator=estimator,
+        torque_limit_known=torque_limit_known,
         **uncertainty,
         **({} if finger_spacing is None else {"finger_spacing": finger_spacing}),
     )
@@ -216,7 +227,10 @@ def run_grasp_demo(
         setup = grasp_scene(hand, mass, float(stiffness), **plant, **spacing)
         choice = given_grasp(setup, offset, finger_spacing)
     nominal_box, mu = Box(size=setup.box.size, mass=estimate), float(uncertainty.get("mu", MU_ASSUMED))
-    grasp = grasp_controller(controller, setup.hand, nominal_box, distribution, gains, mu, adaptation, friction_margin)
+    limit = uncertainty.get("torque_limit") if torque_limit_known else None
+    grasp = grasp_controller(
+        controller, setup.hand, nominal_box, distribution, gains, mu, adaptation, friction_margin, limit
+    )
     supervisor = _supervisor(setup, grasp, offset, approach_gains, hand)
     law: Controller = MotorCommands(supervisor, setup.simulator.actuation.drive) if setup.cancel_damping else supervisor
     if estimator == "hand":

@@ -3,8 +3,10 @@
 Each scenario of :data:`SCENARIOS` is a label and the keyword arguments it adds to the grasp demo
 (:func:`~bhgrasp.scenarios.grasp_demo.run_grasp_demo`): one uncertainty of :mod:`bhgrasp.scenarios.uncertainty`, or
 several together, with or without the pose estimated from the fingers' encoders (``estimator="hand"``,
-:mod:`bhgrasp.controllers.object_estimator`).  Every scenario runs the same :data:`SAMPLES` boxes with the same
-noise seeds (:data:`SEED`).
+:mod:`bhgrasp.controllers.object_estimator`).  A torque limit is told to the controller (it keeps its commands
+within it, ``GraspOptions.torque_limit``) only where the scenario says ``torque_limit_known=True``; elsewhere the
+drive clips what the controller commands.  Every scenario runs the same :data:`SAMPLES` boxes with the same noise
+seeds (:data:`SEED`).
 """
 
 from __future__ import annotations
@@ -71,12 +73,21 @@ SCENARIOS: dict[str, tuple[str, dict[str, Any]]] = {
     "delay": ("measurement delay 5 ms", {"delay": 0.005}),
     "joint_friction": ("joint friction 0.02 N m + 0.1 N m s/rad", {"joint_friction": 0.02, "joint_damping": 0.1}),
     "torque_limit": ("joint torque limit 0.75 N m", {"torque_limit": 0.75}),
+    "torque_limit_known": (
+        "joint torque limit 0.75 N m, told to the controller",
+        {"torque_limit": 0.75, "torque_limit_known": True},
+    ),
     "wrong_mu": (f"true mu 0.5 (assumed {MU_ASSUMED})", {"friction": 0.5}),
     "mu_margin": (
         f"true mu 0.48, 20 % below the assumed {MU_ASSUMED}, friction margin {100 * MARGIN:.0f} %",
         {"friction": 0.48, "friction_margin": MARGIN},
     ),
     "all": ("all at milder levels (see notes)", ALL),
+    "all_remedied": (
+        f"all at milder levels, pose from the encoders and the tracker, friction margin {100 * MARGIN:.0f} %, the "
+        "torque limit told to the controller",
+        {**ALL, "estimator": "hand", "friction_margin": MARGIN, "torque_limit_known": True},
+    ),
     "bench_low_mu": (
         "a real bench, true mu 20 % low (0.48), pose from the encoders and the tracker",
         {**BENCH, "friction": 0.48, "estimator": "hand"},
