@@ -88,8 +88,9 @@ def test_the_readme_states_the_bleach_bottles_committed_need() -> None:
     assert f"grasp needs at least {need:.2f} of the ratings to carry the pushes at rest" in readme
 
 
-def test_the_readme_states_held_out_3s_committed_failures() -> None:
-    """The README's figures for the third held-out set's two failures are the committed report's."""
+def test_the_readme_states_the_last_held_out_sets_committed_figures() -> None:
+    """The README's figures for held-out-3's mini soccer ball (from above since the wider opening), its one failure,
+    and held-out-4's out-of-sample rate and failures are the committed report's."""
     import json
     import math
 
@@ -97,16 +98,32 @@ def test_the_readme_states_held_out_3s_committed_failures() -> None:
 
     trials = json.loads((REFERENCE / "grasp_benchmark.json").read_text())["trials"]
     readme = " ".join((REFERENCE.parents[1] / "README.md").read_text().split())
-    failed = {t["object"]: t for t in trials if t["set"] == "held-out-3" and not t["success"]}
-    assert sorted(failed) == ["mini soccer ball", "windex bottle"]
-    bottle, ball = failed["windex bottle"], failed["mini soccer ball"]
+
+    def overloaded(trial: dict) -> str:
+        return (
+            f"at {trial['torque_to_rating']:.2f} times ({trial['peak_contact_force']:.0f} N at a contact; its grasp "
+            f"needs at least {trial['need_to_rating']:.2f} of the ratings)"
+        )
+
+    third = {t["object"]: t for t in trials if t["set"] == "held-out-3"}
+    assert sorted(name for name, t in third.items() if not t["success"]) == ["windex bottle"]
+    ball = third["mini soccer ball"]
+    assert ball["approach"] == "top" and ball["strict_success"]
+    forces = [ball[f"held_force_{finger}"] for finger in ("F1", "F2", "F3")]
     assert (
-        f"F3's proximal joint at {bottle['torque_to_rating']:.2f} times its rating, "
-        f"{bottle['peak_contact_force']:.0f} N at a contact; its grasp needs at least {bottle['need_to_rating']:.2f} "
-        "of the ratings" in readme
+        f"strictly held ({1e3 * ball['max_displacement']:.1f} mm, {math.degrees(ball['max_rotation']):.1f} deg, each "
+        f"finger {min(forces):.1f}-{max(forces):.1f} N, {ball['torque_to_rating']:.2f} of the ratings)" in readme
     )
-    assert ball["approach"] == "side"
-    turn, shift = math.degrees(ball["max_rotation"]), 1e3 * ball["max_displacement"]
-    assert f"turns {turn:.0f} deg ({shift:.0f} mm) under the pushes" in readme
-    held = sum(t["success"] for t in trials if t["set"] == "held-out-3")
-    assert f"holds held-out-3's objects {held}/20 ({5 * held} %)" in readme
+    fourth = [t for t in trials if t["set"] == "held-out-4"]
+    held = sum(t["success"] for t in fourth)
+    assert f"holds held-out-4's objects {held}/{len(fourth)} ({100 * held / len(fourth):.0f} %)" in readme
+    failed = {t["object"]: t for t in fourth if not t["success"]}
+    assert sorted(failed) == ["juice carton", "water bottle"]
+    carton, bottle = failed["juice carton"], failed["water bottle"]
+    assert f"the 1.05 kg juice carton {overloaded(carton)}" in readme
+    assert (
+        f"water bottle at {bottle['torque_to_rating']:.2f} times ({bottle['peak_contact_force']:.0f} N; it needs at "
+        f"least {bottle['need_to_rating']:.2f})" in readme
+    )
+    for trial in failed.values():  # F3's proximal joint past its rating, what its grasp needs below it
+        assert trial["torque_to_rating"] > 1.0 and trial["need_to_rating"] < 1.0 and not trial["inside_envelope"]

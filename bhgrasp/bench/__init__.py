@@ -1,10 +1,11 @@
 """The grasp benchmark: a wrist-mounted BH8-280 approaches, closes on, lifts, shakes and places household objects.
 
 :mod:`~bhgrasp.bench.protocol` fixes the protocol (phases, thresholds, contact law,
-:class:`~bhgrasp.bench.protocol.Trial`); :mod:`~bhgrasp.bench.objects` the object sets (development, three
+:class:`~bhgrasp.bench.protocol.Trial`); :mod:`~bhgrasp.bench.objects` the object sets (development, four
 held-out, meshes);
-:mod:`~bhgrasp.bench.placement` where the hand goes over the object and :mod:`~bhgrasp.bench.height` how high, both
-from :mod:`~bhgrasp.bench.reach`'s touch angles, or, where no height qualifies, :mod:`~bhgrasp.bench.side` a side
+:mod:`~bhgrasp.bench.placement` where the hand goes over the object, :mod:`~bhgrasp.bench.height` how high and
+:mod:`~bhgrasp.bench.opening` how far the hand opens, all from :mod:`~bhgrasp.bench.reach`'s touch angles, or, where
+no height qualifies, :mod:`~bhgrasp.bench.side` a side
 pinch; :mod:`~bhgrasp.bench.closing` when each finger starts to close;
 :mod:`~bhgrasp.bench.trial` runs one trial, alone on its stand or, with :mod:`~bhgrasp.bench.neighbours`, among
 settled neighbours on the table around it (:mod:`~bhgrasp.bench.table`), the hand turned away from them
@@ -29,6 +30,7 @@ from bhgrasp.bench.objects import (
     SETS,
     BenchObject,
 )
+from bhgrasp.bench.opening import top_down, way_in_gap, widened
 from bhgrasp.bench.placement import closing_planes_meet, grasp_offset
 from bhgrasp.bench.protocol import (
     ACTUATIONS,
@@ -145,5 +147,8 @@ __all__ = [
     "stand_of",
     "success_rates",
     "table_around",
+    "top_down",
+    "way_in_gap",
+    "widened",
     "write_json",
 ]

@@ -24,10 +24,9 @@ import pinocchio as pin
 import bhgrasp as bh
 from bhgrasp.barrett.commands import BarrettDriver
 from bhgrasp.barrett.pucks import FINGER_PUCK
-from bhgrasp.bench.height import trial_clearance
 from bhgrasp.bench.placement import closing_planes_meet, touch_angles
 from bhgrasp.bench.protocol import DT, GRIP_MT, PRESHAPE, Trial
-from bhgrasp.bench.side import approach_of
+from bhgrasp.bench.side import approach_of, top_grasp
 from bhgrasp.errors import ModelError
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
@@ -36,9 +35,9 @@ from bhgrasp.sim.scene import Scene
 CLOSE_SPAN = 3.0  # [s] of the unloaded close: at GRIP_MT it closes at ~0.65 rad/s and stalls on its stops in ~2.5 s
 
 
-@functools.lru_cache(maxsize=1)
-def close_profile() -> tuple[np.ndarray, np.ndarray]:
-    """(times [s], F1's proximal angle [rad]) of an unloaded close from the pre-shape, as the benchmark closes.
+@functools.lru_cache(maxsize=4)
+def close_profile(opening: float = PRESHAPE) -> tuple[np.ndarray, np.ndarray]:
+    """(times [s], F1's proximal angle [rad]) of an unloaded close from ``opening`` [rad], as the benchmark closes.
 
     The BH8-280 palm down (the trial's orientation), its finger pucks at GRIP_MT, libbarrett's ``close()`` at
     t = 0; up to where the angle stops rising (the finger stalls on its stop), read-only.
@@ -49,7 +48,7 @@ def close_profile() -> tuple[np.ndarray, np.ndarray]:
     driver.script([(0.0, "close", "GRASP")])
     q = hand.neutral()
     for finger in hand.fingers:
-        q[hand.joint_index(f"{finger}_proximal")], q[hand.joint_index(f"{finger}_distal")] = PRESHAPE, PRESHAPE / 3
+        q[hand.joint_index(f"{finger}_proximal")], q[hand.joint_index(f"{finger}_distal")] = opening, opening / 3
     trajectory = simulator.run(driver, CLOSE_SPAN, state=simulator.initial_state(q), progress=False, record_every=4)
     angle = np.maximum.accumulate(trajectory.q[:, hand.joint_index("F1_proximal")])
     stop = int(np.argmax(angle)) + 1  # up to where it stalls
@@ -64,9 +63,9 @@ def close_profile() -> tuple[np.ndarray, np.ndarray]:
     return times, angles
 
 
-def close_time(angle: float) -> float:
-    """The time [s] an unloaded finger takes to close from the pre-shape to proximal ``angle`` [rad]."""
-    times, angles = close_profile()
+def close_time(angle: float, opening: float = PRESHAPE) -> float:
+    """The time [s] an unloaded finger takes to close from ``opening`` to proximal ``angle`` [rad]."""
+    times, angles = close_profile(opening)
     return float(np.interp(angle, angles, times))
 
 
@@ -82,9 +81,9 @@ def finger_starts(trial: Trial) -> dict[str, float]:
     side = approach_of(trial) == "side"  # F1 and F2 mirror each other across the object
     if side or trial.actuation != "barrett" or item.kind == "box" or closing_planes_meet(spread) is None:
         return dict.fromkeys(("F1", "F2", "F3"), 0.0)
-    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)
-    angles = touch_angles(item, spread, clearance, PRESHAPE)
-    needs = {finger: close_time(angles[finger]) for finger in ("F1", "F3")}
+    opening, clearance = top_grasp(trial)
+    angles = touch_angles(item, spread, clearance, opening)
+    needs = {finger: close_time(angles[finger], opening) for finger in ("F1", "F3")}
     last = max(needs.values())
     return {"F1": last - needs["F1"], "F2": last - needs["F1"], "F3": last - needs["F3"]}
 

@@ -28,12 +28,12 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_real
-from bhgrasp.bench.height import SWEEP, trial_clearance
+from bhgrasp.bench.height import SWEEP
 from bhgrasp.bench.objects import MESHED
 from bhgrasp.bench.placement import grasp_offset
-from bhgrasp.bench.protocol import APPROACH, PRESHAPE, Trial
+from bhgrasp.bench.protocol import APPROACH, Trial
 from bhgrasp.bench.reach import ORIENTATIONS, hand_depth
-from bhgrasp.bench.side import approach_of, closing_fingers, trial_reach, way_in
+from bhgrasp.bench.side import approach_of, closing_fingers, top_grasp, trial_opening, trial_reach, way_in
 from bhgrasp.grasp.probes import coal_transform
 from bhgrasp.model.objects import RigidObject
 
@@ -47,7 +47,7 @@ def hand_base(trial: Trial, approach: float = 0.0, heading: float = 0.0) -> pin.
 
     From above (:func:`~.side.approach_of`): palm down, the fingers together at the grasp's offset along F3's axis
     (:func:`~.placement.grasp_offset`), the knuckles the height rule's clearance above the object's top
-    (:func:`~.height.trial_clearance`), ``approach`` above.  In a side pinch: palm sideways
+    (:func:`~.side.top_grasp`, at its opening), ``approach`` above.  In a side pinch: palm sideways
     (:data:`~.reach.SIDEWAYS`), the object where :func:`~.side.side_centre` puts it, ``approach`` back along the
     palm's normal.  The object's axis is the world z axis, the heading a turn about it.  A heading other than 0 or a
     half turn assumes what the object stands on is symmetric under it: a table, as among neighbours (a round
@@ -64,10 +64,10 @@ def hand_base(trial: Trial, approach: float = 0.0, heading: float = 0.0) -> pin.
         origin = np.array([0.0, 0.0, item.half_extents[2]]) - rotation @ centre - approach * way_in(trial)
         base = pin.SE3(rotation, origin)
     else:
-        clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)  # one rule for both grasps
-        grasp_height = 2 * item.half_extents[2] + clearance + hand_depth(spread, PRESHAPE)
+        opening, clearance = top_grasp(trial)  # one rule for both grasps
+        grasp_height = 2 * item.half_extents[2] + clearance + hand_depth(spread, opening)
         rotation = pin.rpy.rpyToMatrix(math.pi, 0.0, 0.0)  # palm down
-        offset = np.array([0.0, grasp_offset(item, spread, clearance, PRESHAPE), 0.0])
+        offset = np.array([0.0, grasp_offset(item, spread, clearance, opening), 0.0])
         base = pin.SE3(rotation, np.array([0.0, 0.0, grasp_height + approach]) - rotation @ offset)
     if heading == 0.0:
         return base
@@ -118,13 +118,14 @@ def hand_poses(trial: Trial) -> tuple[tuple[float, tuple[tuple[coal.CollisionGeo
     :data:`~bhgrasp.bench.height.SWEEP` steps of its close to its first touch of the object.
     """
     reach, centre = trial_reach(trial)
+    opening = trial_opening(trial)
     every = list(range(len(reach.geometry.geometryObjects)))
     poses: list[tuple[float, float, list[int]]] = []  # (back along the way in, proximal angle, the shapes)
     for height in np.arange(0.0, APPROACH + 1e-9, DESCENT_STEP):
-        poses.append((float(height), PRESHAPE, every))
+        poses.append((float(height), opening, every))
     for finger in closing_fingers(trial):  # a side pinch's F3 stays open
         touch = reach.touch(finger, centre)
-        for angle in [*np.arange(PRESHAPE + SWEEP, touch, SWEEP), touch]:
+        for angle in [*np.arange(opening + SWEEP, touch, SWEEP), touch]:
             poses.append((0.0, float(angle), reach.shapes[finger]))
     placed = []
     for height, angle, measured in poses:

@@ -14,8 +14,8 @@ import numpy as np
 import pinocchio as pin
 
 import bhgrasp as bh
-from bhgrasp.bench.height import grasp_clearance
 from bhgrasp.bench.need import INFEASIBLE, protocol_need, rated_joints
+from bhgrasp.bench.opening import top_down
 from bhgrasp.bench.protocol import (
     DIRECTIONS,
     FORCE_LIMIT,
@@ -24,7 +24,6 @@ from bhgrasp.bench.protocol import (
     LIFT,
     LIFT_AT,
     LOOSE,
-    PRESHAPE,
     SHAKE_TIME,
     STAND,
     STRICT,
@@ -75,7 +74,7 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand, heading: float = 0.0) -> d
         "max_displacement": float(offsets.max()),
         "max_rotation": float(turns.max()),
         "height_found": approach_of(trial) == "side"
-        or grasp_clearance(trial.item, trial.preshape_spread, trial.grasp, PRESHAPE, table=trial.table) is not None,
+        or top_down(trial.item, trial.preshape_spread, trial.grasp, trial.table) is not None,
     }
     record.update(contact_summary(trajectory, hand, held, shaken, supports(trial)))
     record.update(joint_load(trajectory, hand))

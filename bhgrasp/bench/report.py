@@ -142,7 +142,8 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
             [
                 "The development set is the one the protocol's constants were chosen on (`bhgrasp/bench/protocol.py` "
                 "says which); each held-out set was fixed in the repository before anything was tuned against it "
-                "(held-out-2 and held-out-3 before any of their trials ran; the README says how each was used).",
+                "(held-out-2, held-out-3 and held-out-4 before any of their trials ran; the README says how each was "
+                "used).",
                 "",
             ]
             if any(groups(trials))

@@ -2,10 +2,11 @@
 
 A low object (a 15-35 mm box, a 33 mm can) or a small ball leaves no top-down grasp height
 (:mod:`~bhgrasp.bench.height`): the fingers, 126 mm long, sweep past the object's side onto its stand before they
-touch it; a large ball (70 mm in radius) leaves none either: where the fingers touch it below its equator they meet
-its stand first.  Turned palm sideways (:data:`~bhgrasp.bench.reach.SIDEWAYS`: the palm's normal along world +x, F3 up,
-F1 towards world -y) with F1 and F2 spread to face each other (:data:`SIDE_SPREAD`), the two fingers close in one
-horizontal plane, the pinch plane, and press the object between them across its y edges; F3 stays open above it.
+touch it.  (A large ball, 70 mm in radius, left none either at the pre-shape, whose open F3 it reached into; the hand
+now opens wider for it, :mod:`~bhgrasp.bench.opening`, and takes it from above.)  Turned palm sideways
+(:data:`~bhgrasp.bench.reach.SIDEWAYS`: the palm's normal along world +x, F3 up, F1 towards world -y) with F1 and F2
+spread to face each other (:data:`SIDE_SPREAD`), the two fingers close in one horizontal plane, the pinch plane, and
+press the object between them across its y edges; F3 stays open above it.
 The stand has the object's footprint, so the palm passes beside it, below the object's top; on a table (a trial
 among neighbours) the palm, 44.5 mm in radius about the pinch plane, would be inside the table wherever that plane is
 lower, as it is for every low or small object, and no pinch qualifies (the large ball's plane is higher).
@@ -30,7 +31,8 @@ The rule (:func:`side_centre`), the same for both grasps (how it came about: :mo
   lift turned it over; so did moving the fingertips' touches onto its centre of mass (the
   object 40 mm further out); on the housings it held within 0.05 mm.
 
-A trial takes the pinch only where the top-down rule finds no height (:func:`approach_of`).
+A trial takes the pinch only where the top-down rules find no grasp (:func:`approach_of`,
+:func:`~bhgrasp.bench.opening.top_down`).
 """
 
 from __future__ import annotations
@@ -42,8 +44,9 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN, grasp_clearance, support_box, trial_clearance
+from bhgrasp.bench.height import STAND_HEIGHT, STAND_MARGIN, support_box
 from bhgrasp.bench.objects import BenchObject
+from bhgrasp.bench.opening import top_down
 from bhgrasp.bench.placement import grasp_centre
 from bhgrasp.bench.protocol import APPROACH, PRESHAPE, Trial, spread_of
 from bhgrasp.bench.reach import ORIENTATIONS, Reach, hand_depth, placed_corners, reach_of
@@ -126,14 +129,14 @@ def side_centre(item: BenchObject, grasp: str, table: bool = False) -> tuple[flo
 
 @functools.lru_cache(maxsize=256)
 def approach_of(trial: Trial) -> str:
-    """``"top"`` (palm down) or ``"side"`` (:func:`side_centre`): from above wherever the height rule finds a height.
+    """``"top"`` (palm down) or ``"side"`` (:func:`side_centre`): from above wherever the top-down rules find a grasp.
 
     A trial with its own ``spread`` (a study of the spread) is always grasped from above.
     """
     item = trial.item
     if trial.spread is not None:
         return "top"
-    if grasp_clearance(item, spread_of(item), trial.grasp, PRESHAPE, table=trial.table) is not None:
+    if top_down(item, spread_of(item), trial.grasp, trial.table) is not None:
         return "top"
     return "side" if side_centre(item, trial.grasp, trial.table) is not None else "top"
 
@@ -155,8 +158,24 @@ def trial_reach(trial: Trial) -> tuple[Reach, np.ndarray]:
             side_centre(trial.item, trial.grasp, trial.table)
         )
     item, spread = trial.item, trial.preshape_spread
-    clearance = trial_clearance(item, spread, trial.grasp, PRESHAPE, trial.table)
-    return reach_of(item, spread, PRESHAPE), grasp_centre(item, spread, clearance, PRESHAPE)
+    opening, clearance = top_grasp(trial)
+    return reach_of(item, spread, opening), grasp_centre(item, spread, clearance, opening)
+
+
+def top_grasp(trial: Trial) -> tuple[float, float]:
+    """(opening [rad], clearance [m]) of a trial from above (:func:`~bhgrasp.bench.opening.top_down`).
+
+    Where the rules find no top-down grasp (a trial with its own spread, or one with no side pinch either): the
+    pre-shape and the knuckles on the object's top (0), and the trial's failure says so
+    (:data:`~bhgrasp.bench.metrics.NO_HEIGHT`).
+    """
+    found = top_down(trial.item, trial.preshape_spread, trial.grasp, trial.table)
+    return (PRESHAPE, 0.0) if found is None else found
+
+
+def trial_opening(trial: Trial) -> float:
+    """The proximal angle [rad] of a trial's open hand: the pre-shape, or wider (:func:`top_grasp`) from above."""
+    return PRESHAPE if approach_of(trial) == "side" else top_grasp(trial)[0]
 
 
 def way_in(trial: Trial) -> np.ndarray:
@@ -175,6 +194,8 @@ __all__ = [
     "finger_half_width",
     "pinch_height",
     "side_centre",
+    "top_grasp",
+    "trial_opening",
     "trial_reach",
     "trial_spread",
     "way_in",

@@ -25,7 +25,6 @@ from bhgrasp.bench.protocol import (
     HELD_AT,
     LIFT,
     LIFT_AT,
-    PRESHAPE,
     PUSH,
     RELEASE,
     SHAKE_TIME,
@@ -33,7 +32,7 @@ from bhgrasp.bench.protocol import (
     Trial,
     push_axes,
 )
-from bhgrasp.bench.side import closing_fingers, trial_spread, way_in
+from bhgrasp.bench.side import closing_fingers, trial_opening, trial_spread, way_in
 from bhgrasp.bench.table import NEIGHBOUR_DRAG, Clutter, stand_of, supports
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.errors import InputError
@@ -88,7 +87,7 @@ def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None, start_ch
     if clutter is not None and not trial.table:
         raise InputError("a trial among neighbours stands flush with a table: give it as Trial(..., table=True)")
     item = trial.item
-    spread = trial_spread(trial)
+    spread, opening = trial_spread(trial), trial_opening(trial)
     approach = APPROACH if clutter is None else clutter.approach  # [m] the open hand starts this far above
     heading = 0.0 if clutter is None else clutter.heading
     base = hand_base(trial, approach, heading)  # fingers together
@@ -107,7 +106,7 @@ def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None, start_ch
     simulator = Simulator(scene, dt=dt, contact=contact_law(), actuation=actuation, start_check=check)
     q = hand.neutral()
     for finger in hand.fingers:
-        q[hand.joint_index(f"{finger}_proximal")], q[hand.joint_index(f"{finger}_distal")] = PRESHAPE, PRESHAPE / 3
+        q[hand.joint_index(f"{finger}_proximal")], q[hand.joint_index(f"{finger}_distal")] = opening, opening / 3
     q[[hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]] = spread
     turn = pin.rpy.rpyToMatrix(0.0, 0.0, heading)
     inward, up = np.array([*(approach * turn @ way_in(trial)), 0, 0, 0]), np.array([0, 0, LIFT, 0, 0, 0])
