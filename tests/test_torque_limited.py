@@ -35,15 +35,15 @@ def test_the_split_exerts_the_wrench_and_leaves_an_internal_force() -> None:
         split_internal(np.zeros((6, 6)), np.zeros((3, 3)))
 
 
-def search(torque, wrench_torque, limits, normals, wrench_normals, min_normal) -> tuple[float, float]:
-    """The least max(1, max_j |tau_j(beta)| / L_j) over a fine grid of admissible beta, and the largest beta at it."""
+def search(torque, wrench_torque, limits, normals, wrench_normals) -> tuple[float, float]:
+    """The least max(1, max_j |tau_j(beta)| / L_j) over a fine grid of beta keeping every normal >= 0 (the joints
+    beta moves), and the largest beta at it."""
     internal = normals - wrench_normals
     betas = np.linspace(0.0, 1.0, 200_001)
-    keep = np.all(wrench_normals[None, :] + betas[:, None] * internal[None, :] >= min_normal - 1e-12, axis=1)
-    if not keep.any():  # no beta keeps every normal at f_min: the answer is 1
-        return 1.0, 1.0
+    keep = np.all(wrench_normals[None, :] + betas[:, None] * internal[None, :] >= -1e-12, axis=1)
     betas = betas[keep]
-    ratios = np.max(np.abs(wrench_torque + betas[:, None] * (torque - wrench_torque)) / limits, axis=1)
+    moved = torque != wrench_torque
+    ratios = np.max(np.abs(wrench_torque + betas[:, None] * (torque - wrench_torque))[:, moved] / limits[moved], axis=1)
     worst = np.maximum(ratios, 1.0)
     return worst.min(), betas[worst <= worst.min() + 1e-9].max()
 
@@ -57,14 +57,13 @@ def test_the_squeeze_fraction_is_the_largest_that_keeps_the_joints_within_their_
         torque = wrench_torque + rng.normal(scale=0.6, size=nv)
         limits = rng.uniform(0.3, 1.5, size=nv)
         wrench_normals = rng.normal(scale=1.0, size=contacts)
-        normals = wrench_normals + rng.uniform(0.0, 5.0, size=contacts)
-        normals = np.maximum(normals, 0.5)
-        beta = internal_scale(torque, wrench_torque, limits, normals, wrench_normals, 0.5)
-        best, largest = search(torque, wrench_torque, limits, normals, wrench_normals, 0.5)
+        normals = np.maximum(wrench_normals + rng.uniform(0.0, 5.0, size=contacts), 0.5)
+        beta = internal_scale(torque, wrench_torque, limits, normals, wrench_normals)
+        best, largest = search(torque, wrench_torque, limits, normals, wrench_normals)
         ratio = np.max(np.abs(wrench_torque + beta * (torque - wrench_torque)) / limits)
         assert max(ratio, 1.0) <= best + 1e-6  # as good as the search's best
         assert beta >= largest - 1e-5  # and the largest such fraction (the search's grid is 5e-6)
-        assert np.all(wrench_normals + beta * (normals - wrench_normals) >= 0.5 - 1e-9) or beta == 1.0
+        assert np.all(wrench_normals + beta * (normals - wrench_normals) >= -1e-9)  # every contact still presses
         within += bool(np.all(np.abs(torque) <= limits))
         reachable += best == 1.0
     # every kind of case was drawn: within the limits at beta = 1, within them at a smaller beta, never within
@@ -73,13 +72,31 @@ def test_the_squeeze_fraction_is_the_largest_that_keeps_the_joints_within_their_
 
 def test_within_the_limits_the_forces_are_left_alone() -> None:
     torque, limits = np.array([0.2, -0.5]), np.array([0.5, 0.5])
-    assert internal_scale(torque, np.zeros(2), limits, np.ones(2), np.zeros(2), 0.5) == 1.0
+    assert internal_scale(torque, np.zeros(2), limits, np.ones(2), np.zeros(2)) == 1.0
     # joint 0 at 0.2 + 0.8 beta N m reaches its 0.5 N m at beta = 0.375; joint 1 does not depend on beta
     torque, wrench_torque = np.array([1.0, 0.1]), np.array([0.2, 0.1])
-    beta = internal_scale(torque, wrench_torque, np.array([0.5, 0.5]), np.array([5.0]), np.array([0.0]), 0.5)
+    beta = internal_scale(torque, wrench_torque, np.array([0.5, 0.5]), np.array([5.0]), np.array([0.0]))
     assert beta == pytest.approx((0.5 - 0.2) / (1.0 - 0.2))
     # an unlimited joint (inf) does not count
-    assert internal_scale(np.array([9.0]), np.array([0.0]), np.array([np.inf]), np.ones(1), np.zeros(1), 0.5) == 1.0
+    assert internal_scale(np.array([9.0]), np.array([0.0]), np.array([np.inf]), np.ones(1), np.zeros(1)) == 1.0
+
+
+def test_a_joint_the_squeeze_does_not_move_does_not_stop_it_helping_the_others() -> None:
+    """Joint 1 carries 1.5 N m whatever the squeeze (over its 1 N m); joint 0, 0.2 + 2.8 beta, is within its limit
+    from beta = 0.8 / 2.8 down: that beta, not one that leaves joint 0 at joint 1's ratio."""
+    beta = internal_scale(np.array([3.0, 1.5]), np.array([0.2, 1.5]), np.ones(2), np.array([5.0]), np.array([0.0]))
+    assert beta == pytest.approx(0.8 / 2.8)
+
+
+def test_a_contact_at_the_least_normal_force_still_loses_squeeze() -> None:
+    """The distribution put one contact at its least normal force (0.5 N), the wrench part presses it with 0.1 N: the
+    limit comes first, down to where that contact would stop pressing."""
+    torque, wrench_torque, limits = np.array([2.0]), np.array([0.0]), np.array([1.0])
+    normals, wrench_normals = np.array([0.5, 6.0]), np.array([0.1, 1.0])
+    assert internal_scale(torque, wrench_torque, limits, normals, wrench_normals) == pytest.approx(0.5)
+    # with the other contact's wrench part pulling (-0.4 N) the squeeze stops where it would let go: 0.4 / 5
+    beta = internal_scale(np.array([20.0]), wrench_torque, limits, normals, np.array([0.1, -0.4]))
+    assert beta == pytest.approx(0.4 / 6.4)
 
 
 def test_the_options_check_the_limit() -> None:
@@ -90,14 +107,16 @@ def test_the_options_check_the_limit() -> None:
             GraspOptions(torque_limit=bad)
     hand = bh.BarrettHand()
     box = Box(size=(0.06, 0.05, 0.05), mass=0.3)
-    with pytest.raises(bh.InputError, match=r"one per joint \(8\), got 3 limits"):
-        SMCAdaptiveGrasp(hand, box, options=GraspOptions(torque_limit=(1.0, 1.0, 1.0)))
     law = SMCAdaptiveGrasp(hand, box, options=GraspOptions(torque_limit=0.75))
     assert law.engine == "python" and law.torque_limit.tolist() == [0.75] * 8
     with pytest.raises(bh.InputError, match="does not cover torque_limit=0.75"):
         SMCAdaptiveGrasp(hand, box, options=GraspOptions(torque_limit=0.75), engine="compiled")
     with pytest.raises(bh.InputError, match="`torque_limit_known` must be True or False"):
         check_demo_arguments(torque_limit_known="yes")
+    with pytest.raises(bh.InputError, match="but none was given"):
+        check_demo_arguments(torque_limit_known=True)
+    with pytest.raises(bh.InputError, match=r"one per joint \(8\), got \(1.0, 1.0\)"):
+        SMCAdaptiveGrasp(hand, box, options=GraspOptions(torque_limit=(1.0, 1.0)))
 
 
 HEAVY = {"mass": 0.998, "estimate": 0.5, "duration": 2.0, "torque_limit": 0.75}

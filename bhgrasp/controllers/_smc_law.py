@@ -390,7 +390,7 @@ def uncovered_options(law: Any, base: type) -> str:
     """The options of ``law`` (an SMC-adaptive law; ``base`` its class) the compiled law does not cover ('' if none)."""
     overridden = [
         name
-        for name in ("grasp_torques", "distribute", "errors", "target", "touching")
+        for name in ("grasp_torques", "_finger_law", "distribute", "limit_squeeze", "errors", "target", "touching")
         if getattr(type(law), name) is not getattr(base, name)
     ]
     return ", ".join(

@@ -58,7 +58,7 @@ class ObjectGraspController(Controller):
     assumed cone; mu less the friction margin when one is set, :attr:`design_mu`), ``contacts`` (number of touching
     fingers).  With a torque limit (``options.torque_limit``) the grasp squeezes less where the distribution's forces
     would load a joint past it (:meth:`limit_squeeze`) and logs ``squeeze_scale``, the fraction of the internal
-    force kept (1 within the limits).
+    force kept (1 within the limits, or where no squeeze moves the joints past them; NaN before a grasp).
     """
 
     def __init__(
@@ -169,6 +169,8 @@ class ObjectGraspController(Controller):
         if len(touching) < 2:
             self._hold = None
             self.log["commanded_normal"] = np.zeros(len(hand.fingers))
+            if self._torque_limits is not None:
+                self.log["squeeze_scale"] = np.array(np.nan)
             return hand.gravity_torques(q) + self._closing
         pose = state.object_poses[0]
         if self._hold is None:
@@ -253,7 +255,9 @@ class ObjectGraspController(Controller):
     ) -> np.ndarray:
         """``forces`` (n, 3) with their internal part scaled down to keep every joint within :attr:`torque_limit`.
 
-        ``torques_of`` maps contact forces to the law's joint torques [N m] (affine in them, without side effects).
+        ``torques_of`` maps contact forces to the law's joint torques [N m] (affine in them, without side effects; the
+        SMC-adaptive law with ``hand_adaptation`` is affine to first order: its estimate's update depends on them, and
+        the limit then holds to its second-order term, ~1e-10 N m measured).
         Unchanged (the same array) without a limit or within it; the wrench they exert is the same
         (:mod:`bhgrasp.grasp.torque_limited`).  With a limit, logs ``squeeze_scale`` (beta, 1 when unchanged) and
         the scaled forces' ``commanded_normal``, ``cone_margin`` and ``wrench_residual``.
@@ -263,11 +267,12 @@ class ObjectGraspController(Controller):
             return forces
         torque = torques_of(forces)
         beta = 1.0
-        if not np.all(np.abs(torque) <= limits):
+        if np.all(np.isfinite(torque)) and not np.all(np.abs(torque) <= limits):  # non-finite: __call__ raises
             wrench_part, internal = split_internal(contacts.grasp_map, forces)
-            beta = internal_scale(
-                torque, torques_of(wrench_part), limits, forces[:, 2], wrench_part[:, 2], self.min_normal_force
-            )
+            wrench_torque = torques_of(wrench_part)
+            if not np.all(np.isfinite(wrench_torque)):
+                raise InputError(f"{type(self).__name__}: non-finite torques {wrench_torque} for the wrench's forces")
+            beta = internal_scale(torque, wrench_torque, limits, forces[:, 2], wrench_part[:, 2])
             forces = wrench_part + beta * internal
             self._log_commanded(contacts, forces)
             residual = contacts.grasp_map @ forces.ravel() - self.log["wrench"]
@@ -282,7 +287,7 @@ def joint_limits(torque_limit: Any, nv: int) -> np.ndarray | None:
         return None
     limits = np.array(np.broadcast_to(torque_limit, (nv,)) if np.ndim(torque_limit) == 0 else torque_limit)
     if limits.shape != (nv,):
-        raise InputError(f"`torque_limit` must be one number or one per joint ({nv}), got {len(limits)} limits")
+        raise InputError(f"`torque_limit` must be one number or one per joint ({nv}), got {torque_limit!r}")
     limits.flags.writeable = False
     return limits
 

@@ -14,9 +14,11 @@ SMC-adaptive law's force feedback is linear in them too), so with tau(1) and tau
     tau(beta) = tau(0) + beta (tau(1) - tau(0)).
 
 :func:`internal_scale` picks the largest beta in [beta_min, 1] that keeps every |tau_j(beta)| within its limit
-L_j, where beta_min is the least squeeze that leaves every normal force at the least one the distribution asks
-(or 0, or 1 when f_w alone already presses harder); when no beta in that range keeps every joint within its limit,
-the beta with the smallest largest ratio |tau_j| / L_j (the largest such beta when several have it).  A joint
+L_j, where beta_min is the least squeeze with which every contact still presses (no normal force below 0; 0 where
+f_w's normals alone are all >= 0).  The limit comes before the distribution's least normal force, a preference: a
+contact at it loses squeeze with the others.  When no beta in that range keeps every joint within its limit, the
+beta with the smallest largest ratio |tau_j| / L_j over the joints beta moves (the largest such beta when several
+have it; a joint whose torque does not depend on the squeeze cannot be helped by it).  A joint
 torque clipped by the drive, one finger pressing less than the others, pushes the object out of balance; scaled
 this way the fingers press less together.
 """
@@ -51,17 +53,15 @@ def internal_scale(
     limits: np.ndarray,
     normals: np.ndarray,
     wrench_normals: np.ndarray,
-    min_normal_force: float,
 ) -> float:
     """The squeeze fraction beta in [0, 1] that keeps the joints within their limits (module docstring).
 
     Args:
-        torque: tau(1) (nv,) [N m], the joint torques with the distribution's forces.
-        wrench_torque: tau(0) (nv,) [N m], with their wrench part f_w alone.
+        torque: tau(1) (nv,) [N m], the joint torques with the distribution's forces (finite).
+        wrench_torque: tau(0) (nv,) [N m], with their wrench part f_w alone (finite).
         limits: L (nv,) [N m], every entry > 0 (``inf`` for a joint without a limit).
         normals: The distribution's normal forces (n,) [N].
         wrench_normals: f_w's normal forces (n,) [N].
-        min_normal_force: The least normal force [N] the distribution keeps.
     """
     torque, wrench_torque = np.asarray(torque, dtype=float), np.asarray(wrench_torque, dtype=float)
     limits = np.asarray(limits, dtype=float)
@@ -70,18 +70,21 @@ def internal_scale(
     internal = np.asarray(normals, dtype=float) - wrench_normals
     lowest = 0.0
     for base, slope in zip(wrench_normals, internal):
-        if slope > 0.0:  # beta >= (f_min - f_w,n) / f_i,n keeps this normal at the least one
-            lowest = max(lowest, (min_normal_force - base) / slope)
+        if slope > 0.0:  # beta >= -f_w,n / f_i,n keeps this contact pressing
+            lowest = max(lowest, -base / slope)
     lowest = min(lowest, 1.0)
-    slope = torque - wrench_torque
-    finite = np.isfinite(limits)
-    base, slope = wrench_torque[finite] / limits[finite], slope[finite] / limits[finite]
+    slope = (torque - wrench_torque) / limits
+    base = wrench_torque / limits
+    # joints whose torque beta moves (none of a joint without a limit); one it does not move cannot be helped
+    moved = np.isfinite(limits) & (np.abs(slope) > 1e-12 * np.maximum(1.0, np.abs(base)))
+    if not moved.any():
+        return 1.0
+    base, slope = base[moved], slope[moved]
     # the largest ratio r(beta) = max_j |base_j + beta slope_j| is convex and piecewise linear: its least value over
     # [lowest, 1] is at an end or where two of its lines cross; below 1 any beta of the interval r <= 1 will do
     candidates = [lowest, 1.0]
     for sign in (1.0, -1.0):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            candidates += list((sign - base) / slope)
+        candidates += list((sign - base) / slope)
     lines = np.concatenate((slope, -slope)), np.concatenate((base, -base))
     for i in range(len(lines[0])):
         for j in range(i + 1, len(lines[0])):

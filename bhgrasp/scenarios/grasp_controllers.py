@@ -32,7 +32,7 @@ def grasp_controller(
     mu: float = MU_ASSUMED,
     adaptation: str = "thesis",
     friction_margin: float | None = None,
-    torque_limit: float | None = None,
+    torque_limit: Any = None,
 ) -> ObjectGraspController:
     """The object-space controller called ``name`` (one of :data:`CONTROLLERS`) with the demo's gains.
 

@@ -120,6 +120,8 @@ def check_demo_arguments(**arguments: Any) -> None:
         GraspOptions(friction_margin=arguments["friction_margin"])  # its check: a fraction in [0, 1)
     if not isinstance(arguments.get("torque_limit_known", False), (bool, np.bool_)):
         raise InputError(f"`torque_limit_known` must be True or False, got {arguments['torque_limit_known']!r}")
+    if arguments.get("torque_limit_known") and arguments.get("torque_limit") is None:
+        raise InputError("`torque_limit_known=True` tells the controller the `torque_limit`, but none was given")
     check_uncertainty(**{name: arguments[name] for name in UNCERTAINTIES if name in arguments})
 
 

@@ -83,6 +83,10 @@ SCENARIOS: dict[str, tuple[str, dict[str, Any]]] = {
         {"friction": 0.48, "friction_margin": MARGIN},
     ),
     "all": ("all at milder levels (see notes)", ALL),
+    "all_estimated": (
+        f"all at milder levels, pose from the encoders and the tracker, friction margin {100 * MARGIN:.0f} %",
+        {**ALL, "estimator": "hand", "friction_margin": MARGIN},
+    ),
     "all_remedied": (
         f"all at milder levels, pose from the encoders and the tracker, friction margin {100 * MARGIN:.0f} %, the "
         "torque limit told to the controller",
