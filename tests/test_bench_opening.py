@@ -11,8 +11,9 @@ from bhgrasp.bench.height import STAND_MARGIN, SWEEP, first_touches, grasp_clear
 from bhgrasp.bench.objects import SETS, BenchObject
 from bhgrasp.bench.opening import top_down, way_in_gap, widened
 from bhgrasp.bench.placement import grasp_centre
-from bhgrasp.bench.protocol import PRESHAPE, THREE_FINGER_SPREAD, spread_of
+from bhgrasp.bench.protocol import PRESHAPE, THREE_FINGER_SPREAD, Trial, spread_of
 from bhgrasp.bench.reach import reach_of
+from bhgrasp.bench.side import approach_of, top_grasp, trial_opening
 
 BALL = BenchObject.parse("sphere:0.07:0.123")  # held-out-3's mini soccer ball
 
@@ -41,10 +42,15 @@ def test_the_hand_opens_to_the_first_opening_that_clears_the_ball() -> None:
         assert top_down(BALL, THREE_FINGER_SPREAD, grasp) == (opening, 0.0)
         # there every finger first touches the ball below its equator, with its fingertip
         assert grasp_ready(BALL, THREE_FINGER_SPREAD, 0.0, opening, grasp)
+        # and a trial comes down so, alone on its stand or on a table among neighbours (no side pinch)
+        for table in (False, True):
+            trial = Trial(BALL, grasp, table=table)
+            assert approach_of(trial) == "top" and trial_opening(trial) == opening and top_grasp(trial)[1] == 0.0
 
 
 def test_opening_further_changes_no_first_touch() -> None:
-    """Why the search stops where the open fingers clear the object: a closing finger passes the same angles."""
+    """Why the search stops where the open fingers clear the object: from a wider opening a closing finger passes the
+    same angles (the ball's first touches, links and points, from 0.69 and from 0.4 rad)."""
     found = first_touches(BALL, THREE_FINGER_SPREAD, 0.0, 0.69)
     wider = first_touches(BALL, THREE_FINGER_SPREAD, 0.0, 0.4)
     for finger, (link, point) in found.items():

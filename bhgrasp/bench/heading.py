@@ -28,7 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from bhgrasp._validation import as_real
-from bhgrasp.bench.height import SWEEP
+from bhgrasp.bench.height import DESCENT_STEP, SWEEP
 from bhgrasp.bench.objects import MESHED
 from bhgrasp.bench.placement import grasp_offset
 from bhgrasp.bench.protocol import APPROACH, Trial
@@ -39,7 +39,6 @@ from bhgrasp.model.objects import RigidObject
 
 CLEAR = 0.01  # [m] the least distance to every neighbour on the way down and while closing that takes a heading
 HEADING_STEP = math.radians(15.0)  # [rad] the headings tried for a round object
-DESCENT_STEP = 0.005  # [m] the open hand's heights checked on its way down
 
 
 def hand_base(trial: Trial, approach: float = 0.0, heading: float = 0.0) -> pin.SE3:
@@ -92,9 +91,10 @@ def heading_clearance(trial: Trial, neighbours: Sequence[RigidObject], heading: 
     """The hand's least distance [m] from the neighbours at ``heading`` (negative: it would press into one).
 
     Over the open hand's way down from :data:`~bhgrasp.bench.protocol.APPROACH` above its grasp (every
-    :data:`DESCENT_STEP`, every collision shape of the hand) and each finger's close from the pre-shape to its first
-    touch of the object (the finger's links, in :data:`~bhgrasp.bench.height.SWEEP` steps; coal's distances, the
-    distal at a third of the proximal as before the TorqueSwitch breaks away).  The neighbours where they rest.
+    :data:`~bhgrasp.bench.height.DESCENT_STEP`, every collision shape of the hand) and each finger's close from the
+    trial's opening to its first touch of the object (the finger's links, in :data:`~bhgrasp.bench.height.SWEEP`
+    steps; coal's distances, the distal at a third of the proximal as before the TorqueSwitch breaks away).  The
+    neighbours where they rest.
     """
     shapes = [(shape, coal_transform(body.pose)) for body in neighbours for shape in body.collision_shapes()]
     request, nearest, bases = coal.DistanceRequest(), math.inf, {}
@@ -114,7 +114,7 @@ def hand_poses(trial: Trial) -> tuple[tuple[float, tuple[tuple[coal.CollisionGeo
     """The hand poses :func:`heading_clearance` measures, whatever the heading, once per trial and process.
 
     ``(distance back along the way in [m], ((a hand shape, its placement in the hand base frame), ...))``: the open
-    hand every :data:`DESCENT_STEP` on its way in, all its shapes; each finger's links in
+    hand every :data:`~bhgrasp.bench.height.DESCENT_STEP` on its way in, all its shapes; each finger's links in
     :data:`~bhgrasp.bench.height.SWEEP` steps of its close to its first touch of the object.
     """
     reach, centre = trial_reach(trial)

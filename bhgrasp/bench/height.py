@@ -27,6 +27,7 @@ TABLE_REACH = 0.2  # [m] a trial among neighbours: the table around the stand re
 STAND_MARGIN = 0.003  # [m] the fingers' least distance from the stand when they touch the object (~3x the contact's
 # 1 mm penetration under the power close)
 SWEEP = 0.01  # [rad] the close's proximal steps in :func:`stand_clearance`
+DESCENT_STEP = 0.005  # [m] the open hand's heights checked on its way down (bench.opening, bench.heading)
 
 
 def support_box(item: BenchObject, table: bool = False) -> coal.Box:
@@ -131,17 +132,8 @@ def grasp_clearance(
     return None
 
 
-def trial_clearance(item: BenchObject, spread: float, grasp: str, opening: float, table: bool = False) -> float:
-    """Where a trial puts the knuckles [m above the object's top]: :func:`grasp_clearance`, or 0.
-
-    0 (on its top) where no height qualifies; the trial's failure then says so
-    (:data:`~bhgrasp.bench.metrics.NO_HEIGHT`).
-    """
-    clearance = grasp_clearance(item, spread, grasp, opening, table=table)
-    return 0.0 if clearance is None else clearance
-
-
 __all__ = [
+    "DESCENT_STEP",
     "STAND_HEIGHT",
     "STAND_MARGIN",
     "SWEEP",
@@ -152,5 +144,4 @@ __all__ = [
     "grasp_ready",
     "stand_clearance",
     "support_box",
-    "trial_clearance",
 ]

@@ -29,7 +29,7 @@ from bhgrasp.bench.protocol import (
     STRICT,
     Trial,
 )
-from bhgrasp.bench.side import PINCH, approach_of, closing_fingers, trial_spread
+from bhgrasp.bench.side import PINCH, approach_of, closing_fingers, trial_opening, trial_spread
 from bhgrasp.bench.table import supports
 from bhgrasp.model.hand import STANDARD_GRAVITY
 
@@ -47,12 +47,13 @@ PLACED = 0.002  # [m] placed: back within this of its resting height, the stand 
 def evaluate(trial: Trial, trajectory, hand: bh.Hand, heading: float = 0.0) -> dict:
     """A trial's record from its trajectory.
 
-    Lifted height; displacement and rotation in the palm frame from the closed grasp before the lift (the lift's sag
-    counts) through the shake; the grip once lifted (each finger's normal force on the object against
-    :func:`least_grip`, distal joints off their stops); the envelope (peak forces, finger joint torques against their
-    ratings) and what the protocol's loads need of the ratings at the held grasp (``need_to_rating``, ``need_joint``:
-    :mod:`~bhgrasp.bench.need`; the pushes turned ``heading`` [rad] with the hand); success (held, gripped, inside
-    the envelope, within the thresholds, and placed back), slip, and why it failed.
+    The approach, spread and opening (proximal angle [rad] of the open hand); lifted height; displacement and rotation
+    in the palm frame from the closed grasp before the lift (the lift's sag counts) through the shake; the grip once
+    lifted (each finger's normal force on the object against :func:`least_grip`, distal joints off their stops); the
+    envelope (peak forces, finger joint torques against their ratings) and what the protocol's loads need of the
+    ratings at the held grasp (``need_to_rating``, ``need_joint``: :mod:`~bhgrasp.bench.need`; the pushes turned
+    ``heading`` [rad] with the hand); success (held, gripped, inside the envelope, within the thresholds, and placed
+    back), slip, and why it failed.
     """
     t = trajectory.t
     closed = min(int(np.searchsorted(t, LIFT_AT - 1e-9)), len(t) - 1)
@@ -70,6 +71,7 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand, heading: float = 0.0) -> d
         "actuation": trial.actuation,
         "approach": approach_of(trial),
         "spread": trial_spread(trial),
+        "opening": trial_opening(trial),
         "lifted": lifted,
         "max_displacement": float(offsets.max()),
         "max_rotation": float(turns.max()),

@@ -1,10 +1,10 @@
 """How far the grasp benchmark opens the hand over an object: the pre-shape, or wider where the open hand meets it.
 
 The hand comes down over an object with every finger at :data:`~bhgrasp.bench.protocol.PRESHAPE` (proximal 0.8 rad,
-the distal at a third), a constant chosen on the development set.  A large object reaches into that open hand: the
-70 mm-radius ball of held-out-3 met F3's open fingertip, 3.5-7.7 mm deep, at every height of the height rule's grid
-from its top up to 40 mm, so no top-down height qualified (:func:`~bhgrasp.bench.height.stand_clearance` refuses a
-finger that touches the object before it closes), and the trial fell back to a two-finger side pinch, which turned.
+the distal at a third).  A large object reaches into that open hand: a ball of 70 mm radius meets F3's open fingertip,
+3.5-7.7 mm deep, at every height of the height rule's grid at which F1 and F2 reach it (its top up to 40 mm), so no
+top-down height qualifies there (:func:`~bhgrasp.bench.height.stand_clearance` refuses a finger that touches the
+object before it closes).
 
 The rule (:func:`top_down`), the same for both grasps: at the pre-shape wherever the height rule finds a height there.
 Where it finds none and the open hand meets the object on its way down (:func:`way_in_gap`: the open fingers' least
@@ -12,11 +12,10 @@ distance from the object over the last :data:`~bhgrasp.bench.protocol.APPROACH` 
 its top, below :data:`~bhgrasp.bench.height.STAND_MARGIN`), the fingers open further,
 :data:`~bhgrasp.bench.height.SWEEP` at a time, to the first opening at which they clear it by ``STAND_MARGIN`` there
 (:func:`widened`; at most to the proximal joints' lower limit), and the height rule runs again at that opening; the
-height it finds must leave the open fingers ``STAND_MARGIN`` off the object all the way down to it too.  Opening
-further changes no finger's first touch (a closing finger passes the same angles).  No constant is chosen: the margin
-and step are the height rule's.  Found on held-out-3's mini soccer ball (its trials had been seen); a fourth held-out
-set was fixed before the rule was written (:data:`~bhgrasp.bench.objects.HELD_OUT_SET_4`).  On the development and
-first three held-out sets it changes that ball alone (0.69 rad, the knuckles on its top).
+height it finds must leave the open fingers ``STAND_MARGIN`` off the object all the way down to it too.  The search
+stops at that first clearing opening: a closing finger passes the same angles from any wider one (on the 70 mm ball
+its first touches are the same from 0.4 rad, tested).  The margin and the steps are the height and heading rules'.
+Where the rule came from, and which object sets test it: :mod:`~bhgrasp.bench.protocol`.
 """
 
 from __future__ import annotations
@@ -25,13 +24,11 @@ import functools
 
 import numpy as np
 
-from bhgrasp.bench.height import STAND_MARGIN, SWEEP, grasp_clearance
+from bhgrasp.bench.height import DESCENT_STEP, STAND_MARGIN, SWEEP, grasp_clearance
 from bhgrasp.bench.objects import BenchObject
 from bhgrasp.bench.placement import grasp_centre
 from bhgrasp.bench.protocol import APPROACH, PRESHAPE
 from bhgrasp.bench.reach import reach_of
-
-DESCENT_STEP = 0.0025  # [m] the open hand's heights checked on its way down
 
 
 def way_in_gap(item: BenchObject, spread: float, clearance: float, opening: float) -> float:
@@ -39,9 +36,10 @@ def way_in_gap(item: BenchObject, spread: float, clearance: float, opening: floa
 
     Every finger's links at proximal ``opening`` [rad] (the distal at a third), the hand placed as
     :func:`~bhgrasp.bench.placement.grasp_centre` puts it for ``clearance`` [m] and up to
-    :data:`~bhgrasp.bench.protocol.APPROACH` above, every :data:`DESCENT_STEP` (coal's distances).
+    :data:`~bhgrasp.bench.protocol.APPROACH` above, every :data:`~bhgrasp.bench.height.DESCENT_STEP` (coal's
+    distances).
     """
-    reach = reach_of(item, spread, opening)
+    reach = reach_of(item, spread, PRESHAPE)  # its distances take the fingers' angle: one Reach for every opening
     centre = grasp_centre(item, spread, clearance, opening)
     return min(
         reach.distance(finger, opening, centre + np.array([0.0, 0.0, back]))  # higher: the object further along z
@@ -88,4 +86,4 @@ def widened(item: BenchObject, spread: float) -> float | None:
     return None
 
 
-__all__ = ["DESCENT_STEP", "top_down", "way_in_gap", "widened"]
+__all__ = ["top_down", "way_in_gap", "widened"]

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from bhgrasp.bench.protocol import ACTUATIONS, DIRECTIONS, DISTURBED, FORCE_LIMIT, LOOSE, STRICT
+from bhgrasp.bench.protocol import ACTUATIONS, DIRECTIONS, DISTURBED, FORCE_LIMIT, LOOSE, PRESHAPE, STRICT
 
 OUTCOMES = ("success", "strict_success", "placed", "inside_envelope", "gripped", "approach")
 METRICS = (
@@ -136,7 +136,13 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
         "the grasp held before the pushes (pyramids circumscribing the cones, `bhgrasp/bench/need.py`; - where the "
         "hand did not touch it, no such forces carry a load, or the solver failed). A grasp marked (side) is a side "
         "pinch: where no top-down grasp height qualifies, the palm turns sideways and F1 and F2, spread to face "
-        "each other, close in one horizontal plane while F3 stays open (`bhgrasp/bench/side.py`).",
+        "each other, close in one horizontal plane while F3 stays open (`bhgrasp/bench/side.py`)."
+        + (
+            " A grasp marked (opened X rad) came down with its fingers opened wider than the pre-shape, where the "
+            "open hand would meet the object on its way down (`bhgrasp/bench/opening.py`)."
+            if any(_opened(t) for t in trials)
+            else ""
+        ),
         "",
         *(
             [
@@ -172,7 +178,7 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
     for t in trials:
         number = functools.partial(_number, t)
         lines.append(
-            f"| {t['object']} (`{t['spec']}`) | {t.get('set', '') or 'given'} | {t['grasp']}{_side(t)} | "
+            f"| {t['object']} (`{t['spec']}`) | {t.get('set', '') or 'given'} | {t['grasp']}{_mark_grasp(t)} | "
             f"{number('spread', 180 / math.pi, '.0f')} | "
             f"{t['actuation']} | {_mark(t['success'])} | "
             f"{_mark(t['strict_success'])} | {_mark(t['placed'])} | {number('max_displacement', 1e3)} | "
@@ -260,9 +266,17 @@ def _number(trial: dict[str, Any], key: str, scale: float = 1.0, fmt: str = ".1f
     return "-" if value is None else format(scale * value, fmt)
 
 
-def _side(trial: dict[str, Any]) -> str:
-    """The mark of a side pinch's grasp (:mod:`~bhgrasp.bench.side`), else nothing."""
-    return " (side)" if trial.get("approach") == "side" else ""
+def _mark_grasp(trial: dict[str, Any]) -> str:
+    """The mark of a side pinch's grasp (:mod:`~bhgrasp.bench.side`) or of a wider opening, else nothing."""
+    if trial.get("approach") == "side":
+        return " (side)"
+    return f" (opened {trial['opening']:.2f} rad)" if _opened(trial) else ""
+
+
+def _opened(trial: dict[str, Any]) -> bool:
+    """Whether a trial came down with its fingers opened wider than the pre-shape (:mod:`~bhgrasp.bench.opening`)."""
+    opening = trial.get("opening")
+    return opening is not None and opening < PRESHAPE
 
 
 def _mark(value: bool) -> str:

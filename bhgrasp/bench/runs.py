@@ -88,7 +88,7 @@ def run_bench(
         trial = {key: row[key] for key in ("spec", "set", "grasp", "actuation", *(CLUTTER if neighbours else ()))}
         trial["object"] = row["name"]
         if row["status"] == "ok":
-            named = ("spread", *OUTCOMES, *METRICS, "most_loaded_joint", "need_joint", "failure")
+            named = ("spread", "opening", *OUTCOMES, *METRICS, "most_loaded_joint", "need_joint", "failure")
             trial.update({key: row[key] for key in named})
             trial.update({key: row[key] for key in NEIGHBOURS if neighbours})
             if neighbours:  # a count (the table's column is float where an errored trial left it empty)
@@ -96,6 +96,7 @@ def run_bench(
         else:
             trial.update(
                 spread=row.get("spread"),
+                opening=row.get("opening"),
                 success=False,
                 strict_success=False,
                 placed=False,

@@ -2,8 +2,8 @@
 
 A low object (a 15-35 mm box, a 33 mm can) or a small ball leaves no top-down grasp height
 (:mod:`~bhgrasp.bench.height`): the fingers, 126 mm long, sweep past the object's side onto its stand before they
-touch it.  (A large ball, 70 mm in radius, left none either at the pre-shape, whose open F3 it reached into; the hand
-now opens wider for it, :mod:`~bhgrasp.bench.opening`, and takes it from above.)  Turned palm sideways
+touch it.  (A ball of 70 mm radius leaves none at the pre-shape either, for it reaches into the open F3; the hand opens
+wider for it, :mod:`~bhgrasp.bench.opening`, and takes it from above.)  Turned palm sideways
 (:data:`~bhgrasp.bench.reach.SIDEWAYS`: the palm's normal along world +x, F3 up, F1 towards world -y) with F1 and F2
 spread to face each other (:data:`SIDE_SPREAD`), the two fingers close in one horizontal plane, the pinch plane, and
 press the object between them across its y edges; F3 stays open above it.
