@@ -234,8 +234,17 @@ class SMCAdaptiveGrasp(ObjectGraspController):
         wrench, regressor, s_o, v_r, a_r = self.object_law(t, dt, state)
         desired = self.distribute(contacts, wrench)
         finger_law = partial(self._finger_law, dt, state, contacts, maps, v_r, a_r)
-        desired = self.limit_squeeze(contacts, desired, lambda forces: finger_law(forces)[0])
-        tau, integral, force_error, s_f, hand_estimate = finger_law(desired)
+        evaluated: dict[int, tuple] = {}  # the law's result for forces limit_squeeze evaluated, by their array
+
+        def torques_of(forces: np.ndarray) -> np.ndarray:
+            evaluated[id(forces)] = (forces, finger_law(forces))
+            return evaluated[id(forces)][1][0]
+
+        limited = self.limit_squeeze(contacts, desired, torques_of)
+        known = evaluated.get(id(limited))  # left unchanged: the law already ran for them
+        result = known[1] if known is not None and known[0] is limited else finger_law(limited)
+        tau, integral, force_error, s_f, hand_estimate = result
+        desired = limited
         self._integral = dict(zip(contacts.fingers, integral))
         if hand_estimate is not None:
             self.hand_estimate = hand_estimate
