@@ -24,6 +24,9 @@ and simulated as itself (its hull, or convex pieces if the hull exceeds it by mo
 - :data:`HELD_OUT_SET_4`, fixed before any of its trials ran and before the open hand's pre-shape was made to clear
   the object on its way in: a tea box, a soap bar, a 1 L juice carton, a soda can, a 0.5 L water bottle, a short
   wide tea tin, a jam jar, four balls of 22-45 mm;
+- :data:`HELD_OUT_SET_5`, fixed before any of its trials ran and before the shake's pushes were made to start from
+  the held grasp at rest: a small cracker box, a butter block, a 0.5 L milk carton, a dish-soap bottle, a bean can, a
+  shoe-polish tin, a spray can, a sauce bottle, three balls of 30-45 mm;
 - :data:`MESH_SET` (:func:`mesh_set`, read at its first use): the development set's objects simulated as meshes
   (each must end as its primitive does), and the household mug and bottle that fit the hand's span.
 
@@ -268,6 +271,20 @@ HELD_OUT_SET_4 = (
     BenchObject("sphere", (0.045,), 0.3, "grapefruit"),
 )
 
+HELD_OUT_SET_5 = (
+    BenchObject("box", (0.10, 0.06, 0.16), 0.25, "cracker box"),
+    BenchObject("box", (0.12, 0.065, 0.035), 0.25, "butter block"),
+    BenchObject("box", (0.07, 0.07, 0.12), 0.53, "milk carton"),
+    BenchObject("box", (0.08, 0.045, 0.22), 0.5, "dish-soap bottle"),
+    BenchObject("cylinder", (0.0375, 0.11), 0.45, "bean can"),
+    BenchObject("cylinder", (0.04, 0.03), 0.1, "shoe-polish tin"),
+    BenchObject("cylinder", (0.0325, 0.19), 0.3, "spray can"),
+    BenchObject("cylinder", (0.03, 0.2), 0.55, "sauce bottle"),
+    BenchObject("sphere", (0.03,), 0.09, "tangerine"),
+    BenchObject("sphere", (0.036,), 0.16, "field hockey ball"),
+    BenchObject("sphere", (0.045,), 0.3, "pomegranate"),
+)
+
 
 @functools.lru_cache(maxsize=1)
 def mesh_set() -> tuple[BenchObject, ...]:
@@ -293,6 +310,7 @@ class _Sets(Mapping):
         "held-out-2": HELD_OUT_SET_2,
         "held-out-3": HELD_OUT_SET_3,
         "held-out-4": HELD_OUT_SET_4,
+        "held-out-5": HELD_OUT_SET_5,
     }
 
     def __getitem__(self, name: str) -> tuple[BenchObject, ...]:
@@ -324,6 +342,7 @@ __all__ = [
     "HELD_OUT_SET_2",
     "HELD_OUT_SET_3",
     "HELD_OUT_SET_4",
+    "HELD_OUT_SET_5",
     "KINDS",
     "OBJECT_SET",
     "SETS",

@@ -10,7 +10,7 @@ import sys
 from bhgrasp.cli import arguments as checked
 
 # bhgrasp.bench.objects.SETS, checked equal by the tests
-SETS = ("development", "held-out", "held-out-2", "held-out-3", "held-out-4", "meshes")
+SETS = ("development", "held-out", "held-out-2", "held-out-3", "held-out-4", "held-out-5", "meshes")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -34,8 +34,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=SETS,
         default=None,
         help="a built-in object set: development (the protocol's constants were chosen on it), held-out (fixed "
-        "before tuning), held-out-2, held-out-3 and held-out-4 (each fixed before any of its trials ran) or meshes "
-        "(the development set as meshes, a mug and a bottle); repeatable; with --object, added to those",
+        "before tuning), held-out-2 to held-out-5 (each fixed before any of its trials ran) or meshes (the "
+        "development set as meshes, a mug and a bottle); repeatable; with --object, added to those",
     )
     add(
         "--grasp",
