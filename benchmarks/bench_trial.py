@@ -28,7 +28,7 @@ import numpy as np
 
 from bhgrasp.bench.objects import BenchObject
 from bhgrasp.bench.protocol import HELD_AT, RELEASE, SHAKE_TIME, Trial
-from bhgrasp.bench.trial import BenchController, fallen, setup, shake_force
+from bhgrasp.bench.trial import BenchController, run_protocol, setup
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.sim import Simulator
 from bhgrasp.sim.actuation import BarrettActuation
@@ -61,15 +61,7 @@ def run(trial: Trial, duration: float, compiled: bool) -> dict:
     setattr(CompiledEngine, name, timed)
     try:
         start = time.perf_counter()
-        trajectory = simulator.run(
-            controller,
-            duration,
-            state=state,
-            progress=False,
-            record_every=40,
-            object_forces=shake_force(trial.item.mass),
-            until=fallen(simulator.scene),
-        )
+        trajectory = run_protocol(simulator, state, controller, record_every=40, duration=duration)
         wall = time.perf_counter() - start
     finally:
         setattr(CompiledEngine, name, call)

@@ -245,7 +245,7 @@ def test_the_readme_states_the_committed_figures_of_the_held_grasps() -> None:
     trials = json.loads((REFERENCE / "grasp_benchmark.json").read_text())["trials"]
     held = [t for t in trials if t["set"] != "development" and t["success"]]
     top = (
-        "Over the four held-out sets, from above: at most {} mm and {} deg under the pushes, each finger pressing "
+        "Over the five held-out sets, from above: at most {} mm and {} deg under the pushes, each finger pressing "
         "{}-{} N, every joint at most {} of its rating, no contact above {} N."
     )
     side = (

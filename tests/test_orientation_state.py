@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -82,6 +83,26 @@ def test_trajectory_slices_by_time(trajectory: Trajectory) -> None:
     np.testing.assert_array_equal(part.contacts_at(k - 50)["force"], trajectory.contacts_at(k)["force"])
     with pytest.raises(bh.InputError, match="no samples between t = 5 and 6 s"):
         trajectory.between(5, 6)
+
+
+def test_joined_parts_are_the_whole_record(trajectory: Trajectory) -> None:
+    """Cut in three at any samples and joined again, a record is the same arrays, contacts and log."""
+    cuts = (0, 37, 90, len(trajectory))
+    assert len(trajectory.contact_depth) > 0  # the box rests on the table: contacts to keep in step with the samples
+    joined = Trajectory.joined([trajectory[a:b] for a, b in itertools.pairwise(cuts)])
+    for name in ("t", "q", "u", "tau", "object_position", "contact_offsets", "contact_force", "contact_pair"):
+        np.testing.assert_array_equal(getattr(joined, name), getattr(trajectory, name), err_msg=name)
+    assert joined.log.keys() == trajectory.log.keys()
+    for name, values in trajectory.log.items():
+        np.testing.assert_array_equal(joined.log[name], values)
+    np.testing.assert_array_equal(joined.contacts_at(60)["force"], trajectory.contacts_at(60)["force"])
+
+
+def test_joining_refuses_no_parts_and_times_that_go_back(trajectory: Trajectory) -> None:
+    with pytest.raises(bh.InputError, match="at least one part"):
+        Trajectory.joined([])
+    with pytest.raises(bh.InputError, match="must increase: a part ends at t = 0.1 s and the next starts at 0.05"):
+        Trajectory.joined([trajectory.between(0.0, 0.1), trajectory.between(0.05, 0.2)])
 
 
 def test_loading_something_else_fails_clearly(tmp_path: Path) -> None:

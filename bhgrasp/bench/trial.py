@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import math
 from collections.abc import Callable
 
@@ -35,6 +37,7 @@ from bhgrasp.bench.protocol import (
 from bhgrasp.bench.side import closing_fingers, trial_opening, trial_spread, way_in
 from bhgrasp.bench.table import NEIGHBOUR_DRAG, Clutter, stand_of, supports
 from bhgrasp.controllers.mount import MountServo
+from bhgrasp.data.trajectory import Trajectory
 from bhgrasp.errors import InputError
 from bhgrasp.model.mount import mounted
 from bhgrasp.motion.held import HeldReference
@@ -110,13 +113,11 @@ def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None, start_ch
     q[[hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]] = spread
     turn = pin.rpy.rpyToMatrix(0.0, 0.0, heading)
     inward, up = np.array([*(approach * turn @ way_in(trial)), 0, 0, 0]), np.array([0, 0, LIFT, 0, 0, 0])
-    shake = 6 * SHAKE_TIME
-    moves = [
+    moves = [  # the shake's pushes run from the held grasp with the wrist held there (run_protocol)
         (inward, CLOSE_AT),
         (np.zeros(6), LIFT_AT - CLOSE_AT),
         (up, 1.0),
         (np.zeros(6), HELD_AT - LIFT_AT - 1.0),
-        (np.zeros(6), shake),
         (-(LIFT - DROP) / LIFT * up, 1.0),
     ]
     path = MountReference(PosePath(base, moves), hand.base_placement)
@@ -124,14 +125,18 @@ def setup(trial: Trial, dt: float = DT, clutter: Clutter | None = None, start_ch
 
 
 class BenchController:
-    """The trial's commands: the wrist on its path (MountServo), the fingers by the driver or by joint torques."""
+    """The trial's commands: the wrist on its path (MountServo), the fingers by the driver or by joint torques.
+
+    On its own clock: approach, close and lift to HELD_AT, then the place.  The shake's pushes run on copies taken
+    at HELD_AT that hold the wrist there (:meth:`holding`; :func:`run_protocol`).
+    """
 
     def __init__(self, trial: Trial, hand: bh.Hand, path: MountReference) -> None:
         self.trial, self.hand = trial, hand
         self.path = HeldReference(path)
         self.servo = MountServo(hand, self.path, fingers="zero", compensate_load=False)
         self.spread = [hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]
-        self.place_from = HELD_AT + 6 * SHAKE_TIME  # the place's descent starts
+        self.place_from = HELD_AT  # the place's descent starts (its own run from the held grasp: run_protocol)
         self.place_at = self.place_from + 1.0  # open here, or where the stand takes the object's weight first
         self.set_down = 0.5 * trial.item.mass * GRAVITY  # [N] the stand's push that ends the descent
         self.stand = supports(trial)  # the stand, and the table around it among neighbours
@@ -163,6 +168,17 @@ class BenchController:
         """
         pushes = [f for f, pair in zip(state.contact_forces, state.contact_bodies) if self.stand & set(pair)]
         return float(np.sum(pushes, axis=0)[2]) >= self.set_down if pushes else False
+
+    def holding(self) -> BenchController:
+        """A copy of this controller, as it stands, for a push from the held grasp.
+
+        It holds the wrist where the lift leaves it (at HELD_AT) and never places, nor opens the idealised hand's
+        fingers.
+        """
+        held = copy.deepcopy(self)
+        held.path.hold(HELD_AT)
+        held.place_at = math.inf  # the idealised hand's fingers keep closing
+        return held
 
     def reset(self, state: bh.State) -> None:
         """Start a trial at ``state`` (the driver's script, the spread hold)."""
@@ -231,19 +247,88 @@ def simulate_trial(
     """
     simulator, state, hand, path = setup(trial, dt, clutter)
     controller = BenchController(trial, hand, path)
-    duration = HELD_AT + 6 * SHAKE_TIME + 1.0 + RELEASE if duration is None else duration
-    trajectory = simulator.run(
-        controller,
-        duration,
-        state=state,
-        progress=False,
-        record_every=record_every,
-        object_forces=shake_force(
-            trial.item.mass, len(simulator.scene.objects), 0.0 if clutter is None else clutter.heading
-        ),
-        until=fallen(simulator.scene),
-    )
-    return trajectory, hand
+    heading = 0.0 if clutter is None else clutter.heading
+    return run_protocol(simulator, state, controller, record_every, duration, heading), hand
+
+
+class _Resumed:
+    """A controller run on from where it stands: its ``reset`` is not called again (its log is still recorded)."""
+
+    def __init__(self, controller: BenchController) -> None:
+        self.controller = controller
+
+    @property
+    def log(self) -> dict:
+        return self.controller.log
+
+    def __call__(self, t: float, state: bh.State) -> np.ndarray:
+        return self.controller(t, state)
+
+
+class _LastState:
+    """An ``until`` that keeps the last state a run reached and stops it where the object fell."""
+
+    def __init__(self, scene: Scene) -> None:
+        self.fell = fallen(scene)
+        self.state: bh.State | None = None
+        self.stopped = False
+
+    def __call__(self, state: bh.State) -> bool:
+        self.state = state
+        self.stopped = self.fell(state)
+        return self.stopped
+
+
+def run_protocol(
+    simulator: Simulator,
+    state: bh.State,
+    controller: BenchController,
+    record_every: int = 40,
+    duration: float | None = None,
+    heading: float = 0.0,
+) -> Trajectory:
+    """The protocol's runs from ``state``, joined in the protocol's time (a sample every ``record_every`` steps).
+
+    As DexGraspBench applies each direction's force afresh to the squeezed grasp, each push starts from the held
+    grasp: the approach, close and lift run to HELD_AT; then push k runs for SHAKE_TIME from the state and the
+    controller as they were at HELD_AT (the wrist held there), recorded from HELD_AT + k SHAKE_TIME; then the place
+    runs from the held grasp too, recorded from HELD_AT + 6 SHAKE_TIME.  ``duration`` [s] of protocol time cuts it
+    short (default: all of it); a run in which the object falls ends the trial.
+    """
+    end = HELD_AT + 6 * SHAKE_TIME + 1.0 + RELEASE if duration is None else duration
+    shake = shake_force(controller.trial.item.mass, len(simulator.scene.objects), heading)
+    watch = _LastState(simulator.scene)
+
+    def run(runner, start: bh.State, span: float, offset: float) -> Trajectory:
+        part = simulator.run(
+            runner,
+            span,
+            state=start,
+            progress=False,
+            record_every=record_every,
+            object_forces=lambda t: shake(t + offset),
+            until=watch,
+        )
+        return dataclasses.replace(part, t=part.t + offset) if offset else part
+
+    lifted = run(controller, state, min(end, HELD_AT), 0.0)
+    if end <= HELD_AT or watch.stopped:
+        return lifted
+    held, grasp = watch.state, lifted[len(lifted) - 1 :]
+    parts = [lifted]
+    for k in range(7):  # the six pushes, then the place
+        start = HELD_AT + k * SHAKE_TIME
+        if start >= end:
+            break
+        stop = end if k == 6 else min(end, start + SHAKE_TIME)
+        runner = controller.holding() if k < 6 else copy.deepcopy(controller)
+        part = run(_Resumed(runner), held, stop - start, start - HELD_AT)
+        if k:  # its first sample: the held grasp as the lift's last recorded it (a run's first has no step's contacts)
+            parts.append(dataclasses.replace(grasp, t=grasp.t + (start - HELD_AT)))
+        parts.append(part[1:] if stop >= end or watch.stopped else part[1:-1])
+        if watch.stopped:
+            break
+    return Trajectory.joined(parts)
 
 
 def run_trial(trial: Trial, dt: float = DT, record_every: int = 40) -> dict:
@@ -270,6 +355,7 @@ __all__ = [
     "contact_law",
     "fallen",
     "idealised_damping",
+    "run_protocol",
     "run_trial",
     "setup",
     "shake_force",

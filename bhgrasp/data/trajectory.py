@@ -5,6 +5,7 @@ Units SI, angles in radians, world frame; contacts stored flat with per-sample o
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -145,6 +146,59 @@ class Trajectory:
             joint_names=self.joint_names,
             object_names=self.object_names,
             pair_bodies=self.pair_bodies,
+        )
+
+    @classmethod
+    def joined(cls, parts: list[Trajectory]) -> Trajectory:
+        """One record of ``parts`` in order (runs of one scene whose times increase from part to part).
+
+        Their labels must agree; a log name missing from a part is NaN in its samples.
+
+        Raises:
+            InputError: No parts, parts of different scenes (labels or array widths), or times that do not
+                increase across a junction.
+        """
+        if not parts:
+            raise InputError("joining trajectories needs at least one part, got none")
+        first = parts[0]
+        for part in parts[1:]:
+            same = part.joint_names == first.joint_names and part.object_names == first.object_names
+            same = same and np.array_equal(part.pair_bodies, first.pair_bodies)
+            if not same or part.q.shape[1:] != first.q.shape[1:] or part.u.shape[1:] != first.u.shape[1:]:
+                raise InputError("joined trajectories must record one scene (the same joints, objects and pairs)")
+        for before, after in itertools.pairwise(parts):
+            if len(before) and len(after) and not after.t[0] > before.t[-1]:
+                raise InputError(
+                    f"joined trajectories' times must increase: a part ends at t = {before.t[-1]} s and the next "
+                    f"starts at {after.t[0]} s"
+                )
+        sample = {
+            name: np.concatenate([getattr(p, name) for p in parts])
+            for name in _ARRAYS
+            if not name.startswith("contact_")
+        }
+        contacts = {
+            name: np.concatenate([getattr(p, name) for p in parts])
+            for name in _ARRAYS
+            if name.startswith("contact_") and name != "contact_offsets"
+        }
+        ends = np.cumsum([0] + [int(p.contact_offsets[-1]) for p in parts[:-1]])
+        contacts["contact_offsets"] = np.concatenate(
+            [first.contact_offsets[:1], *(p.contact_offsets[1:] + end for p, end in zip(parts, ends))]
+        )
+        log = {}
+        for name in dict.fromkeys(name for p in parts for name in p.log):
+            shape = next(p.log[name].shape[1:] for p in parts if name in p.log)
+            log[name] = np.concatenate(
+                [p.log[name] if name in p.log else np.full((len(p), *shape), np.nan) for p in parts]
+            )
+        return cls(
+            **sample,
+            **contacts,
+            log=log,
+            joint_names=first.joint_names,
+            object_names=first.object_names,
+            pair_bodies=first.pair_bodies,
         )
 
     # ------------------------------------------------------------------ files
