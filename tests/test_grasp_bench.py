@@ -75,34 +75,62 @@ def test_the_shake_pushes_10_m_newtons_along_each_direction_for_its_window() -> 
 
 @pytest.mark.parametrize("actuation", ["barrett", "full"])
 def test_each_push_starts_from_the_held_grasp(actuation: str) -> None:
-    """The first push is one run on from the lift with the wrist held (to the bit); the second starts from the held
-    grasp again, as DexGraspBench applies each push afresh, not from where the first left the object."""
+    """The first push is one run on from the lift with the wrist held (to the bit); the second is a run of its own
+    from the lift's last state and controller, as DexGraspBench applies each push afresh, not from where the first
+    left the object."""
     trial = Trial(BenchObject.parse("box:0.06x0.05x0.05:0.3"), "power", actuation)
-    joined, _ = simulate_trial(trial, duration=HELD_AT + SHAKE_TIME + 0.1)
+    joined, _ = simulate_trial(trial, duration=HELD_AT + SHAKE_TIME + 0.5)
     simulator, state, hand, path = setup(trial)
     controller = BenchController(trial, hand, path)
     controller.reset(state)
     holding = controller.holding()  # the wrist stays where the lift leaves it, the fingers keep closing: no place
+    assert holding.path.held == HELD_AT and controller.path.held is None  # a copy: the original is left as it was
 
     def on(t: float, sensed: bh.State) -> np.ndarray:
         return holding(t, sensed)
 
     on.log = holding.log
-    whole = simulator.run(
-        on, HELD_AT + SHAKE_TIME, state=state, progress=False, record_every=40, object_forces=shake_force(0.3)
+    shake = shake_force(0.3)
+    whole = simulator.run(on, HELD_AT + SHAKE_TIME, state=state, progress=False, record_every=40, object_forces=shake)
+    second = int(np.searchsorted(joined.t, HELD_AT + SHAKE_TIME + 1e-9))  # the second push's first sample
+    names = ("t", "q", "tau", "object_position", "object_quaternion", "contact_offsets", "contact_force")
+    for name in names:  # through the first push's last sample, at HELD_AT + SHAKE_TIME
+        np.testing.assert_array_equal(getattr(joined[:second], name), getattr(whole, name), err_msg=name)
+    # the second push: the lift again (the same bits to HELD_AT), then -x from the held grasp on a copy held there
+    last: dict[str, bh.State] = {}
+    lift = BenchController(trial, hand, path)
+    lifted = simulator.run(
+        lift,
+        HELD_AT,
+        state=state,
+        progress=False,
+        record_every=40,
+        object_forces=shake,
+        until=lambda s: last.update(at=s),
     )
-    held, second = (int(np.searchsorted(joined.t, time - 1e-9)) for time in (HELD_AT, HELD_AT + SHAKE_TIME))
-    for name in ("t", "q", "tau", "object_position", "object_quaternion", "contact_offsets", "contact_force"):
-        np.testing.assert_array_equal(getattr(joined[:second], name), getattr(whole[:second], name), err_msg=name)
-    assert joined.t[second] == pytest.approx(HELD_AT + SHAKE_TIME)
-    for name in ("q", "tau", "object_position"):
-        np.testing.assert_array_equal(getattr(joined, name)[second], getattr(joined, name)[held], err_msg=name)
-    np.testing.assert_array_equal(joined.contacts_at(second)["force"], joined.contacts_at(held)["force"])
-    moved = np.linalg.norm(whole.object_position[-1, 0] - joined.object_position[held, 0])
+    np.testing.assert_array_equal(lifted.object_position, joined.object_position[: len(lifted)])
+    again = lift.holding()
+
+    def pushing(t: float, sensed: bh.State) -> np.ndarray:
+        return again(t, sensed)
+
+    pushing.log = again.log
+    minus_x = simulator.run(
+        pushing,
+        0.5,
+        state=last["at"],
+        progress=False,
+        record_every=40,
+        object_forces=lambda t: shake(t + SHAKE_TIME),
+    )
+    for name in ("q", "tau", "object_position", "contact_force"):
+        np.testing.assert_array_equal(getattr(joined[second:], name), getattr(minus_x[1:], name), err_msg=name)
+    np.testing.assert_allclose(joined.t[second:], minus_x.t[1:] + SHAKE_TIME, rtol=0, atol=1e-9)
+    moved = np.linalg.norm(whole.object_position[-1, 0] - lifted.object_position[-1, 0])
     assert moved > 1e-5  # the +x push moved the box: the -x push does not start from there
     if actuation == "full":  # the idealised fingers keep closing through the push (they open only in the place)
         proximal = [hand.joint_index(f"{finger}_proximal") for finger in hand.fingers]
-        assert (joined.u[held:second][:, proximal] > 0.0).all()
+        assert (joined.u[len(lifted) : second][:, proximal] > 0.0).all()
 
 
 def hand_force_on_object(trajectory, k: int) -> np.ndarray:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from pathlib import Path
 
@@ -98,9 +99,20 @@ def test_joined_parts_are_the_whole_record(trajectory: Trajectory) -> None:
     np.testing.assert_array_equal(joined.contacts_at(60)["force"], trajectory.contacts_at(60)["force"])
 
 
-def test_joining_refuses_no_parts_and_times_that_go_back(trajectory: Trajectory) -> None:
-    with pytest.raises(bh.InputError, match="at least one part"):
-        Trajectory.joined([])
+def test_joined_parts_fill_a_log_one_lacks_with_nan_and_skip_empty_ones(trajectory: Trajectory) -> None:
+    head, tail = trajectory[0:50], dataclasses.replace(trajectory[50 : len(trajectory)], log={})
+    joined = Trajectory.joined([head, trajectory[0:0], tail])
+    np.testing.assert_array_equal(joined.log["vector"][:50], trajectory.log["vector"][:50])
+    assert np.isnan(joined.log["vector"][50:]).all() and joined.log["vector"].shape == trajectory.log["vector"].shape
+    np.testing.assert_array_equal(joined.contact_force, trajectory.contact_force)
+
+
+def test_joining_refuses_no_samples_other_scenes_and_times_that_go_back(trajectory: Trajectory) -> None:
+    with pytest.raises(bh.InputError, match="at least one sample"):
+        Trajectory.joined([trajectory[0:0]])
+    other = dataclasses.replace(trajectory.between(0.15, 0.2), object_names=("another",))
+    with pytest.raises(bh.InputError, match="must record one scene"):
+        Trajectory.joined([trajectory.between(0.0, 0.1), other])
     with pytest.raises(bh.InputError, match="must increase: a part ends at t = 0.1 s and the next starts at 0.05"):
         Trajectory.joined([trajectory.between(0.0, 0.1), trajectory.between(0.05, 0.2)])
 

@@ -251,10 +251,10 @@ def _failure(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.nda
             return f"the object left the scene at {end:.2f} s"
         return "not placed: the object did not end resting on its stand at its height after the release"
     k = int(moved[0])
-    if times[k] < HELD_AT:
+    if times[k] <= HELD_AT:
         when = "during the lift"
-    else:
-        when = f"under the {DIRECTIONS[min(int((times[k] - HELD_AT) // SHAKE_TIME), 5)]} push"
+    else:  # push k's samples are (HELD_AT + k SHAKE_TIME, HELD_AT + (k + 1) SHAKE_TIME] (bench.trial.run_protocol)
+        when = f"under the {DIRECTIONS[min(math.ceil((times[k] - HELD_AT) / SHAKE_TIME - 1e-9) - 1, 5)]} push"
     return f"moved {1e3 * offsets[k]:.0f} mm / {math.degrees(turns[k]):.0f} deg {when}"
 
 

@@ -138,6 +138,7 @@ class BenchController:
         self.spread = [hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]
         self.place_from = HELD_AT  # the place's descent starts (its own run from the held grasp: run_protocol)
         self.place_at = self.place_from + 1.0  # open here, or where the stand takes the object's weight first
+        self.holds = False  # a copy for a push from the held grasp (holding)
         self.set_down = 0.5 * trial.item.mass * GRAVITY  # [N] the stand's push that ends the descent
         self.stand = supports(trial)  # the stand, and the table around it among neighbours
         self.log: dict = {}
@@ -176,14 +177,16 @@ class BenchController:
         fingers.
         """
         held = copy.deepcopy(self)
+        held.holds = True
         held.path.hold(HELD_AT)
         held.place_at = math.inf  # the idealised hand's fingers keep closing
         return held
 
     def reset(self, state: bh.State) -> None:
-        """Start a trial at ``state`` (the driver's script, the spread hold)."""
-        self.path.release()
-        self.place_at = self.place_from + 1.0
+        """Start a trial at ``state`` (the driver's script, the spread hold); a :meth:`holding` copy keeps holding."""
+        if not self.holds:
+            self.path.release()
+            self.place_at = self.place_from + 1.0
         self.servo.reset(state)
         if self.trial.actuation == "barrett":
             self.driver.reset(state)
@@ -291,9 +294,13 @@ def run_protocol(
 
     As DexGraspBench applies each direction's force afresh to the squeezed grasp, each push starts from the held
     grasp: the approach, close and lift run to HELD_AT; then push k runs for SHAKE_TIME from the state and the
-    controller as they were at HELD_AT (the wrist held there), recorded from HELD_AT + k SHAKE_TIME; then the place
-    runs from the held grasp too, recorded from HELD_AT + 6 SHAKE_TIME.  ``duration`` [s] of protocol time cuts it
-    short (default: all of it); a run in which the object falls ends the trial.
+    controller as they were at HELD_AT (the wrist held there), its samples after its start recorded in
+    (HELD_AT + k SHAKE_TIME, HELD_AT + (k + 1) SHAKE_TIME]; then the place runs from the held grasp too, recorded after
+    HELD_AT + 6 SHAKE_TIME.  The held grasp is the sample at HELD_AT alone: from one push's last sample to the next
+    push's first the record jumps back to near it (as a replay shows).  ``duration`` [s] of protocol time cuts it
+    short (default: all of it); a run in which the object falls ends the trial.  With ``record_every`` dividing the
+    steps of the lift, a push and the place (the protocol's times are multiples of 10 ms), the samples are evenly
+    spaced.
     """
     end = HELD_AT + 6 * SHAKE_TIME + 1.0 + RELEASE if duration is None else duration
     shake = shake_force(controller.trial.item.mass, len(simulator.scene.objects), heading)
@@ -314,8 +321,8 @@ def run_protocol(
     lifted = run(controller, state, min(end, HELD_AT), 0.0)
     if end <= HELD_AT or watch.stopped:
         return lifted
-    held, grasp = watch.state, lifted[len(lifted) - 1 :]
-    parts = [lifted]
+    held = watch.state
+    parts = [lifted]  # its last sample is the held grasp each push starts from
     for k in range(7):  # the six pushes, then the place
         start = HELD_AT + k * SHAKE_TIME
         if start >= end:
@@ -323,9 +330,7 @@ def run_protocol(
         stop = end if k == 6 else min(end, start + SHAKE_TIME)
         runner = controller.holding() if k < 6 else copy.deepcopy(controller)
         part = run(_Resumed(runner), held, stop - start, start - HELD_AT)
-        if k:  # its first sample: the held grasp as the lift's last recorded it (a run's first has no step's contacts)
-            parts.append(dataclasses.replace(grasp, t=grasp.t + (start - HELD_AT)))
-        parts.append(part[1:] if stop >= end or watch.stopped else part[1:-1])
+        parts.append(part[1:])  # from its first step on; its last sample, at stop, ends it
         if watch.stopped:
             break
     return Trajectory.joined(parts)

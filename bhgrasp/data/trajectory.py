@@ -152,38 +152,32 @@ class Trajectory:
     def joined(cls, parts: list[Trajectory]) -> Trajectory:
         """One record of ``parts`` in order (runs of one scene whose times increase from part to part).
 
-        Their labels must agree; a log name missing from a part is NaN in its samples.
+        Empty parts are skipped; a log name missing from a part is NaN in its samples.
 
         Raises:
-            InputError: No parts, parts of different scenes (labels or array widths), or times that do not
+            InputError: No samples, parts of different scenes (labels or array widths), or times that do not
                 increase across a junction.
         """
+        parts = [part[0 : len(part)] for part in parts if len(part)]  # slices: contacts from row 0, logs per sample
         if not parts:
-            raise InputError("joining trajectories needs at least one part, got none")
+            raise InputError("joining trajectories needs at least one sample, got none")
         first = parts[0]
         for part in parts[1:]:
             same = part.joint_names == first.joint_names and part.object_names == first.object_names
             same = same and np.array_equal(part.pair_bodies, first.pair_bodies)
-            if not same or part.q.shape[1:] != first.q.shape[1:] or part.u.shape[1:] != first.u.shape[1:]:
+            widths = all(getattr(part, n).shape[1:] == getattr(first, n).shape[1:] for n in _ARRAYS)
+            logs = all(part.log[n].shape[1:] == first.log[n].shape[1:] for n in part.log.keys() & first.log.keys())
+            if not (same and widths and logs):
                 raise InputError("joined trajectories must record one scene (the same joints, objects and pairs)")
         for before, after in itertools.pairwise(parts):
-            if len(before) and len(after) and not after.t[0] > before.t[-1]:
+            if not after.t[0] > before.t[-1]:
                 raise InputError(
-                    f"joined trajectories' times must increase: a part ends at t = {before.t[-1]} s and the next "
-                    f"starts at {after.t[0]} s"
+                    f"joined trajectories' times must increase: a part ends at t = {before.t[-1]:.6g} s and the next "
+                    f"starts at {after.t[0]:.6g} s"
                 )
-        sample = {
-            name: np.concatenate([getattr(p, name) for p in parts])
-            for name in _ARRAYS
-            if not name.startswith("contact_")
-        }
-        contacts = {
-            name: np.concatenate([getattr(p, name) for p in parts])
-            for name in _ARRAYS
-            if name.startswith("contact_") and name != "contact_offsets"
-        }
+        arrays = {name: np.concatenate([getattr(p, name) for p in parts]) for name in _ARRAYS}
         ends = np.cumsum([0] + [int(p.contact_offsets[-1]) for p in parts[:-1]])
-        contacts["contact_offsets"] = np.concatenate(
+        arrays["contact_offsets"] = np.concatenate(
             [first.contact_offsets[:1], *(p.contact_offsets[1:] + end for p, end in zip(parts, ends))]
         )
         log = {}
@@ -193,8 +187,7 @@ class Trajectory:
                 [p.log[name] if name in p.log else np.full((len(p), *shape), np.nan) for p in parts]
             )
         return cls(
-            **sample,
-            **contacts,
+            **arrays,
             log=log,
             joint_names=first.joint_names,
             object_names=first.object_names,
