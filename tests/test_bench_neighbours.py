@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 
 import numpy as np
 import pinocchio as pin
@@ -12,7 +13,7 @@ import pytest
 import bhgrasp as bh
 from bhgrasp.bench import report as bench_report
 from bhgrasp.bench.height import STAND_HEIGHT, TABLE_REACH, grasp_clearance, stand_clearance
-from bhgrasp.bench.metrics import stand_support
+from bhgrasp.bench.metrics import evaluate, stand_support
 from bhgrasp.bench.neighbours import (
     RAISE,
     neighbour_displacements,
@@ -22,9 +23,22 @@ from bhgrasp.bench.neighbours import (
     settle_neighbours,
 )
 from bhgrasp.bench.objects import BenchObject
-from bhgrasp.bench.protocol import APPROACH, CLOSE_AT, DISTURBED, FRICTION, HELD_AT, PRESHAPE, STIFFNESS, Trial
+from bhgrasp.bench.protocol import (
+    APPROACH,
+    APPROACH_GUARD,
+    CLOSE_AT,
+    DISTURBED,
+    FORCE_LIMIT,
+    FRICTION,
+    HELD_AT,
+    LIFT,
+    LIFT_AT,
+    PRESHAPE,
+    STIFFNESS,
+    Trial,
+)
 from bhgrasp.bench.table import Clutter, floor_below, stand_of, supports, table_around
-from bhgrasp.bench.trial import setup, shake_force, simulate_trial
+from bhgrasp.bench.trial import BenchController, setup, shake_force, simulate_trial
 from bhgrasp.errors import InputError, UnreachableError
 from bhgrasp.model.objects import Box
 from bhgrasp.sim import Simulator
@@ -83,16 +97,61 @@ def test_far_neighbours_leave_the_grasp_as_alone_and_only_sink_into_the_table():
     assert np.allclose(neighbour_displacements(among), 0.2 * 9.81 / STIFFNESS, rtol=0.01)
 
 
-def test_a_neighbour_in_a_fingers_path_is_disturbed():
-    """A post 2 cm under F3's fingertip: the hand's 5 cm descent must push it away."""
+def _post_under_f3(depth: float = 0.02) -> Clutter:
+    """The can among a 0.2 kg post standing ``depth`` [m] under F3's open fingertip, on the table."""
     _, state, hand, _ = setup(CAN_ON_TABLE)
     x, y, z = hand.fingertip_positions(state.q)[hand.fingers.index("F3")]
-    height = z - 0.02
+    height = z - depth
     post = Box(size=(0.02, 0.02, height), mass=0.2, pose=pin.SE3(np.eye(3), np.array([x, y, height / 2])), name="post")
-    clutter = Clutter((CAN.item.body(FRICTION), post), (*table_around(CAN.item), floor_below()))
-    trajectory, hand = simulate_trial(CAN_ON_TABLE, duration=CLOSE_AT + 0.5, clutter=clutter)
-    assert neighbour_displacements(trajectory)[0] > DISTURBED
-    assert peak_force_on(trajectory, hand, ["post"]) > 1.0 and peak_force_on(trajectory, hand, ["none"]) == 0.0
+    return Clutter((CAN.item.body(FRICTION), post), (*table_around(CAN.item), floor_below()))
+
+
+def _first_touch(trajectory, hand, name: str) -> float:
+    """When a hand link first touches ``name`` [s]."""
+    for k in range(len(trajectory.t)):
+        if any(b == name and hand.model.existFrame(str(a)) for a, b in trajectory.contacts_at(k)["bodies"]):
+            return float(trajectory.t[k])
+    return math.inf
+
+
+def test_the_approach_stops_where_the_hand_meets_a_neighbour(monkeypatch):
+    """A post 2 cm under F3's fingertip on the hand's 5 cm descent.  Unguarded, the arm drives F3 on into it (the
+    arm's force, far beyond the hand's envelope); guarded, the approach stops within milliseconds of the first touch
+    (as the unguarded run finds it).  The impact peaks below that of the hand's mass meeting the contact's spring at
+    the approach's speed, v sqrt(k m); once stopped, F3 rests on the post with less than the guard; the lift raises
+    the wrist 10 cm from where it stopped."""
+    clutter = _post_under_f3()
+    monkeypatch.setattr("bhgrasp.bench.trial.APPROACH_GUARD", math.inf)
+    driven, hand = simulate_trial(CAN_ON_TABLE, duration=CLOSE_AT, clutter=clutter, record_every=4)
+    touched = _first_touch(driven, hand, "post")
+    mass = pin.computeTotalMass(hand.model)  # [kg] the hand on its mount
+    guard = APPROACH_GUARD * mass * 9.81  # [N]
+    speed = np.linalg.norm(driven.v[int(np.searchsorted(driven.t, touched)), :3])  # [m/s] the wrist's, at the touch
+    assert evaluate(CAN_ON_TABLE, driven, hand)["approach_stopped"] is None and touched < CLOSE_AT
+    assert peak_force_on(driven, hand, ["post"]) > 2 * FORCE_LIMIT  # 134 N: the arm's push
+    monkeypatch.undo()
+    trajectory, hand = simulate_trial(CAN_ON_TABLE, duration=LIFT_AT + 1.2, clutter=clutter, record_every=4)
+    record = evaluate(CAN_ON_TABLE, trajectory, hand)
+    assert touched <= record["approach_stopped"] < touched + 0.01  # [s]
+    assert record["approach_met"] == "post"
+    stopped = record["approach_stopped"]
+    assert peak_force_on(trajectory.between(0.0, stopped + 0.05), hand, ["post"]) < speed * math.sqrt(STIFFNESS * mass)
+    assert peak_force_on(trajectory.between(stopped + 0.05, CLOSE_AT), hand, ["post"]) < guard
+    mount_z = trajectory.q[:, 2]  # [m] from where the approach stopped, the lift's 10 cm
+    stop, close = (int(np.searchsorted(trajectory.t, t)) for t in (record["approach_stopped"], CLOSE_AT))
+    assert abs(mount_z[close] - mount_z[stop]) < 2e-3
+    assert abs(abs(mount_z[-1] - mount_z[close]) - LIFT) < 3e-3
+
+
+def test_a_controller_reset_follows_its_planned_approach_again():
+    """After a stopped approach, ``reset`` restores the planned path (a controller run again starts afresh)."""
+    simulator, state, hand, path = setup(CAN_ON_TABLE, clutter=_post_under_f3())
+    controller = BenchController(CAN_ON_TABLE, hand, path)
+    simulator.run(controller, 0.6, state=state, progress=False)
+    assert 0.0 < controller.approach_stopped < 0.6 and controller.path.reference is not path
+    controller.reset(state)
+    assert math.isnan(controller.approach_stopped) and controller.path.reference is path
+    assert np.array_equal(controller.path(0.8)[0], path(0.8)[0])
 
 
 def test_the_table_can_only_raise_the_grasp_or_leave_none():
@@ -198,3 +257,28 @@ def test_the_readme_states_the_committed_rates_among_neighbours() -> None:
     second = rate("grasp_neighbours_seed2", "development"), rate("grasp_neighbours_seed2", "held-out")
     alone = rate("grasp_benchmark", "development"), rate("grasp_benchmark", "held-out")
     assert f"holds {second[0]} and {second[1]}, where alone the sets hold {alone[0]} and {alone[1]}" in readme
+
+
+def test_the_committed_runs_stop_their_approach_only_among_neighbours() -> None:
+    """The README's guarded-approach figures are the committed reports': alone, no approach of the six sets meets
+    anything; among neighbours, the trials whose approach stopped press the table with 5-7 N, every finger joint under
+    0.2 of its rating, inside the envelope; the meat can's stopped approach still holds it (seed 1)."""
+    from bhgrasp.thesis.results import REFERENCE
+
+    def trials(name: str) -> list[dict]:
+        return json.loads((REFERENCE / f"{name}.json").read_text())["trials"]
+
+    assert all(t["approach_stopped"] is None for t in trials("grasp_benchmark"))
+    stopped = [
+        t for name in ("grasp_neighbours", "grasp_neighbours_seed2") for t in trials(name) if t["approach_stopped"]
+    ]
+    assert {t["object"] for t in stopped} == {"box", "ball", "tennis ball", "meat can"}
+    for trial in stopped:
+        assert trial["inside_envelope"], trial["object"]
+        if trial["object"] != "meat can":  # no grasp height: run with the knuckles on its top, they meet the table
+            assert 4.5 <= trial["peak_stand_force"] < 7.5 and trial["torque_to_rating"] < 0.2, trial["object"]
+            assert not trial["success"], trial["object"]
+    meat = [t for t in trials("grasp_neighbours") if t["object"] == "meat can"]
+    assert all(t["strict_success"] and t["approach_stopped"] for t in meat) and len(meat) == 2
+    readme = " ".join((REFERENCE.parents[1] / "README.md").read_text().split())
+    assert "guarded they stop at 5-7 N, every joint under 0.2 of its rating" in readme

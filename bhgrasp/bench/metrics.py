@@ -77,7 +77,9 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand, heading: float = 0.0) -> d
         "max_rotation": float(turns.max()),
         "height_found": approach_of(trial) == "side"
         or top_down(trial.item, trial.preshape_spread, trial.grasp, trial.table) is not None,
+        "approach_stopped": approach_stopped(trajectory),
     }
+    record["approach_met"] = met_on_approach(trajectory, hand, record["approach_stopped"])
     record.update(contact_summary(trajectory, hand, held, shaken, supports(trial)))
     record.update(joint_load(trajectory, hand))
     record["need_to_rating"], record["need_joint"] = protocol_need(trajectory, hand, held, trial.item.mass, heading)
@@ -101,6 +103,29 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand, heading: float = 0.0) -> d
     record["strict_success"] = bool(kept and offsets.max() < STRICT[0] and turns.max() < STRICT[1])
     record["failure"] = failure_reason(record, offsets, turns, t[closed : shaken + 1], float(t[-1]), trial.item.mass)
     return record
+
+
+def approach_stopped(trajectory) -> float | None:
+    """When the guarded approach stopped [s] (the hand met something on its way), or ``None``: it ran its course."""
+    logged = trajectory.log.get("approach_stopped")
+    return None if logged is None or not np.isfinite(logged).any() else float(np.nanmin(logged))
+
+
+def met_on_approach(trajectory, hand: bh.Hand, stopped: float | None, window: float = 0.02) -> str:
+    """What the hand touched where its approach stopped, names, or '' (none recorded).
+
+    The bodies in the samples from ``stopped`` [s] to ``window`` [s] after it (an impact may part before the next
+    sample).
+    """
+    if stopped is None:
+        return ""
+    first, last = np.searchsorted(trajectory.t, [stopped - 1e-9, stopped + window])
+    touched = set()
+    for k in range(int(first), min(int(last) + 1, len(trajectory.t))):
+        for a, b in trajectory.contacts_at(k)["bodies"]:
+            if hand.model.existFrame(str(a)) != hand.model.existFrame(str(b)):
+                touched.add(str(b) if hand.model.existFrame(str(a)) else str(a))
+    return ", ".join(sorted(touched))
 
 
 def least_grip(mass: float, fingers: int = 3) -> float:
@@ -226,6 +251,9 @@ def _failure(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.nda
         reason = f"not lifted: the object rose {1e3 * record['lifted']:.0f} mm of the wrist's {1e3 * LIFT:.0f}"
         if record["peak_stand_force"] > 0.0:
             reason += f"; the fingers pressed the stand with up to {record['peak_stand_force']:.0f} N"
+        if record.get("approach_stopped") is not None:
+            met = record.get("approach_met") or "something"
+            reason += f"; the approach stopped at {record['approach_stopped']:.2f} s, where the hand met {met}"
         return reason
     if record["success"]:
         return ""
@@ -260,11 +288,13 @@ def _failure(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.nda
 
 __all__ = [
     "NO_HEIGHT",
+    "approach_stopped",
     "contact_summary",
     "evaluate",
     "failure_reason",
     "held_forces",
     "joint_load",
     "least_grip",
+    "met_on_approach",
     "relative_poses",
 ]

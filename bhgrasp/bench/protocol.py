@@ -6,7 +6,8 @@ DexGraspBench's shake protocol:
 
 1. **approach** (0-1 s): the wrist descends 5 cm to the grasp height, the fingers pre-shaped (proximal 0.8 rad, or
    wider where that open hand would meet the object on its way down: :mod:`~bhgrasp.bench.opening`), the spread
-   held in position mode;
+   held in position mode; a guarded move: where the hand meets anything with more than :data:`APPROACH_GUARD` of
+   its weight, the wrist stops there and the trial goes on from there;
 2. **close** (from 1 s): the hand's own ``close()`` (libbarrett's CMD_CLOSE: each finger runs to a stall, then its
    puck idles and its worm holds it), force-limited (the finger pucks' MT lowered to :data:`GRIP_MT`, in both
    grasps: at full MT the power grasps of the development set's box, can and bottle loaded F3's proximal joint,
@@ -108,6 +109,14 @@ PRESHAPE = 0.8  # [rad] proximal angle of the open hand (the distal follows at a
 # the object's axis, and the squeeze opened the spread by 0.1 rad, which a push then closed, letting the ball out
 THREE_FINGER_SPREAD = math.pi / 3
 LIFT = 0.10  # [m]
+# The approach is a guarded move, as an arm's is on a wrist force sensor: where the hand meets anything (the object,
+# its stand, the table, a neighbour) with more than this fraction of its own weight, the wrist stops there and the
+# trial goes on from there (the close on time, the lift and place from where it stopped).  Half, as the place stops
+# where the stand takes half the object's weight: the fraction is a sensor's threshold, not chosen on any trial.
+# An unguarded approach drives a finger into whatever it meets with the arm's force, which no hand resists: among
+# neighbours, a trial with no grasp height pressed F3's fingertip on the table with 451 N, its proximal joint at 9.7
+# times its rating (tests/test_bench_neighbours.py measures it on a post)
+APPROACH_GUARD = 0.5
 RELEASE = 0.5  # [s] of open() after the place
 DROP = 0.005  # [m] the place stops this far above the lift's start: a stiff wrist setting the held object onto the
 # stand would press it there through the locked fingers

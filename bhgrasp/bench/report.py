@@ -37,6 +37,9 @@ METRICS = (
 )
 
 
+STOP = ("approach_stopped", "approach_met")  # when the guarded approach stopped [s] and what the hand met there
+
+
 def write_json(trials: list[dict[str, Any]], path: Path) -> None:
     """``{"protocol": ..., "trials": [...]}`` with sorted keys."""
     protocol = {
@@ -122,7 +125,8 @@ def markdown(trials: list[dict[str, Any]], command: str = COMMAND) -> str:
         "# Grasp benchmark",
         "",
         f"Regenerate: `{command}`. "
-        "Protocol: approach, close, lift 10 cm, push 10 m N on the object along +x, -x, +y, -y, +z, -z (2 s "
+        "Protocol: approach (guarded: the wrist stops where the hand meets anything with half its weight, and the "
+        "trial goes on from there), close, lift 10 cm, push 10 m N on the object along +x, -x, +y, -y, +z, -z (2 s "
         "each, each from the held grasp, as DexGraspBench applies each afresh), place from it until the stand "
         "pushes up (on the object or a finger) with half the object's weight, "
         "open (`bhgrasp/bench/protocol.py`). Success: lifted; gripped once lifted (each finger pressing the "
@@ -238,7 +242,7 @@ def compare(trials: list[dict[str, Any]], reference: list[dict[str, Any]], rel: 
             problems.append(f"{key}: not in the reference")
             continue
         among = ("neighbours", "neighbour_seed", "neighbours_disturbed") if _among(trial, known) else ()
-        for name in (*OUTCOMES, "most_loaded_joint", "failure", *among):
+        for name in (*OUTCOMES, "most_loaded_joint", *STOP, "failure", *among):
             if trial.get(name) != known.get(name):
                 problems.append(f"{key} {name}: {trial.get(name)!r}, reference {known.get(name)!r}")
         problems += _metric_problems(trial, known, str(key), rel)
@@ -284,4 +288,4 @@ def _mark(value: bool) -> str:
     return "yes" if value else "no"
 
 
-__all__ = ["METRICS", "OUTCOMES", "compare", "distinct", "groups", "markdown", "success_rates", "write_json"]
+__all__ = ["METRICS", "OUTCOMES", "STOP", "compare", "distinct", "groups", "markdown", "success_rates", "write_json"]

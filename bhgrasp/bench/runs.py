@@ -16,7 +16,7 @@ from typing import Any
 from bhgrasp.bench.neighbours import run_among_neighbours
 from bhgrasp.bench.objects import BenchObject
 from bhgrasp.bench.protocol import GRASPS, Trial
-from bhgrasp.bench.report import METRICS, OUTCOMES
+from bhgrasp.bench.report import METRICS, OUTCOMES, STOP
 from bhgrasp.bench.trial import run_trial
 from bhgrasp.sweep import run_sweep
 
@@ -88,7 +88,7 @@ def run_bench(
         trial = {key: row[key] for key in ("spec", "set", "grasp", "actuation", *(CLUTTER if neighbours else ()))}
         trial["object"] = row["name"]
         if row["status"] == "ok":
-            named = ("spread", "opening", *OUTCOMES, *METRICS, "most_loaded_joint", "need_joint", "failure")
+            named = ("spread", "opening", *OUTCOMES, *METRICS, "most_loaded_joint", "need_joint", *STOP, "failure")
             trial.update({key: row[key] for key in named})
             trial.update({key: row[key] for key in NEIGHBOURS if neighbours})
             if neighbours:  # a count (the table's column is float where an errored trial left it empty)
@@ -104,6 +104,7 @@ def run_bench(
                 gripped=False,
                 most_loaded_joint=None,
                 need_joint=None,
+                **dict.fromkeys(STOP),
                 failure=row["error"],
                 **dict.fromkeys(METRICS),
                 **dict.fromkeys(NEIGHBOURS if neighbours else ()),

@@ -19,6 +19,7 @@ from bhgrasp.bench.heading import hand_base
 from bhgrasp.bench.metrics import GRAVITY, evaluate
 from bhgrasp.bench.protocol import (
     APPROACH,
+    APPROACH_GUARD,
     CLOSE_AT,
     DROP,
     DT,
@@ -39,7 +40,7 @@ from bhgrasp.bench.table import NEIGHBOUR_DRAG, Clutter, stand_of, supports
 from bhgrasp.controllers.mount import MountServo
 from bhgrasp.data.trajectory import Trajectory
 from bhgrasp.errors import InputError
-from bhgrasp.model.mount import mounted
+from bhgrasp.model.mount import mount_pose, mounted
 from bhgrasp.motion.held import HeldReference
 from bhgrasp.motion.pose_references import PosePath
 from bhgrasp.motion.wrist import MountReference
@@ -133,7 +134,10 @@ class BenchController:
 
     def __init__(self, trial: Trial, hand: bh.Hand, path: MountReference) -> None:
         self.trial, self.hand = trial, hand
-        self.path = HeldReference(path)
+        self.planned, self.path = path, HeldReference(path)
+        self.guard = APPROACH_GUARD * pin.computeTotalMass(hand.model) * GRAVITY  # [N] what stops the approach
+        self.approach_stopped = math.nan  # [s] when the guard stopped it (NaN: it ran its course)
+        self.links = frozenset(frame.name for frame in hand.model.frames)  # the hand's bodies
         self.servo = MountServo(hand, self.path, fingers="zero", compensate_load=False)
         self.spread = [hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]
         self.place_from = HELD_AT  # the place's descent starts (its own run from the held grasp: run_protocol)
@@ -170,6 +174,38 @@ class BenchController:
         pushes = [f for f, pair in zip(state.contact_forces, state.contact_bodies) if self.stand & set(pair)]
         return float(np.sum(pushes, axis=0)[2]) >= self.set_down if pushes else False
 
+    def _meets(self, state: bh.State) -> bool:
+        """Whether the hand meets anything with more than :attr:`guard`: the wrist force sensor's reading.
+
+        The sum of the contact forces on the hand's links (the hand's own weight is the arm's, not a contact's).
+        """
+        links, total = self.links, np.zeros(3)
+        for force, (a, b) in zip(state.contact_forces, state.contact_bodies):
+            sign = (b in links) - (a in links)  # the force is on b, its opposite on a
+            if sign:
+                total += sign * force
+        return bool(total @ total > self.guard**2)
+
+    def _follow(self, reference: MountReference, state: bh.State) -> None:
+        """Drive the wrist along ``reference`` from now on (the compiled servo copies its path: a new servo)."""
+        self.path.reference = reference
+        self.servo = MountServo(self.hand, self.path, fingers="zero", compensate_load=False)
+        self.servo.reset(state)
+
+    def _stop_approach(self, t: float, state: bh.State) -> None:
+        """Drop the rest of the approach at ``t`` [s].
+
+        The wrist rests where it is (as an arm's guarded move stops it, not where its reference had gone on to)
+        until the close, and every later move (the lift, the place) runs from there.
+        """
+        planned = self.planned.pose
+        here = self.planned.origin * mount_pose(state.q[:6])  # where the wrist is, not where it was headed
+        later = [(segment.offset, segment.duration) for segment in planned.segments[1:]]
+        path = PosePath(here, [(np.zeros(6), CLOSE_AT - t), *later], delay=t)
+        self._follow(MountReference(path, self.planned.origin), state)
+        self.approach_stopped = t
+        self.log["approach_stopped"] = t
+
     def holding(self) -> BenchController:
         """A copy of this controller, as it stands, for a push from the held grasp.
 
@@ -186,6 +222,9 @@ class BenchController:
         """Start a trial at ``state`` (the driver's script, the spread hold); a :meth:`holding` copy keeps holding."""
         if not self.holds:
             self.path.release()
+            if not math.isnan(self.approach_stopped):
+                self._follow(self.planned, state)
+                self.approach_stopped = math.nan
             self.place_at = self.place_from + 1.0
         self.servo.reset(state)
         if self.trial.actuation == "barrett":
@@ -196,6 +235,8 @@ class BenchController:
 
     def __call__(self, t: float, state: bh.State) -> np.ndarray:
         """The inputs of the trial's actuation: puck torques (or joint torques), then the wrist's."""
+        if t < CLOSE_AT and math.isnan(self.approach_stopped) and len(state.contact_forces) and self._meets(state):
+            self._stop_approach(t, state)  # a guarded move: the hand met something on its way
         if self.path.held is None and t >= self.place_from and (t >= self.place_at or self._set_down(state)):
             self.path.hold(t)  # the wrist stops where the stand takes the object, and the hand opens
             self.place_at = t
