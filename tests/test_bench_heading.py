@@ -83,7 +83,7 @@ def post_under(trial: Trial, finger: str, name: str = "post", angle: float = 0.0
 
 
 def test_the_hand_turns_away_from_a_post_in_a_fingers_path():
-    """A post 2 cm under F3's open fingertip: heading 0 would push it (tests/test_bench_neighbours.py); the chosen
+    """A post 2 cm under F3's open fingertip: heading 0 would meet it (tests/test_bench_neighbours.py); the chosen
     heading clears it by CLEAR, and the simulated descent and close leave it where it stood."""
     post = post_under(CAN, "F3")
     assert heading_clearance(CAN, [post], 0.0) < 0.0

@@ -31,6 +31,7 @@ from bhgrasp.bench.protocol import (
 )
 from bhgrasp.bench.side import PINCH, approach_of, closing_fingers, trial_opening, trial_spread
 from bhgrasp.bench.table import supports
+from bhgrasp.data.trajectory import Trajectory
 from bhgrasp.model.hand import STANDARD_GRAVITY
 
 GRAVITY = -STANDARD_GRAVITY[2]  # [m/s^2] the simulated hand's (bhgrasp.model.hand)
@@ -105,20 +106,26 @@ def evaluate(trial: Trial, trajectory, hand: bh.Hand, heading: float = 0.0) -> d
     return record
 
 
-def approach_stopped(trajectory) -> float | None:
+def approach_stopped(trajectory: Trajectory) -> float | None:
     """When the guarded approach stopped [s] (the hand met something on its way), or ``None``: it ran its course."""
     logged = trajectory.log.get("approach_stopped")
     return None if logged is None or not np.isfinite(logged).any() else float(np.nanmin(logged))
 
 
-def met_on_approach(trajectory, hand: bh.Hand, stopped: float | None, window: float = 0.02) -> str:
-    """What the hand touched where its approach stopped, names, or '' (none recorded).
+def met_on_approach(trajectory: Trajectory, hand: bh.Hand, stopped: float | None, window: float = 0.02) -> str:
+    """What the hand met where its approach stopped, names, or '' (none recorded).
 
-    The bodies in the samples from ``stopped`` [s] to ``window`` [s] after it (an impact may part before the next
-    sample).
+    The body of the pair the controller logged (``approach_met_pair``: the hand's hardest contact at the stop, an
+    index into ``trajectory.pair_bodies``), else the bodies the hand touches in the samples from ``stopped`` [s] to
+    ``window`` [s] after it (an impact may part before the next sample).
     """
     if stopped is None:
         return ""
+    logged = trajectory.log.get("approach_met_pair")
+    pair = np.nanmax(logged) if logged is not None and np.isfinite(logged).any() else -1.0
+    if pair >= 0:
+        a, b = (str(name) for name in trajectory.pair_bodies[int(pair)])
+        return b if hand.model.existFrame(a) else a
     first, last = np.searchsorted(trajectory.t, [stopped - 1e-9, stopped + window])
     touched = set()
     for k in range(int(first), min(int(last) + 1, len(trajectory.t))):
@@ -229,6 +236,9 @@ def failure_reason(
     run's ``end`` [s] before the shake's), or not placed.
     """
     reason = _failure(record, offsets, turns, times, end, mass)
+    if reason and record.get("approach_stopped") is not None and "approach stopped" not in reason:
+        met = record.get("approach_met") or "something"
+        reason += f" (the approach stopped at {record['approach_stopped']:.2f} s, where the hand met {met})"
     return f"{NO_HEIGHT}; {reason}" if reason and not record.get("height_found", True) else reason
 
 

@@ -113,9 +113,9 @@ LIFT = 0.10  # [m]
 # its stand, the table, a neighbour) with more than this fraction of its own weight, the wrist stops there and the
 # trial goes on from there (the close on time, the lift and place from where it stopped).  Half, as the place stops
 # where the stand takes half the object's weight: the fraction is a sensor's threshold, not chosen on any trial.
-# An unguarded approach drives a finger into whatever it meets with the arm's force, which no hand resists: among
-# neighbours, a trial with no grasp height pressed F3's fingertip on the table with 451 N, its proximal joint at 9.7
-# times its rating (tests/test_bench_neighbours.py measures it on a post)
+# An unguarded approach drives a finger on into whatever it meets with the arm's force, which no hand resists
+# (tests/test_bench_neighbours.py measures it on a post).  The guard cannot soften the touch itself, an impact at the
+# approach's speed in the step it happens; it arms once the hand reads below it (a start in contact is no meeting)
 APPROACH_GUARD = 0.5
 RELEASE = 0.5  # [s] of open() after the place
 DROP = 0.005  # [m] the place stops this far above the lift's start: a stiff wrist setting the held object onto the

@@ -5,7 +5,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -132,12 +132,21 @@ class BenchController:
     at HELD_AT that hold the wrist there (:meth:`holding`; :func:`run_protocol`).
     """
 
-    def __init__(self, trial: Trial, hand: bh.Hand, path: MountReference) -> None:
+    def __init__(
+        self, trial: Trial, hand: bh.Hand, path: MountReference, pairs: Sequence[tuple[str, str]] = ()
+    ) -> None:
+        """The trial's commands along ``path``.
+
+        ``pairs``: the scene's collision pairs' (body a, body b) names, in order; where the guarded approach stops,
+        the hand's hardest contact is logged by its pair's index there (``approach_met_pair``).
+        """
         self.trial, self.hand = trial, hand
         self.planned, self.path = path, HeldReference(path)
         self.guard = APPROACH_GUARD * pin.computeTotalMass(hand.model) * GRAVITY  # [N] what stops the approach
+        self.armed = False  # the guard arms at the first stepped reading below it (a start in contact is no meeting)
         self.approach_stopped = math.nan  # [s] when the guard stopped it (NaN: it ran its course)
         self.links = frozenset(frame.name for frame in hand.model.frames)  # the hand's bodies
+        self.pairs = {(str(a), str(b)): index for index, (a, b) in enumerate(pairs)}
         self.servo = MountServo(hand, self.path, fingers="zero", compensate_load=False)
         self.spread = [hand.joint_index("F1_spread"), hand.joint_index("F2_spread")]
         self.place_from = HELD_AT  # the place's descent starts (its own run from the held grasp: run_protocol)
@@ -186,10 +195,19 @@ class BenchController:
                 total += sign * force
         return bool(total @ total > self.guard**2)
 
+    def _met(self, state: bh.State) -> int:
+        """The index in :attr:`pairs` of the hand's contact pressing hardest (-1: the pairs are not known)."""
+        pressed = [
+            (float(np.linalg.norm(force)), self.pairs.get((a, b), -1))
+            for force, (a, b) in zip(state.contact_forces, state.contact_bodies)
+            if (a in self.links) != (b in self.links)
+        ]
+        return max(pressed)[1] if pressed else -1
+
     def _follow(self, reference: MountReference, state: bh.State) -> None:
         """Drive the wrist along ``reference`` from now on (the compiled servo copies its path: a new servo)."""
         self.path.reference = reference
-        self.servo = MountServo(self.hand, self.path, fingers="zero", compensate_load=False)
+        self.servo = MountServo(self.hand, self.path, fingers="zero", compensate_load=False, engine=self.servo.engine)
         self.servo.reset(state)
 
     def _stop_approach(self, t: float, state: bh.State) -> None:
@@ -204,7 +222,7 @@ class BenchController:
         path = PosePath(here, [(np.zeros(6), CLOSE_AT - t), *later], delay=t)
         self._follow(MountReference(path, self.planned.origin), state)
         self.approach_stopped = t
-        self.log["approach_stopped"] = t
+        self.log["approach_stopped"], self.log["approach_met_pair"] = t, float(self._met(state))
 
     def holding(self) -> BenchController:
         """A copy of this controller, as it stands, for a push from the held grasp.
@@ -225,6 +243,9 @@ class BenchController:
             if not math.isnan(self.approach_stopped):
                 self._follow(self.planned, state)
                 self.approach_stopped = math.nan
+            self.armed = False
+            for name in ("approach_stopped", "approach_met_pair"):
+                self.log.pop(name, None)
             self.place_at = self.place_from + 1.0
         self.servo.reset(state)
         if self.trial.actuation == "barrett":
@@ -235,8 +256,11 @@ class BenchController:
 
     def __call__(self, t: float, state: bh.State) -> np.ndarray:
         """The inputs of the trial's actuation: puck torques (or joint torques), then the wrist's."""
-        if t < CLOSE_AT and math.isnan(self.approach_stopped) and len(state.contact_forces) and self._meets(state):
-            self._stop_approach(t, state)  # a guarded move: the hand met something on its way
+        if t < CLOSE_AT and math.isnan(self.approach_stopped):  # a guarded move
+            meets = len(state.contact_forces) > 0 and self._meets(state)
+            if self.armed and meets:
+                self._stop_approach(t, state)  # the hand met something on its way
+            self.armed = self.armed or (t > 0.0 and not meets)  # the start state carries no contacts yet
         if self.path.held is None and t >= self.place_from and (t >= self.place_at or self._set_down(state)):
             self.path.hold(t)  # the wrist stops where the stand takes the object, and the hand opens
             self.place_at = t
@@ -290,7 +314,7 @@ def simulate_trial(
     ``duration`` [s] cuts the protocol short (default: all of it); ``clutter`` as :func:`setup` takes it.
     """
     simulator, state, hand, path = setup(trial, dt, clutter)
-    controller = BenchController(trial, hand, path)
+    controller = BenchController(trial, hand, path, [(p.body_a, p.body_b) for p in simulator.scene.pairs])
     heading = 0.0 if clutter is None else clutter.heading
     return run_protocol(simulator, state, controller, record_every, duration, heading), hand
 
