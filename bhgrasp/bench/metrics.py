@@ -237,9 +237,14 @@ def failure_reason(
     """
     reason = _failure(record, offsets, turns, times, end, mass)
     if reason and record.get("approach_stopped") is not None and "approach stopped" not in reason:
-        met = record.get("approach_met") or "something"
-        reason += f" (the approach stopped at {record['approach_stopped']:.2f} s, where the hand met {met})"
+        reason += f" ({_stopped(record)})"
     return f"{NO_HEIGHT}; {reason}" if reason and not record.get("height_found", True) else reason
+
+
+def _stopped(record: dict) -> str:
+    """Where the guarded approach stopped, as a failure's clause."""
+    met = record.get("approach_met") or "something"
+    return f"the approach stopped at {record['approach_stopped']:.2f} s, where the hand met {met}"
 
 
 def _need(record: dict) -> str:
@@ -262,8 +267,7 @@ def _failure(record: dict, offsets: np.ndarray, turns: np.ndarray, times: np.nda
         if record["peak_stand_force"] > 0.0:
             reason += f"; the fingers pressed the stand with up to {record['peak_stand_force']:.0f} N"
         if record.get("approach_stopped") is not None:
-            met = record.get("approach_met") or "something"
-            reason += f"; the approach stopped at {record['approach_stopped']:.2f} s, where the hand met {met}"
+            reason += f"; {_stopped(record)}"
         return reason
     if record["success"]:
         return ""
